@@ -1,0 +1,97 @@
+"""The method registry: built-ins (every module below `methods`), entry points, plugins.
+
+Built-in methods are discovered by importing every submodule of the `methods` package (a
+backend module imports its library lazily, so a missing library makes its methods
+`unavailable` instead of breaking this import). Third-party methods register through the
+entry-point group ``mesh_shootout.methods`` or a module named under ``plugins:`` in a config.
+"""
+from __future__ import annotations
+
+import difflib
+import importlib
+import pkgutil
+from importlib.metadata import entry_points
+
+from .base import TASKS, Method, Param
+
+ENTRY_POINT_GROUP = "mesh_shootout.methods"
+_REGISTRY: dict[str, Method] = {}
+_LOADED = False
+_SKIP = {"methods.base", "methods.registry"}
+
+
+def register(name: str, *, task: str, library: str, params: dict | None = None,
+             requires: tuple | list | None = None, doc: str | None = None):
+    """Decorator registering ``func(V, F, **params)`` as method ``name``.
+
+    ``params`` maps each parameter name to its default or to a `Param` (bounds, choices).
+    ``requires`` lists importable modules the method needs (availability check).
+    Simplification methods receive ``target_faces`` (int) in place of the shared
+    ``target_ratio``/``target_faces`` parameters, which are added automatically.
+    """
+    if task not in TASKS:
+        raise ValueError(f"register({name!r}): task must be one of {TASKS}, got {task!r}")
+    if "." not in name:
+        raise ValueError(f"register({name!r}): name must be '<backend>.<method>'")
+
+    def deco(func):
+        if name in _REGISTRY:
+            raise ValueError(f"method {name!r} is already registered "
+                             f"(by {_REGISTRY[name].func.__module__})")
+        declared = {}
+        for k, v in (params or {}).items():
+            declared[k] = v if isinstance(v, Param) else Param(k, v)
+        if task == "simplification":
+            from .base import SIMPLIFICATION_TARGET_PARAMS
+            declared = {**SIMPLIFICATION_TARGET_PARAMS, **declared}
+        _REGISTRY[name] = Method(name=name, task=task, library=library, func=func,
+                                 params=declared, requires=tuple(requires or ()),
+                                 doc=(doc or (func.__doc__ or "")).strip())
+        return func
+
+    return deco
+
+
+def _load_builtins() -> None:
+    global _LOADED
+    if _LOADED:
+        return
+    _LOADED = True
+    import methods
+    for info in pkgutil.walk_packages(methods.__path__, prefix="methods."):
+        if info.name not in _SKIP:
+            importlib.import_module(info.name)
+    for ep in entry_points(group=ENTRY_POINT_GROUP):
+        obj = ep.load()
+        if callable(obj) and not isinstance(obj, type(importlib)):
+            obj()
+
+
+def load_plugins(modules) -> None:
+    """Import plugin modules (they register methods as a side effect)."""
+    _load_builtins()
+    for mod in modules or ():
+        importlib.import_module(mod)
+
+
+def all_methods(task: str | None = None) -> list[Method]:
+    """Every registered method (available or not), sorted by name."""
+    _load_builtins()
+    return sorted((m for m in _REGISTRY.values() if task is None or m.task == task),
+                  key=lambda m: m.name)
+
+
+def available(task: str | None = None) -> list[str]:
+    """Names of registered methods whose libraries import here."""
+    return [m.name for m in all_methods(task) if m.is_available]
+
+
+def get(name: str) -> Method:
+    """The method called ``name``; KeyError naming the close matches when unknown."""
+    _load_builtins()
+    try:
+        return _REGISTRY[name]
+    except KeyError:
+        close = difflib.get_close_matches(name, list(_REGISTRY), n=3, cutoff=0.5)
+        hint = f"; did you mean {', '.join(close)}?" if close else ""
+        raise KeyError(f"unknown method {name!r}{hint}") from None
