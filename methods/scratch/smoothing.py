@@ -1,0 +1,149 @@
+"""Laplacian smoothing from scratch: explicit and implicit diffusion, Taubin, screened Poisson.
+
+All diffusion methods here run on one operator family, chosen by the ``weights`` parameter
+(issue 4), always written as ``L = M^-1 W`` with a *symmetric* ``W`` in libigl's sign
+convention (off-diagonal weights positive, rows summing to zero) and a diagonal ``M``:
+
+``uniform``
+    umbrella operator: ``W = A - diag(deg)`` (A the 0/1 vertex adjacency), ``M = diag(deg)``,
+    so ``(L X)_i = mean of the neighbours - x_i`` (Taubin 1995).
+``cotan``
+    row-normalized cotangent weights: ``W`` = the cotangent matrix (``igl.cotmatrix``),
+    ``M = diag(sum_{j != i} W_ij)``, so ``(L X)_i`` = cotangent-weighted neighbour mean - x_i
+    (Desbrun et al. 1999, "scale-dependent"-free normalized form).
+``cotan_area``
+    the Laplace-Beltrami operator: ``W`` = cotangent matrix, ``M`` = mixed Voronoi mass
+    (Meyer et al. 2003; ``igl.massmatrix(..., VORONOI)``).
+
+Time step (the shared, dimensionless ``step`` parameter): ``uniform`` and ``cotan`` are
+row-normalized (``L`` has eigenvalues in ``[-2, 0]`` for non-negative weights), so the time
+step is ``h = step``. ``cotan_area`` is area-normalized (``L`` has units 1/length^2), so the
+time step is ``h = step * lbar^2`` with ``lbar`` the mean edge length of the *input* mesh;
+that makes one ``step`` value mean the same amount of smoothing on meshes of any scale and
+resolution. For an equilateral triangulation the forward-Euler stability limit is
+``step < 1/3`` for ``cotan_area`` and ``step < 1`` for ``uniform``.
+
+Degenerate rows: a vertex whose mass is zero (isolated vertex; vertex only in zero-area
+faces) has an all-zero ``W`` row; its mass is set to 1 so it simply stays put. With ``cotan``
+weights a vertex whose off-diagonal cotangent sum is <= 0 (negative weights dominating, only
+on very bad triangles) is normalized by the sum of absolute weights instead.
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from methods import Param, SmoothingResult, register
+from methods.scratch.operators import (cotan_weights, unique_edges, uniform_weights,
+                                       voronoi_areas)
+
+WEIGHTS = ("uniform", "cotan", "cotan_area")
+
+_WEIGHTS_DOC = ("operator L = M^-1 W: uniform (umbrella, M = diag(deg)), cotan (cotangent W, "
+                "M = diag of its off-diagonal row sums), cotan_area (cotangent W, Voronoi mass)")
+_STEP_DOC = ("dimensionless step: time step h = step for uniform/cotan, "
+             "h = step * (mean edge length)^2 for cotan_area")
+
+
+def mean_edge_length(V: np.ndarray, F: np.ndarray) -> float:
+    """Mean length of the unique undirected edges of ``(V, F)``."""
+    E = unique_edges(F)
+    return float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean())
+
+
+def smoothing_operator(V: np.ndarray, F: np.ndarray, weights: str = "cotan_area"
+                       ) -> tuple[sp.csr_matrix, np.ndarray]:
+    """The pair ``(W, m)`` defining ``L = diag(m)^-1 W`` for the given ``weights`` choice.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    weights : {"uniform", "cotan", "cotan_area"}
+        See the module docstring for the definitions.
+
+    Returns
+    -------
+    W : (n, n) scipy.sparse.csr_matrix
+        Symmetric, rows sum to zero, libigl sign convention (negative semi-definite).
+    m : (n,) float64
+        Strictly positive diagonal of the mass matrix ``M``.
+    """
+    n = V.shape[0]
+    if weights == "uniform":
+        W = uniform_weights(F, n)
+        m = -W.diagonal()
+    elif weights == "cotan":
+        W = cotan_weights(V, F)
+        m = -W.diagonal()
+        bad = m <= 0
+        if bad.any():
+            absW = abs(W)
+            absW.setdiag(0)
+            m = np.where(bad, np.asarray(absW.sum(axis=1)).ravel(), m)
+    elif weights == "cotan_area":
+        W = cotan_weights(V, F)
+        m = voronoi_areas(V, F)
+    else:
+        raise ValueError(f"unknown weights {weights!r}; expected one of {WEIGHTS}")
+    m = np.asarray(m, dtype=np.float64)
+    m = np.where((m > 0) & np.isfinite(m), m, 1.0)
+    return W.tocsr(), m
+
+
+def time_step(V: np.ndarray, F: np.ndarray, step: float, weights: str) -> float:
+    """Physical time step ``h``: ``step`` (row-normalized) or ``step * lbar^2`` (cotan_area)."""
+    if weights == "cotan_area":
+        return float(step) * mean_edge_length(V, F) ** 2
+    return float(step)
+
+
+def _finite(X: np.ndarray) -> bool:
+    return bool(np.isfinite(X).all())
+
+
+@register("scratch.explicit", task="smoothing", library="scratch",
+          params={"weights": Param("weights", "uniform", choices=WEIGHTS, doc=_WEIGHTS_DOC),
+                  "step": Param("step", 0.25, "float", low=0.0, doc=_STEP_DOC),
+                  "iterations": Param("iterations", 10, "int", low=0, high=100000,
+                                      doc="number of forward-Euler steps")})
+def explicit(V, F, *, weights="uniform", step=0.25, iterations=10):
+    """Explicit (forward Euler) Laplacian smoothing ``X <- X + h L X``.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+        Vertex positions.
+    F : (m, 3) int64
+        Triangles (unchanged).
+    weights : {"uniform", "cotan", "cotan_area"}
+        Operator ``L = M^-1 W`` (module docstring); built once from the input positions.
+    step : float
+        Dimensionless step; ``h = step`` for uniform/cotan, ``h = step * lbar^2`` for
+        cotan_area (``lbar`` = mean input edge length).
+    iterations : int
+        Number of steps.
+
+    Returns
+    -------
+    SmoothingResult
+        ``V`` (n, 3). Unstable steps are *not* clamped: coordinates may grow without bound
+        (forward Euler is stable only for ``h * |lambda_max(L)| < 2``); iteration stops early
+        once a coordinate is non-finite.
+
+    Notes
+    -----
+    Forward Euler on the diffusion equation ``dX/dt = L X`` (Taubin 1995; Desbrun et al.
+    1999, Sec. 2). One sparse mat-vec per step. With ``uniform`` weights and ``step = 1`` each
+    vertex moves to the mean of its neighbours (the vertex itself not averaged in).
+    """
+    W, m = smoothing_operator(V, F, weights)
+    h = time_step(V, F, step, weights)
+    L = (sp.diags(h / m) @ W).tocsr()
+    X = V.copy()
+    with np.errstate(over="ignore", invalid="ignore"):
+        for _ in range(iterations):
+            X = X + L @ X
+            if not _finite(X):
+                break
+    return SmoothingResult(V=X)
