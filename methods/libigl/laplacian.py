@@ -1,0 +1,81 @@
+"""libigl reference Laplacians (task ``laplacian``); ``igl`` is imported lazily.
+
+libigl's sign convention is the project's: off-diagonal weights positive where POS holds,
+rows sum to zero, ``W`` negative semi-definite on Delaunay meshes.
+Note: libigl does not clamp degenerate faces; a zero-area face gives inf/NaN cotangents.
+These adapters return what libigl returns (the harness records non-finite values as such).
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from methods import LaplacianResult, Param, register
+
+_MASS = Param("mass", "voronoi", choices=("barycentric", "voronoi", "none"),
+              doc="igl.massmatrix type: barycentric -> MASSMATRIX_TYPE_BARYCENTRIC, voronoi -> "
+                  "MASSMATRIX_TYPE_VORONOI (mixed Voronoi, Meyer et al. 2003), none -> M=None")
+
+
+def _igl_mass(igl, V, F, mass):
+    if mass == "none":
+        return None
+    kind = {"barycentric": igl.MASSMATRIX_TYPE_BARYCENTRIC,
+            "voronoi": igl.MASSMATRIX_TYPE_VORONOI}[mass]
+    return sp.csr_matrix(igl.massmatrix(V, F, kind))
+
+
+@register("libigl.cotan", task="laplacian", library="libigl", params={"mass": _MASS},
+          requires=("igl",))
+def cotan(V, F, *, mass="voronoi"):
+    """libigl cotangent Laplacian ``igl.cotmatrix(V, F)`` and ``igl.massmatrix(V, F, type)``.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    mass : {"voronoi", "barycentric", "none"}
+        Mass matrix type (see the module's ``_MASS`` declaration).
+
+    Returns
+    -------
+    LaplacianResult
+        ``W_ij = (cot a_ij + cot b_ij) / 2`` (Pinkall & Polthier 1993), ``M`` diagonal areas.
+    """
+    import igl
+    W = sp.csr_matrix(igl.cotmatrix(V, F))
+    return LaplacianResult(W=W, M=_igl_mass(igl, V, F, mass))
+
+
+@register("libigl.intrinsic_delaunay", task="laplacian", library="libigl",
+          params={"mass": _MASS}, requires=("igl",))
+def intrinsic_delaunay(V, F, *, mass="voronoi"):
+    """libigl's cotangent Laplacian of the intrinsic Delaunay triangulation.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    mass : {"voronoi", "barycentric", "none"}
+        Mass of the intrinsic triangulation, ``igl.massmatrix_intrinsic`` on its edge lengths
+        (areas are preserved by intrinsic flips, so barycentric totals equal the input's).
+
+    Returns
+    -------
+    LaplacianResult
+        ``W = igl.intrinsic_delaunay_cotmatrix(V, F)[0]`` (Fisher et al. 2006; Bobenko &
+        Springborn 2007): cotangent weights of the intrinsic Delaunay triangulation, all
+        non-negative (POS), but between vertices that need not share a mesh edge (no LOC).
+    """
+    import igl
+    L, l_int, F_int = igl.intrinsic_delaunay_cotmatrix(V, F)
+    W = sp.csr_matrix(L)
+    M = None
+    if mass != "none":
+        kind = {"barycentric": igl.MASSMATRIX_TYPE_BARYCENTRIC,
+                "voronoi": igl.MASSMATRIX_TYPE_VORONOI}[mass]
+        M = sp.csr_matrix(igl.massmatrix_intrinsic(np.ascontiguousarray(l_int),
+                                                   np.ascontiguousarray(F_int), kind))
+        if M.shape[0] < V.shape[0]:  # trailing unreferenced vertices
+            M.resize((V.shape[0], V.shape[0]))
+    return LaplacianResult(W=W, M=M)
