@@ -18,6 +18,9 @@ ENTRY_POINT_GROUP = "mesh_shootout.methods"
 _REGISTRY: dict[str, Method] = {}
 _LOADED = False
 _SKIP = {"methods.base", "methods.registry"}
+# modules (built-in or entry point) that failed to import: name -> reason. A broken backend
+# module costs its own methods, not the registry; `shootout methods` and the tests show it.
+BROKEN: dict[str, str] = {}
 
 
 def register(name: str, *, task: str, library: str, params: dict | None = None,
@@ -58,13 +61,23 @@ def _load_builtins() -> None:
         return
     _LOADED = True
     import methods
-    for info in pkgutil.walk_packages(methods.__path__, prefix="methods."):
+    for info in pkgutil.walk_packages(methods.__path__, prefix="methods.", onerror=_onerror):
         if info.name not in _SKIP:
-            importlib.import_module(info.name)
+            try:
+                importlib.import_module(info.name)
+            except Exception as exc:  # noqa: BLE001 - recorded and shown, never swallowed silently
+                BROKEN[info.name] = f"{type(exc).__name__}: {exc}"
     for ep in entry_points(group=ENTRY_POINT_GROUP):
-        obj = ep.load()
-        if callable(obj) and not isinstance(obj, type(importlib)):
-            obj()
+        try:
+            obj = ep.load()
+            if callable(obj) and not isinstance(obj, type(importlib)):
+                obj()
+        except Exception as exc:  # noqa: BLE001
+            BROKEN[f"entry point {ep.name} ({ep.value})"] = f"{type(exc).__name__}: {exc}"
+
+
+def _onerror(name):
+    BROKEN[name] = "package failed to import"
 
 
 def load_plugins(modules) -> None:

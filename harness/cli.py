@@ -1,0 +1,118 @@
+"""`shootout` command line. Exit codes: 0 finished, 1 internal failure (or `compare` found a
+regression), 2 bad config or arguments (one message, nothing written)."""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from .errors import ShootoutError
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):                       # argparse exits 2 as well; keep one style
+        self.print_usage(sys.stderr)
+        print(f"shootout: error: {message}", file=sys.stderr)
+        raise SystemExit(2)
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = _Parser(prog="shootout", description="Compare discrete Laplacians, smoothing and simplification methods.")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    r = sub.add_parser("run", help="run a config and write its run folder")
+    r.add_argument("config")
+    r.add_argument("--out", help="run folder (default results/<name>)")
+    r.add_argument("--workers", type=int, help="cases in parallel (default: number of cores; 1 for timing-grade numbers)")
+    r.add_argument("--executor", choices=["local", "dask", "serial"], default="local")
+    r.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://host:8786")
+    r.add_argument("--resume", action="store_true", help="skip cases already recorded with status ok")
+    r.add_argument("--timeout", type=float, help="seconds per case before it is killed (status timeout)")
+    r.add_argument("--quiet", action="store_true", help="no progress bar")
+    r.add_argument("--export-benchmark-json", metavar="FILE", help="also write timings in pytest-benchmark's JSON layout")
+    m = sub.add_parser("methods", help="list registered methods")
+    m.add_argument("--task", choices=["laplacian", "smoothing", "simplification"])
+    sub.add_parser("datasets", help="list bundled and procedural meshes")
+    rp = sub.add_parser("report", help="rebuild report.html from a run folder")
+    rp.add_argument("run_dir")
+    c = sub.add_parser("compare", help="compare two run folders; exit 1 on a regression")
+    c.add_argument("run_a")
+    c.add_argument("run_b")
+    c.add_argument("--html", metavar="FILE", help="also write an HTML diff")
+    return p
+
+
+def _cmd_run(a) -> int:
+    from .config import load_config
+    if a.workers is not None and a.workers < 1:
+        raise ShootoutError(f"--workers: expected an integer >= 1, got {a.workers}")
+    if a.timeout is not None and a.timeout <= 0:
+        raise ShootoutError(f"--timeout: expected seconds > 0, got {a.timeout}")
+    if a.executor == "dask" and not a.scheduler:
+        raise ShootoutError("--executor dask needs --scheduler tcp://HOST:PORT")
+    cfg = load_config(a.config)
+    from .runner import run
+    frames = run(cfg, out=a.out, workers=a.workers, executor=a.executor, scheduler=a.scheduler,
+                 resume=a.resume, timeout=a.timeout, quiet=a.quiet,
+                 export_benchmark_json=a.export_benchmark_json)
+    from pathlib import Path
+    out = Path(a.out) if a.out else Path("results") / cfg.name
+    total = {}
+    for df in frames.values():
+        for s, n in df["status"].value_counts().items():
+            total[s] = total.get(s, 0) + int(n)
+    summary = ", ".join(f"{n} {s}" for s, n in sorted(total.items()))
+    print(f"{cfg.name}: {summary or 'no cases'}; report: {out / 'report.html'}")
+    return 0
+
+
+def _cmd_methods(a) -> int:
+    import methods
+    for m in methods.all_methods(a.task):
+        why = m.unavailable_reason()
+        params = ", ".join(p.describe() for p in m.params.values()) or "-"
+        state = "available" if why is None else f"unavailable ({why})"
+        print(f"{m.name:32s} {m.task:15s} {m.library:20s} {state}\n    params: {params}")
+    from methods.registry import BROKEN
+    for mod, why in BROKEN.items():
+        print(f"warning: module {mod} failed to import, its methods are missing: {why}", file=sys.stderr)
+    return 0
+
+
+def _cmd_datasets(a) -> int:
+    from .datasets import describe_all
+    print(f"{'name':24s} {'kind':18s} {'vertices':>9s} {'faces':>9s}  description")
+    for r in describe_all():
+        print(f"{r['name']:24s} {r['kind']:18s} {r['vertices']:9d} {r['faces']:9d}  {r['description']}")
+    return 0
+
+
+def _cmd_report(a) -> int:
+    from pathlib import Path
+    from .report import build_report
+    d = Path(a.run_dir)
+    if not (d / "run.json").exists() and not any(d.glob("*.csv")):
+        raise ShootoutError(f"{d}: not a run folder (no run.json or CSV files)")
+    print(build_report(d))
+    return 0
+
+
+def _cmd_compare(a) -> int:
+    from .compare import compare_runs
+    return compare_runs(a.run_a, a.run_b, html_out=a.html)
+
+
+def main(argv=None) -> int:
+    args = _parser().parse_args(argv)
+    handler = {"run": _cmd_run, "methods": _cmd_methods, "datasets": _cmd_datasets,
+               "report": _cmd_report, "compare": _cmd_compare}[args.command]
+    try:
+        return handler(args)
+    except ShootoutError as exc:
+        print(f"shootout: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("shootout: interrupted; rows finished so far are saved (use --resume)", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

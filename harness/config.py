@@ -1,0 +1,350 @@
+"""YAML config -> validated `Config` -> list of `Case`.
+
+Every problem is collected with its key path (``tasks.smoothing.methods[1].params.step``) and
+raised once as a `ConfigError`; nothing is written before validation passes.
+"""
+from __future__ import annotations
+
+import difflib
+import hashlib
+import itertools
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import yaml
+
+from . import datasets
+from .errors import ConfigError
+from .noise import MODELS
+
+TOP_KEYS = {"name", "repeats", "save_meshes", "plugins", "seed", "meshes", "noise", "tasks",
+            "timeout", "report", "hausdorff_samples"}
+TASK_KEYS = {"methods", "params"}
+NOISE_KEYS = {"model", "levels", "seeds", "fraction"}
+
+
+@dataclass(frozen=True)
+class Case:
+    """One (mesh, noise model, level, seed, method, params): small, picklable, self-describing."""
+
+    case_id: str
+    task: str
+    mesh: dict                      # spec, see harness.datasets
+    mesh_key: str
+    noise_model: str
+    noise_level: float
+    seed: int
+    fraction: float
+    method: str
+    params: dict
+    repeats: int = 1
+    plugins: tuple = ()
+    hausdorff_samples: int = 20000
+
+
+@dataclass
+class Config:
+    name: str
+    raw: dict
+    repeats: int
+    save_meshes: bool
+    plugins: list
+    seed: int
+    timeout: float | None
+    cases: list = field(default_factory=list)
+    report: dict = field(default_factory=dict)
+    source: str = "<config>"
+
+
+def _close(word, options):
+    m = difflib.get_close_matches(str(word), [str(o) for o in options], n=3, cutoff=0.5)
+    return f" (did you mean {', '.join(m)}?)" if m else ""
+
+
+def _is_int(x):
+    return isinstance(x, int) and not isinstance(x, bool)
+
+
+def _is_num(x):
+    return isinstance(x, (int, float)) and not isinstance(x, bool)
+
+
+def case_id(task, mesh_spec, model, level, seed, fraction, method, params) -> str:
+    """Stable 12-hex id: sha1 of the canonical JSON of everything that defines the case."""
+    blob = json.dumps([task, mesh_spec, model, level, seed, fraction, method, params],
+                      sort_keys=True, default=str)
+    return hashlib.sha1(blob.encode()).hexdigest()[:12]
+
+
+def _grid(params: dict) -> list[dict]:
+    """Cartesian product over list-valued parameters."""
+    keys = list(params)
+    vals = [v if isinstance(v, list) else [v] for v in params.values()]
+    return [dict(zip(keys, combo)) for combo in itertools.product(*vals)]
+
+
+def load_config(source, base_dir: Path | None = None) -> Config:
+    """Parse and validate a config given as a path, YAML text or dict."""
+    label = "<config>"
+    if isinstance(source, dict):
+        raw = source
+    else:
+        p = Path(str(source))
+        if "\n" not in str(source) and p.suffix in (".yaml", ".yml", ".json"):
+            label = str(p)
+            if not p.is_file():
+                raise ConfigError(label, [f"config file not found: {p}"])
+            base_dir = base_dir or p.parent
+            text = p.read_text()
+        else:
+            text = str(source)
+        try:
+            raw = yaml.safe_load(text)
+        except yaml.YAMLError as exc:
+            raise ConfigError(label, [f"not valid YAML: {exc}".replace("\n", " ")]) from None
+    if not isinstance(raw, dict):
+        raise ConfigError(label, [f"top level: expected a mapping, got {type(raw).__name__}"])
+    return _validate(raw, label, base_dir or Path.cwd())
+
+
+def _validate(raw: dict, label: str, base_dir: Path) -> Config:
+    import methods
+    P: list[str] = []
+
+    for k in raw:
+        if k not in TOP_KEYS:
+            P.append(f"{k}: unknown key{_close(k, TOP_KEYS)}; expected one of {sorted(TOP_KEYS)}")
+
+    name = raw.get("name", Path(label).stem if label != "<config>" else "run")
+    if not isinstance(name, str) or not name or "/" in name:
+        P.append(f"name: expected a non-empty string without '/', got {name!r}")
+    repeats = raw.get("repeats", 1)
+    if not _is_int(repeats) or repeats < 1:
+        P.append(f"repeats: expected an integer >= 1, got {repeats!r}")
+    save = raw.get("save_meshes", False)
+    if not isinstance(save, bool):
+        P.append(f"save_meshes: expected true or false, got {save!r}")
+    seed = raw.get("seed", 0)
+    if not _is_int(seed) or seed < 0:
+        P.append(f"seed: expected an integer >= 0, got {seed!r}")
+    timeout = raw.get("timeout")
+    if timeout is not None and (not _is_num(timeout) or timeout <= 0):
+        P.append(f"timeout: expected a number of seconds > 0, got {timeout!r}")
+    hs = raw.get("hausdorff_samples", 20000)
+    if not _is_int(hs) or hs < 0:
+        P.append(f"hausdorff_samples: expected an integer >= 0, got {hs!r}")
+    report = raw.get("report", {})
+    if not isinstance(report, dict):
+        P.append(f"report: expected a mapping, got {type(report).__name__}")
+        report = {}
+
+    plugins = raw.get("plugins", []) or []
+    if not isinstance(plugins, list) or not all(isinstance(x, str) for x in plugins):
+        P.append(f"plugins: expected a list of module names, got {plugins!r}")
+        plugins = []
+    for i, mod in enumerate(plugins):
+        try:
+            methods.load_plugins([mod])
+        except Exception as exc:       # any failure of a user's module is a config problem
+            P.append(f"plugins[{i}]: cannot import {mod!r} ({type(exc).__name__}: {exc})")
+    methods.load_plugins([])
+
+    meshes = _check_meshes(raw.get("meshes"), base_dir, P)
+    noises = _check_noise(raw.get("noise", [{"model": "none"}]), P)
+    tasks = _check_tasks(raw.get("tasks"), P)
+
+    if P:
+        raise ConfigError(label, P)
+
+    cases = []
+    seeds_base = seed
+    for spec in meshes:
+        key = datasets.spec_key(spec)
+        is_pair = "clean" in spec or datasets.resolve_bundled(spec.get("bundled", "")) in datasets.PAIRS
+        noise_list = [("given", float("nan"), 0, 1.0)] if is_pair else [
+            (n["model"], float(lv), seeds_base + s, float(n.get("fraction", 1.0)))
+            for n in noises for lv in (n.get("levels") or [0.0]) for s in range(n.get("seeds", 1))]
+        for model, level, s, frac in noise_list:
+            for task, entries in tasks.items():
+                for mname, grid in entries:
+                    for params in grid:
+                        cid = case_id(task, spec, model, level, s, frac, mname, params)
+                        cases.append(Case(cid, task, spec, key, model, level, s, frac, mname,
+                                          params, repeats, tuple(plugins), hs))
+    seen = set()
+    unique = [c for c in cases if not (c.case_id in seen or seen.add(c.case_id))]
+    return Config(name=name, raw=raw, repeats=repeats, save_meshes=save, plugins=plugins,
+                  seed=seed, timeout=float(timeout) if timeout else None, cases=unique,
+                  report=report, source=label)
+
+
+def _check_meshes(meshes, base_dir: Path, P: list) -> list[dict]:
+    out = []
+    if not isinstance(meshes, list) or not meshes:
+        P.append("meshes: expected a non-empty list of meshes")
+        return out
+    for i, m in enumerate(meshes):
+        at = f"meshes[{i}]"
+        if isinstance(m, str):
+            if datasets.resolve_bundled(m):
+                out.append({"bundled": datasets.resolve_bundled(m)})
+            elif m in datasets.PROCEDURAL:
+                out.append({"procedural": m})
+            else:
+                opts = datasets.bundled_names() + list(datasets.PROCEDURAL)
+                P.append(f"{at}: unknown mesh {m!r}{_close(m, opts)}; see `shootout datasets`")
+        elif isinstance(m, dict) and "procedural" in m:
+            kind = m["procedural"]
+            if kind not in datasets.PROCEDURAL:
+                P.append(f"{at}.procedural: unknown procedural mesh {kind!r}{_close(kind, datasets.PROCEDURAL)}; "
+                         f"expected one of {sorted(datasets.PROCEDURAL)}")
+                continue
+            spec = {"procedural": kind}
+            for k, v in m.items():
+                if k == "procedural":
+                    continue
+                if k not in datasets.PROCEDURAL[kind]:
+                    P.append(f"{at}.{k}: unknown parameter of {kind}{_close(k, datasets.PROCEDURAL[kind])}; "
+                             f"expected {sorted(datasets.PROCEDURAL[kind])}")
+                    continue
+                lo, hi = datasets.PROCEDURAL_BOUNDS[k]
+                want_int = _is_int(datasets.PROCEDURAL[kind][k])
+                if not (_is_int(v) if want_int else _is_num(v)) or not lo <= v <= hi:
+                    P.append(f"{at}.{k}: expected {'an integer' if want_int else 'a number'} in [{lo}, {hi}], got {v!r}")
+                    continue
+                spec[k] = v
+            out.append(spec)
+        elif isinstance(m, dict) and "file" in m:
+            extra = set(m) - {"file", "clean"}
+            if extra:
+                P.append(f"{at}: unknown key(s) {sorted(extra)}; a file mesh takes 'file' and optional 'clean'")
+            spec = {}
+            for k in ("file", "clean"):
+                if k not in m:
+                    continue
+                f = m[k]
+                if not isinstance(f, str):
+                    P.append(f"{at}.{k}: expected a path string, got {f!r}")
+                    continue
+                path = Path(f) if Path(f).is_absolute() else base_dir / f
+                if not path.is_file() and Path(f).is_file():
+                    path = Path(f).resolve()
+                if not path.is_file():
+                    P.append(f"{at}.{k}: file not found: {f} (relative paths are resolved against {base_dir})")
+                    continue
+                spec[k] = str(path.resolve())
+            if "file" in spec:
+                out.append(spec)
+        else:
+            P.append(f"{at}: expected a bundled name, {{procedural: ...}} or {{file: ...}}, got {m!r}")
+    return out
+
+
+def _check_noise(noise, P: list) -> list[dict]:
+    out = []
+    if not isinstance(noise, list) or not noise:
+        P.append("noise: expected a non-empty list of {model: ..., levels: [...]}")
+        return out
+    for i, n in enumerate(noise):
+        at = f"noise[{i}]"
+        if not isinstance(n, dict):
+            P.append(f"{at}: expected a mapping like {{model: gaussian_normal, levels: [0.1]}}, got {n!r}")
+            continue
+        for k in n:
+            if k not in NOISE_KEYS:
+                P.append(f"{at}.{k}: unknown key{_close(k, NOISE_KEYS)}; expected {sorted(NOISE_KEYS)}")
+        model = n.get("model")
+        if model not in MODELS:
+            P.append(f"{at}.model: expected one of {list(MODELS)}, got {model!r}{_close(model, MODELS)}")
+            continue
+        entry = {"model": model}
+        levels = n.get("levels")
+        if model == "none":
+            if levels not in (None, [], [0], [0.0]):
+                P.append(f"{at}.levels: model none takes no levels, got {levels!r}")
+            entry["levels"] = [0.0]
+        else:
+            if not isinstance(levels, list) or not levels:
+                P.append(f"{at}.levels: expected a non-empty list of numbers >= 0, got {levels!r}")
+            else:
+                for j, lv in enumerate(levels):
+                    if not _is_num(lv) or not 0 <= lv <= 100:
+                        P.append(f"{at}.levels[{j}]: expected a number in [0, 100] (x mean edge length), got {lv!r}")
+                entry["levels"] = levels
+        seeds = n.get("seeds", 1)
+        if not _is_int(seeds) or not 1 <= seeds <= 1000:
+            P.append(f"{at}.seeds: expected an integer in [1, 1000], got {seeds!r}")
+        entry["seeds"] = seeds if _is_int(seeds) else 1
+        frac = n.get("fraction", 1.0)
+        if "fraction" in n and model != "impulsive":
+            P.append(f"{at}.fraction: only the impulsive model takes a fraction")
+        if not _is_num(frac) or not 0 < frac <= 1:
+            P.append(f"{at}.fraction: expected a number in (0, 1], got {frac!r}")
+        entry["fraction"] = frac
+        out.append(entry)
+    return out
+
+
+def _check_tasks(tasks, P: list) -> dict:
+    import methods
+    from methods.base import TASKS
+    out = {}
+    if not isinstance(tasks, dict) or not tasks:
+        P.append(f"tasks: expected a mapping with one or more of {list(TASKS)}")
+        return out
+    for task, body in tasks.items():
+        at = f"tasks.{task}"
+        if task not in TASKS:
+            P.append(f"{at}: unknown task{_close(task, TASKS)}; expected one of {list(TASKS)}")
+            continue
+        if not isinstance(body, dict):
+            P.append(f"{at}: expected a mapping with 'methods' (and optional 'params'), got {body!r}")
+            continue
+        for k in body:
+            if k not in TASK_KEYS:
+                P.append(f"{at}.{k}: unknown key{_close(k, TASK_KEYS)}; expected {sorted(TASK_KEYS)}")
+        shared = body.get("params", {}) or {}
+        if not isinstance(shared, dict):
+            P.append(f"{at}.params: expected a mapping of parameter -> value or list, got {shared!r}")
+            shared = {}
+        mlist = body.get("methods")
+        if not isinstance(mlist, list) or not mlist:
+            P.append(f"{at}.methods: expected a non-empty list of method names or {{name:, params:}}")
+            continue
+        entries = []
+        for i, m in enumerate(mlist):
+            mat = f"{at}.methods[{i}]"
+            if isinstance(m, str):
+                mname, own = m, {}
+            elif isinstance(m, dict) and isinstance(m.get("name"), str):
+                mname, own = m["name"], m.get("params", {}) or {}
+                extra = set(m) - {"name", "params"}
+                if extra:
+                    P.append(f"{mat}: unknown key(s) {sorted(extra)}; expected 'name' and 'params'")
+                if not isinstance(own, dict):
+                    P.append(f"{mat}.params: expected a mapping, got {own!r}")
+                    own = {}
+            else:
+                P.append(f"{mat}: expected a method name or {{name: ..., params: ...}}, got {m!r}")
+                continue
+            try:
+                meth = methods.get(mname)
+            except KeyError as exc:
+                P.append(f"{mat}: {exc.args[0]}; see `shootout methods`")
+                continue
+            if meth.task != task:
+                P.append(f"{mat}: {mname} is a {meth.task} method, not {task}")
+                continue
+            params = {**shared, **own}
+            for k, v in params.items():
+                src = f"{mat}.params.{k}" if k in own else f"{at}.params.{k}"
+                values = v if isinstance(v, list) else [v]
+                if isinstance(v, list) and not v:
+                    P.append(f"{src}: empty list of values")
+                for val in values:
+                    for prob in meth.param_problems({k: val}):
+                        P.append(f"{src}: {prob}")
+            entries.append((mname, _grid(params)))
+        out[task] = entries
+    return out

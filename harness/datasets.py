@@ -1,0 +1,268 @@
+"""Bundled real meshes (package data) and procedural meshes with exact ground truth.
+
+A mesh spec is a dict, the normalised form of a config entry:
+``{"bundled": "bunny"}``, ``{"procedural": "sphere", "subdivisions": 4}``,
+``{"file": "scan.obj"}`` or ``{"file": "noisy.obj", "clean": "clean.obj"}``.
+`load(spec)` returns a `Source`: the clean `Mesh` and, for ready noisy/clean pairs, the noisy
+vertex positions (same count and order; no synthetic noise is added to a pair).
+"""
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .errors import InvalidMeshError
+from .mesh import Mesh, read_mesh, validate
+
+DATA_DIR = Path(__file__).parent / "data" / "meshes"
+
+# short name -> (file, description); every file stem is accepted too
+BUNDLED = {
+    "bunny": ("bunny.off", "Stanford bunny, decimated, closed"),
+    "stanford-bunny": ("stanford-bunny.obj", "Stanford bunny scan, open (5 holes), 1,113 unreferenced vertices removed"),
+    "fandisk": ("fandisk.obj", "Fandisk CAD part, closed, sharp features"),
+    "armadillo": ("armadillo.obj", "Stanford armadillo, decimated, closed"),
+    "camelhead": ("camelhead.off", "camel head, open (1 boundary loop)"),
+    "fertility": ("fertility.off", "Fertility statue, closed, genus 4"),
+    "max": ("decimated-max.obj", "Max Planck bust, decimated, poor triangles"),
+    "knight": ("decimated-knight.off", "knight, decimated to 1k faces"),
+    "woody": ("woody.obj", "Woody, open, small"),
+    "spot": ("spot.obj", "Spot the cow, closed"),
+}
+# published noisy/clean pairs (Zhang et al. 2015, Guided mesh normal filtering)
+PAIRS = {
+    "fandisk-noisy-0.3": ("denoise/Fandisk0.3/Noisy.obj", "denoise/Fandisk0.3/Original.obj", 0.3,
+                          "Fandisk with Gaussian noise 0.3 x mean edge length (Zhang et al. 2015)"),
+    "sharpsphere-noisy-0.3": ("denoise/SharpSphere0.3/Noisy.obj", "denoise/SharpSphere0.3/Original.obj", 0.3,
+                              "SharpSphere with Gaussian noise 0.3 x mean edge length (Zhang et al. 2015)"),
+}
+PROCEDURAL = {
+    "sphere": {"subdivisions": 3, "radius": 1.0},
+    "torus": {"R": 1.0, "r": 0.4, "resolution": 48},
+    "plane_delaunay": {"n_points": 300, "seed": 0},
+    "plane_nondelaunay": {"n_points": 300, "seed": 0, "flip_fraction": 0.3},
+}
+PROCEDURAL_BOUNDS = {
+    "subdivisions": (0, 9), "radius": (1e-9, 1e9), "R": (1e-9, 1e9), "r": (1e-9, 1e9),
+    "resolution": (3, 4096), "n_points": (4, 2_000_000), "seed": (0, 2**32 - 1),
+    "flip_fraction": (0.0, 1.0),
+}
+
+
+def bundled_names() -> list[str]:
+    """Short names of bundled meshes and pairs, plus file stems that differ from them."""
+    stems = [Path(f).stem for f, _ in BUNDLED.values() if Path(f).stem not in BUNDLED]
+    return sorted(BUNDLED) + sorted(PAIRS) + sorted(stems)
+
+
+def resolve_bundled(name: str) -> str | None:
+    """Canonical short name for a bundled name or file stem, or None."""
+    if name in BUNDLED or name in PAIRS:
+        return name
+    for short, (fname, _) in BUNDLED.items():
+        if Path(fname).stem == name or fname == name:
+            return short
+    return None
+
+
+@dataclass
+class Source:
+    """A clean mesh and, for a ready pair, the given noisy positions."""
+
+    key: str                      # short label for the `mesh` column
+    clean: Mesh
+    noisy_V: np.ndarray | None = None
+    pair_level: float | None = None
+
+
+def spec_key(spec: dict) -> str:
+    """Readable label of a spec for the ``mesh`` column (stable across runs)."""
+    if "bundled" in spec:
+        return spec["bundled"]
+    if "procedural" in spec:
+        extra = ",".join(f"{k}={spec[k]}" for k in sorted(spec) if k != "procedural")
+        return spec["procedural"] + (f"({extra})" if extra else "")
+    return Path(spec["file"]).stem
+
+
+def load(spec) -> Source:
+    """Load the mesh a spec names (cached per process)."""
+    if isinstance(spec, str):
+        spec = {"bundled": spec}
+    return _load_cached(_freeze(spec))
+
+
+def _freeze(spec: dict):
+    return tuple(sorted((k, tuple(v) if isinstance(v, list) else v) for k, v in spec.items()))
+
+
+@functools.lru_cache(maxsize=8)
+def _load_cached(frozen) -> Source:
+    spec = dict(frozen)
+    key = spec_key(spec)
+    if "bundled" in spec:
+        name = resolve_bundled(spec["bundled"])
+        if name is None:
+            raise InvalidMeshError(f"unknown bundled mesh {spec['bundled']!r}")
+        if name in PAIRS:
+            noisy, clean, level, _ = PAIRS[name]
+            return _pair(key, DATA_DIR / noisy, DATA_DIR / clean, level)
+        return Source(key, read_mesh(DATA_DIR / BUNDLED[name][0], name=name))
+    if "procedural" in spec:
+        kind = spec.pop("procedural")
+        params = {**PROCEDURAL[kind], **spec}
+        V, F = GENERATORS[kind](**params)
+        return Source(key, validate(V, F, name=key))
+    if "clean" in spec:
+        return _pair(key, Path(spec["file"]), Path(spec["clean"]), None)
+    return Source(key, read_mesh(spec["file"]))
+
+
+def _pair(key: str, noisy_path: Path, clean_path: Path, level) -> Source:
+    noisy = read_mesh(noisy_path, repair=False)
+    clean = read_mesh(clean_path, repair=False)
+    if noisy.n_vertices != clean.n_vertices:
+        raise InvalidMeshError(f"{key}: noisy ({noisy.n_vertices}) and clean ({clean.n_vertices}) "
+                               "vertex counts differ; a pair needs the same vertices in the same order")
+    if noisy.n_faces != clean.n_faces or not np.array_equal(noisy.F, clean.F):
+        raise InvalidMeshError(f"{key}: noisy and clean faces differ; a pair needs the same connectivity")
+    clean = validate(clean.V, clean.F, name=key)
+    return Source(key, clean, noisy_V=noisy.V[clean.vertex_map], pair_level=level)
+
+
+# ----------------------------------------------------------------------------- procedural
+
+def icosphere(subdivisions: int = 3, radius: float = 1.0):
+    """Icosahedron subdivided ``subdivisions`` times (4x faces each), projected to the sphere.
+
+    Faces: 20 * 4^s. Every vertex lies exactly (to rounding) on the sphere of ``radius``.
+    """
+    t = (1 + 5 ** 0.5) / 2
+    V = np.array([[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t],
+                  [0, -1, -t], [0, 1, -t], [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]], float)
+    F = np.array([[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4],
+                  [11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8],
+                  [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]], np.int64)
+    V /= np.linalg.norm(V, axis=1, keepdims=True)
+    for _ in range(int(subdivisions)):
+        E = np.sort(np.concatenate([F[:, [1, 2]], F[:, [2, 0]], F[:, [0, 1]]]), axis=1)
+        uniq, inv = np.unique(E, axis=0, return_inverse=True)
+        mid = V[uniq[:, 0]] + V[uniq[:, 1]]
+        mid /= np.linalg.norm(mid, axis=1, keepdims=True)
+        m = len(F)
+        e = inv.ravel().reshape(3, m) + len(V)          # midpoint opposite corner k
+        a, b, c = F[:, 0], F[:, 1], F[:, 2]
+        F = np.concatenate([np.stack([a, e[2], e[1]], 1), np.stack([b, e[0], e[2]], 1),
+                            np.stack([c, e[1], e[0]], 1), np.stack([e[0], e[1], e[2]], 1)])
+        V = np.concatenate([V, mid])
+    return V * radius, F
+
+
+def torus(R: float = 1.0, r: float = 0.4, resolution: int = 48):
+    """Torus of major radius R, minor radius r; ``resolution`` x ``resolution // 2`` quads split in two."""
+    n, m = int(resolution), max(3, int(resolution) // 2)
+    u, v = np.meshgrid(np.arange(n) * 2 * np.pi / n, np.arange(m) * 2 * np.pi / m, indexing="ij")
+    V = np.stack([(R + r * np.cos(v)) * np.cos(u), (R + r * np.cos(v)) * np.sin(u), r * np.sin(v)], -1)
+    i, j = np.meshgrid(np.arange(n), np.arange(m), indexing="ij")
+    a = i * m + j
+    b = ((i + 1) % n) * m + j
+    c = ((i + 1) % n) * m + (j + 1) % m
+    d = i * m + (j + 1) % m
+    F = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3), np.stack([a, c, d], -1).reshape(-1, 3)])
+    return V.reshape(-1, 3), F.astype(np.int64)
+
+
+def _plane_points(n_points: int, seed: int):
+    rng = np.random.default_rng(int(seed))
+    k = max(2, int(round(np.sqrt(n_points) / 2)))
+    s = np.linspace(0, 1, k + 1)[:-1]
+    border = np.concatenate([np.stack([s, 0 * s], 1), np.stack([1 + 0 * s, s], 1),
+                             np.stack([1 - s, 1 + 0 * s], 1), np.stack([0 * s, 1 - s], 1)])
+    inner = rng.uniform(0.03, 0.97, size=(max(1, n_points - len(border)), 2))
+    return np.concatenate([border, inner])
+
+
+def plane_delaunay(n_points: int = 300, seed: int = 0):
+    """Delaunay triangulation of seeded random points in the unit square (z = 0)."""
+    from scipy.spatial import Delaunay
+    P = _plane_points(n_points, seed)
+    F = Delaunay(P).simplices.astype(np.int64)
+    V = np.column_stack([P, np.zeros(len(P))])
+    return V, _orient_up(V, F)
+
+
+def _orient_up(V, F):
+    n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])[:, 2]
+    F = F.copy()
+    F[n < 0] = F[n < 0][:, [0, 2, 1]]
+    return F
+
+
+def plane_nondelaunay(n_points: int = 300, seed: int = 0, flip_fraction: float = 0.3):
+    """`plane_delaunay` with a seeded fraction of interior edges flipped.
+
+    Only edges whose quad is strictly convex are flipped, and no two flipped edges share a
+    face, so every flipped edge has opposite angles summing above pi (non-Delaunay) and the
+    triangulation stays valid and planar.
+    """
+    V, F = plane_delaunay(n_points, seed)
+    rng = np.random.default_rng(int(seed) + 1)
+    m = len(F)
+    he = np.concatenate([F[:, [1, 2]], F[:, [2, 0]], F[:, [0, 1]]])   # edge opposite corner k
+    fid = np.tile(np.arange(m), 3)
+    opp = np.concatenate([F[:, 0], F[:, 1], F[:, 2]])
+    key = np.sort(he, axis=1)
+    order = np.lexsort((key[:, 1], key[:, 0]))
+    k_sorted = key[order]
+    same = np.all(k_sorted[1:] == k_sorted[:-1], axis=1)
+    h1, h2 = order[:-1][same], order[1:][same]                        # the two halves of interior edges
+    sel = rng.permutation(len(h1))[: int(round(flip_fraction * len(h1)))]
+    used = np.zeros(m, bool)
+    F = F.copy()
+    P = V[:, :2]
+
+    def cross(o, a, b):
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    for s in sel:                       # a few hundred edges: generation, not a hot path
+        a, b = h1[s], h2[s]
+        f1, f2 = fid[a], fid[b]
+        if used[f1] or used[f2]:
+            continue
+        p, q = he[a]
+        x, y = opp[a], opp[b]
+        # convex quad x-p-y-q: x and y on opposite sides of pq, p and q on opposite sides of xy
+        if cross(P[p], P[q], P[x]) * cross(P[p], P[q], P[y]) >= 0:
+            continue
+        if cross(P[x], P[y], P[p]) * cross(P[x], P[y], P[q]) >= -1e-12:
+            continue
+        F[f1] = [x, p, y]
+        F[f2] = [y, q, x]
+        used[f1] = used[f2] = True
+    return V, _orient_up(V, F)
+
+
+GENERATORS = {"sphere": icosphere, "torus": torus, "plane_delaunay": plane_delaunay,
+              "plane_nondelaunay": plane_nondelaunay}
+
+
+def describe_all() -> list[dict]:
+    """Rows for `shootout datasets`: name, kind, vertex and face counts, description."""
+    rows = []
+    for name, (fname, desc) in BUNDLED.items():
+        m = load({"bundled": name}).clean
+        rows.append({"name": name, "kind": "bundled", "file": fname, "vertices": m.n_vertices,
+                     "faces": m.n_faces, "description": desc})
+    for name, (noisy, _, _, desc) in PAIRS.items():
+        m = load({"bundled": name}).clean
+        rows.append({"name": name, "kind": "noisy/clean pair", "file": noisy, "vertices": m.n_vertices,
+                     "faces": m.n_faces, "description": desc})
+    for name, defaults in PROCEDURAL.items():
+        m = load({"procedural": name}).clean
+        args = ", ".join(f"{k}={v}" for k, v in defaults.items())
+        rows.append({"name": name, "kind": "procedural", "file": f"({args})", "vertices": m.n_vertices,
+                     "faces": m.n_faces, "description": GENERATORS[name].__doc__.strip().splitlines()[0]})
+    return rows

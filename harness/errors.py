@@ -1,0 +1,27 @@
+"""Exceptions of the harness: each becomes a one-line user message, never a traceback."""
+
+
+class ShootoutError(Exception):
+    """Base class for errors the CLI reports as a message."""
+
+
+class ConfigError(ShootoutError):
+    """A config with problems; ``problems`` lists every one as 'key.path: what was expected'."""
+
+    def __init__(self, source: str, problems: list[str]):
+        self.source = source
+        self.problems = list(problems)
+        lines = "\n".join(f"  - {p}" for p in self.problems)
+        super().__init__(f"{source}: {len(self.problems)} problem(s) in config:\n{lines}")
+
+
+class InvalidMeshError(ShootoutError, ValueError):
+    """A mesh that cannot be used (unreadable, empty, NaN, non-triangle, out-of-range indices)."""
+
+
+class MethodUnavailable(ShootoutError):
+    """The library a method needs is not installed."""
+
+
+class MethodFailed(ShootoutError):
+    """A method raised, crashed its process, or returned malformed output."""

@@ -1,0 +1,269 @@
+"""Triangle meshes: reading (OBJ/OFF/PLY/STL), validation with documented repairs, topology.
+
+Repair policy (each repair is recorded in ``Mesh.repairs`` and in the run's rows):
+- polygons with more than 3 corners are fan-triangulated;
+- faces with a repeated vertex index and exact duplicate faces are removed;
+- unreferenced vertices are removed, ``Mesh.vertex_map`` keeps the original index of each kept one.
+Errors (``InvalidMeshError``): unreadable or empty file, unsupported extension, NaN/inf
+coordinates, indices out of range, no face left after the repairs.
+Kept as they are, and reported by `topology`: zero-area faces with distinct corners,
+non-manifold edges and vertices, several components, boundaries.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+
+from methods.scratch.operators import unique_edges
+
+from .errors import InvalidMeshError
+
+SUPPORTED = (".obj", ".off", ".ply", ".stl")
+
+
+@dataclass
+class Mesh:
+    """``V`` (n, 3) float64, ``F`` (m, 3) int64; ``vertex_map[i]`` = index of vertex i in the source."""
+
+    V: np.ndarray
+    F: np.ndarray
+    name: str = ""
+    vertex_map: np.ndarray | None = None
+    repairs: list = field(default_factory=list)
+
+    @property
+    def n_vertices(self) -> int:
+        return int(self.V.shape[0])
+
+    @property
+    def n_faces(self) -> int:
+        return int(self.F.shape[0])
+
+    def diagonal(self) -> float:
+        """Length of the bounding-box diagonal."""
+        return float(np.linalg.norm(self.V.max(0) - self.V.min(0)))
+
+
+# ----------------------------------------------------------------------------- reading
+
+def _fan(polys: list[list[int]]) -> tuple[np.ndarray, int]:
+    tris = []
+    n_poly = 0
+    for p in polys:
+        if len(p) < 3:
+            raise InvalidMeshError(f"face with {len(p)} corners")
+        if len(p) > 3:
+            n_poly += 1
+        for k in range(1, len(p) - 1):
+            tris.append((p[0], p[k], p[k + 1]))
+    return np.asarray(tris, dtype=np.int64).reshape(-1, 3), n_poly
+
+
+def _read_obj(text: str):
+    verts, polys = [], []
+    for ln, line in enumerate(text.splitlines(), 1):
+        if line.startswith("v "):
+            parts = line.split()
+            if len(parts) < 4:
+                raise InvalidMeshError(f"line {ln}: vertex with fewer than 3 coordinates")
+            verts.append(parts[1:4])
+        elif line.startswith("f "):
+            idx = []
+            for tok in line.split()[1:]:
+                i = int(tok.split("/", 1)[0])
+                idx.append(i - 1 if i > 0 else len(verts) + i)
+            polys.append(idx)
+    try:
+        V = np.asarray(verts, dtype=np.float64).reshape(-1, 3)
+    except ValueError as exc:
+        raise InvalidMeshError(f"bad vertex coordinate: {exc}") from None
+    return V, polys
+
+
+def _read_off(text: str):
+    tokens_lines = [ln.split("#", 1)[0].split() for ln in text.splitlines()]
+    tokens_lines = [t for t in tokens_lines if t]
+    if not tokens_lines or not tokens_lines[0][0].endswith("OFF"):
+        raise InvalidMeshError("missing OFF header")
+    head = tokens_lines[0][1:] or tokens_lines[1]
+    start = 1 if tokens_lines[0][1:] else 2
+    nv, nf = int(head[0]), int(head[1])
+    if len(tokens_lines) < start + nv + nf:
+        raise InvalidMeshError(f"truncated OFF: header promises {nv} vertices and {nf} faces, "
+                               f"file has {len(tokens_lines) - start} data lines")
+    V = np.asarray([t[:3] for t in tokens_lines[start:start + nv]], dtype=np.float64).reshape(-1, 3)
+    polys = []
+    for t in tokens_lines[start + nv:start + nv + nf]:
+        k = int(t[0])
+        if len(t) < k + 1:
+            raise InvalidMeshError(f"truncated OFF face line: {' '.join(t)}")
+        polys.append([int(x) for x in t[1:k + 1]])
+    return V, polys
+
+
+def read_mesh(path, name: str | None = None, repair: bool = True) -> Mesh:
+    """Read a triangle mesh file and validate it (see the module docstring for the policy)."""
+    path = Path(path)
+    ext = path.suffix.lower()
+    if ext not in SUPPORTED:
+        raise InvalidMeshError(f"{path.name}: unsupported extension {ext!r}; expected one of {SUPPORTED}")
+    if not path.is_file():
+        raise InvalidMeshError(f"{path}: no such file")
+    if path.stat().st_size == 0:
+        raise InvalidMeshError(f"{path.name}: empty file")
+    notes = []
+    try:
+        if ext in (".obj", ".off"):
+            text = path.read_text(errors="replace")
+            V, polys = _read_obj(text) if ext == ".obj" else _read_off(text)
+            F, n_poly = _fan(polys) if polys else (np.zeros((0, 3), np.int64), 0)
+            if n_poly:
+                notes.append(f"fan-triangulated {n_poly} polygon(s) with more than 3 corners")
+        else:
+            import igl
+            V, F = igl.read_triangle_mesh(str(path))
+            V = np.asarray(V, dtype=np.float64)
+            F = np.asarray(F, dtype=np.int64)
+    except InvalidMeshError as exc:
+        raise InvalidMeshError(f"{path.name}: {exc}") from None
+    except (ValueError, IndexError, UnicodeDecodeError, RuntimeError) as exc:
+        raise InvalidMeshError(f"{path.name}: unreadable ({type(exc).__name__}: {exc})") from None
+    mesh = validate(V, F, name=name or path.stem, repair=repair)
+    mesh.repairs[:0] = notes
+    return mesh
+
+
+def write_obj(path, V: np.ndarray, F: np.ndarray) -> None:
+    """Write a triangle mesh as OBJ (1-based indices, 17 significant digits)."""
+    with open(path, "w") as fh:
+        fh.write("".join(f"v {x:.17g} {y:.17g} {z:.17g}\n" for x, y, z in V))
+        fh.write("".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in F))
+
+
+# ----------------------------------------------------------------------------- validation
+
+def validate(V, F, name: str = "", repair: bool = True) -> Mesh:
+    """Check arrays and apply the documented repairs; raises InvalidMeshError."""
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F)
+    label = f"{name}: " if name else ""
+    if V.ndim != 2 or V.shape[1] != 3 or V.shape[0] == 0:
+        raise InvalidMeshError(f"{label}no vertices (or not 3D): shape {V.shape}")
+    if F.ndim != 2 or F.shape[0] == 0:
+        raise InvalidMeshError(f"{label}no faces")
+    if F.shape[1] != 3:
+        raise InvalidMeshError(f"{label}faces must be triangles, got {F.shape[1]} corners")
+    F = F.astype(np.int64)
+    bad = ~np.isfinite(V).all(axis=1)
+    if bad.any():
+        raise InvalidMeshError(f"{label}{int(bad.sum())} vertices with NaN or inf coordinates "
+                               f"(first: {np.flatnonzero(bad)[:5].tolist()})")
+    if F.min() < 0 or F.max() >= len(V):
+        raise InvalidMeshError(f"{label}face indices out of range [0, {len(V)}): "
+                               f"min {int(F.min())}, max {int(F.max())}")
+    notes = []
+    vmap = np.arange(len(V))
+    if repair:
+        rep = (F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 2] == F[:, 0])
+        if rep.any():
+            notes.append(f"removed {int(rep.sum())} face(s) with a repeated vertex")
+            F = F[~rep]
+        if len(F):
+            key = np.sort(F, axis=1)
+            _, first = np.unique(key, axis=0, return_index=True)
+            if len(first) < len(F):
+                notes.append(f"removed {len(F) - len(first)} duplicate face(s)")
+                F = F[np.sort(first)]
+        if len(F) == 0:
+            raise InvalidMeshError(f"{label}no valid face left after removing degenerate faces")
+        used = np.zeros(len(V), bool)
+        used[F.ravel()] = True
+        if not used.all():
+            notes.append(f"removed {int((~used).sum())} unreferenced vertex/vertices")
+            vmap = np.flatnonzero(used)
+            remap = np.full(len(V), -1, np.int64)
+            remap[vmap] = np.arange(len(vmap))
+            V, F = V[vmap], remap[F]
+    return Mesh(V=np.ascontiguousarray(V), F=np.ascontiguousarray(F), name=name,
+                vertex_map=vmap, repairs=notes)
+
+
+# ----------------------------------------------------------------------------- topology
+
+def edge_face_counts(F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unique undirected edges (e, 2) and how many faces use each (e,)."""
+    E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+    n = int(F.max()) + 1
+    keys, counts = np.unique(E[:, 0] * n + E[:, 1], return_counts=True)
+    return np.stack([keys // n, keys % n], 1), counts
+
+
+def nonmanifold_vertices(F: np.ndarray, n: int) -> np.ndarray:
+    """Indices of vertices whose incident faces form more than one edge-connected fan."""
+    m = len(F)
+    corner_v = F.ravel()                           # corner c = 3 f + k sits at vertex F[f, k]
+    c = np.arange(3 * m)
+    nxt = F[:, [1, 2, 0]].ravel()
+    prv = F[:, [2, 0, 1]].ravel()
+    # each corner touches the two edges (v, nxt) and (v, prv); corners sharing (v, x) are one fan
+    keys = np.concatenate([corner_v * n + nxt, corner_v * n + prv])
+    corners = np.concatenate([c, c])
+    _, inv = np.unique(keys, return_inverse=True)
+    order = np.argsort(inv, kind="stable")
+    g, cs = inv[order], corners[order]
+    same = g[1:] == g[:-1]
+    a, b = cs[:-1][same], cs[1:][same]
+    G = sp.coo_matrix((np.ones(len(a)), (a, b)), shape=(3 * m, 3 * m))
+    _, comp = connected_components(G, directed=False)
+    pairs = np.unique(corner_v * (3 * m) + comp)
+    fans = np.bincount(pairs // (3 * m), minlength=n)
+    return np.flatnonzero(fans > 1)
+
+
+def topology(V: np.ndarray, F: np.ndarray) -> dict:
+    """Topological facts of a triangle mesh.
+
+    Returns a dict with ``n_edges``, ``boundary_edges``, ``boundary_loops`` (components of the
+    boundary-edge graph), ``components`` (of the face graph, over referenced vertices),
+    ``euler`` (chi = V - E + F over referenced vertices), ``genus`` (from
+    chi = 2c - 2g - b, total over components; may be fractional for non-manifold meshes),
+    ``nonmanifold_edges`` (edges with more than two faces), ``nonmanifold_vertices``,
+    ``manifold`` (edge- and vertex-manifold).
+    """
+    n = len(V)
+    edges, counts = edge_face_counts(F)
+    used = np.unique(F)
+    bnd = edges[counts == 1]
+    if len(bnd):
+        Gb = sp.coo_matrix((np.ones(len(bnd)), (bnd[:, 0], bnd[:, 1])), shape=(n, n))
+        nb, lab = connected_components(Gb, directed=False)
+        loops = len(np.unique(lab[np.unique(bnd)]))
+    else:
+        loops = 0
+    Ge = sp.coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n, n))
+    _, lab = connected_components(Ge, directed=False)
+    comps = len(np.unique(lab[used]))
+    chi = len(used) - len(edges) + len(F)
+    nm_edges = int((counts > 2).sum())
+    nm_verts = len(nonmanifold_vertices(F, n))
+    return {
+        "n_edges": int(len(edges)),
+        "boundary_edges": int(len(bnd)),
+        "boundary_loops": int(loops),
+        "components": int(comps),
+        "euler": int(chi),
+        "genus": (2 * comps - loops - chi) / 2,
+        "nonmanifold_edges": nm_edges,
+        "nonmanifold_vertices": nm_verts,
+        "manifold": nm_edges == 0 and nm_verts == 0,
+    }
+
+
+def mean_edge_length(V: np.ndarray, F: np.ndarray) -> float:
+    """Mean length of the unique edges."""
+    E = unique_edges(F)
+    return float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean())

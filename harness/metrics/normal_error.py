@@ -1,0 +1,17 @@
+"""Angle between each face normal of the result and of the clean mesh (same faces)."""
+import numpy as np
+
+from methods.scratch.operators import face_normals
+
+
+def normal_error(V: np.ndarray, V_clean: np.ndarray, F: np.ndarray) -> dict:
+    """``normal_error_deg`` = mean_f angle(n_f, n_f^clean), ``normal_error_rms_deg`` = RMS of it.
+
+    Angles via atan2(|n x m|, n . m), accurate near 0 and 180 degrees. Degenerate faces
+    (zero normal on either side) count as 90 degrees.
+    """
+    N, C = face_normals(V, F), face_normals(V_clean, F)
+    ang = np.degrees(np.arctan2(np.linalg.norm(np.cross(N, C), axis=1), (N * C).sum(1)))
+    deg = (np.linalg.norm(N, axis=1) == 0) | (np.linalg.norm(C, axis=1) == 0)
+    ang[deg] = 90.0
+    return {"normal_error_deg": float(ang.mean()), "normal_error_rms_deg": float(np.sqrt((ang ** 2).mean()))}
