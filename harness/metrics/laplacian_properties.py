@@ -24,8 +24,9 @@ and ``M`` diagonal (or None):
     of ``S`` (dimensionless, so meshes and operators compare). ``psd`` is
     ``min_eig >= -PSD_TOL``. How it is computed (no dense eigensolver):
 
-    1. ``lam_max = max |eig(S)|`` by ARPACK Lanczos (``eigsh``, ``which='LM'``; fast, extreme
-       eigenvalue).
+    1. ``lam_max = max |eig(S)|`` by ARPACK Lanczos (``eigsh``, ``which='LM'``, tol 1e-6; fast,
+       extreme eigenvalue). Small Krylov spaces (``ncv=8``) are used throughout: on this
+       shared 2-core machine larger ones were slower (threaded BLAS contention).
     2. ``A = S - sigma I`` with ``sigma = -PSD_TOL * lam_max`` is factorised by SuperLU with a
        symmetric fill-reducing ordering and diagonal pivoting (``SymmetricMode``,
        ``diag_pivot_thresh=0``), i.e. ``P A P^T = L D L^T``. By Sylvester's law of inertia the
@@ -172,10 +173,12 @@ def laplacian_properties(W, M, V, F, planar: bool | None = None) -> dict:
 
 
 def _edge_keys(F: np.ndarray, n: int) -> np.ndarray:
-    """Sorted unique directed keys ``i*n + j`` of both orientations of every mesh edge."""
+    """Sorted directed keys ``i*n + j`` of both orientations of every mesh edge (with repeats)."""
     i = np.concatenate([F[:, 0], F[:, 1], F[:, 2], F[:, 1], F[:, 2], F[:, 0]])
     j = np.concatenate([F[:, 1], F[:, 2], F[:, 0], F[:, 0], F[:, 1], F[:, 2]])
-    return np.unique(i * np.int64(n) + j)
+    keys = i * np.int64(n) + j
+    keys.sort()
+    return keys
 
 
 def _isin_sorted(keys: np.ndarray, sorted_keys: np.ndarray) -> np.ndarray:
@@ -190,8 +193,10 @@ def _boundary_vertices(F: np.ndarray, n: int) -> np.ndarray:
     """Vertices on an edge with one incident face, or with more than two (non-manifold)."""
     E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
     keys = E[:, 0] * np.int64(n) + E[:, 1]
-    uk, counts = np.unique(keys, return_counts=True)
-    bad = uk[counts != 2]
+    keys.sort()
+    start = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]])
+    counts = np.diff(np.r_[start, keys.size])
+    bad = keys[start[counts != 2]]
     out = np.zeros(n, bool)
     out[bad // n] = True
     out[bad % n] = True
@@ -234,8 +239,9 @@ def _min_eig(W):
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            lam_max = float(np.abs(sla.eigsh(S, k=1, which="LM", return_eigenvectors=False,
-                                             tol=1e-6, maxiter=max(1000, 10 * n))).max())
+            lam_max = float(np.abs(sla.eigsh(S, k=1, which="LM", ncv=min(n - 1, 8),
+                                             return_eigenvectors=False, tol=1e-6,
+                                             maxiter=max(1000, 10 * n))).max())
     except (sla.ArpackNoConvergence, RuntimeError, ValueError):
         lam_max = float(abs(S).sum(axis=1).max())  # Gershgorin bound (>= true value)
     if lam_max == 0.0:
@@ -259,7 +265,7 @@ def _min_eig(W):
             warnings.simplefilter("ignore")
             if psd:
                 op = sla.LinearOperator(A.shape, matvec=lu.solve, dtype=np.float64)
-                ev = sla.eigsh(S, k=1, sigma=sigma, OPinv=op, which="LM",
+                ev = sla.eigsh(S, k=1, sigma=sigma, OPinv=op, which="LM", ncv=min(n - 1, 8),
                                return_eigenvectors=False, tol=1e-10, maxiter=1000)
             else:
                 ev = _most_negative(S, n, lam_max)
@@ -280,8 +286,8 @@ def _most_negative(S, n, lam_max):
     ``1e-6 * lam_max`` (an unconverged Rayleigh quotient is only an upper bound); else None.
     """
     try:
-        return sla.eigsh(S, k=1, which="SA", return_eigenvectors=False, tol=1e-8,
-                         maxiter=max(2000, 20 * n))
+        return sla.eigsh(S, k=1, which="SA", ncv=min(n - 1, 8), return_eigenvectors=False,
+                         tol=1e-8, maxiter=max(2000, 20 * n))
     except sla.ArpackNoConvergence:
         pass
     rng = np.random.default_rng(0)

@@ -121,3 +121,125 @@ def cotan(V, F, *, mass="voronoi"):
     """
     W = op.cotan_weights(V, F)
     return LaplacianResult(W=W, M=op.mass_matrix(V, F, mass))
+
+
+@register("scratch.cotan_normalized", task="laplacian", library="scratch")
+def cotan_normalized(V, F):
+    """Row-normalized cotangent weights: ``W_ij = w_ij / sum_k w_ik``, ``W_ii = -1``, ``M = None``.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+
+    Returns
+    -------
+    LaplacianResult
+        ``(W f)_i = sum_j w_ij (f_j - f_i) / sum_j w_ij`` with ``w_ij`` the cotangent weights,
+        the update direction of explicit smoothing with "normalized weights and no area term"
+        (Bommes' geometry processing lecture); ``M = None``.
+
+    Notes
+    -----
+    Not symmetric (rows are scaled differently); LIN holds (a scaled row of the cotangent
+    operator still annihilates linear functions); POS fails wherever cotangent weights are
+    negative. Policy for rows whose weight sum is not positive (``sum <= 1e-12 * max|w|``: an
+    isolated vertex, or negative cotangents cancelling the positive ones): the row is left as
+    the plain cotangent row (no scaling), so W stays finite and its rows still sum to zero.
+    """
+    W = op.cotan_weights(V, F)
+    s = -W.diagonal()
+    wmax = float(abs(W).max()) if W.nnz else 0.0
+    ok = s > 1e-12 * wmax
+    scale = np.where(ok, 1.0 / np.where(ok, s, 1.0), 1.0)
+    return LaplacianResult(W=sp.diags(scale) @ W, M=None)
+
+
+def mean_value_weights(V: np.ndarray, F: np.ndarray) -> sp.csr_matrix:
+    """Floater's mean value weights ``w_ij = (tan(d_ij/2) + tan(g_ij/2)) / |x_i - x_j|``.
+
+    ``d_ij`` and ``g_ij`` are the angles at ``x_i`` of the two faces sharing edge ij (one on the
+    boundary). ``tan(a/2) = |u x v| / (|u||v| + u . v)`` for the edge vectors u, v leaving the
+    corner, which avoids evaluating the angle. Zero-area corners (angle 0 or pi, or a
+    repeated vertex) and zero-length edges contribute 0. Rows sum to zero (diagonal = minus
+    the row sum); the matrix is not symmetric.
+    """
+    n = V.shape[0]
+    i = np.concatenate([F[:, 0], F[:, 1], F[:, 2]])
+    j = np.concatenate([F[:, 1], F[:, 2], F[:, 0]])
+    k = np.concatenate([F[:, 2], F[:, 0], F[:, 1]])
+    u = V[j] - V[i]
+    v = V[k] - V[i]
+    lu = np.linalg.norm(u, axis=1)
+    lv = np.linalg.norm(v, axis=1)
+    cr = np.linalg.norm(np.cross(u, v), axis=1)
+    den = lu * lv + (u * v).sum(1)
+    ok = (cr > 0) & (den > 0)
+    t = np.where(ok, cr / np.where(ok, den, 1.0), 0.0)          # tan(angle_i / 2)
+    wu = np.where(lu > 0, t / np.where(lu > 0, lu, 1.0), 0.0)   # to j
+    wv = np.where(lv > 0, t / np.where(lv > 0, lv, 1.0), 0.0)   # to k
+    rows = np.concatenate([i, i])
+    cols = np.concatenate([j, k])
+    vals = np.concatenate([wu, wv])
+    keep = rows != cols
+    W = sp.csr_matrix((vals[keep], (rows[keep], cols[keep])), shape=(n, n))
+    W = W - sp.diags(np.asarray(W.sum(axis=1)).ravel())
+    return W.tocsr()
+
+
+@register("scratch.mean_value", task="laplacian", library="scratch")
+def mean_value(V, F):
+    """Floater's mean value Laplacian (Floater 2003), ``M = None``.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+
+    Returns
+    -------
+    LaplacianResult
+        ``W_ij = (tan(d_ij/2) + tan(g_ij/2)) / |x_i - x_j|`` (units 1/length), see
+        `mean_value_weights`; ``M = None``.
+
+    Notes
+    -----
+    On a planar mesh the weights reproduce linear functions (LIN) and are positive (POS,
+    half-angles below pi/2), they are local (LOC), but not symmetric (no SYM): Wardetzky et
+    al. 2007's example that LIN + POS + LOC can be had without SYM.
+    """
+    return LaplacianResult(W=mean_value_weights(V, F), M=None)
+
+
+@register("scratch.intrinsic_delaunay", task="laplacian", library="scratch",
+          params={"mass": _MASS})
+def intrinsic_delaunay(V, F, *, mass="voronoi"):
+    """Cotangent Laplacian of the intrinsic Delaunay triangulation (own edge-flip implementation).
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    mass : {"voronoi", "barycentric", "none"}
+        Mass of the intrinsic triangulation (from its edge lengths), as
+        ``igl.massmatrix_intrinsic``.
+
+    Returns
+    -------
+    LaplacianResult
+        ``W`` equal to ``igl.intrinsic_delaunay_cotmatrix(V, F)`` (to ~1e-12 relative on the
+        bundled meshes); ``M`` as chosen.
+
+    Notes
+    -----
+    Fisher et al. 2006 edge flips on lengths until every interior edge has opposite angles
+    summing to at most pi (`methods.scratch.intrinsic_delaunay`); then cotangent weights
+    (Bobenko & Springborn 2007). All interior weights are >= 0 (POS), SYM and LIN hold, but
+    flipped edges join vertices that share no mesh edge (LOC fails). Boundary edges are never
+    flipped, so a boundary edge with an obtuse opposite angle keeps a negative weight.
+    Degenerate faces: a flat (zero-area) triangle has an angle of pi, so its longest edge is
+    flipped away when the neighbour allows; remaining zero-area faces contribute 0.
+    """
+    from methods.scratch.intrinsic_delaunay import intrinsic_delaunay_cotmatrix, intrinsic_mass
+    W, l_int, F_int = intrinsic_delaunay_cotmatrix(V, F)
+    return LaplacianResult(W=W, M=intrinsic_mass(l_int, F_int, V.shape[0], mass))

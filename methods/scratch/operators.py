@@ -101,6 +101,16 @@ def voronoi_areas(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     C, dbl = corner_cotangents(V, F)
     p0, p1, p2 = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     sq = np.stack([((p2 - p1) ** 2).sum(1), ((p0 - p2) ** 2).sum(1), ((p1 - p0) ** 2).sum(1)], 1)
+    return mixed_voronoi_from_cotangents(F, C, sq, dbl, V.shape[0])
+
+
+def mixed_voronoi_from_cotangents(F: np.ndarray, C: np.ndarray, sq: np.ndarray, dbl: np.ndarray,
+                                  n: int) -> np.ndarray:
+    """Mixed Voronoi vertex areas (n,) from corner cotangents ``C`` (m, 3), squared
+    corner-opposite edge lengths ``sq`` (m, 3) and face double areas ``dbl`` (m,).
+
+    Shared by `voronoi_areas` (extrinsic) and the intrinsic triangulation's mass.
+    """
     # corner 0 touches edges opposite corners 1 (to p2) and 2 (to p1)
     vor = np.stack([sq[:, 1] * C[:, 1] + sq[:, 2] * C[:, 2],
                     sq[:, 2] * C[:, 2] + sq[:, 0] * C[:, 0],
@@ -110,7 +120,7 @@ def voronoi_areas(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     any_obtuse = obtuse.any(axis=1)
     mixed = np.where(obtuse, area[:, None] / 2.0, area[:, None] / 4.0)
     A = np.where(any_obtuse[:, None], mixed, vor)
-    return np.bincount(F.ravel(), weights=A.ravel(), minlength=V.shape[0])
+    return np.bincount(F.ravel(), weights=A.ravel(), minlength=n)
 
 
 def mass_matrix(V: np.ndarray, F: np.ndarray, kind: str = "voronoi") -> sp.csr_matrix | None:
