@@ -181,7 +181,9 @@ def _plane_points(n_points: int, seed: int):
     s = np.linspace(0, 1, k + 1)[:-1]
     border = np.concatenate([np.stack([s, 0 * s], 1), np.stack([1 + 0 * s, s], 1),
                              np.stack([1 - s, 1 + 0 * s], 1), np.stack([0 * s, 1 - s], 1)])
-    inner = rng.uniform(0.03, 0.97, size=(max(1, n_points - len(border)), 2))
+    # interior points keep one border spacing away from the sides, so the angle opposite a
+    # boundary edge stays below 2 atan(1/2) = 53 degrees (no negative boundary cotangent)
+    inner = rng.uniform(1.0 / k, 1 - 1.0 / k, size=(max(1, n_points - len(border)), 2))
     return np.concatenate([border, inner])
 
 

@@ -1,32 +1,29 @@
 """Executors: run cases and yield ``(case, row, meshes)`` as each finishes.
 
-Isolation: every case runs in a fresh child process (forked from a forkserver that has
-numpy, scipy and the harness preloaded), so a segfault or abort in a C++ backend costs one
-row (status ``error``, the signal named) and a case past its timeout is killed (status
-``timeout``). ``serial`` runs in-process without isolation (debugging only).
+Isolation: every case runs in a fresh child process forked from the driver (which has the
+method registry loaded and the meshes of the run cached), so a segfault or abort in a C++
+backend costs one row (status ``error``, the signal named) and a case past its timeout is
+killed (status ``timeout``). The local executor is a single-threaded scheduler waiting on the
+children's pipes and sentinels: no threads in the forking process, and no re-import of the
+user's ``__main__`` (scripts need no ``if __name__ == "__main__"`` guard).
+``serial`` runs in-process without isolation (debugging only).
 """
 from __future__ import annotations
 
 import multiprocessing as mp
 import signal
 import time
-from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
+from multiprocessing.connection import wait as mp_wait
 
 from .config import Case
 from .runner import base_row, run_case
 
-_CTX = None
-
 
 def _context():
-    global _CTX
-    if _CTX is None:
-        try:
-            _CTX = mp.get_context("forkserver")
-            _CTX.set_forkserver_preload(["numpy", "scipy.sparse", "harness.runner", "harness.measure"])
-        except ValueError:            # no forkserver on this platform
-            _CTX = mp.get_context("spawn")
-    return _CTX
+    try:
+        return mp.get_context("fork")
+    except ValueError:                 # no fork on this platform (Windows): spawn still isolates
+        return mp.get_context("spawn")
 
 
 def _child(conn, case, want_meshes):
@@ -43,42 +40,54 @@ def _signal_name(code: int) -> str:
         return f"signal {-code}"
 
 
-def run_isolated(case: Case, timeout: float | None = None, want_meshes: bool = False):
-    """Run one case in a fresh child process; returns ``(row, meshes)``, never raises."""
-    ctx = _context()
-    recv, send = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_child, args=(send, case, want_meshes), daemon=True)
-    t0 = time.perf_counter()
-    proc.start()
-    send.close()
-    result = None
-    try:
-        if recv.poll(timeout):
-            try:
-                result = recv.recv()
-            except EOFError:
-                result = None
-    finally:
-        recv.close()
-    if result is None and proc.is_alive() and timeout is not None and time.perf_counter() - t0 >= timeout:
-        proc.kill()
-        proc.join()
-        row = base_row(case)
+class _Job:
+    """A case running in its own child process."""
+
+    def __init__(self, case: Case, want_meshes: bool):
+        ctx = _context()
+        self.case = case
+        self.conn, send = ctx.Pipe(duplex=False)
+        self.proc = ctx.Process(target=_child, args=(send, case, want_meshes), daemon=True)
+        self.t0 = time.perf_counter()
+        self.proc.start()
+        send.close()
+
+    def collect(self):
+        """``(row, meshes)`` once the pipe is readable (a result, or EOF when the child died)."""
+        try:
+            result = self.conn.recv()
+        except (EOFError, OSError):
+            result = None
+        self.conn.close()
+        self.proc.join(10)
+        if self.proc.is_alive():
+            self.proc.kill()
+            self.proc.join()
+        if result is not None:
+            return result
+        row = base_row(self.case)
+        code = self.proc.exitcode
+        if code is not None and code < 0:
+            row["error"] = f"worker process died: {_signal_name(code)} (the method crashed its process)"
+        else:
+            row["error"] = f"worker process exited with code {code} without a result"
+        return row, {}
+
+    def kill_timeout(self, timeout: float):
+        self.proc.kill()
+        self.proc.join()
+        self.conn.close()
+        row = base_row(self.case)
         row.update(status="timeout", error=f"killed after {timeout:g} s (timeout)")
         return row, {}
-    proc.join(5)
-    if proc.is_alive():
-        proc.kill()
-        proc.join()
-    if result is not None:
-        return result
-    row = base_row(case)
-    code = proc.exitcode
-    if code is not None and code < 0:
-        row["error"] = f"worker process died: {_signal_name(code)} (the method crashed its process)"
-    else:
-        row["error"] = f"worker process exited with code {code} without a result"
-    return row, {}
+
+
+def run_isolated(case: Case, timeout: float | None = None, want_meshes: bool = False):
+    """Run one case in a fresh child process; returns ``(row, meshes)``, never raises."""
+    job = _Job(case, want_meshes)
+    if job.conn.poll(timeout):
+        return job.collect()
+    return job.kill_timeout(timeout)
 
 
 class SerialExecutor:
@@ -108,26 +117,53 @@ class LocalExecutor:
         self.timeout = timeout
 
     def run(self, cases, want_meshes=False):
-        cases = list(cases)
-        with ThreadPoolExecutor(max_workers=self.workers) as pool:
-            pending = {}
-            it = iter(cases)
-            for c in it:
-                pending[pool.submit(run_isolated, c, self.timeout, want_meshes)] = c
-                if len(pending) >= self.workers:
-                    break
-            while pending:
-                done, _ = wait(pending, return_when=FIRST_COMPLETED)
-                for fut in done:
-                    c = pending.pop(fut)
-                    row, meshes = fut.result()
-                    yield c, row, meshes
-                    nxt = next(it, None)
-                    if nxt is not None:
-                        pending[pool.submit(run_isolated, nxt, self.timeout, want_meshes)] = nxt
+        todo = list(cases)
+        _warm_mesh_cache(todo)
+        todo.reverse()
+        running: list[_Job] = []
+        try:
+            while todo or running:
+                while todo and len(running) < self.workers:
+                    running.append(_Job(todo.pop(), want_meshes))
+                wait_s = None
+                if self.timeout is not None:
+                    now = time.perf_counter()
+                    wait_s = max(0.0, min(j.t0 + self.timeout - now for j in running))
+                ready = mp_wait([j.conn for j in running], timeout=wait_s)
+                for job in [j for j in running if j.conn in ready]:
+                    running.remove(job)
+                    row, meshes = job.collect()
+                    yield job.case, row, meshes
+                if self.timeout is not None:
+                    now = time.perf_counter()
+                    for job in [j for j in running if now - j.t0 >= self.timeout and j.conn not in ready]:
+                        running.remove(job)
+                        row, meshes = job.kill_timeout(self.timeout)
+                        yield job.case, row, meshes
+        finally:
+            for job in running:                # interrupted: leave no orphan behind
+                job.proc.kill()
+                job.proc.join()
 
     def close(self):
         pass
+
+
+def _warm_mesh_cache(cases) -> None:
+    """Load each distinct mesh once in the driver so forked children inherit it (best effort:
+    a mesh that fails to load fails again, as an error row, in its cases)."""
+    from . import datasets
+    from .errors import ShootoutError
+    seen = set()
+    for c in cases:
+        key = repr(sorted(c.mesh.items()))
+        if key in seen or len(seen) >= 8:
+            continue
+        seen.add(key)
+        try:
+            datasets.load(c.mesh)
+        except (ShootoutError, ValueError, OSError):
+            pass
 
 
 def make_executor(kind: str, workers: int, timeout: float | None, scheduler: str | None):

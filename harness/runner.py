@@ -75,7 +75,7 @@ def run_case(case: Case, want_meshes: bool = False) -> tuple[dict, dict]:
         why = method.unavailable_reason()
         if why:
             row.update(status="unavailable", error=why)
-            return row
+            return row, meshes
         F = clean.F
         times, result = [], None
         for _ in range(case.repeats):

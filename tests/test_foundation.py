@@ -1,0 +1,324 @@
+"""Foundation: metrics on closed-form cases, datasets, noise determinism, config errors, CLI end to end."""
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from harness import datasets
+from harness.cli import main
+from harness.config import load_config
+from harness.errors import ConfigError, InvalidMeshError
+from harness.measure import TASK_COLUMNS, diverged
+from harness.mesh import read_mesh, topology
+from harness.metrics.hausdorff import hausdorff
+from harness.metrics.normal_error import normal_error
+from harness.metrics.surface_distance import point_surface_distance
+from harness.metrics.triangle_quality import triangle_quality
+from harness.metrics.volume_area import area, volume
+from harness.noise import apply_noise
+from harness.runner import COMMON_COLUMNS
+
+
+# ----------------------------------------------------------------------------- metrics
+
+def test_equilateral_triangle_quality():
+    V = np.array([[0, 0, 0], [1, 0, 0], [0.5, np.sqrt(3) / 2, 0]])
+    q = triangle_quality(V, np.array([[0, 1, 2]]))
+    assert q["min_angle"] == pytest.approx(60, abs=1e-9)
+    assert q["max_angle"] == pytest.approx(60, abs=1e-9)
+    assert q["radius_ratio_mean"] == pytest.approx(1.0, abs=1e-12)
+    assert q["obtuse_fraction"] == 0
+
+
+def test_right_triangle_quality():
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.0]])
+    q = triangle_quality(V, np.array([[0, 1, 2]]))
+    assert q["max_angle"] == pytest.approx(90, abs=1e-9) and q["min_angle"] == pytest.approx(45, abs=1e-9)
+    # 2 r / R for the isosceles right triangle: r = (2 - sqrt 2)/2, R = sqrt(2)/2
+    assert q["radius_ratio_mean"] == pytest.approx(2 * (2 - np.sqrt(2)) / 2 / (np.sqrt(2) / 2), rel=1e-12)
+
+
+def test_sphere_vertices_on_exact_sphere_and_distance():
+    V, F = datasets.icosphere(4, radius=2.0)
+    assert np.abs(np.linalg.norm(V, axis=1) - 2.0).max() < 1e-12
+    # points at radius 3 are at distance >= 1 from the inscribed polyhedron, and close to 1
+    P = 1.5 * V[:50]
+    d = point_surface_distance(P, V, F)
+    assert np.allclose(d, 1.0, atol=1e-12)      # the sphere's vertices are on the mesh
+
+
+def test_volume_and_area_of_sphere_converge():
+    V, F = datasets.icosphere(5)
+    assert volume(V, F) == pytest.approx(4 / 3 * np.pi, rel=2e-3)
+    assert area(V, F) == pytest.approx(4 * np.pi, rel=2e-3)
+
+
+def test_hausdorff_of_translated_copy_equals_translation():
+    V, F = datasets.icosphere(3)
+    t = np.array([0.0, 0.0, 0.05])
+    h = hausdorff(V, F, V + t, F, n_samples=5000)
+    # every point moves by |t|; the closest point on the translated surface is at most |t| away,
+    # and the extreme points along t realise it
+    assert h["hausdorff"] == pytest.approx(0.05, rel=0.02)
+    assert h["hausdorff"] <= 0.05 + 1e-12
+
+
+def test_hausdorff_planes():
+    V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0.0]])
+    F = np.array([[0, 1, 2], [0, 2, 3]])
+    h = hausdorff(V, F, V + [0, 0, 0.3], F, n_samples=1000)
+    assert h["hausdorff"] == pytest.approx(0.3, abs=1e-12)
+    assert h["dist_mean"] == pytest.approx(0.3, abs=1e-12)
+
+
+def test_normal_error_zero_and_flipped():
+    V, F = datasets.icosphere(2)
+    assert normal_error(V, V, F)["normal_error_deg"] == pytest.approx(0, abs=1e-6)
+    c, s_ = np.cos(np.radians(30)), np.sin(np.radians(30))
+    R = np.array([[1, 0, 0], [0, c, -s_], [0, s_, c]])
+    tri = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.0]])
+    assert normal_error(tri @ R.T, tri, np.array([[0, 1, 2]]))["normal_error_deg"] == pytest.approx(30)
+
+
+def test_diverged():
+    V = np.random.default_rng(0).random((10, 3))
+    assert not diverged(V * 1.1, V)
+    assert diverged(V * 1e4, V)
+    W = V.copy()
+    W[3, 1] = np.nan
+    assert diverged(W, V)
+
+
+# ----------------------------------------------------------------------------- datasets, mesh
+
+def test_bundled_meshes_load_with_documented_counts():
+    counts = {"bunny": (3485, 6966), "fandisk": (6475, 12946), "camelhead": (11381, 22704),
+              "fertility": (4494, 9000), "max": (5272, 10540), "knight": (502, 1000),
+              "woody": (694, 1267), "spot": (2930, 5856), "stanford-bunny": (34834, 69451)}
+    for name, (nv, nf) in counts.items():
+        m = datasets.load(name).clean
+        assert (m.n_vertices, m.n_faces) == (nv, nf), name
+    sb = datasets.load("stanford-bunny").clean
+    assert len(sb.vertex_map) == 34834 and sb.vertex_map.max() == 35946
+    assert datasets.resolve_bundled("decimated-knight") == "knight"
+
+
+def test_topology_facts():
+    assert topology(*_vf("fertility"))["genus"] == 4
+    t = topology(*_vf("camelhead"))
+    assert t["boundary_loops"] == 1 and t["manifold"]
+    t = topology(*_vf("stanford-bunny"))
+    assert t["boundary_loops"] == 5
+
+
+def _vf(name):
+    m = datasets.load(name).clean
+    return m.V, m.F
+
+
+def test_planes_delaunay_and_not():
+    from scipy.spatial import Delaunay  # noqa: F401  (generator dependency)
+    V, F = datasets.plane_delaunay(200, 1)
+    V2, F2 = datasets.plane_nondelaunay(200, 1, 0.3)
+    assert np.all(V[:, 2] == 0) and len(F) == len(F2)
+    from methods.scratch.operators import cotan_weights
+    W = cotan_weights(V, F)
+    W2 = cotan_weights(V2, F2)
+    off = W - __import__("scipy.sparse", fromlist=["diags"]).diags(W.diagonal())
+    off2 = W2 - __import__("scipy.sparse", fromlist=["diags"]).diags(W2.diagonal())
+    assert off.min() >= -1e-12                      # Delaunay: non-negative cotan weights
+    assert off2.min() < -1e-3                       # flipped edges: negative weights
+
+
+def test_pair_loads_noisy_and_clean():
+    src = datasets.load("fandisk-noisy-0.3")
+    assert src.noisy_V.shape == src.clean.V.shape and src.pair_level == 0.3
+    assert np.abs(src.noisy_V - src.clean.V).max() > 0
+
+
+def test_polygon_file_is_fan_triangulated(tmp_path):
+    p = tmp_path / "quad.obj"
+    p.write_text("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n")
+    m = read_mesh(p)
+    assert m.n_faces == 2 and "fan-triangulated" in m.repairs[0]
+
+
+@pytest.mark.parametrize("text,ext,needle", [
+    ("", ".obj", "empty"), ("v 0 0 0\nv nan 0 0\nv 1 1 1\nf 1 2 3\n", ".obj", "NaN"),
+    ("v 0 0 0\nf 1 2 3\n", ".obj", "out of range"), ("OFF\n3 1 0\n0 0 0\n", ".off", "truncated"),
+    ("solid", ".xyz", "unsupported")])
+def test_bad_files_raise_clear_errors(tmp_path, text, ext, needle):
+    p = tmp_path / f"bad{ext}"
+    p.write_text(text)
+    with pytest.raises(InvalidMeshError, match=needle):
+        read_mesh(p)
+
+
+# ----------------------------------------------------------------------------- noise
+
+def test_noise_levels_and_models():
+    m = datasets.load("bunny").clean
+    from harness.mesh import mean_edge_length
+    e = mean_edge_length(m.V, m.F)
+    Vn = apply_noise(m.V, m.F, "gaussian_normal", 0.3, 0, "bunny")
+    d = np.linalg.norm(Vn - m.V, axis=1)
+    assert np.sqrt((d ** 2).mean()) == pytest.approx(0.3 * e, rel=0.05)
+    Vi = apply_noise(m.V, m.F, "impulsive", 0.5, 0, "bunny", fraction=0.2)
+    moved = (np.linalg.norm(Vi - m.V, axis=1) > 0).mean()
+    assert moved == pytest.approx(0.2, abs=0.01)
+    assert np.array_equal(apply_noise(m.V, m.F, "none", 0, 0, "bunny"), m.V)
+    assert not np.array_equal(apply_noise(m.V, m.F, "gaussian_random", 0.3, 1, "bunny"),
+                              apply_noise(m.V, m.F, "gaussian_random", 0.3, 2, "bunny"))
+
+
+def test_noise_bit_identical_across_processes():
+    code = ("import hashlib; from harness import datasets; from harness.noise import apply_noise;"
+            "m = datasets.load('bunny').clean;"
+            "print(hashlib.sha256(apply_noise(m.V, m.F, 'gaussian_normal', 0.3, 7, 'bunny').tobytes()).hexdigest())")
+    outs = {subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+            for _ in range(2)}
+    m = datasets.load("bunny").clean
+    import hashlib
+    here = hashlib.sha256(apply_noise(m.V, m.F, "gaussian_normal", 0.3, 7, "bunny").tobytes()).hexdigest()
+    assert outs == {here + "\n"}
+
+
+# ----------------------------------------------------------------------------- config
+
+GOOD = {"name": "t", "meshes": ["knight"], "noise": [{"model": "none"}],
+        "tasks": {"laplacian": {"methods": ["scratch.cotan"]}}}
+
+
+def _problems(cfg):
+    with pytest.raises(ConfigError) as ei:
+        load_config(cfg)
+    return ei.value.problems
+
+
+def test_config_grid_expansion():
+    cfg = load_config({"name": "g", "meshes": ["knight", {"procedural": "sphere", "subdivisions": 2}],
+                       "noise": [{"model": "gaussian_normal", "levels": [0.1, 0.2], "seeds": 2}],
+                       "tasks": {"smoothing": {"methods": [{"name": "scratch.explicit",
+                                                            "params": {"iterations": [1, 2, 3]}}]}}})
+    assert len(cfg.cases) == 2 * 2 * 2 * 3
+    assert len({c.case_id for c in cfg.cases}) == len(cfg.cases)
+    again = load_config(cfg.raw)
+    assert [c.case_id for c in again.cases] == [c.case_id for c in cfg.cases]
+
+
+@pytest.mark.parametrize("patch,needle", [
+    ({"repeats": 0}, "repeats: expected an integer >= 1"),
+    ({"repeat": 3}, "repeat: unknown key (did you mean repeats"),
+    ({"meshes": ["bunyy"]}, "meshes[0]: unknown mesh 'bunyy' (did you mean bunny"),
+    ({"meshes": [{"procedural": "sphere", "subdivisions": "x"}]}, "meshes[0].subdivisions: expected an integer"),
+    ({"meshes": [{"file": "nope.obj"}]}, "meshes[0].file: file not found"),
+    ({"noise": [{"model": "gauss", "levels": [0.1]}]}, "noise[0].model: expected one of"),
+    ({"noise": [{"model": "gaussian_normal", "levels": [-1]}]}, "noise[0].levels[0]"),
+    ({"tasks": {"laplacian": {"methods": ["scratch.cotann"]}}}, "tasks.laplacian.methods[0]: unknown method 'scratch.cotann'"),
+    ({"tasks": {"laplacian": {"methods": [{"name": "scratch.cotan", "params": {"mass": "area"}}]}}},
+     "tasks.laplacian.methods[0].params.mass: parameter 'mass': must be one of"),
+    ({"tasks": {"smoothing": {"methods": ["scratch.cotan"]}}}, "is a laplacian method, not smoothing"),
+    ({"tasks": {"smoothin": {"methods": ["scratch.explicit"]}}}, "tasks.smoothin: unknown task"),
+    ({"plugins": ["no_such_module_xyz"]}, "plugins[0]: cannot import"),
+])
+def test_config_errors_name_key_path(patch, needle):
+    probs = _problems({**GOOD, **patch})
+    assert any(needle in p for p in probs), probs
+
+
+def test_three_mistakes_reported_together_and_nothing_written(tmp_path, capsys):
+    cfg = tmp_path / "bad.yaml"
+    cfg.write_text("name: bad\nrepeats: -1\nmeshes: [bunyy]\nnoise: [{model: none}]\n"
+                   "tasks: {laplacian: {methods: [scratch.cotann]}}\n")
+    out = tmp_path / "out"
+    code = main(["run", str(cfg), "--out", str(out), "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert "3 problem(s)" in err and "repeats" in err and "bunyy" in err and "scratch.cotann" in err
+    assert "Traceback" not in err
+    assert not out.exists()
+
+
+def test_bad_yaml_exit_2(tmp_path, capsys):
+    cfg = tmp_path / "x.yaml"
+    cfg.write_text("name: [unclosed\n")
+    assert main(["run", str(cfg), "--quiet"]) == 2
+    assert "not valid YAML" in capsys.readouterr().err
+
+
+# ----------------------------------------------------------------------------- end to end
+
+def test_cli_end_to_end(tmp_path):
+    cfg = tmp_path / "e2e.yaml"
+    cfg.write_text(
+        "name: e2e\nrepeats: 2\nsave_meshes: true\nmeshes: [knight, {procedural: plane_delaunay, n_points: 80}]\n"
+        "noise: [{model: none}, {model: gaussian_normal, levels: [0.2]}]\n"
+        "tasks:\n  laplacian: {methods: [scratch.uniform, scratch.cotan, libigl.cotan]}\n"
+        "  smoothing: {methods: [{name: scratch.explicit, params: {iterations: [2, 4]}}]}\n"
+        "  simplification: {methods: [fast_simplification.qem], params: {target_ratio: 0.5}}\n")
+    out = tmp_path / "run"
+    r = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(out),
+                        "--workers", "2", "--quiet"], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    for task, n in (("laplacian", 12), ("smoothing", 8), ("simplification", 4)):
+        df = pd.read_csv(out / f"{task}.csv")
+        assert list(df.columns) == COMMON_COLUMNS + TASK_COLUMNS[task]
+        assert len(df) == n and (df["status"] == "ok").all(), df[["method", "error"]]
+        assert (df["repeats"] == 2).all() and (df["time_min_s"] <= df["time_s"]).all()
+        assert df["peak_rss_mb"].gt(0).all()
+    lap = pd.read_csv(out / "laplacian.csv")
+    plane = lap[lap["mesh"].str.startswith("plane_delaunay") & (lap["noise_model"] == "none")]
+    assert len(plane) == 3 and plane["lin_error"].notna().all()      # planar: LIN measured
+    assert plane.set_index("method").loc["scratch.cotan", "LIN"] == True  # noqa: E712
+    assert plane.set_index("method").loc["scratch.uniform", "LIN"] == False  # noqa: E712
+    assert lap[lap["mesh"] == "knight"]["lin_error"].isna().all()
+    meta = json.loads((out / "run.json").read_text())
+    assert meta["status"] == "finished" and meta["versions"]["libigl"] and meta["n_cases"] == 24
+    assert (out / "report.html").stat().st_size > 1000
+    assert len(list((out / "meshes").glob("*.obj"))) == 12 + 4   # results + distinct inputs
+    # the methods and datasets commands list
+    r = subprocess.run([sys.executable, "-m", "harness.cli", "methods"], capture_output=True, text=True)
+    assert r.returncode == 0 and "scratch.cotan" in r.stdout and "fast_simplification.qem" in r.stdout
+    r = subprocess.run([sys.executable, "-m", "harness.cli", "datasets"], capture_output=True, text=True)
+    assert r.returncode == 0 and "armadillo" in r.stdout and "plane_nondelaunay" in r.stdout
+
+
+def test_python_api_run_and_method_errors(tmp_path):
+    import harness
+    import methods
+    frames = harness.run({**GOOD, "name": "api"}, out=tmp_path / "api", workers=1, quiet=True)
+    assert set(frames) == {"laplacian"} and frames["laplacian"]["status"].tolist() == ["ok"]
+    m = methods.get("scratch.cotan")
+    V, F = datasets.icosphere(1)
+    with pytest.raises(ValueError, match="NaN"):
+        m(np.where(np.arange(len(V))[:, None] == 0, np.nan, V), F)
+    with pytest.raises(ValueError, match="out of range"):
+        m(V, F + 100)
+    with pytest.raises(ValueError, match="shape"):
+        m(V[:, :2], F)
+    with pytest.raises(KeyError, match="did you mean scratch.cotan"):
+        methods.get("scratch.cotann")
+
+
+def test_unavailable_library_is_a_row_not_a_crash(tmp_path):
+    import methods
+    from methods import LaplacianResult, register
+    from methods.scratch.operators import cotan_weights
+
+    name = "testlib.needs_missing"
+    if name not in [m.name for m in methods.all_methods()]:
+        @register(name, task="laplacian", library="nolib", requires=("no_such_library_qq",))
+        def _f(V, F):
+            return LaplacianResult(cotan_weights(V, F))
+    assert name not in methods.available()
+    frames = harness_run_serial({**GOOD, "name": "u", "tasks": {"laplacian": {"methods": [name]}}}, tmp_path)
+    row = frames["laplacian"].iloc[0]
+    assert row["status"] == "unavailable" and "no_such_library_qq" in row["error"]
+
+
+def harness_run_serial(cfg, tmp_path):
+    import harness
+    return harness.run(cfg, out=tmp_path / "s", executor="serial", quiet=True)
