@@ -68,3 +68,107 @@ def test_uniform_exact(path):
     assert abs(r.W - ref).max() == 0.0
     deg = np.asarray(A.sum(axis=1)).ravel()
     assert np.array_equal(r.M.diagonal(), np.where(deg > 0, deg, 1.0))
+
+
+@pytest.mark.parametrize("path", MESH_FILES, ids=lambda p: p.stem)
+def test_intrinsic_delaunay_matches_libigl(path):
+    """W vs igl.intrinsic_delaunay_cotmatrix to 1e-8; voronoi mass vs igl to 1e-10.
+
+    The barycentric mass of an intrinsic Delaunay triangulation depends on how cocircular
+    quads are split (fandisk has many), so it is checked against ``igl.massmatrix_intrinsic``
+    on our own triangulation (1e-10), and its total against the surface area (1e-12).
+    """
+    from methods.scratch.intrinsic_delaunay import (cotangents_from_lengths,
+                                                    intrinsic_delaunay_triangulation)
+    V, F = load(path)
+    r = methods.get("scratch.intrinsic_delaunay")(V, F, mass="voronoi")
+    L, l_ref, F_ref = igl.intrinsic_delaunay_cotmatrix(V, F)
+    assert rel_err(r.W, L) < 1e-8
+    Mv = igl.massmatrix_intrinsic(l_ref, F_ref, igl.MASSMATRIX_TYPE_VORONOI)
+    assert rel_err(r.M, Mv) < 1e-10
+    l_int, F_int, _ = intrinsic_delaunay_triangulation(V, F)
+    rb = methods.get("scratch.intrinsic_delaunay")(V, F, mass="barycentric")
+    Mb = igl.massmatrix_intrinsic(l_int, F_int, igl.MASSMATRIX_TYPE_BARYCENTRIC)
+    Mb.resize(rb.M.shape)
+    assert rel_err(rb.M, Mb) < 1e-10
+    area = igl.doublearea(V, F).sum() / 2
+    assert abs(rb.M.diagonal().sum() - area) < 1e-12 * area
+    # every flippable interior edge of our result is Delaunay: cot a + cot b >= -1e-9
+    C, _ = cotangents_from_lengths(l_int)
+    W_int = 0.5 * np.concatenate([C[:, 0], C[:, 1], C[:, 2]])
+    from methods.scratch.intrinsic_delaunay import halfedge_twins
+    tw = halfedge_twins(F_int)
+    h = np.flatnonzero(tw >= 0)
+    cot_of = lambda hh: C[hh // 3, hh % 3]
+    assert (cot_of(h) + cot_of(tw[h])).min() > -1e-9
+
+
+def test_mean_value_and_normalized_against_loops():
+    """Mean value weights vs a direct per-face loop with arccos/tan (1e-12 relative);
+    cotan_normalized = rows of igl.cotmatrix divided by minus its diagonal (1e-12)."""
+    V, F = load(MESH_DIR / "decimated-knight.off")
+    n = V.shape[0]
+    ref = np.zeros((n, n))
+    for f in F:
+        for k in range(3):
+            i, j, l = f[k], f[(k + 1) % 3], f[(k + 2) % 3]
+            u, v = V[j] - V[i], V[l] - V[i]
+            ang = np.arccos(np.clip(u @ v / np.linalg.norm(u) / np.linalg.norm(v), -1, 1))
+            ref[i, j] += np.tan(ang / 2) / np.linalg.norm(u)
+            ref[i, l] += np.tan(ang / 2) / np.linalg.norm(v)
+    ref -= np.diag(ref.sum(1))
+    W = methods.get("scratch.mean_value")(V, F).W
+    assert np.abs(W.toarray() - ref).max() < 1e-12 * np.abs(ref).max()
+    L = igl.cotmatrix(V, F)
+    Wn = methods.get("scratch.cotan_normalized")(V, F).W
+    refn = sp.diags(-1.0 / L.diagonal()) @ L
+    assert rel_err(Wn, refn) < 1e-12
+    assert np.allclose(Wn.diagonal(), -1.0)
+
+
+def test_robust_tufted_equals_intrinsic_delaunay_on_closed_mesh():
+    """On a closed manifold mesh the tufted cover's intrinsic Delaunay Laplacian (no
+    mollification) is the intrinsic Delaunay Laplacian: 1e-8 relative on bunny."""
+    pytest.importorskip("robust_laplacian")
+    V, F = load(MESH_DIR / "bunny.off")
+    r = methods.get("robust.tufted")(V, F, mollify_factor=0.0)
+    L, _, _ = igl.intrinsic_delaunay_cotmatrix(V, F)
+    assert rel_err(r.W, L) < 1e-8
+
+
+def test_robust_tufted_rows_sum_to_zero_with_unreferenced_vertices():
+    pytest.importorskip("robust_laplacian")
+    V, F = load(MESH_DIR / "stanford-bunny.obj")
+    W = methods.get("robust.tufted")(V, F).W
+    assert np.abs(np.asarray(W.sum(axis=1))).max() < 1e-10 * abs(W).max()
+
+
+def _degenerate_mesh():
+    """A planar fan plus: a zero-area face (collinear corners), a face with a repeated vertex,
+    a needle (area ~1e-14), a duplicated vertex (zero-length edge), an isolated vertex."""
+    V = np.array([[0, 0, 0], [1, 0, 0], [0.5, 1, 0], [-0.5, 1, 0], [-1, 0, 0], [0, -1, 0],
+                  [2, 0, 0],            # 6: collinear with 0, 1
+                  [0.5, 1e-14, 0],      # 7: needle apex on edge 0-1
+                  [1, 0, 0],            # 8: duplicate of vertex 1
+                  [5, 5, 5]], float)    # 9: isolated
+    F = np.array([[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 5], [0, 5, 1],
+                  [0, 1, 6],            # zero area (collinear)
+                  [1, 1, 2],            # repeated vertex
+                  [1, 0, 7],            # needle
+                  [1, 8, 2]], np.int64)  # zero-length edge 1-8
+    return V, F
+
+
+@pytest.mark.parametrize("name", ["scratch.uniform", "scratch.umbrella", "scratch.cotan",
+                                  "scratch.cotan_normalized", "scratch.mean_value",
+                                  "scratch.intrinsic_delaunay", "robust.tufted"])
+def test_degenerate_triangles_give_finite_weights(name):
+    if not methods.get(name).is_available:
+        pytest.skip(f"{name} unavailable")
+    V, F = _degenerate_mesh()
+    r = methods.get(name)(V, F)
+    W = sp.csr_matrix(r.W)
+    assert np.isfinite(W.data).all()
+    assert np.abs(np.asarray(W.sum(axis=1))).max() <= 1e-9 * max(1.0, abs(W).max())
+    if r.M is not None:
+        assert np.isfinite(r.M.data).all()

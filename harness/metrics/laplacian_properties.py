@@ -14,7 +14,9 @@ and ``M`` diagonal (or None):
     only for planar meshes: ``max_i |(W X)_i| / (max|W| * diag)`` over interior vertices i
     (referenced, not on a boundary or non-manifold edge), with ``X`` (n, 2) the coordinates
     in the mesh plane (principal axes of the referenced vertices) and ``diag`` the bounding
-    box diagonal of the referenced vertices; ``|.|`` is the Euclidean norm of the 2-vector.
+    box diagonal of the referenced vertices (world axes, as everywhere in the contract: a
+    rotation of the mesh changes ``lin_error`` by the ratio of the diagonals, never the LIN
+    flag); ``|.|`` is the Euclidean norm of the 2-vector.
     ``LIN`` is ``lin_error <= LIN_TOL``. Both None (blank) for non-planar meshes.
 ``neg_weights``
     fraction of off-diagonal stored entries with ``W_ij < -ZERO_TOL * max|W|``.

@@ -1,0 +1,234 @@
+"""laplacian_properties on closed-form cases: Wardetzky et al. 2007's table on planar meshes.
+
+Planar meshes are built here (seeded): a Delaunay triangulation of random points in the unit
+square whose boundary edges all have opposite angles <= pi/2 (interior points kept at least
+half a boundary spacing away from the sides, so no point lies in a boundary edge's diametral
+disk: POS then holds for the cotangent weights on *every* edge, boundary included), and a
+non-Delaunay copy with a set of independent convex interior edges flipped (opposite angles
+then sum above pi).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from scipy.spatial import Delaunay
+
+import methods
+from harness.metrics.laplacian_properties import COLUMNS, laplacian_properties
+
+MESH_DIR = Path(__file__).resolve().parents[1] / "harness" / "data" / "meshes"
+
+
+def plane_delaunay(n_inner=250, k=8, seed=0):
+    rng = np.random.default_rng(seed)
+    s = np.arange(k) / k
+    border = np.concatenate([np.c_[s, 0 * s], np.c_[1 + 0 * s, s], np.c_[1 - s, 1 + 0 * s],
+                             np.c_[0 * s, 1 - s]])
+    margin = 0.6 / k                      # > half the boundary spacing 1/k
+    inner = rng.uniform(margin, 1 - margin, size=(n_inner, 2))
+    P = np.concatenate([border, inner])
+    F = Delaunay(P).simplices.astype(np.int64)
+    V = np.c_[P, np.zeros(len(P))]
+    n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])[:, 2]
+    F[n < 0] = F[n < 0][:, [0, 2, 1]]
+    return V, F
+
+
+def plane_nondelaunay(seed=0, fraction=0.3):
+    V, F = plane_delaunay(seed=seed)
+    rng = np.random.default_rng(seed + 1)
+    m = len(F)
+    he = np.concatenate([F[:, [1, 2]], F[:, [2, 0]], F[:, [0, 1]]])
+    opp = np.concatenate([F[:, 0], F[:, 1], F[:, 2]])
+    fid = np.tile(np.arange(m), 3)
+    key = np.sort(he, axis=1)
+    order = np.lexsort((key[:, 1], key[:, 0]))
+    same = np.all(key[order][1:] == key[order][:-1], axis=1)
+    h1, h2 = order[:-1][same], order[1:][same]
+    used = np.zeros(m, bool)
+    P = V[:, :2]
+
+    def orient(a, b, c):
+        return (P[b, 0] - P[a, 0]) * (P[c, 1] - P[a, 1]) - (P[b, 1] - P[a, 1]) * (P[c, 0] - P[a, 0])
+
+    flipped = 0
+    for s in rng.permutation(len(h1))[: int(fraction * len(h1))]:   # test setup, not a hot path
+        a, b = h1[s], h2[s]
+        f1, f2 = fid[a], fid[b]
+        p, q = he[a]
+        x, y = opp[a], opp[b]
+        if used[f1] or used[f2]:
+            continue
+        if orient(p, q, x) * orient(p, q, y) >= 0 or orient(x, y, p) * orient(x, y, q) >= 0:
+            continue
+        F[f1], F[f2] = [x, p, y], [y, q, x]
+        used[f1] = used[f2] = True
+        flipped += 1
+    n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])[:, 2]
+    F[n < 0] = F[n < 0][:, [0, 2, 1]]
+    assert flipped > 10
+    return V, F
+
+
+@pytest.fixture(scope="module")
+def planes():
+    return {"D": plane_delaunay(), "N": plane_nondelaunay()}
+
+
+def props(name, V, F, **params):
+    r = methods.get(name)(V, F, **params)
+    p = laplacian_properties(r.W, r.M, V, F)
+    assert set(p) == set(COLUMNS)
+    return p
+
+
+def flags(p):
+    return (p["SYM"], p["LOC"], p["LIN"], p["POS"])
+
+
+def test_planes_are_what_they_claim(planes):
+    igl = pytest.importorskip("igl")
+    V, F = planes["D"]
+    assert igl.is_intrinsic_delaunay(igl.edge_lengths(V, F), F).all()
+    W = igl.cotmatrix(V, F)
+    assert W[~np.eye(W.shape[0], dtype=bool)].min() >= -1e-12   # all weights >= 0
+    V, F = planes["N"]
+    assert not igl.is_intrinsic_delaunay(igl.edge_lengths(V, F), F).all()
+    assert np.all(igl.doublearea(V, F) > 0)
+
+
+@pytest.mark.parametrize("name", ["scratch.cotan", "libigl.cotan"])
+def test_cotan_on_delaunay_plane_has_all_four(planes, name):
+    p = props(name, *planes["D"])
+    assert flags(p) == (True, True, True, True)
+    assert p["psd"] is True and p["min_eig"] >= -1e-10
+    assert p["sym_error"] <= 1e-14 and p["lin_error"] < 1e-13 and p["neg_weights"] == 0
+    assert p["operator_symmetric"] is False        # M^-1 W with non-uniform Voronoi areas
+    assert laplacian_properties(methods.get(name)(*planes["D"], mass="none").W, None,
+                                *planes["D"])["operator_symmetric"] is True
+
+
+def test_cotan_on_nondelaunay_plane_loses_pos_only(planes):
+    p = props("scratch.cotan", *planes["N"])
+    assert flags(p) == (True, True, True, False)
+    assert p["neg_weights"] > 0.01
+    assert p["psd"] is True        # the FEM stiffness matrix is PSD even with negative weights
+
+
+def test_uniform_fails_lin_and_umbrella_is_not_pointwise_symmetric(planes):
+    for key in "DN":
+        V, F = planes[key]
+        p = props("scratch.uniform", V, F)
+        assert flags(p) == (True, True, False, True)
+        assert p["lin_error"] > 1e-3 and p["sym_error"] == 0.0
+        assert p["operator_symmetric"] is True and p["psd"] is True
+        q = props("scratch.umbrella", V, F)
+        assert flags(q) == flags(p) and q["lin_error"] == p["lin_error"]
+        assert q["operator_symmetric"] is False     # D W with D = 1/N_i
+
+
+def test_mean_value_is_lin_pos_loc_but_not_sym(planes):
+    for key in "DN":
+        p = props("scratch.mean_value", *planes[key])
+        assert flags(p) == (False, True, True, True)
+        assert p["sym_error"] > 0.1 and p["lin_error"] < 1e-12
+
+
+def test_intrinsic_delaunay_is_pos_lin_sym_but_not_loc(planes):
+    for name in ("scratch.intrinsic_delaunay", "libigl.intrinsic_delaunay"):
+        p = props(name, *planes["N"])
+        assert flags(p) == (True, False, True, True)
+        assert p["loc_violations"] > 0 and p["psd"] is True
+        # already Delaunay: no flips, so it is the cotangent Laplacian (local)
+        assert flags(props(name, *planes["D"])) == (True, True, True, True)
+
+
+def test_cotan_normalized_is_lin_not_sym(planes):
+    p = props("scratch.cotan_normalized", *planes["D"])
+    assert flags(p) == (False, True, True, True)
+
+
+def test_lin_is_rotation_invariant_and_blank_off_plane(planes):
+    V, F = planes["N"]
+    c, s = np.cos(0.7), np.sin(0.7)
+    R = np.array([[1, 0, 0], [0, c, -s], [0, s, c]]) @ np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+    Vr = V @ R.T + [3.0, -2.0, 1.0]
+    p0 = props("scratch.uniform", V, F)
+    p1 = props("scratch.uniform", Vr, F)
+    # |W X| is invariant; the normalising bbox diagonal (world axes, CONTRACT) is not
+    diag = lambda P: np.linalg.norm(P.max(0) - P.min(0))
+    assert p1["lin_error"] * diag(Vr) == pytest.approx(p0["lin_error"] * diag(V), rel=1e-9)
+    assert props("scratch.cotan", Vr, F)["LIN"] is True
+    Vb = V.copy()
+    Vb[:, 2] = 0.1 * np.sin(5 * V[:, 0])             # bent: not planar
+    pb = props("scratch.cotan", Vb, F)
+    assert pb["lin_error"] is None and pb["LIN"] is None
+    # forcing planar=False blanks it too
+    r = methods.get("scratch.cotan")(V, F)
+    assert laplacian_properties(r.W, r.M, V, F, planar=False)["LIN"] is None
+
+
+def test_min_eig_closed_form():
+    """Small matrices with known spectra: path graph (PSD, eigenvalue 0) and a path whose
+    middle edge has a negative weight (one negative eigenvalue), checked against a dense
+    eigensolver to 1e-8."""
+    n = 40
+    V = np.c_[np.arange(n, dtype=float), np.zeros(n), np.zeros(n)]
+    F = np.c_[np.arange(n - 2), np.arange(1, n - 1), np.arange(2, n)]   # collinear: no area
+    w = np.ones(n - 1)
+    A = sp.diags([w, w], [1, -1], shape=(n, n)).tocsr()
+    W = A - sp.diags(np.asarray(A.sum(1)).ravel())
+    p = laplacian_properties(W, None, V, F, planar=False)
+    assert p["psd"] is True and abs(p["min_eig"]) < 1e-12
+    w[n // 2] = -0.5
+    A = sp.diags([w, w], [1, -1], shape=(n, n)).tocsr()
+    W = A - sp.diags(np.asarray(A.sum(1)).ravel())
+    ev = np.linalg.eigvalsh(-W.toarray())
+    p = laplacian_properties(W, None, V, F, planar=False)
+    assert p["psd"] is False and p["POS"] is False
+    assert p["min_eig"] == pytest.approx(ev.min() / np.abs(ev).max(), rel=1e-8)
+
+
+def test_bunny_spectrum_against_dense():
+    """min_eig of mean value weights on knight (1k faces) equals the dense eigvalsh value."""
+    igl = pytest.importorskip("igl")
+    V, F = igl.read_triangle_mesh(str(MESH_DIR / "decimated-knight.off"))
+    for name in ("scratch.mean_value", "scratch.cotan"):
+        W = methods.get(name)(V, F).W
+        S = -(W + W.T).toarray() / 2
+        ev = np.linalg.eigvalsh(S)
+        p = laplacian_properties(W, None, V, F)
+        assert p["min_eig"] == pytest.approx(ev.min() / np.abs(ev).max(), rel=1e-6, abs=1e-12)
+        assert p["psd"] is bool(ev.min() >= -1e-10 * np.abs(ev).max())
+
+
+def test_nonfinite_and_isolated_do_not_crash():
+    """libigl on a zero-area face gives NaN/inf: value columns blank, pattern columns kept.
+    Isolated vertices and a zero matrix are measured without errors."""
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [2, 0, 0], [7, 7, 7]], float)
+    F = np.array([[0, 1, 2], [0, 1, 3]], np.int64)          # second face is flat
+    W = sp.csr_matrix(np.array([[np.nan, 1, 1, np.inf, 0], [1, -2, 1, 0, 0],
+                                [1, 1, -2, 0, 0], [np.inf, 0, 0, -np.inf, 0], [0] * 5]))
+    p = laplacian_properties(W, None, V, F)
+    assert p["nnz"] == 12 and p["LOC"] is True
+    assert p["sym_error"] is None and p["SYM"] is None and p["psd"] is None and p["POS"] is None
+    p = laplacian_properties(sp.csr_matrix((5, 5)), None, V, F)
+    assert p["SYM"] is True and p["nnz"] == 0
+    r = methods.get("scratch.cotan")(V, F)
+    p = laplacian_properties(r.W, r.M, V, F)
+    assert p["psd"] is True and p["LOC"] is True and p["operator_symmetric"] is not None
+
+
+def test_properties_on_a_real_mesh_have_expected_flags():
+    """bunny (closed): cotan SYM/LOC and PSD, LIN blank, some negative weights; robust and
+    intrinsic Delaunay POS but not LOC."""
+    igl = pytest.importorskip("igl")
+    V, F = igl.read_triangle_mesh(str(MESH_DIR / "bunny.off"))
+    p = props("scratch.cotan", V, F)
+    assert (p["SYM"], p["LOC"], p["LIN"], p["psd"]) == (True, True, None, True)
+    assert 0 < p["neg_weights"] < 0.5
+    q = props("scratch.intrinsic_delaunay", V, F)
+    assert (q["SYM"], q["LOC"], q["POS"], q["psd"]) == (True, False, True, True)
