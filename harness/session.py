@@ -90,7 +90,11 @@ def run_session(cfg: Config, out=None, workers=None, executor="local", scheduler
         meta.update(finished=now_iso(), wall_s=round(time.perf_counter() - t0, 3), status_counts=counts)
         folder.write_run_json(meta)
     from .report import build_report
-    build_report(out_dir)
+    try:
+        build_report(out_dir)
+    except Exception as exc:  # the rows are safe on disk; a report bug must not lose the run
+        print(f"shootout: warning: report.html could not be built ({type(exc).__name__}: {exc}); "
+              f"rows are in {out_dir}; retry with `shootout report {out_dir}`", file=sys.stderr)
     if export_benchmark_json:
         from .benchmark_json import export_benchmark_json as _export
         _export(out_dir, export_benchmark_json)
