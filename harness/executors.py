@@ -11,7 +11,10 @@ user's ``__main__`` (scripts need no ``if __name__ == "__main__"`` guard).
 from __future__ import annotations
 
 import multiprocessing as mp
+import os
+import select
 import signal
+import threading
 import time
 from multiprocessing.connection import wait as mp_wait
 
@@ -26,7 +29,32 @@ def _context():
         return mp.get_context("spawn")
 
 
-def _child(conn, case, want_meshes):
+def _die_with_driver(conn, own_reader_fd) -> None:
+    """In the child: exit as soon as no process can read our result any more (driver killed).
+
+    A forked child outlives a SIGKILLed driver (it is re-parented), so a sleeping or long case
+    would run on as an orphan. Linux reports POLLERR on a pipe's write end once every read end
+    is closed. The child first closes its inherited copy of its own read end; the copies of
+    older siblings' read ends it inherited are released when it exits, so after the driver
+    dies the children go youngest first, each in turn.
+    """
+    if own_reader_fd is not None:
+        os.close(own_reader_fd)
+    if not hasattr(select, "poll"):
+        return
+
+    def watch():
+        p = select.poll()
+        p.register(conn.fileno(), 0)  # no events asked: only POLLERR/POLLHUP/POLLNVAL wake us
+        while not p.poll():
+            pass
+        os._exit(70)
+
+    threading.Thread(target=watch, name="die-with-driver", daemon=True).start()
+
+
+def _child(conn, case, want_meshes, own_reader_fd=None):
+    _die_with_driver(conn, own_reader_fd)
     try:
         conn.send(run_case(case, want_meshes=want_meshes))
     finally:
@@ -47,7 +75,8 @@ class _Job:
         ctx = _context()
         self.case = case
         self.conn, send = ctx.Pipe(duplex=False)
-        self.proc = ctx.Process(target=_child, args=(send, case, want_meshes), daemon=True)
+        own = self.conn.fileno() if ctx.get_start_method() == "fork" else None   # inherited copy
+        self.proc = ctx.Process(target=_child, args=(send, case, want_meshes, own), daemon=True)
         self.t0 = time.perf_counter()
         self.proc.start()
         send.close()
