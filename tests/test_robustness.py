@@ -1,0 +1,109 @@
+"""Isolation and timeouts (issue 7): a method that kills its process or never returns costs one
+row, and the run goes on.
+
+The misbehaving methods live in tests/plugins/crashy.py and are loaded the way users load
+theirs, through ``plugins: [tests.plugins.crashy]`` (the repository root on the path of the
+driver and of every child).
+"""
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:          # so `tests.plugins.crashy` imports here and in forked children
+    sys.path.insert(0, str(ROOT))
+
+import harness  # noqa: E402
+from harness.results import load_csv  # noqa: E402
+
+SHOOTOUT = Path(sys.executable).with_name("shootout")
+MESHES = ["knight", {"procedural": "sphere", "subdivisions": 2}]
+
+
+def env_with_root():
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT)] + [p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p])
+    return env
+
+
+def read_all(out: Path) -> pd.DataFrame:
+    return pd.concat([load_csv(p) for p in sorted(out.glob("*.csv"))], ignore_index=True)
+
+
+def test_abort_segfault_and_sleep_through_the_cli(tmp_path):
+    """`shootout run cfg --timeout 3`: per mesh one SIGABRT error row, one SIGSEGV error row, one
+    timeout row; every other row ok; exit 0; run.json records the workers and the counts."""
+    cfg = {"name": "crash", "plugins": ["tests.plugins.crashy"], "meshes": MESHES,
+           "noise": [{"model": "gaussian_normal", "levels": [0.2]}],
+           "tasks": {"laplacian": {"methods": ["crashy.abort", "crashy.sleep", "crashy.segfault",
+                                               "scratch.cotan", "libigl.cotan"]},
+                     "smoothing": {"methods": [{"name": "scratch.explicit", "params": {"iterations": 5}}]},
+                     "simplification": {"methods": ["fast_simplification.qem"],
+                                        "params": {"target_ratio": 0.5}}}}
+    path = tmp_path / "crash.yaml"
+    path.write_text(yaml.safe_dump(cfg))
+    out = tmp_path / "out"
+    r = subprocess.run([str(SHOOTOUT), "run", str(path), "--out", str(out), "--timeout", "3",
+                        "--workers", "2", "--quiet"], capture_output=True, text=True, env=env_with_root(),
+                       timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert "Traceback" not in r.stderr
+    df = read_all(out)
+    assert len(df) == len(MESHES) * 7 and df["case_id"].is_unique
+    for mesh, rows in df.groupby("mesh"):
+        by = rows.set_index("method")
+        assert by.loc["crashy.abort", "status"] == "error"
+        assert "SIGABRT" in by.loc["crashy.abort", "error"]
+        assert by.loc["crashy.segfault", "status"] == "error"
+        assert "SIGSEGV" in by.loc["crashy.segfault", "error"]
+        assert by.loc["crashy.sleep", "status"] == "timeout"
+        assert "3 s" in by.loc["crashy.sleep", "error"]
+        others = by.drop(index=["crashy.abort", "crashy.segfault", "crashy.sleep"])
+        assert (others["status"] == "ok").all(), others[["status", "error"]]
+        assert (others["peak_rss_mb"] > 0).all()       # measured in the worker, from the OS
+    meta = json.loads((out / "run.json").read_text())
+    assert meta["status"] == "finished" and meta["workers"] == 2 and meta["timeout_s"] == 3
+    assert meta["status_counts"] == {"ok": 8, "error": 4, "timeout": 2}
+
+
+def test_every_other_failure_mode_is_one_defined_row(tmp_path):
+    """In-process API, timeout from the config: os._exit, an exception, a missing library, NaN
+    smoothing output and out-of-range faces each give one row with a defined status."""
+    cfg = {"name": "fail", "plugins": ["tests.plugins.crashy"], "timeout": 3, "meshes": ["knight"],
+           "tasks": {"laplacian": {"methods": ["crashy.exit", "crashy.raises", "crashy.missing",
+                                               "crashy.sleep", "scratch.uniform"]},
+                     "smoothing": {"methods": ["crashy.nan_smooth"]},
+                     "simplification": {"methods": ["crashy.bad_faces"], "params": {"target_ratio": 0.5}}}}
+    frames = harness.run(cfg, out=tmp_path / "out", workers=2)
+    lap = frames["laplacian"].set_index("method")
+    assert lap.loc["crashy.exit", "status"] == "error"
+    assert "exited with code 3" in lap.loc["crashy.exit", "error"]
+    assert lap.loc["crashy.raises", "status"] == "error"
+    assert "RuntimeError: crashy.raises failed on purpose" in lap.loc["crashy.raises", "error"]
+    assert lap.loc["crashy.missing", "status"] == "unavailable"
+    assert "no_such_module_xyz" in lap.loc["crashy.missing", "error"]
+    assert lap.loc["crashy.sleep", "status"] == "timeout"
+    assert lap.loc["scratch.uniform", "status"] == "ok"
+    sm = frames["smoothing"].iloc[0]
+    # NaN coordinates are never a good result: ok with diverged=true and no accuracy numbers
+    assert sm["status"] == "ok" and bool(sm["diverged"]) is True
+    for col in ("ev_mean", "dist_mean", "hausdorff", "normal_error_deg", "min_angle"):
+        assert np.isnan(sm[col]), col
+    simp = frames["simplification"].iloc[0]
+    assert simp["status"] == "error" and "out of range" in simp["error"]
+
+
+def test_serial_executor_is_not_used_for_isolation_by_default(tmp_path):
+    """The default executor isolates: a segfault in the first case does not end the run."""
+    cfg = {"name": "seg", "plugins": ["tests.plugins.crashy"], "meshes": ["knight"],
+           "tasks": {"laplacian": {"methods": ["crashy.segfault", "scratch.uniform"]}}}
+    frames = harness.run(cfg, out=tmp_path / "out", workers=1)
+    st = frames["laplacian"].set_index("method")["status"].to_dict()
+    assert st == {"crashy.segfault": "error", "scratch.uniform": "ok"}
