@@ -1,0 +1,128 @@
+"""Timings of a run folder in pytest-benchmark's JSON layout, so its tooling can read them.
+
+``pytest-benchmark compare FILE.json`` (and anything else that reads ``--benchmark-json``
+output) understands the result: ``machine_info``, ``commit_info``, ``benchmarks`` (one entry per
+case with status ok: ``group`` = task/mesh/noise, ``name`` = method[params], ``params``,
+``extra_info`` with the case's metrics, ``stats``), ``datetime`` and ``version``.
+
+The run records, per case, the median, minimum and maximum of ``repeats`` timed calls, not the
+individual times. So ``stats.min``/``max``/``median``/``rounds`` are exact; the statistics that
+need every sample are derived and marked in ``extra_info.stats_note``: ``mean`` is the mean of
+(min, median, max) — exact for up to 3 repeats, an estimate beyond —, ``stddev`` the sample
+standard deviation of those three values (0 for one repeat), ``q1``/``q3`` the midpoints
+min..median and median..max, ``total`` = mean x rounds; ``outliers`` are not known ("0;0").
+"""
+from __future__ import annotations
+
+import json
+import math
+import platform
+import statistics
+from pathlib import Path
+
+from .results import RunFolder
+
+FORMAT_VERSION = "5.1.0"      # the pytest-benchmark JSON layout written here
+
+
+def _f(v):
+    try:
+        x = float(v)
+    except (TypeError, ValueError):
+        return None
+    return x if math.isfinite(x) else None
+
+
+def _scalar(v):
+    if isinstance(v, bool) or v is None or isinstance(v, str):
+        return v
+    if hasattr(v, "item"):
+        v = v.item()
+    if isinstance(v, float) and not math.isfinite(v):
+        return None
+    return v
+
+
+def stats_from_row(row: dict) -> dict | None:
+    """pytest-benchmark ``stats`` from a row's median/min/max/repeats (see the module docstring)."""
+    med, lo, hi = _f(row.get("time_s")), _f(row.get("time_min_s")), _f(row.get("time_max_s"))
+    if med is None:
+        return None
+    lo = med if lo is None else lo
+    hi = med if hi is None else hi
+    n = int(_f(row.get("repeats")) or 1)
+    sample = [med] if n == 1 else [lo, hi] if n == 2 else [lo, med, hi]
+    mean = statistics.fmean(sample)
+    stddev = statistics.stdev(sample) if len(sample) > 1 else 0.0
+    q1, q3 = (lo + med) / 2, (med + hi) / 2
+    iqr = q3 - q1
+    return {"min": lo, "max": hi, "mean": mean, "stddev": stddev, "rounds": n, "median": med, "iqr": iqr,
+            "q1": q1, "q3": q3, "iqr_outliers": 0, "stddev_outliers": 0, "outliers": "0;0",
+            "ld15iqr": lo, "hd15iqr": hi, "ops": (1.0 / mean) if mean > 0 else 0.0, "total": mean * n,
+            "iterations": 1}
+
+
+def machine_info(meta: dict) -> dict:
+    m = meta.get("machine") or {}
+    v = meta.get("versions") or {}
+    return {"node": m.get("node", platform.node()), "processor": m.get("cpu", ""), "machine": m.get("machine", ""),
+            "python_compiler": platform.python_compiler(), "python_implementation": platform.python_implementation(),
+            "python_implementation_version": v.get("python", platform.python_version()),
+            "python_version": v.get("python", platform.python_version()), "python_build": list(platform.python_build()),
+            "release": m.get("release", ""), "system": m.get("system", ""),
+            "cpu": {"brand_raw": m.get("cpu", ""), "count": m.get("cpu_count"), "hz_advertised_friendly":
+                    f"{m['cpu_freq_mhz']} MHz" if m.get("cpu_freq_mhz") else None, "arch": m.get("machine", "")},
+            "memory_gb": m.get("memory_gb"), "versions": v}
+
+
+def commit_info(meta: dict) -> dict:
+    return {"id": meta.get("git_commit") or "unversioned", "time": None, "author_time": None, "dirty": None,
+            "project": "mesh-shootout", "branch": None}
+
+
+def build(run_dir) -> dict:
+    """The pytest-benchmark document of a run folder."""
+    folder = RunFolder(run_dir)
+    meta = folder.read_run_json() or {}
+    benchmarks = []
+    for task, df in folder.frames().items():
+        for rec in df.to_dict("records"):
+            if rec.get("status") != "ok":
+                continue
+            stats = stats_from_row(rec)
+            if stats is None:
+                continue
+            try:
+                params = json.loads(rec.get("params") or "{}")
+            except json.JSONDecodeError:
+                params = {}
+            lvl = rec.get("noise_level")
+            noise = rec.get("noise_model") if lvl is None or (isinstance(lvl, float) and math.isnan(lvl)) \
+                else f"{rec.get('noise_model')}-{lvl:g}"
+            pstr = ",".join(f"{k}={params[k]}" for k in sorted(params) if params[k] is not None)
+            name = f"{rec['method']}[{pstr}]" if pstr else str(rec["method"])
+            group = f"{task}/{rec.get('mesh')}/{noise}"
+            extra = {k: _scalar(v) for k, v in rec.items()
+                     if k not in ("params", "time_s", "time_min_s", "time_max_s", "min_angle_hist", "error")}
+            extra["stats_note"] = ("the run records median/min/max of the repeats only: min, max, median, rounds "
+                                   "are exact; mean, stddev, q1, q3 are derived (see harness/benchmark_json.py)")
+            benchmarks.append({
+                "group": group, "name": name, "fullname": f"{group}::{name}[seed={rec.get('seed')}]",
+                "params": {k: _scalar(v) for k, v in params.items()}, "param": pstr or None,
+                "extra_info": extra,
+                "options": {"disable_gc": False, "timer": "perf_counter", "min_rounds": int(rec.get("repeats") or 1),
+                            "max_time": None, "min_time": None, "warmup": False},
+                "stats": stats,
+            })
+    return {"machine_info": machine_info(meta), "commit_info": commit_info(meta), "benchmarks": benchmarks,
+            "datetime": meta.get("finished") or meta.get("started"), "version": FORMAT_VERSION}
+
+
+def export_benchmark_json(run_dir, file) -> Path:
+    """Write ``build(run_dir)`` to ``file``; return its path."""
+    doc = build(run_dir)
+    path = Path(file)
+    if path.parent and not path.parent.exists():
+        path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(doc, indent=2, default=str, allow_nan=False))
+    return path

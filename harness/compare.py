@@ -1,0 +1,326 @@
+"""``shootout compare RUN_A RUN_B``: match cases by ``case_id``, show what changed, flag regressions.
+
+RUN_A is the baseline, RUN_B the candidate. For every case present in both runs and every
+metric column, the two values are compared with the metric's rule (`RULES`):
+
+* error-like metrics (lower is better: ``ev_*``, ``dist_mean``, ``hausdorff``, normal errors,
+  ``sym_error``, ``lin_error``, ``neg_weights``, ``obtuse_fraction``, ``max_angle``) regress when
+  ``b > a + max(rel * |a|, abs)``: worse by more than ``rel`` (1 %) relative *and* more than a
+  small absolute amount (lengths are fractions of the bounding-box diagonal, so ``1e-6`` is
+  far below anything visible; angles ``0.01`` degrees);
+* quality metrics (higher is better: ``min_angle``, ``radius_ratio_mean``, ``min_eig``) regress
+  when ``b < a - max(rel * |a|, abs)``;
+* ratios that should be 1 (``volume_ratio``, ``area_ratio``) regress when ``|b - 1|`` grows
+  by more than ``max(1 % of |a - 1|, 1e-4)``;
+* flags regress when a good value turns bad: ``SYM LOC LIN POS psd operator_symmetric manifold``
+  true -> false, ``diverged topology_changed`` false -> true; ``loc_violations`` may not grow;
+* ``out_faces`` regresses when its miss of ``target_faces`` grows by more than
+  ``max(2 faces, 1 % of the target)`` (the conformance tolerance);
+* a value that becomes blank (not measurable any more) regresses; one that appears improves;
+* time regresses only when all three hold: the candidate's median ``time_s`` exceeds
+  ``time_factor`` (1.5) x the baseline's, its *fastest* repeat is slower than the baseline's
+  *slowest* one (``time_min_s(B) > time_max_s(A)``: beyond both runs' own spread), and the
+  difference exceeds 1 ms (sub-millisecond timings are dominated by scheduler noise);
+* a case whose status was ok and is not any more regresses; a case of RUN_A missing in RUN_B
+  regresses too (an interrupted or shrunken run must not pass CI); cases new in RUN_B are listed.
+
+Inputs (``input_*``, ``n_vertices``, ``n_faces``) are compared only to warn that the two runs
+did not see the same data. ``nnz``, ``peak_rss_mb``, ``genus_change``, ``boundary_loops_change``
+are informational. Exit code: 1 if anything regressed, else 0.
+"""
+from __future__ import annotations
+
+import html
+import json
+import math
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+from .errors import ShootoutError
+from .results import RunFolder
+
+TIME_FACTOR = 1.5
+TIME_FLOOR_S = 1e-3
+
+
+@dataclass(frozen=True)
+class Rule:
+    kind: str            # lower | higher | one | true | false | count | target | info | input
+    rel: float = 0.01
+    abs: float = 0.0
+
+
+_LEN = Rule("lower", 0.01, 1e-6)
+_DEG = Rule("lower", 0.01, 0.01)
+RULES: dict[str, Rule] = {
+    # smoothing and simplification accuracy
+    "ev_mean": _LEN, "ev_rms": _LEN, "dist_mean": _LEN, "ev_sun": _LEN, "hausdorff": _LEN,
+    "normal_error_deg": _DEG, "normal_error_rms_deg": _DEG,
+    "volume_ratio": Rule("one", 0.01, 1e-4), "area_ratio": Rule("one", 0.01, 1e-4),
+    "min_angle": Rule("higher", 0.01, 0.01), "max_angle": Rule("lower", 0.01, 0.01),
+    "radius_ratio_mean": Rule("higher", 0.01, 1e-3), "obtuse_fraction": Rule("lower", 0.01, 2e-3),
+    "diverged": Rule("false"), "manifold": Rule("true"), "topology_changed": Rule("false"),
+    "out_faces": Rule("target"), "target_faces": Rule("info"),
+    "genus_change": Rule("info"), "boundary_loops_change": Rule("info"),
+    # Laplacian properties (absolute floors = the metric's own tolerances)
+    "sym_error": Rule("lower", 0.01, 1e-10), "lin_error": Rule("lower", 0.01, 1e-9),
+    "neg_weights": Rule("lower", 0.01, 1e-6), "min_eig": Rule("higher", 0.01, 1e-10),
+    "loc_violations": Rule("count"), "nnz": Rule("info"),
+    "SYM": Rule("true"), "LOC": Rule("true"), "LIN": Rule("true"), "POS": Rule("true"), "psd": Rule("true"),
+    "operator_symmetric": Rule("true"),
+    # the data each case saw
+    "input_ev_mean": Rule("input"), "input_dist_mean": Rule("input"), "input_normal_error_deg": Rule("input"),
+    "n_vertices": Rule("input"), "n_faces": Rule("input"),
+    "peak_rss_mb": Rule("info"),
+}
+SKIP = {"case_id", "task", "mesh", "noise_model", "noise_level", "seed", "method", "library", "params",
+        "status", "error", "time_s", "time_min_s", "time_max_s", "repeats", "min_angle_hist"}
+
+
+def _blank(v) -> bool:
+    return v is None or (isinstance(v, float) and math.isnan(v)) or v == ""
+
+
+def _num(v):
+    if isinstance(v, bool):
+        return float(v)
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        return None
+
+
+def judge(metric: str, a, b, row_a=None, row_b=None) -> str:
+    """'regression' | 'improvement' | 'changed' (beyond tolerance, no direction) | 'same' (within it)."""
+    rule = RULES.get(metric, Rule("info"))
+    if _blank(a) and _blank(b):
+        return "same"
+    if rule.kind in ("info", "input"):
+        if _blank(a) != _blank(b):
+            return "changed"
+        x, y = _num(a), _num(b)
+        if x is not None and y is not None:
+            return "same" if abs(x - y) <= 1e-12 * max(abs(x), abs(y), 1.0) else "changed"
+        return "same" if str(a) == str(b) else "changed"
+    if _blank(b):
+        return "regression"
+    if _blank(a):
+        return "improvement"
+    if rule.kind in ("true", "false"):
+        good = rule.kind == "true"
+        va, vb = bool(a), bool(b)
+        if va == vb:
+            return "same"
+        return "regression" if va == good else "improvement"
+    x, y = _num(a), _num(b)
+    if x is None or y is None:
+        return "same" if str(a) == str(b) else "changed"
+    if rule.kind == "count":
+        return "same" if x == y else ("regression" if y > x else "improvement")
+    if rule.kind == "target":
+        t = _num((row_b or {}).get("target_faces"))
+        if t is None:
+            return "same" if x == y else "changed"
+        miss_a, miss_b = abs(x - t), abs(y - t)
+        tol = max(2.0, 0.01 * t)
+        if miss_b > miss_a + tol:
+            return "regression"
+        return "improvement" if miss_b < miss_a - tol else "same"
+    if rule.kind == "one":
+        x, y = abs(x - 1.0), abs(y - 1.0)
+    tol = max(rule.rel * abs(x), rule.abs)
+    worse = (y - x) if rule.kind in ("lower", "one") else (x - y)
+    if worse > tol:
+        return "regression"
+    if worse < -tol:
+        return "improvement"
+    return "same"
+
+
+def judge_time(ra: dict, rb: dict, factor: float = TIME_FACTOR) -> str:
+    a, b = _num(ra.get("time_s")), _num(rb.get("time_s"))
+    if a is None or b is None:
+        return "same"
+    a_max = _num(ra.get("time_max_s")) or a
+    b_min = _num(rb.get("time_min_s")) or b
+    b_max = _num(rb.get("time_max_s")) or b
+    a_min = _num(ra.get("time_min_s")) or a
+    if b > factor * a and b_min > a_max and b - a > TIME_FLOOR_S:
+        return "regression"
+    if a > factor * b and a_min > b_max and a - b > TIME_FLOOR_S:
+        return "improvement"
+    return "same"
+
+
+def _rows(run) -> dict[str, dict]:
+    folder = RunFolder(run)
+    if not Path(run).is_dir():
+        raise ShootoutError(f"{run}: no such run folder")
+    frames = folder.frames()
+    if not frames:
+        raise ShootoutError(f"{run}: not a run folder (no laplacian.csv, smoothing.csv or simplification.csv)")
+    out = {}
+    for task, df in frames.items():
+        for rec in df.to_dict("records"):
+            rec = {k: (None if isinstance(v, float) and math.isnan(v) else v) for k, v in rec.items()}
+            rec["task"] = task
+            out[str(rec["case_id"])] = rec
+    return out
+
+
+def _label(r: dict) -> str:
+    try:
+        p = json.loads(r.get("params") or "{}")
+    except json.JSONDecodeError:
+        p = {}
+    ps = ",".join(f"{k}={v}" for k, v in sorted(p.items()) if v is not None)
+    lvl = r.get("noise_level")
+    noise = r.get("noise_model") if _blank(lvl) else f"{r.get('noise_model')} {lvl:g}"
+    return f"{r.get('mesh')} {noise} {r.get('method')}[{ps}]"
+
+
+def compare_rows(rows_a: dict, rows_b: dict, time_factor: float = TIME_FACTOR) -> dict:
+    """Every change between two runs' rows: ``{"changes": [...], "only_a": [...], "only_b": [...], ...}``."""
+    changes, input_changes = [], []
+    common = [c for c in rows_a if c in rows_b]
+    for cid in common:
+        ra, rb = rows_a[cid], rows_b[cid]
+        base = {"case_id": cid, "task": ra["task"], "case": _label(ra)}
+        sa, sb = ra.get("status"), rb.get("status")
+        if sa != sb:
+            verdict = "regression" if sa == "ok" else ("improvement" if sb == "ok" else "changed")
+            changes.append({**base, "metric": "status", "a": sa, "b": sb, "verdict": verdict,
+                            "note": str(rb.get("error") or "")[:200]})
+        if sa == "ok" and sb == "ok":
+            v = judge_time(ra, rb, time_factor)
+            a, b = _num(ra.get("time_s")), _num(rb.get("time_s"))
+            if a is not None and b is not None and a != b:
+                changes.append({**base, "metric": "time_s", "a": a, "b": b, "verdict": v,
+                                "note": f"A {_fmt(ra.get('time_min_s'))}..{_fmt(ra.get('time_max_s'))}, "
+                                        f"B {_fmt(rb.get('time_min_s'))}..{_fmt(rb.get('time_max_s'))}"})
+        if sa != "ok" or sb != "ok":
+            continue
+        for metric in ra:
+            if metric in SKIP or metric.startswith("_"):
+                continue
+            a, b = ra.get(metric), rb.get(metric)
+            verdict = judge(metric, a, b, ra, rb)
+            if verdict == "same":
+                if not (_blank(a) and _blank(b)) and a != b and not (_num(a) == _num(b) and _num(a) is not None):
+                    changes.append({**base, "metric": metric, "a": a, "b": b, "verdict": "within tolerance"})
+                continue
+            entry = {**base, "metric": metric, "a": a, "b": b, "verdict": verdict}
+            (input_changes if RULES.get(metric, Rule("info")).kind == "input" else changes).append(entry)
+    only_a = [c for c in rows_a if c not in rows_b]
+    only_b = [c for c in rows_b if c not in rows_a]
+    for cid in only_a:
+        r = rows_a[cid]
+        changes.append({"case_id": cid, "task": r["task"], "case": _label(r), "metric": "case", "a": r.get("status"),
+                        "b": None, "verdict": "regression", "note": "missing in RUN_B"})
+    return {"changes": changes, "input_changes": input_changes, "common": len(common), "only_a": only_a,
+            "only_b": only_b, "rows_a": rows_a, "rows_b": rows_b}
+
+
+def _fmt(v) -> str:
+    if _blank(v):
+        return "—"
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int,)) and not isinstance(v, bool):
+        return str(v)
+    x = _num(v)
+    if x is None:
+        return str(v)
+    if x == 0:
+        return "0"
+    if 1e-3 <= abs(x) < 1e5:
+        return f"{x:.4g}"
+    return f"{x:.3e}"
+
+
+def _change(a, b) -> str:
+    x, y = _num(a), _num(b)
+    if x is None or y is None or isinstance(a, bool) or isinstance(b, bool):
+        return ""
+    if x == 0:
+        return "" if y == 0 else f"{y - x:+.3g}"
+    return f"{(y - x) / abs(x) * 100:+.1f}%"
+
+
+ORDER = {"regression": 0, "improvement": 1, "changed": 2, "within tolerance": 3}
+
+
+def _sorted(changes):
+    return sorted(changes, key=lambda c: (ORDER.get(c["verdict"], 9), c["task"], c["case"], c["metric"]))
+
+
+def compare_runs(run_a, run_b, html_out=None, time_factor: float = TIME_FACTOR, out=None,
+                 max_lines: int = 200) -> int:
+    """Print the changes from RUN_A (baseline) to RUN_B; write an HTML diff if asked; 1 on a regression."""
+    out = out or sys.stdout
+    ra, rb = _rows(run_a), _rows(run_b)
+    res = compare_rows(ra, rb, time_factor)
+    changes = _sorted(res["changes"])
+    regress = [c for c in changes if c["verdict"] == "regression"]
+    shown = [c for c in changes if c["verdict"] != "within tolerance"]
+    quiet = len(changes) - len(shown)
+    ma = (RunFolder(run_a).read_run_json() or {}).get("machine")
+    mb = (RunFolder(run_b).read_run_json() or {}).get("machine")
+    print(f"compare A={run_a} (baseline) B={run_b}: {res['common']} cases in both, "
+          f"{len(res['only_a'])} only in A, {len(res['only_b'])} only in B", file=out)
+    if ma and mb and ma != mb:
+        print("note: the runs come from different machines; time changes compare different hardware", file=out)
+    if res["input_changes"]:
+        n = len({c['case_id'] for c in res['input_changes']})
+        print(f"warning: {n} case(s) saw different input data (mesh or noise changed): "
+              + ", ".join(sorted({c['metric'] for c in res['input_changes']})), file=out)
+    if shown:
+        w = max(12, min(90, max(len(c["case"]) for c in shown)))
+        head = f"{'verdict':11s} {'task':14s} {'case':{w}s} {'metric':22s} {'A':>11s} {'B':>11s} {'change':>9s}"
+        print(head, file=out)
+        print("-" * len(head), file=out)
+        for c in shown[:max_lines]:
+            flag = "REGRESSION" if c["verdict"] == "regression" else c["verdict"]
+            line = (f"{flag:11s} {c['task']:14s} {c['case'][:w]:{w}s} {c['metric']:22s} {_fmt(c['a']):>11s} "
+                    f"{_fmt(c['b']):>11s} {_change(c['a'], c['b']):>9s}")
+            if c.get("note"):
+                line += f"  {c['note']}"
+            print(line, file=out)
+        if len(shown) > max_lines:
+            print(f"... {len(shown) - max_lines} more changes (see --html)", file=out)
+    n_imp = sum(c["verdict"] == "improvement" for c in changes)
+    print(f"{len(regress)} regression(s) in {len({c['case_id'] for c in regress})} case(s), {n_imp} improvement(s), "
+          f"{quiet} change(s) within tolerance; tolerances: harness/compare.py (errors: worse by >1% and a small "
+          f"absolute amount; time: >{time_factor:g}x and beyond both runs' min-max spread)", file=out)
+    if res["only_b"]:
+        print(f"new in B: {len(res['only_b'])} case(s), e.g. " + ", ".join(_label(rb[c]) for c in res["only_b"][:3]),
+              file=out)
+    if html_out:
+        Path(html_out).write_text(_html(run_a, run_b, res, changes, time_factor), encoding="utf-8")
+        print(f"HTML diff: {html_out}", file=out)
+    return 1 if regress else 0
+
+
+def _html(run_a, run_b, res, changes, time_factor) -> str:
+    e = html.escape
+    colors = {"regression": "#fdecec", "improvement": "#e8f5ec", "changed": "#fff8e1", "within tolerance": "#fff"}
+    rows = "".join(
+        f"<tr style='background:{colors.get(c['verdict'], '#fff')}'><td>{e(c['verdict'])}</td><td>{e(c['task'])}</td>"
+        f"<td>{e(c['case'])}</td><td><code>{e(c['case_id'])}</code></td><td>{e(c['metric'])}</td>"
+        f"<td class=n>{e(_fmt(c['a']))}</td><td class=n>{e(_fmt(c['b']))}</td><td class=n>{e(_change(c['a'], c['b']))}</td>"
+        f"<td>{e(c.get('note', ''))}</td></tr>" for c in changes)
+    n_reg = sum(c["verdict"] == "regression" for c in changes)
+    summary = (f"{res['common']} cases in both runs, {len(res['only_a'])} only in A, {len(res['only_b'])} only in B; "
+               f"<b>{n_reg} regression(s)</b>.")
+    doc = e(__doc__ or "")
+    return ("<!doctype html><html><head><meta charset='utf-8'><title>mesh-shootout compare</title><style>"
+            "body{font:14px system-ui,sans-serif;margin:20px;color:#1d2330}table{border-collapse:collapse;font-size:12px}"
+            "td,th{border:1px solid #d9dee7;padding:3px 6px;text-align:left}td.n{text-align:right;font-variant-numeric:tabular-nums}"
+            "pre{background:#f5f7fa;padding:8px;white-space:pre-wrap;font-size:12px}</style></head><body>"
+            f"<h1>mesh-shootout compare</h1><p>A (baseline): <code>{e(str(Path(run_a).resolve()))}</code><br>"
+            f"B (candidate): <code>{e(str(Path(run_b).resolve()))}</code></p><p>{summary}</p>"
+            f"<table><tr><th>verdict</th><th>task</th><th>case</th><th>id</th><th>metric</th><th>A</th><th>B</th>"
+            f"<th>change</th><th>note</th></tr>{rows}</table>"
+            f"<details><summary>Tolerances (time factor {time_factor:g})</summary><pre>{doc}</pre></details>"
+            "</body></html>")

@@ -1,0 +1,729 @@
+/* mesh-shootout report: tables, SVG plots and canvas-2D mesh views drawn from the inline JSON.
+   Hand-written, no dependencies, no network. Status markers for tests are written on <body>:
+   data-plots-rendered (number of SVG plots drawn), data-view3d (ready | none | failed),
+   data-js-error (first uncaught error, if any). */
+(function () {
+  'use strict';
+  var body = document.body;
+  window.addEventListener('error', function (e) {
+    if (!body.dataset.jsError) body.dataset.jsError = String(e.message || e);
+  });
+  var D = JSON.parse(document.getElementById('report-data').textContent);
+  var SVGNS = 'http://www.w3.org/2000/svg';
+  var PALETTE = ['#4e79a7', '#f28e2b', '#e15759', '#59a14f', '#b07aa1', '#76b7b2', '#edc948', '#9c755f',
+    '#ff9da7', '#1b9e77', '#7570b3', '#d95f02', '#66a61e', '#e7298a', '#a6761d', '#17becf', '#bcbd22', '#393b79'];
+  var REF = '#777';
+  var plotsRendered = 0;
+
+  // ------------------------------------------------------------------ small helpers
+  function el(tag, attrs, kids) {
+    var e = document.createElement(tag);
+    if (attrs) for (var k in attrs) {
+      if (k === 'text') e.textContent = attrs[k];
+      else if (k === 'html') e.innerHTML = attrs[k];
+      else e.setAttribute(k, attrs[k]);
+    }
+    (kids || []).forEach(function (c) { if (c) e.appendChild(typeof c === 'string' ? document.createTextNode(c) : c); });
+    return e;
+  }
+  function sv(tag, attrs, text) {
+    var e = document.createElementNS(SVGNS, tag);
+    for (var k in attrs) e.setAttribute(k, attrs[k]);
+    if (text !== undefined) e.textContent = text;
+    return e;
+  }
+  function esc(s) {
+    return String(s).replace(/[&<>"']/g, function (c) {
+      return {'&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;', "'": '&#39;'}[c];
+    });
+  }
+  function isNum(v) { return typeof v === 'number' && isFinite(v); }
+  function fmt(v, d) {
+    if (v === null || v === undefined) return '';
+    if (typeof v === 'boolean') return v ? 'true' : 'false';
+    if (!isNum(v)) return String(v);
+    if (Number.isInteger(v) && Math.abs(v) < 1e9) return String(v);
+    var a = Math.abs(v);
+    d = d || 4;
+    if (a === 0) return '0';
+    if (a >= 1e-3 && a < 1e6) return String(parseFloat(v.toPrecision(d)));
+    return v.toExponential(d - 1).replace('e+', 'e');
+  }
+  function fmtTime(s) {
+    if (!isNum(s)) return '';
+    if (s < 1e-3) return fmt(s * 1e6, 3) + ' µs';
+    if (s < 1) return fmt(s * 1e3, 3) + ' ms';
+    return fmt(s, 3) + ' s';
+  }
+  function mean(a) { var s = 0; for (var i = 0; i < a.length; i++) s += a[i]; return s / a.length; }
+  function median(a) {
+    var b = a.slice().sort(function (x, y) { return x - y; }); var n = b.length;
+    return n % 2 ? b[(n - 1) / 2] : (b[n / 2 - 1] + b[n / 2]) / 2;
+  }
+  function groupBy(rows, keyf) {
+    var m = new Map();
+    rows.forEach(function (r) { var k = keyf(r); if (!m.has(k)) m.set(k, []); m.get(k).push(r); });
+    return m;
+  }
+  function uniq(a) { return Array.from(new Set(a)); }
+  function guard(where, host, f) {
+    try { return f(); } catch (err) {
+      console.error('report: ' + where + ' failed: ' + (err && err.stack || err));
+      if (host) host.appendChild(el('div', {'class': 'jserror', text: where + ' failed: ' + err}));
+    }
+  }
+
+  // ------------------------------------------------------------------ task data
+  function taskRows(task) {
+    var T = D.tasks[task];
+    if (!T) return null;
+    var rows = T.rows.map(function (r) {
+      var o = {}; T.columns.forEach(function (c, i) { o[c] = r[i]; }); return o;
+    });
+    var colors = {};
+    T.variants.forEach(function (v, i) { colors[v] = PALETTE[i % PALETTE.length]; });
+    return {T: T, rows: rows, colors: colors, variants: T.variants};
+  }
+
+  // ------------------------------------------------------------------ plotting (SVG)
+  function domain(vals, log, zero) {
+    var v = log ? vals.map(Math.log10) : vals.slice();
+    var lo = Math.min.apply(null, v), hi = Math.max.apply(null, v);
+    if (zero && !log) { lo = Math.min(lo, 0); hi = Math.max(hi, 0); }
+    if (hi - lo < 1e-12 * Math.max(1, Math.abs(hi))) {
+      var pad = log ? 0.3 : (Math.abs(hi) > 0 ? Math.abs(hi) * 0.2 : 1);
+      lo -= pad; hi += pad;
+    } else {
+      var p = (hi - lo) * 0.07;
+      if (!(zero && !log && lo === 0)) lo -= p;
+      hi += p;
+    }
+    return [lo, hi];
+  }
+  function linTicks(lo, hi) {
+    var span = hi - lo, raw = span / 5, mag = Math.pow(10, Math.floor(Math.log10(raw)));
+    var step = [1, 2, 2.5, 5, 10].map(function (s) { return s * mag; }).find(function (s) { return span / s <= 6; }) || raw;
+    var out = [];
+    for (var t = Math.ceil(lo / step) * step; t <= hi + 1e-9 * step; t += step) out.push(Math.abs(t) < step * 1e-9 ? 0 : t);
+    return out;
+  }
+  function ticks(d, log) { // tick positions in axis units (log10 of the value on log axes)
+    if (!log) return linTicks(d[0], d[1]);
+    if (d[1] - d[0] < 1) {   // less than a decade: evenly spaced values read better than 2-5-10
+      var lin = linTicks(Math.pow(10, d[0]), Math.pow(10, d[1])).filter(function (v) { return v > 0; }).map(Math.log10);
+      if (lin.length >= 2) return lin;
+    }
+    var out = [], a = Math.floor(d[0]), b = Math.ceil(d[1]);
+    var mult = (d[1] - d[0]) < 2.5 ? [1, 2, 5] : [1];
+    var step = (b - a) > 8 ? 2 : 1;
+    for (var k = a; k <= b; k += step) mult.forEach(function (m) {
+      var t = Math.log10(m) + k; if (t >= d[0] - 1e-9 && t <= d[1] + 1e-9) out.push(t);
+    });
+    return out;
+  }
+  function tickLabels(ts, log) { // shortest labels that are all distinct
+    var vals = ts.map(function (t) { return log ? Math.pow(10, t) : t; });
+    for (var p = 2; p <= 8; p++) {
+      var labs = vals.map(function (v) {
+        if (v === 0) return '0';
+        var a = Math.abs(v);
+        if (a >= 1e-3 && a < 1e5) return String(parseFloat(v.toPrecision(p)));
+        return v.toExponential(p - 1).replace(/\.?0+e/, 'e').replace('e+', 'e');
+      });
+      if (new Set(labs).size === labs.length) return labs;
+    }
+    return vals.map(String);
+  }
+  function okv(v, log) { return isNum(v) && (!log || v > 0); }
+
+  /* spec: {w,h,title,xlabel,ylabel,xlog,ylog,yzero,xdomain,diag,series:[{name,color,pts:[[x,y,tip]],line,dash,ring}],
+            front:[[x,y]], hlines:[{y,label}]} */
+  function chart(spec) {
+    var W = spec.w || 360, H = spec.h || 250;
+    var m = {l: 56, r: 12, t: spec.title ? 22 : 10, b: 38};
+    var xs = [], ys = [], dropped = 0;
+    spec.series.forEach(function (s) {
+      s.pts.forEach(function (p) {
+        if (okv(p[0], spec.xlog) && okv(p[1], spec.ylog)) { xs.push(p[0]); ys.push(p[1]); } else dropped++;
+      });
+    });
+    (spec.hlines || []).forEach(function (h) { if (okv(h.y, spec.ylog)) ys.push(h.y); });
+    var svg = sv('svg', {width: W, height: H, viewBox: '0 0 ' + W + ' ' + H, 'class': 'chart', role: 'img'});
+    if (spec.title) svg.appendChild(sv('text', {x: m.l, y: 15, 'font-size': 12, 'font-weight': 600, fill: '#1d2330'}, spec.title));
+    if (!xs.length) {
+      svg.appendChild(sv('text', {x: W / 2, y: H / 2, 'text-anchor': 'middle', 'font-size': 12, fill: '#888'},
+        'no finite' + (spec.ylog || spec.xlog ? ' positive' : '') + ' values to plot'));
+      plotsRendered++;
+      return svg;
+    }
+    var xd = spec.xdomain || domain(xs, spec.xlog), yd = domain(ys, spec.ylog, spec.yzero);
+    if (spec.diag) { var u = [Math.min(xd[0], yd[0]), Math.max(xd[1], yd[1])]; xd = u; yd = u; }
+    function X(v) { var t = spec.xlog ? Math.log10(v) : v; return m.l + (t - xd[0]) / (xd[1] - xd[0]) * (W - m.l - m.r); }
+    function Y(v) { var t = spec.ylog ? Math.log10(v) : v; return H - m.b - (t - yd[0]) / (yd[1] - yd[0]) * (H - m.t - m.b); }
+    function Xt(t) { return X(spec.xlog ? Math.pow(10, t) : t); }
+    function Yt(t) { return Y(spec.ylog ? Math.pow(10, t) : t); }
+    var g = sv('g', {});
+    svg.appendChild(g);
+    g.appendChild(sv('rect', {x: m.l, y: m.t, width: W - m.l - m.r, height: H - m.t - m.b, fill: '#fcfcfd', stroke: '#c9ced8'}));
+    var xt = ticks(xd, spec.xlog), xl = tickLabels(xt, spec.xlog);
+    xt.forEach(function (t, i) {
+      var x = Xt(t);
+      g.appendChild(sv('line', {x1: x, x2: x, y1: m.t, y2: H - m.b, stroke: '#eceff4'}));
+      g.appendChild(sv('text', {x: x, y: H - m.b + 13, 'text-anchor': 'middle', 'font-size': 10, fill: '#555'}, xl[i]));
+    });
+    var yt = ticks(yd, spec.ylog), yl = tickLabels(yt, spec.ylog);
+    yt.forEach(function (t, i) {
+      var y = Yt(t);
+      g.appendChild(sv('line', {x1: m.l, x2: W - m.r, y1: y, y2: y, stroke: '#eceff4'}));
+      g.appendChild(sv('text', {x: m.l - 4, y: y + 3, 'text-anchor': 'end', 'font-size': 10, fill: '#555'}, yl[i]));
+    });
+    g.appendChild(sv('text', {x: (m.l + W - m.r) / 2, y: H - 6, 'text-anchor': 'middle', 'font-size': 11, fill: '#333'},
+      spec.xlabel + (spec.xlog ? ' (log)' : '')));
+    g.appendChild(sv('text', {x: 12, y: (m.t + H - m.b) / 2, 'text-anchor': 'middle', 'font-size': 11, fill: '#333',
+      transform: 'rotate(-90 12 ' + (m.t + H - m.b) / 2 + ')'}, spec.ylabel + (spec.ylog ? ' (log)' : '')));
+    var clip = 'c' + Math.random().toString(36).slice(2);
+    var defs = sv('defs', {}); var cp = sv('clipPath', {id: clip});
+    cp.appendChild(sv('rect', {x: m.l, y: m.t, width: W - m.l - m.r, height: H - m.t - m.b}));
+    defs.appendChild(cp); svg.appendChild(defs);
+    var inner = sv('g', {'clip-path': 'url(#' + clip + ')'});
+    svg.appendChild(inner);
+    if (spec.diag) {
+      var a = Math.pow(10, xd[0]), b = Math.pow(10, xd[1]);
+      if (!spec.xlog) { a = xd[0]; b = xd[1]; }
+      inner.appendChild(sv('line', {x1: X(a), y1: Y(a), x2: X(b), y2: Y(b), stroke: REF, 'stroke-dasharray': '5 4'}));
+    }
+    (spec.hlines || []).forEach(function (h) {
+      if (!okv(h.y, spec.ylog)) return;
+      inner.appendChild(sv('line', {x1: m.l, x2: W - m.r, y1: Y(h.y), y2: Y(h.y), stroke: REF, 'stroke-dasharray': '5 4'}));
+      inner.appendChild(sv('text', {x: W - m.r - 3, y: Y(h.y) - 3, 'text-anchor': 'end', 'font-size': 10, fill: '#555'}, h.label));
+    });
+    if (spec.front && spec.front.length > 1) {
+      var d = '', f = spec.front;
+      for (var i = 0; i < f.length; i++) {
+        d += (i ? 'H' + X(f[i][0]).toFixed(1) + 'V' : 'M' + X(f[i][0]).toFixed(1) + ',') + Y(f[i][1]).toFixed(1);
+      }
+      inner.appendChild(sv('path', {d: d, fill: 'none', stroke: '#222', 'stroke-width': 1.2, 'stroke-dasharray': '3 3'}));
+    }
+    spec.series.forEach(function (s) {
+      var pts = s.pts.filter(function (p) { return okv(p[0], spec.xlog) && okv(p[1], spec.ylog); });
+      if (s.line && pts.length > 1) {
+        inner.appendChild(sv('polyline', {points: pts.map(function (p) { return X(p[0]).toFixed(1) + ',' + Y(p[1]).toFixed(1); }).join(' '),
+          fill: 'none', stroke: s.color, 'stroke-width': s.width || 1.6, 'stroke-dasharray': s.dash || ''}));
+      }
+      if (s.marker === false) return;
+      pts.forEach(function (p) {
+        var c = sv('circle', {cx: X(p[0]).toFixed(1), cy: Y(p[1]).toFixed(1), r: s.r || 4, fill: s.color,
+          stroke: p[3] ? '#111' : '#fff', 'stroke-width': p[3] ? 1.8 : 0.8, 'class': 'pt'});
+        if (p[2]) c.appendChild(sv('title', {}, p[2]));
+        inner.appendChild(c);
+      });
+    });
+    if (dropped && spec.noteDropped !== false) {
+      svg.appendChild(sv('text', {x: W - m.r, y: 15, 'text-anchor': 'end', 'font-size': 9, fill: '#999'},
+        dropped + ' point' + (dropped > 1 ? 's' : '') + (spec.ylog || spec.xlog ? ' ≤ 0 or' : '') + ' blank not shown'));
+    }
+    plotsRendered++;
+    return svg;
+  }
+  function pareto(pts) { // pts [[x,y,...]]: minimal x and y; returns front sorted by x
+    var s = pts.filter(function (p) { return isNum(p[0]) && isNum(p[1]); })
+      .slice().sort(function (a, b) { return a[0] - b[0] || a[1] - b[1]; });
+    var out = [], best = Infinity;
+    s.forEach(function (p) { if (p[1] < best) { out.push(p); best = p[1]; } });
+    return out;
+  }
+  function legend(variants, colors, hidden, onToggle, extra) {
+    var box = el('div', {'class': 'legend'});
+    variants.forEach(function (v) {
+      var s = el('span', {title: 'click to hide/show'}, [el('i', {style: 'background:' + colors[v]}), v]);
+      if (hidden.has(v)) s.className = 'off';
+      s.addEventListener('click', function () { if (hidden.has(v)) hidden.delete(v); else hidden.add(v); onToggle(); });
+      box.appendChild(s);
+    });
+    (extra || []).forEach(function (x) {
+      var icon = x === 'Pareto front' ? el('i', {'class': 'ref front'}) : el('i', {'class': 'ref'});
+      box.appendChild(el('span', {style: 'cursor:default'}, [icon, x]));
+    });
+    return box;
+  }
+  function panelGroup(parent, title, caption, leg) {
+    var g = el('div', {'class': 'plotgroup'}, [el('h4', {text: title})]);
+    if (caption) g.appendChild(el('p', {'class': 'caption', html: caption}));
+    if (leg) g.appendChild(leg());
+    var panels = el('div', {'class': 'panels'});
+    g.appendChild(panels);
+    parent.appendChild(g);
+    return panels;
+  }
+  function addPanel(panels, svg) { var p = el('div', {'class': 'panel'}); p.appendChild(svg); panels.appendChild(p); }
+  function autoLog(vals) {
+    var v = vals.filter(isNum);
+    if (!v.length || Math.min.apply(null, v) <= 0) return false;
+    return Math.max.apply(null, v) / Math.min.apply(null, v) > 20;
+  }
+  function tipOf(r, extra) {
+    return r._variant + '\n' + r.mesh + ', ' + r._noise + (r.seed !== null && r.seed !== undefined ? ', seed ' + r.seed : '') +
+      '\n' + extra + '\ncase ' + r.case_id;
+  }
+  function histPlot(parent, d, hidden, title, mkLeg) {
+    var rows = d.rows.filter(function (r) { return r.status === 'ok' && Array.isArray(r._hist); });
+    if (!rows.length) return;
+    var panels = panelGroup(parent, title, 'Per-face minimum angle, 5° bins over [0°, 60°], summed over all ok cases ' +
+      'of each method and shown as the fraction of faces. Mass to the right is better (60° = equilateral); ' +
+      'faces under 10° are slivers.', mkLeg);
+    var series = [];
+    groupBy(rows, function (r) { return r._variant; }).forEach(function (rs, v) {
+      if (hidden.has(v)) return;
+      var sum = null;
+      rs.forEach(function (r) { if (!sum) sum = r._hist.map(function () { return 0; }); r._hist.forEach(function (c, i) { sum[i] += c; }); });
+      var tot = sum.reduce(function (a, b) { return a + b; }, 0) || 1;
+      series.push({name: v, color: d.colors[v], line: true, r: 3, pts: sum.map(function (c, i) {
+        return [i * 5 + 2.5, c / tot, v + '\n' + (i * 5) + '–' + (i * 5 + 5) + '°: ' + fmt(100 * c / tot, 3) + ' % of ' + tot + ' faces'];
+      })});
+    });
+    addPanel(panels, chart({w: 560, h: 280, xlabel: 'per-face minimum angle (degrees)', ylabel: 'fraction of faces',
+      xdomain: [0, 60], yzero: true, series: series}));
+  }
+
+  // ------------------------------------------------------------------ tables
+  var BOOL_COLS = {SYM: 1, LOC: 1, LIN: 1, POS: 1, psd: 1, operator_symmetric: 1, manifold: 1, topology_changed: 1, diverged: 1};
+  function paramText(p) {
+    try { var o = JSON.parse(p); return Object.keys(o).filter(function (k) { return o[k] !== null; })
+      .map(function (k) { return k + '=' + (typeof o[k] === 'object' ? JSON.stringify(o[k]) : o[k]); }).join(', '); }
+    catch (e) { return p || ''; }
+  }
+  function rowsTable(task, d) {
+    var host = document.getElementById('rows-' + task);
+    var cols = d.T.columns.filter(function (c) { return c[0] !== '_' && c !== 'task' && c !== 'min_angle_hist'; });
+    var state = {col: null, dir: 1, q: '', status: ''};
+    var statuses = uniq(d.rows.map(function (r) { return r.status; }));
+    var search = el('input', {type: 'search', placeholder: 'filter: words that must all appear in a row', size: 42});
+    var sel = el('select', {}, [el('option', {value: '', text: 'any status'})].concat(statuses.map(function (s) {
+      return el('option', {value: s, text: s}); })));
+    var count = el('span', {'class': 'muted'});
+    host.appendChild(el('div', {'class': 'controls'}, [search, sel, count,
+      el('span', {'class': 'muted', text: 'click a column header to sort'})]));
+    var wrap = el('div', {'class': 'tablewrap'});
+    var table = el('table', {'class': 'rowtable'});
+    var thead = el('thead'), tbody = el('tbody');
+    table.appendChild(thead); table.appendChild(tbody); wrap.appendChild(table); host.appendChild(wrap);
+    var texts = d.rows.map(function (r) {
+      return cols.map(function (c) { return c === 'params' ? paramText(r[c]) : fmt(r[c]); }).join(' ').toLowerCase();
+    });
+    function cell(r, c) {
+      var v = r[c];
+      if (v === null || v === undefined || v === '') return '<td></td>';
+      if (c === 'params') return '<td>' + esc(paramText(v)) + '</td>';
+      if (c === 'status') return '<td class="st-' + esc(v) + '">' + esc(v) + '</td>';
+      if (c === 'error') return '<td class="err" title="' + esc(v) + '">' + esc(v) + '</td>';
+      if (c === 'case_id') return '<td class="mono">' + esc(v) + '</td>';
+      if (typeof v === 'boolean' || BOOL_COLS[c]) {
+        var good = (c === 'topology_changed' || c === 'diverged') ? !v : v;
+        return '<td class="' + (good ? 't' : 'f') + '">' + (v ? '✓' : '✗') + '</td>';
+      }
+      if (isNum(v)) return '<td class="num" title="' + v + '">' + (c.indexOf('time') === 0 ? fmtTime(v) : fmt(v)) + '</td>';
+      return '<td>' + esc(v) + '</td>';
+    }
+    function render() {
+      thead.innerHTML = '<tr>' + cols.map(function (c) {
+        var mark = state.col === c ? (state.dir > 0 ? ' ▲' : ' ▼') : '';
+        return '<th data-col="' + esc(c) + '"' + (state.col === c ? ' class="sorted"' : '') + '>' + esc(c) + mark + '</th>';
+      }).join('') + '</tr>';
+      var words = state.q.toLowerCase().split(/\s+/).filter(Boolean);
+      var idx = [];
+      d.rows.forEach(function (r, i) {
+        if (state.status && r.status !== state.status) return;
+        for (var w = 0; w < words.length; w++) if (texts[i].indexOf(words[w]) < 0) return;
+        idx.push(i);
+      });
+      if (state.col) {
+        var c = state.col;
+        idx.sort(function (a, b) {
+          var x = d.rows[a][c], y = d.rows[b][c];
+          var xn = x === null || x === undefined || x === '', yn = y === null || y === undefined || y === '';
+          if (xn || yn) return xn === yn ? 0 : (xn ? 1 : -1);
+          if (typeof x === 'number' && typeof y === 'number') return (x - y) * state.dir;
+          return String(x).localeCompare(String(y)) * state.dir;
+        });
+      }
+      var LIMIT = 2000;
+      tbody.innerHTML = idx.slice(0, LIMIT).map(function (i) {
+        var r = d.rows[i]; return '<tr>' + cols.map(function (c) { return cell(r, c); }).join('') + '</tr>';
+      }).join('');
+      count.textContent = idx.length + ' of ' + d.rows.length + ' rows' + (idx.length > LIMIT ? ' (first ' + LIMIT + ' shown)' : '');
+    }
+    thead.addEventListener('click', function (e) {
+      var th = e.target.closest('th'); if (!th) return;
+      var c = th.getAttribute('data-col');
+      if (state.col === c) state.dir = -state.dir; else { state.col = c; state.dir = 1; }
+      render();
+    });
+    search.addEventListener('input', function () { state.q = search.value; render(); });
+    sel.addEventListener('change', function () { state.status = sel.value; render(); });
+    render();
+  }
+
+  // ------------------------------------------------------------------ sections
+  function selectEl(options, value, onChange) {
+    var s = el('select', {}, options.map(function (o) { return el('option', {value: o[0], text: o[1]}); }));
+    s.value = value;
+    s.addEventListener('change', function () { onChange(s.value); });
+    return s;
+  }
+  function meshFilter(rows, state, rerender) {
+    var meshes = uniq(rows.map(function (r) { return r.mesh; }));
+    if (meshes.length < 2) return null;
+    return el('label', {}, ['mesh ', selectEl([['', 'all meshes']].concat(meshes.map(function (m) { return [m, m]; })), '',
+      function (v) { state.mesh = v; rerender(); })]);
+  }
+
+  function laplacianSection(d) {
+    var host = document.getElementById('plots-laplacian');
+    var hidden = new Set();
+    var leg = el('div'), plots = el('div');
+    host.appendChild(leg); host.appendChild(plots);
+    function render() {
+      leg.innerHTML = ''; plots.innerHTML = '';
+      var mkLeg = function () { return legend(d.variants, d.colors, hidden, render); };
+      var ok = d.rows.filter(function (r) { return r.status === 'ok' && isNum(r.time_s); });
+      var panels = panelGroup(plots, 'Time to build the operator vs mesh size',
+        'Median of the repeats; each point is one mesh and noise level (median over seeds). Hover a point for details.', mkLeg);
+      var series = [];
+      groupBy(ok, function (r) { return r._variant; }).forEach(function (rs, v) {
+        if (hidden.has(v)) return;
+        var pts = [];
+        groupBy(rs, function (r) { return r.mesh + '|' + r._noise; }).forEach(function (g) {
+          var r = g[0], t = median(g.map(function (x) { return x.time_s; }));
+          pts.push([r.n_vertices, t, tipOf(r, 'time ' + fmtTime(t) + ', ' + r.n_vertices + ' vertices')]);
+        });
+        pts.sort(function (a, b) { return a[0] - b[0]; });
+        series.push({name: v, color: d.colors[v], pts: pts, line: false});
+      });
+      addPanel(panels, chart({w: 560, h: 300, xlabel: 'vertices', ylabel: 'time (s)', xlog: true, ylog: true, series: series}));
+    }
+    render();
+  }
+
+  var SMOOTH_METRICS = [
+    ['dist_mean', 'mean distance to the clean surface', 'input_dist_mean'],
+    ['ev_mean', 'mean vertex error (to its own clean vertex)', 'input_ev_mean'],
+    ['ev_rms', 'RMS vertex error', null],
+    ['ev_sun', 'E_v, Sun et al. 2007 (area-weighted RMS distance)', null],
+    ['hausdorff', 'Hausdorff distance to the clean surface', null],
+    ['normal_error_deg', 'mean face-normal error (degrees)', 'input_normal_error_deg'],
+    ['normal_error_rms_deg', 'RMS face-normal error (degrees)', null]];
+
+  function smoothingSection(d) {
+    var host = document.getElementById('plots-smoothing');
+    var state = {metric: 'dist_mean', mesh: ''};
+    var hidden = new Set();
+    var controls = el('div', {'class': 'controls'});
+    var leg = el('div'), plots = el('div');
+    host.appendChild(controls); host.appendChild(leg); host.appendChild(plots);
+    controls.appendChild(el('label', {}, ['accuracy metric ', selectEl(SMOOTH_METRICS.map(function (m) {
+      return [m[0], m[0] + ' — ' + m[1]]; }), state.metric, function (v) { state.metric = v; render(); })]));
+    var mf = meshFilter(d.rows, state, function () { render(); });
+    if (mf) controls.appendChild(mf);
+    function render() {
+      leg.innerHTML = ''; plots.innerHTML = '';
+      var M = SMOOTH_METRICS.find(function (m) { return m[0] === state.metric; });
+      var key = M[0], inKey = M[2], label = key + (key.indexOf('deg') > 0 ? '' : ' (/ bbox diagonal)');
+      var mkLeg = function (extra) { return function () { return legend(d.variants, d.colors, hidden, render, extra); }; };
+      var all = d.rows.filter(function (r) { return !state.mesh || r.mesh === state.mesh; });
+      var ok = all.filter(function (r) { return r.status === 'ok' && !r.diverged; });
+      var nDiv = all.filter(function (r) { return r.diverged; }).length;
+      if (nDiv) plots.appendChild(el('p', {'class': 'warn', text: nDiv + ' diverged result(s) (non-finite or exploded coordinates) are not plotted; see the table.'}));
+      var vis = ok.filter(function (r) { return !hidden.has(r._variant) && isNum(r[key]); });
+      var panelsKey = function (r) { return r.mesh + ' · ' + r._noise; };
+
+      // best per mesh and noise level
+      var bt = el('table', {'class': 'best'});
+      bt.innerHTML = '<tr><th>mesh</th><th>noise</th><th>most accurate</th><th>' + esc(key) + '</th><th>noisy input</th>' +
+        '<th>time</th><th>Pareto front (fastest first): method, ' + esc(key) + ', time</th></tr>';
+      var anyWorse = false;
+      groupBy(vis, panelsKey).forEach(function (rs) {
+        var pts = aggregate(rs, key);
+        var best = pts.reduce(function (a, b) { return b[1] < a[1] ? b : a; });
+        var inp = inKey ? mean(rs.map(function (r) { return r[inKey]; }).filter(isNum)) : null;
+        if (isNum(inp) && best[1] > inp) anyWorse = true;
+        var front = pareto(pts).map(function (p) { return esc(p[4]) + ' ' + fmt(p[1], 3) + ', ' + fmtTime(p[0]); }).join('<br>');
+        var tr = el('tr', {html: '<td>' + esc(rs[0].mesh) + '</td><td>' + esc(rs[0]._noise) + '</td><td><i style="color:' +
+          d.colors[best[4]] + '">●</i> ' + esc(best[4]) + '</td><td class="num' +
+          (isNum(inp) && best[1] > inp ? ' worse" title="worse than the noisy input' : '') + '">' + fmt(best[1], 4) + '</td><td class="num">' +
+          (isNum(inp) ? fmt(inp, 4) : '—') + '</td><td class="num">' + fmtTime(best[0]) + '</td><td>' + front + '</td>'});
+        bt.appendChild(tr);
+      });
+      plots.appendChild(el('h4', {text: 'Most accurate method per mesh and noise level'}));
+      plots.appendChild(bt);
+      if (anyWorse) plots.appendChild(el('p', {'class': 'caption', html: 'Red: even the most accurate method left the mesh ' +
+        'further from the clean one than the noisy input was (by ' + esc(key) + ').'}));
+
+      // accuracy vs time
+      var panels = panelGroup(plots, 'Accuracy vs time, per mesh and noise level',
+        'x: median time of the method call (log); y: ' + esc(key) + ' (mean over seeds). Black-ringed points and the dashed ' +
+        'staircase are the Pareto front: no other method in the panel is both faster and more accurate. ' +
+        (inKey ? 'The grey dashed line is the noisy input: points above it made the mesh worse.' : ''),
+        mkLeg(inKey ? ['noisy input', 'Pareto front'] : ['Pareto front']));
+      groupBy(vis, panelsKey).forEach(function (rs, title) {
+        var pts = aggregate(rs, key), front = pareto(pts);
+        var onFront = new Set(front);
+        var series = [];
+        groupBy(pts, function (p) { return p[4]; }).forEach(function (ps, v) {
+          series.push({name: v, color: d.colors[v], pts: ps.map(function (p) { return [p[0], p[1], p[2], onFront.has(p)]; })});
+        });
+        var inp = inKey ? mean(rs.map(function (r) { return r[inKey]; }).filter(isNum)) : null;
+        addPanel(panels, chart({title: title, xlabel: 'time (s)', ylabel: label, xlog: true,
+          ylog: autoLog(pts.map(function (p) { return p[1]; }).concat(isNum(inp) ? [inp] : [])),
+          series: series, front: front, hlines: isNum(inp) ? [{y: inp, label: 'noisy input'}] : []}));
+      });
+
+      // error vs noise level
+      var levels = uniq(vis.map(function (r) { return r.noise_level; }).filter(isNum));
+      var enPanels = panelGroup(plots, 'Error vs noise level, per mesh and noise model',
+        levels.length > 1 ? 'Mean over seeds; noise level = σ / mean edge length.' + (inKey ? ' Grey dashed: the noisy input.' : '')
+          : 'This run has a single noise level, so each line is a single point.', mkLeg(inKey ? ['noisy input'] : []));
+      groupBy(vis, function (r) { return r.mesh + ' · ' + r.noise_model; }).forEach(function (rs, title) {
+        var series = [];
+        var yall = [];
+        groupBy(rs, function (r) { return r._variant; }).forEach(function (vr, v) {
+          var pts = [];
+          groupBy(vr, function (r) { return r.noise_level; }).forEach(function (g, lv) {
+            var y = mean(g.map(function (r) { return r[key]; }));
+            yall.push(y);
+            pts.push([lv, y, v + '\n' + title + ' ' + lv + '\n' + key + ' ' + fmt(y) + ' (' + g.length + ' case' + (g.length > 1 ? 's' : '') + ')']);
+          });
+          pts.sort(function (a, b) { return a[0] - b[0]; });
+          series.push({name: v, color: d.colors[v], pts: pts, line: true});
+        });
+        if (inKey) {
+          var ip = [];
+          groupBy(rs, function (r) { return r.noise_level; }).forEach(function (g, lv) {
+            var y = mean(g.map(function (r) { return r[inKey]; }).filter(isNum)); yall.push(y);
+            ip.push([lv, y, 'noisy input at ' + lv + ': ' + fmt(y)]);
+          });
+          ip.sort(function (a, b) { return a[0] - b[0]; });
+          series.unshift({name: 'noisy input', color: REF, pts: ip, line: true, dash: '5 4', r: 2.5});
+        }
+        addPanel(enPanels, chart({title: title, xlabel: 'noise level', ylabel: label, ylog: autoLog(yall), series: series}));
+      });
+
+      // input vs output
+      var ioKey = inKey ? key : 'dist_mean', ioIn = inKey || 'input_dist_mean';
+      var ioPanels = panelGroup(plots, 'Input error vs output error (improvement)',
+        'Each point is one case. Below the dashed diagonal y = x the method reduced the error of its noisy input; ' +
+        'above it, it made things worse.' + (inKey ? '' : ' (' + esc(key) + ' has no input counterpart; showing dist_mean.)'),
+        mkLeg([]));
+      var ioSeries = [];
+      groupBy(ok.filter(function (r) { return !hidden.has(r._variant) && isNum(r[ioKey]) && isNum(r[ioIn]); }),
+        function (r) { return r._variant; }).forEach(function (rs, v) {
+        ioSeries.push({name: v, color: d.colors[v], pts: rs.map(function (r) {
+          return [r[ioIn], r[ioKey], tipOf(r, 'input ' + fmt(r[ioIn]) + ' → ' + fmt(r[ioKey]) + ' (' + ioKey + ')')]; })});
+      });
+      addPanel(ioPanels, chart({w: 440, h: 340, xlabel: ioIn, ylabel: ioKey, xlog: true, ylog: true, diag: true, series: ioSeries}));
+      histPlot(plots, {rows: ok, colors: d.colors}, hidden, 'Triangle quality of the results: min-angle histogram per method', mkLeg([]));
+    }
+    function aggregate(rs, key) { // one point per variant: [median time, mean metric, tip, n, variant]
+      var out = [];
+      groupBy(rs, function (r) { return r._variant; }).forEach(function (g, v) {
+        var t = median(g.map(function (r) { return r.time_s; }).filter(isNum)), y = mean(g.map(function (r) { return r[key]; }));
+        out.push([t, y, tipOf(g[0], key + ' ' + fmt(y) + ', time ' + fmtTime(t) + (g.length > 1 ? ' (' + g.length + ' seeds)' : '')), g.length, v]);
+      });
+      return out;
+    }
+    render();
+  }
+
+  function simplificationSection(d) {
+    var host = document.getElementById('plots-simplification');
+    var state = {metric: 'hausdorff', mesh: ''};
+    var hidden = new Set();
+    var controls = el('div', {'class': 'controls'});
+    var leg = el('div'), plots = el('div');
+    host.appendChild(controls); host.appendChild(leg); host.appendChild(plots);
+    controls.appendChild(el('label', {}, ['accuracy metric ', selectEl([['hausdorff', 'hausdorff — symmetric Hausdorff to the input'],
+      ['dist_mean', 'dist_mean — mean distance to the input']], state.metric, function (v) { state.metric = v; render(); })]));
+    var mf = meshFilter(d.rows, state, function () { render(); });
+    if (mf) controls.appendChild(mf);
+    function render() {
+      leg.innerHTML = ''; plots.innerHTML = '';
+      var mkLeg = function () { return legend(d.variants, d.colors, hidden, render); };
+      var key = state.metric;
+      var ok = d.rows.filter(function (r) {
+        return r.status === 'ok' && (!state.mesh || r.mesh === state.mesh) && !hidden.has(r._variant);
+      });
+      var vis = ok.filter(function (r) { return isNum(r[key]) && isNum(r.out_faces); });
+      var bt = el('table', {'class': 'best'});
+      bt.innerHTML = '<tr><th>mesh</th><th>noise</th><th>target</th><th>most accurate</th><th>' + esc(key) +
+        '</th><th>faces</th><th>time</th><th>fastest</th><th>its ' + esc(key) + '</th><th>its time</th></tr>';
+      groupBy(vis, function (r) { return r.mesh + '|' + r._noise + '|' + r._target; }).forEach(function (rs) {
+        var best = rs.reduce(function (a, b) { return b[key] < a[key] ? b : a; });
+        var fast = rs.reduce(function (a, b) { return b.time_s < a.time_s ? b : a; });
+        bt.appendChild(el('tr', {html: '<td>' + esc(best.mesh) + '</td><td>' + esc(best._noise) + '</td><td>' + esc(fmt(best._target)) +
+          '</td><td><i style="color:' + d.colors[best._variant] + '">●</i> ' + esc(best._variant) + '</td><td class="num">' + fmt(best[key], 4) +
+          '</td><td class="num">' + best.out_faces + '</td><td class="num">' + fmtTime(best.time_s) + '</td><td>' + esc(fast._variant) +
+          '</td><td class="num">' + fmt(fast[key], 4) + '</td><td class="num">' + fmtTime(fast.time_s) + '</td>'}));
+      });
+      plots.appendChild(el('h4', {text: 'Most accurate and fastest method per mesh, noise level and target'}));
+      plots.appendChild(bt);
+      var panels = panelGroup(plots, key + ' vs output face count, per mesh and noise level',
+        'One line per method through its face targets (log–log; mean over seeds). Lower-left is better: fewer faces, ' +
+        'closer to the input. Distances are fractions of the bounding-box diagonal.', mkLeg);
+      groupBy(vis, function (r) { return r.mesh + ' · ' + r._noise; }).forEach(function (rs, title) {
+        var series = [];
+        groupBy(rs, function (r) { return r._variant; }).forEach(function (vr, v) {
+          var pts = [];
+          groupBy(vr, function (r) { return r._target; }).forEach(function (g) {
+            var x = mean(g.map(function (r) { return r.out_faces; })), y = mean(g.map(function (r) { return r[key]; }));
+            pts.push([x, y, tipOf(g[0], 'target ' + fmt(g[0]._target) + ': ' + Math.round(x) + ' faces of ' + g[0].n_faces +
+              ', ' + key + ' ' + fmt(y) + ', time ' + fmtTime(median(g.map(function (r) { return r.time_s; }))))]);
+          });
+          pts.sort(function (a, b) { return a[0] - b[0]; });
+          series.push({name: v, color: d.colors[v], pts: pts, line: true});
+        });
+        addPanel(panels, chart({title: title, xlabel: 'output faces', ylabel: key + ' (/ bbox diagonal)', xlog: true, ylog: true, series: series}));
+      });
+      var tp = panelGroup(plots, 'Time vs output face count', 'Median time of the method call; one point per case.', mkLeg);
+      var ts = [];
+      groupBy(vis.filter(function (r) { return isNum(r.time_s); }), function (r) { return r._variant; }).forEach(function (rs, v) {
+        ts.push({name: v, color: d.colors[v], pts: rs.map(function (r) {
+          return [r.out_faces, r.time_s, tipOf(r, r.out_faces + ' faces, ' + fmtTime(r.time_s))]; })});
+      });
+      addPanel(tp, chart({w: 560, h: 280, xlabel: 'output faces', ylabel: 'time (s)', xlog: true, ylog: true, series: ts}));
+      histPlot(plots, {rows: ok, colors: d.colors}, hidden, 'Triangle quality of the results: min-angle histogram per method', mkLeg);
+    }
+    render();
+  }
+
+  // ------------------------------------------------------------------ 3D views (canvas 2D painter's algorithm)
+  var VIRIDIS = [[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]];
+  function cmap(t) {
+    t = Math.max(0, Math.min(1, t)) * (VIRIDIS.length - 1);
+    var i = Math.min(Math.floor(t), VIRIDIS.length - 2), f = t - i, a = VIRIDIS[i], b = VIRIDIS[i + 1];
+    return [a[0] + (b[0] - a[0]) * f, a[1] + (b[1] - a[1]) * f, a[2] + (b[2] - a[2]) * f];
+  }
+  function decode(b64, Type) {
+    var s = atob(b64), u = new Uint8Array(s.length);
+    for (var i = 0; i < s.length; i++) u[i] = s.charCodeAt(i);
+    return new Type(u.buffer);
+  }
+  function unpack(m, lo, span) {
+    var q = decode(m.V, Uint16Array), V = new Float32Array(q.length);
+    for (var i = 0; i < q.length; i++) V[i] = lo[i % 3] + q[i] / 65535 * span;
+    return {V: V, F: decode(m.F, Uint32Array), e: m.e ? decode(m.e, Uint8Array) : null, nv: m.nv, nf: m.nf};
+  }
+  function drawMesh(canvas, mesh, cam, center, radius) {
+    var ctx = canvas.getContext('2d'), w = canvas.width, h = canvas.height;
+    ctx.fillStyle = '#ffffff'; ctx.fillRect(0, 0, w, h);
+    var cy = Math.cos(cam.yaw), sy = Math.sin(cam.yaw), cp = Math.cos(cam.pitch), sp = Math.sin(cam.pitch);
+    // R = Rx(pitch) * Ry(yaw)
+    var r00 = cy, r01 = 0, r02 = sy, r10 = sp * sy, r11 = cp, r12 = -sp * cy, r20 = -cp * sy, r21 = sp, r22 = cp * cy;
+    var s = cam.zoom * 0.47 * Math.min(w, h) / radius, n = mesh.nv, V = mesh.V, F = mesh.F, e = mesh.e;
+    var X = new Float32Array(n), Y = new Float32Array(n), Z = new Float32Array(n);
+    for (var i = 0; i < n; i++) {
+      var x = V[3 * i] - center[0], y = V[3 * i + 1] - center[1], z = V[3 * i + 2] - center[2];
+      X[i] = r00 * x + r01 * y + r02 * z; Y[i] = r10 * x + r11 * y + r12 * z; Z[i] = r20 * x + r21 * y + r22 * z;
+    }
+    var m = mesh.nf, depth = new Float32Array(m), order = new Uint32Array(m);
+    for (var f = 0; f < m; f++) { depth[f] = Z[F[3 * f]] + Z[F[3 * f + 1]] + Z[F[3 * f + 2]]; order[f] = f; }
+    order.sort(function (a, b) { return depth[a] - depth[b]; });
+    var L = [-0.35, 0.45, 0.82], ln = Math.hypot(L[0], L[1], L[2]);
+    L = [L[0] / ln, L[1] / ln, L[2] / ln];
+    ctx.lineWidth = 0.6; ctx.lineJoin = 'round';
+    var hw = w / 2, hh = h / 2;
+    for (var k = 0; k < m; k++) {
+      var t = order[k], a = F[3 * t], b = F[3 * t + 1], c = F[3 * t + 2];
+      var ux = X[b] - X[a], uy = Y[b] - Y[a], uz = Z[b] - Z[a], vx = X[c] - X[a], vy = Y[c] - Y[a], vz = Z[c] - Z[a];
+      var nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx, nl = Math.hypot(nx, ny, nz);
+      if (!(nl > 0)) continue;
+      var sh = 0.28 + 0.72 * Math.abs(nx * L[0] + ny * L[1] + nz * L[2]) / nl;
+      var col = e ? cmap((e[a] + e[b] + e[c]) / 765) : [206, 209, 216];
+      var rgb = 'rgb(' + (col[0] * sh | 0) + ',' + (col[1] * sh | 0) + ',' + (col[2] * sh | 0) + ')';
+      ctx.fillStyle = rgb; ctx.strokeStyle = rgb;
+      ctx.beginPath();
+      ctx.moveTo(hw + s * X[a], hh - s * Y[a]); ctx.lineTo(hw + s * X[b], hh - s * Y[b]); ctx.lineTo(hw + s * X[c], hh - s * Y[c]);
+      ctx.closePath(); ctx.fill(); ctx.stroke();
+    }
+  }
+  function viewCard(v) {
+    var card = el('div', {'class': 'view', 'data-case': v.case_id});
+    card.appendChild(el('h4', {text: (v.title || 'case ' + v.case_id)}));
+    var sub = (v.why ? v.why + ' — ' : '') + 'case ' + v.case_id + (v.params ? ', params ' + paramText(v.params) : '') +
+      (v.metric && isNum(v.value) ? ', ' + v.metric + ' = ' + fmt(v.value) : '');
+    card.appendChild(el('div', {'class': 'caption', text: sub}));
+    if (v.error) { card.appendChild(el('p', {'class': 'err', text: 'No 3D view: ' + v.error})); return {card: card, ok: false}; }
+    if (v.source) card.appendChild(el('div', {'class': 'caption', text: v.source}));
+    if (v.mismatch) card.appendChild(el('p', {'class': 'warn', text: v.mismatch}));
+    var meshes = v.meshes.map(function (m) { return unpack(m, v.lo, v.span); });
+    var ref = meshes[0], lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
+    for (var i = 0; i < ref.V.length; i++) { lo[i % 3] = Math.min(lo[i % 3], ref.V[i]); hi[i % 3] = Math.max(hi[i % 3], ref.V[i]); }
+    var center = [(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2];
+    var radius = Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) / 2 || 1;
+    var home = {yaw: 0.45, pitch: 0.3, zoom: 1};
+    var cam = {yaw: home.yaw, pitch: home.pitch, zoom: 1};
+    var dpr = Math.min(window.devicePixelRatio || 1, 2), size = 320;
+    var row = el('div', {'class': 'canvases'}), canvases = [];
+    v.meshes.forEach(function (m, j) {
+      var cv = el('canvas', {width: Math.round(size * dpr), height: Math.round(size * dpr),
+        style: 'width:' + size + 'px;height:' + size + 'px'});
+      var capHtml = '<b>' + esc(m.label) + '</b> — ' + m.nf.toLocaleString('en') + ' faces' + (m.note ? ' (' + esc(m.note) + ')' : '') +
+        '<br>' + esc(m.what) + (isNum(m.emean) ? '<br>mean ' + fmt(m.emean, 3) + ', max ' + fmt(m.emaxv, 3) : '');
+      var fig = el('figure', {}, [cv, el('figcaption', {html: capHtml})]);
+      row.appendChild(fig); canvases.push(cv);
+    });
+    card.appendChild(row);
+    card.appendChild(el('div', {'class': 'colorbar'}, [el('span', {text: '0'}), el('span', {'class': 'bar'}),
+      el('span', {text: fmt(v.emax, 3) + ' (' + v.unit + '; 99th percentile of the noisy and result errors, larger values saturate)'})]));
+    var pending = false;
+    function redraw() {
+      pending = false;
+      canvases.forEach(function (cv, j) { drawMesh(cv, meshes[j], cam, center, radius); });
+    }
+    function schedule() { if (!pending) { pending = true; requestAnimationFrame(redraw); } }
+    var drag = null;
+    canvases.forEach(function (cv) {
+      cv.addEventListener('pointerdown', function (e) { drag = [e.clientX, e.clientY]; cv.setPointerCapture(e.pointerId); cv.style.cursor = 'grabbing'; });
+      cv.addEventListener('pointermove', function (e) {
+        if (!drag) return;
+        cam.yaw += (e.clientX - drag[0]) * 0.01;
+        cam.pitch = Math.max(-1.57, Math.min(1.57, cam.pitch + (e.clientY - drag[1]) * 0.01));
+        drag = [e.clientX, e.clientY]; schedule();
+      });
+      cv.addEventListener('pointerup', function () { drag = null; cv.style.cursor = 'grab'; });
+      cv.addEventListener('wheel', function (e) {
+        e.preventDefault(); cam.zoom = Math.max(0.3, Math.min(8, cam.zoom * Math.exp(-e.deltaY * 0.0015))); schedule();
+      }, {passive: false});
+      cv.addEventListener('dblclick', function () { cam.yaw = home.yaw; cam.pitch = home.pitch; cam.zoom = 1; schedule(); });
+    });
+    redraw();
+    return {card: card, ok: true};
+  }
+  function viewsSection() {
+    var host = document.getElementById('view-list');
+    var views = D.views || [];
+    if (!views.length) {
+      host.appendChild(el('p', {'class': 'muted', text: 'No 3D views: this run has no smoothing or simplification case with status ok.'}));
+      body.dataset.view3d = 'none';
+      return;
+    }
+    var nOk = 0;
+    views.forEach(function (v) {
+      guard('3D view ' + v.case_id, host, function () { var r = viewCard(v); host.appendChild(r.card); if (r.ok) nOk++; });
+    });
+    body.dataset.view3d = nOk ? 'ready' : 'failed';
+    body.dataset.view3dCount = String(nOk);
+  }
+
+  // ------------------------------------------------------------------ main
+  var sections = {laplacian: laplacianSection, smoothing: smoothingSection, simplification: simplificationSection};
+  Object.keys(sections).forEach(function (task) {
+    var d = taskRows(task);
+    if (!d) return;
+    var host = document.getElementById('plots-' + task);
+    guard(task + ' plots', host, function () { sections[task](d); });
+    guard(task + ' table', document.getElementById('rows-' + task), function () { rowsTable(task, d); });
+  });
+  body.dataset.plotsRendered = String(plotsRendered);
+  guard('3D views', document.getElementById('view-list'), viewsSection);
+  body.dataset.plotsRendered = String(plotsRendered);
+  body.dataset.ready = '1';
+})();

@@ -1,0 +1,182 @@
+"""report.html from a real (tiny) run: content, self-containment, rebuild via `shootout report`,
+3D views recomputed from run.json, and the failure paths (the page says why, it never crashes)."""
+from __future__ import annotations
+
+import base64
+import csv
+import json
+import re
+import shutil
+
+import numpy as np
+import pytest
+
+import harness
+from harness.cli import main as cli
+from harness.mesh import write_obj
+from harness.results import load_csv
+from harness.report import build_report
+from harness.report import html as rh
+
+TINY = {
+    "name": "tiny-report",
+    "repeats": 1,
+    "seed": 0,
+    "hausdorff_samples": 2000,
+    "meshes": ["knight", {"procedural": "plane_nondelaunay", "n_points": 120}],
+    "noise": [{"model": "gaussian_normal", "levels": [0.2, 0.5]}, {"model": "none"}],
+    "tasks": {
+        "laplacian": {"methods": ["scratch.uniform", "scratch.cotan"]},
+        "smoothing": {"methods": [{"name": "scratch.explicit", "params": {"iterations": [2, 6]}}]},
+        "simplification": {"methods": ["fast_simplification.qem"], "params": {"target_ratio": [0.5, 0.2]}},
+    },
+}
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory):
+    out = tmp_path_factory.mktemp("report_run")
+    harness.run(TINY, out=out, quiet=True, workers=1)
+    return out
+
+
+def page_data(path) -> dict:
+    text = path.read_text()
+    m = re.search(r"<script type='application/json' id='report-data'>(.*?)</script>", text, re.S)
+    assert m, "the report has no inline data block"
+    return json.loads(m.group(1).replace("<\\/", "</"))
+
+
+def copy_run(run_dir, tmp_path):
+    dst = tmp_path / "run"
+    shutil.copytree(run_dir, dst)
+    (dst / "report.html").unlink()
+    return dst
+
+
+def rewrite_csv(path, edit):
+    rows = list(csv.DictReader(path.open()))
+    fields = list(rows[0])
+    edit(rows)
+    with path.open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=fields, lineterminator="\n")
+        w.writeheader()
+        w.writerows(rows)
+
+
+def test_report_is_self_contained_and_small(run_dir):
+    path = run_dir / "report.html"
+    text = path.read_text()
+    assert path.stat().st_size < 5_000_000
+    # no external resource of any kind: scripts and styles are inline, nothing is fetched
+    assert not re.search(r"<script[^>]*\ssrc=", text)
+    assert "<link" not in text and "@import" not in text
+    assert not re.search(r"url\(\s*['\"]?(https?:)?//", text)
+    assert not re.search(r"""(src|href)=['"]?(https?:)?//""", text)
+    for sid in ("overview", "task-laplacian", "task-smoothing", "task-simplification", "views"):
+        assert f"id='{sid}'" in text
+    assert "Cases by status" in text and "config (" in text
+
+
+def test_page_data_matches_the_csvs(run_dir):
+    d = page_data(run_dir / "report.html")
+    for task in ("laplacian", "smoothing", "simplification"):
+        with (run_dir / f"{task}.csv").open() as fh:
+            n = sum(1 for _ in csv.DictReader(fh))
+        assert len(d["tasks"][task]["rows"]) == n == 12
+    assert d["tasks"]["smoothing"]["variants"] == ["scratch.explicit iterations=2", "scratch.explicit iterations=6"]
+    # the simplification target is a plot axis, not part of the method's name
+    assert d["tasks"]["simplification"]["variants"] == ["fast_simplification.qem"]
+    cols = d["tasks"]["smoothing"]["columns"]
+    hist = [r[cols.index("_hist")] for r in d["tasks"]["smoothing"]["rows"]]
+    assert all(len(h) == 12 for h in hist)                     # 5-degree bins over [0, 60]
+    faces = [r[cols.index("n_faces")] for r in d["tasks"]["smoothing"]["rows"]]
+    assert [sum(h) for h in hist] == faces                     # one count per face
+
+
+def test_property_matrix_and_uniform_note(run_dir):
+    df = load_csv(run_dir / "laplacian.csv")
+    mat = {e["variant"]: e["props"] for e in rh.property_matrix(df)}
+    cot, uni = mat["scratch.cotan"], mat["scratch.uniform"]
+    # LIN is measured only on the exactly planar input (plane_nondelaunay, noise none): 1 row each
+    assert cot["LIN"]["measured"] == 1 and cot["LIN"]["fails"] == 0 and cot["LIN"]["worst"] < 1e-9
+    assert uni["LIN"]["measured"] == 1 and uni["LIN"]["fails"] == 1 and uni["LIN"]["worst"] > 1e-6
+    assert cot["SYM"]["fails"] == uni["SYM"]["fails"] == 0
+    assert uni["POS"]["fails"] == 0 and cot["POS"]["fails"] >= 1          # non-Delaunay plane: negative cotans
+    assert "plane_nondelaunay(n_points=120)" in cot["POS"]["fail_meshes"]
+    text = (run_dir / "report.html").read_text()
+    assert "weighted Delaunay" in text and "D = diag(1/N" in text
+    lin = df[(df.method == "scratch.uniform") & df.lin_error.notna()].lin_error.iloc[0]
+    assert f"lin_error = {rh._fmt(lin)}" in text                          # the numbers come from the row
+
+
+def test_views_recomputed_from_run_json(run_dir):
+    d = page_data(run_dir / "report.html")
+    views = d["views"]
+    assert [v["why"].split()[0] for v in views] == ["best", "worst", "best", "worst"]
+    for v in views:
+        assert "error" not in v, v.get("error")
+        assert "recomputed" in v["source"] and "mismatch" not in v
+        assert [m["label"] for m in v["meshes"]] == ["clean", "noisy input", "result"]
+        for m in v["meshes"]:
+            V = np.frombuffer(base64.b64decode(m["V"]), "<u2")
+            F = np.frombuffer(base64.b64decode(m["F"]), "<u4")
+            assert V.size == 3 * m["nv"] and F.size == 3 * m["nf"] and F.max() < m["nv"]
+            if "e" in m:
+                assert np.frombuffer(base64.b64decode(m["e"]), np.uint8).size == m["nv"]
+
+
+def test_decimation_for_display_only():
+    from harness import datasets
+    mesh = datasets.load("bunny").clean
+    err = np.linalg.norm(mesh.V, axis=1)
+    V, F, e, note = rh._decimate(mesh.V, mesh.F, err, 2000)
+    assert len(F) <= 2000 * 1.01 and len(e) == len(V) and "decimated" in note
+    assert rh._decimate(mesh.V, mesh.F, err, 10**6)[3] is None
+
+
+def test_shootout_report_rebuilds(run_dir, tmp_path):
+    dst = copy_run(run_dir, tmp_path)
+    assert cli(["report", str(dst)]) == 0
+    assert page_data(dst / "report.html")["tasks"].keys() == {"laplacian", "smoothing", "simplification"}
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert cli(["report", str(empty)]) == 2
+
+
+def test_views_from_config_saved_meshes_and_errors(run_dir, tmp_path):
+    dst = copy_run(run_dir, tmp_path)
+    lap = next(csv.DictReader((dst / "laplacian.csv").open()))["case_id"]
+    smo = next(csv.DictReader((dst / "smoothing.csv").open()))
+    meta = json.loads((dst / "run.json").read_text())
+    meta["config"]["report"] = {"views": [smo["case_id"], lap, "000000000000"]}
+    (dst / "run.json").write_text(json.dumps(meta))
+    # a saved result mesh is used instead of recomputing
+    (dst / "meshes").mkdir()
+    from harness import datasets
+    clean = datasets.load("knight").clean
+    write_obj(dst / "meshes" / f"{smo['case_id']}.obj", clean.V * 1.01, clean.F)
+    views = page_data(build_report(dst))["views"]
+    assert [v["case_id"] for v in views] == [smo["case_id"], lap, "000000000000"]
+    assert "read from meshes/" in views[0]["source"] and views[0]["why"].startswith("chosen in the config")
+    assert "no result mesh" in views[1]["error"]
+    assert "not in this run" in views[2]["error"]
+
+
+def test_report_survives_a_config_that_no_longer_loads_and_groups_errors(run_dir, tmp_path):
+    dst = copy_run(run_dir, tmp_path)
+    meta = json.loads((dst / "run.json").read_text())
+    meta["config"]["tasks"]["smoothing"]["methods"] = ["nobody.nothing"]
+    (dst / "run.json").write_text(json.dumps(meta))
+
+    def fail_two(rows):
+        for r in rows[:2]:
+            r.update(status="error", error="ValueError: boom at smoothing.py:12")
+    rewrite_csv(dst / "smoothing.csv", fail_two)
+    path = build_report(dst)
+    d = page_data(path)
+    assert d["views"] and all("cannot rebuild the cases" in v["error"] and "nobody.nothing" in v["error"]
+                              for v in d["views"])
+    text = path.read_text()
+    assert re.search(r"<td class='st-error'>error</td><td>2</td><td class='msg'>ValueError: boom at smoothing.py:12",
+                     text)

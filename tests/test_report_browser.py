@@ -1,0 +1,252 @@
+"""report.html in a real browser: headless Chromium driven over the DevTools protocol.
+
+Chromium is started with ``--remote-debugging-pipe`` (DevTools messages as NUL-separated JSON
+on file descriptors 3 and 4), so the test needs nothing beyond the standard library and the
+``chromium`` binary. Networking is off twice over: every request goes to a dead proxy
+(``--proxy-server=127.0.0.1:9``) and the page is emulated offline; every request the page
+issues is recorded anyway, and any that is not the report file itself fails the test. Console
+messages of level error, uncaught exceptions and browser log errors fail the test too.
+
+Skipped only when no Chromium binary exists (``.ci/run`` installs Debian's ``chromium``).
+"""
+from __future__ import annotations
+
+import base64
+import json
+import os
+import select
+import shutil
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+import pytest
+
+import harness
+
+CHROMIUM = next((shutil.which(n) for n in ("chromium", "chromium-browser", "google-chrome", "chrome")
+                 if shutil.which(n)), None)
+pytestmark = pytest.mark.skipif(CHROMIUM is None, reason="no chromium binary on PATH (apt-get install chromium)")
+
+TINY = {
+    "name": "tiny-browser",
+    "repeats": 1,
+    "seed": 0,
+    "hausdorff_samples": 2000,
+    "meshes": ["knight", {"procedural": "plane_nondelaunay", "n_points": 120}],
+    "noise": [{"model": "gaussian_normal", "levels": [0.2, 0.5]}, {"model": "none"}],
+    "tasks": {
+        "laplacian": {"methods": ["scratch.uniform", "scratch.cotan"]},
+        "smoothing": {"methods": [{"name": "scratch.explicit", "params": {"iterations": [2, 6]}}]},
+        "simplification": {"methods": ["fast_simplification.qem"], "params": {"target_ratio": [0.5, 0.2]}},
+    },
+}
+
+
+class CDP:
+    """Minimal Chrome DevTools Protocol client over ``--remote-debugging-pipe``."""
+
+    def __init__(self, url_dir: Path, width=1400, height=2000):
+        self.user_dir = tempfile.mkdtemp(prefix="chromium-profile-")
+        r_cmd, w_cmd = os.pipe()     # we write commands -> chromium reads fd 3
+        r_out, w_out = os.pipe()     # chromium writes fd 4 -> we read
+        args = [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                "--disable-extensions", "--disable-default-apps", "--no-default-browser-check",
+                "--proxy-server=http://127.0.0.1:9", "--proxy-bypass-list=<-loopback>",
+                f"--window-size={width},{height}", f"--user-data-dir={self.user_dir}",
+                "--remote-debugging-pipe", "about:blank"]
+
+        def _fds():              # in the child: the pipe ends become fds 3 and 4 (kept open by pass_fds)
+            a, b = os.dup(r_cmd), os.dup(w_out)
+            os.dup2(a, 3)
+            os.dup2(b, 4)
+        self.proc = subprocess.Popen(args, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                     stderr=subprocess.DEVNULL, pass_fds=(3, 4), preexec_fn=_fds)
+        os.close(r_cmd)
+        os.close(w_out)
+        self.w, self.r = w_cmd, r_out
+        self.buf = b""
+        self.next_id = 0
+        self.events: list[dict] = []
+        self.session = None
+
+    def _read_message(self, deadline):
+        while b"\0" not in self.buf:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise TimeoutError("no DevTools message from chromium in time")
+            ready, _, _ = select.select([self.r], [], [], left)
+            if ready:
+                chunk = os.read(self.r, 1 << 20)
+                if not chunk:
+                    raise RuntimeError("chromium closed the DevTools pipe")
+                self.buf += chunk
+        msg, self.buf = self.buf.split(b"\0", 1)
+        return json.loads(msg)
+
+    def call(self, method, params=None, timeout=20.0, session=True):
+        self.next_id += 1
+        mid = self.next_id
+        msg = {"id": mid, "method": method, "params": params or {}}
+        if session and self.session:
+            msg["sessionId"] = self.session
+        os.write(self.w, json.dumps(msg).encode() + b"\0")
+        deadline = time.monotonic() + timeout
+        while True:
+            m = self._read_message(deadline)
+            if m.get("id") == mid:
+                if "error" in m:
+                    raise RuntimeError(f"{method}: {m['error']}")
+                return m.get("result", {})
+            self.events.append(m)
+
+    def pump(self, seconds):
+        deadline = time.monotonic() + seconds
+        try:
+            while True:
+                self.events.append(self._read_message(deadline))
+        except TimeoutError:
+            pass
+
+    def eval(self, expr):
+        r = self.call("Runtime.evaluate", {"expression": expr, "returnByValue": True, "awaitPromise": True})
+        if "exceptionDetails" in r:
+            raise RuntimeError(f"evaluate failed: {r['exceptionDetails']}")
+        return r["result"].get("value")
+
+    def open(self, url):
+        target = self.call("Target.createTarget", {"url": "about:blank"}, session=False)["targetId"]
+        self.session = self.call("Target.attachToTarget", {"targetId": target, "flatten": True},
+                                 session=False)["sessionId"]
+        for m in ("Runtime.enable", "Log.enable", "Network.enable", "Page.enable"):
+            self.call(m)
+        self.call("Network.emulateNetworkConditions", {"offline": True, "latency": 0, "downloadThroughput": -1,
+                                                       "uploadThroughput": -1})
+        self.call("Emulation.setDeviceMetricsOverride", {"width": 1400, "height": 2000, "deviceScaleFactor": 1,
+                                                         "mobile": False})
+        self.call("Page.navigate", {"url": url})
+
+    def close(self):
+        try:
+            self.call("Browser.close", session=False, timeout=5)
+        except Exception:  # noqa: BLE001 - the browser may already be gone; it is killed below
+            pass
+        try:
+            self.proc.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+        for fd in (self.w, self.r):
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+        shutil.rmtree(self.user_dir, ignore_errors=True)
+
+
+def check_report_in_browser(report: Path, screenshot: Path | None = None, timeout=30.0, full_page=False,
+                            interact=True) -> dict:
+    """Open ``report`` from file:// offline; return what the page did (used by the test and for docs)."""
+    report = Path(report).resolve()
+    cdp = CDP(report.parent)
+    try:
+        cdp.open(report.as_uri())
+        deadline = time.monotonic() + timeout
+        while cdp.eval("document.body && document.body.dataset.ready") != "1":
+            if time.monotonic() > deadline:
+                raise TimeoutError("the report's script never set data-ready")
+            cdp.pump(0.2)
+        cdp.pump(0.3)
+        state = cdp.eval("""(() => {
+            const b = document.body.dataset;
+            const canvases = [...document.querySelectorAll('#views canvas')];
+            const painted = canvases.filter(c => {
+                const ctx = c.getContext('2d'); const w = c.width, h = c.height;
+                const d = ctx.getImageData(0, 0, w, h).data; let n = 0;
+                for (let i = 0; i < d.length; i += 4 * 97) if (d[i] < 240 || d[i+1] < 240 || d[i+2] < 240) n++;
+                return n > 20;
+            }).length;
+            return {plots: b.plotsRendered, view3d: b.view3d, view3dCount: b.view3dCount, jsError: b.jsError || null,
+                    svg: document.querySelectorAll('svg.chart').length,
+                    svgPoints: document.querySelectorAll('svg.chart circle').length,
+                    canvases: canvases.length, painted: painted,
+                    sections: [...document.querySelectorAll('section.task')].map(s => s.id),
+                    tables: [...document.querySelectorAll('table.rowtable')].map(t => t.tBodies[0].rows.length),
+                    matrixRows: document.querySelectorAll('table.propmatrix tr').length,
+                    jserrors: document.querySelectorAll('.jserror').length,
+                    smoothingSvgs: document.querySelectorAll('#plots-smoothing svg.chart').length,
+                    height: document.documentElement.scrollHeight};
+        })()""")
+        if interact:
+            _interact(cdp, state)
+        if screenshot is not None:
+            params = {"format": "png"}
+            if full_page:
+                params.update(captureBeyondViewport=True,
+                              clip={"x": 0, "y": 0, "width": 1400, "height": state["height"], "scale": 1})
+            shot = cdp.call("Page.captureScreenshot", params, timeout=60)
+            Path(screenshot).write_bytes(base64.b64decode(shot["data"]))
+        cdp.pump(0.2)
+        events = cdp.events
+    finally:
+        cdp.close()
+    console = [e["params"] for e in events if e.get("method") == "Runtime.consoleAPICalled"
+               and e["params"].get("type") in ("error", "assert")]
+    exceptions = [e["params"] for e in events if e.get("method") == "Runtime.exceptionThrown"]
+    logs = [e["params"]["entry"] for e in events if e.get("method") == "Log.entryAdded"
+            and e["params"]["entry"].get("level") == "error"]
+    requests = [e["params"]["request"]["url"] for e in events if e.get("method") == "Network.requestWillBeSent"]
+    state.update(console_errors=console, exceptions=exceptions, log_errors=logs,
+                 foreign_requests=[u for u in requests if u != report.as_uri()], requests=requests)
+    return state
+
+
+def _interact(cdp, state):
+    # interact: sort a table column and filter rows, then switch a metric select
+    state["sorted"] = cdp.eval("""(() => {
+        const th = document.querySelector('#rows-smoothing th[data-col="time_s"]'); th.click();
+        const first = document.querySelector('#rows-smoothing th.sorted'); return first ? first.textContent : null; })()""")
+    state["filtered"] = cdp.eval("""(() => {
+        const inp = document.querySelector('#rows-laplacian input[type=search]');
+        inp.value = 'scratch.uniform'; inp.dispatchEvent(new Event('input'));
+        return document.querySelector('#rows-laplacian tbody').rows.length; })()""")
+    state["metric_switch"] = cdp.eval("""(() => {
+        const s = document.querySelector('#plots-smoothing select'); s.value = 'ev_mean';
+        s.dispatchEvent(new Event('change'));
+        return document.querySelectorAll('#plots-smoothing svg.chart').length; })()""")
+
+
+@pytest.fixture(scope="module")
+def tiny_report(tmp_path_factory):
+    out = tmp_path_factory.mktemp("browser_run")
+    harness.run(TINY, out=out, quiet=True, workers=1)
+    return out / "report.html"
+
+
+def test_report_opens_offline_without_errors(tiny_report, tmp_path):
+    shot = tmp_path / "report.png"
+    s = check_report_in_browser(tiny_report, screenshot=shot)
+    print(f"screenshot: {shot}")
+    assert s["console_errors"] == [], s["console_errors"]
+    assert s["exceptions"] == [], s["exceptions"]
+    assert s["log_errors"] == [], s["log_errors"]
+    assert s["jsError"] is None and s["jserrors"] == 0
+    # the page loaded from file:// and asked for nothing else
+    assert s["requests"] and s["foreign_requests"] == [], s["foreign_requests"]
+    assert s["sections"] == ["task-laplacian", "task-smoothing", "task-simplification"]
+    # every plot is an SVG with points; the marker and the DOM agree
+    assert int(s["plots"]) == s["svg"] >= 8, s
+    assert s["svgPoints"] > 30
+    assert s["matrixRows"] == 3          # header + scratch.cotan + scratch.uniform
+    assert s["tables"] == [12, 12, 12]   # 2 meshes x 3 noise settings x 2 methods/params
+    # 3D views: best and worst per task, each with 3 canvases that really got pixels
+    assert s["view3d"] == "ready" and int(s["view3dCount"]) == 4
+    assert s["canvases"] == 12 and s["painted"] == 12, s
+    # interaction works
+    assert s["sorted"] and s["sorted"].startswith("time_s")
+    assert s["filtered"] == 6
+    assert s["metric_switch"] == s["smoothingSvgs"] > 0     # re-rendered, same plots, new metric
+    png = shot.read_bytes()
+    assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20_000
