@@ -1,0 +1,186 @@
+"""Durability and resume (issue 7): a run killed with SIGKILL mid-way leaves parseable CSVs,
+``--resume`` finishes it with no duplicate and no lost ok row, a changed config is refused
+(exit 2, nothing touched), and no case process outlives a killed driver."""
+import csv
+import io
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import psutil
+import pytest
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+import harness  # noqa: E402
+from harness.config import load_config  # noqa: E402
+from harness.results import RunFolder, columns, load_csv  # noqa: E402
+
+SHOOTOUT = Path(sys.executable).with_name("shootout")
+TASK_FILES = ("laplacian.csv", "smoothing.csv", "simplification.csv")
+
+
+def env_with_root():
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT)] + [p for p in env.get("PYTHONPATH", "").split(os.pathsep) if p])
+    return env
+
+
+def slow_config(seconds=(0.4, 0.41, 0.42, 0.43, 0.44, 0.45)):
+    return {"name": "killme", "plugins": ["tests.plugins.crashy"],
+            "meshes": ["knight", {"procedural": "sphere", "subdivisions": 2}],
+            "tasks": {"laplacian": {"methods": [{"name": "crashy.slow", "params": {"seconds": list(seconds)}},
+                                                "crashy.raises"]},
+                      "smoothing": {"methods": [{"name": "scratch.explicit", "params": {"iterations": [3, 4]}}]}}}
+
+
+def data_rows(path: Path) -> int:
+    try:
+        return max(0, path.read_text().count("\n") - 1)
+    except FileNotFoundError:
+        return 0
+
+
+def strict_rows(path: Path, task: str) -> list[dict]:
+    """Every line of the CSV parsed with the csv module: header == contract columns, every row
+    complete (a torn line would fail here)."""
+    text = path.read_text()
+    assert text.endswith("\n"), f"{path.name}: last line not terminated"
+    rows = list(csv.reader(io.StringIO(text)))
+    assert rows[0] == columns(task)
+    assert all(len(r) == len(rows[0]) for r in rows[1:]), f"{path.name}: ragged row"
+    return [dict(zip(rows[0], r)) for r in rows[1:]]
+
+
+def start(cfg_path, out, *extra):
+    return subprocess.Popen([str(SHOOTOUT), "run", str(cfg_path), "--out", str(out), "--quiet", *extra],
+                            env=env_with_root(), start_new_session=True,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def wait_for_rows(out: Path, n: int, proc, limit=120):
+    t0 = time.time()
+    while sum(data_rows(out / f) for f in TASK_FILES) < n:
+        assert proc.poll() is None, f"run ended before {n} rows: {proc.communicate()}"
+        assert time.time() - t0 < limit, "no rows appeared"
+        time.sleep(0.05)
+
+
+def test_sigkill_mid_run_then_resume(tmp_path):
+    cfg_path = tmp_path / "killme.yaml"
+    cfg_path.write_text(yaml.safe_dump(slow_config()))
+    out = tmp_path / "out"
+    n_cases = len(load_config(cfg_path).cases)           # 2 meshes x (6 slow + 1 raises + 2 smoothing) = 18
+    proc = start(cfg_path, out, "--workers", "2")
+    wait_for_rows(out, 5, proc)
+    os.killpg(proc.pid, signal.SIGKILL)                 # the whole process group, mid-run
+    proc.wait(30)
+    assert proc.returncode == -signal.SIGKILL
+
+    before = {}
+    for f in TASK_FILES:
+        if (out / f).exists():
+            task = f[:-4]
+            load_csv(out / f)                            # pandas parses it
+            for r in strict_rows(out / f, task):
+                before[r["case_id"]] = r
+    assert 5 <= len(before) < n_cases, "the kill should land mid-run"
+    ok_before = {k: r for k, r in before.items() if r["status"] == "ok"}
+    assert ok_before
+
+    r = subprocess.run([str(SHOOTOUT), "run", str(cfg_path), "--out", str(out), "--quiet", "--resume",
+                        "--workers", "2"], env=env_with_root(), capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    after = {}
+    for f in ("laplacian.csv", "smoothing.csv"):         # the tasks of this config
+        rows = strict_rows(out / f, f[:-4])
+        ids = [x["case_id"] for x in rows]
+        assert len(ids) == len(set(ids)), f"duplicate rows in {f}"
+        after.update({x["case_id"]: x for x in rows})
+    assert set(after) == {c.case_id for c in load_config(cfg_path).cases}
+    for cid, row in ok_before.items():                   # ok rows kept exactly as written
+        assert after[cid] == row
+    statuses = {x["method"]: set() for x in after.values()}
+    for x in after.values():
+        statuses[x["method"]].add(x["status"])
+    assert statuses == {"crashy.slow": {"ok"}, "crashy.raises": {"error"}, "scratch.explicit": {"ok"}}
+    meta = RunFolder(out).read_run_json()
+    assert meta["status"] == "finished" and meta["resumed_ok_cases"] == len(ok_before)
+
+
+def test_resume_with_a_changed_config_is_refused(tmp_path):
+    cfg = slow_config(seconds=(0.0,))
+    cfg_path = tmp_path / "c.yaml"
+    cfg_path.write_text(yaml.safe_dump(cfg))
+    out = tmp_path / "out"
+    harness.run(load_config(cfg_path), out=out, workers=2)
+    snapshot = {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()}
+
+    cfg["tasks"]["laplacian"]["methods"].append("scratch.uniform")     # one more method: new cases
+    cfg_path.write_text(yaml.safe_dump(cfg))
+    r = subprocess.run([str(SHOOTOUT), "run", str(cfg_path), "--out", str(out), "--resume"],
+                       env=env_with_root(), capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2
+    assert "config changed" in r.stderr and "--resume" in r.stderr and "Traceback" not in r.stderr
+    assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file()} == snapshot
+
+
+def test_resume_drops_a_torn_last_line_and_reruns_that_case(tmp_path):
+    """Should the OS ever leave half a line, --resume drops it and runs that case again."""
+    cfg = load_config(slow_config(seconds=(0.0,)))
+    out = tmp_path / "out"
+    harness.run(cfg, out=out, workers=2)
+    p = out / "laplacian.csv"
+    lines = p.read_text().splitlines(keepends=True)
+    torn_id = lines[-1].split(",")[0]
+    p.write_text("".join(lines[:-1]) + lines[-1][: len(lines[-1]) // 2])     # half a row, no newline
+    frames = harness.run(cfg, out=out, workers=2, resume=True)
+    df = frames["laplacian"]
+    assert df["case_id"].is_unique and torn_id in set(df["case_id"])
+    assert len(df) == sum(c.task == "laplacian" for c in cfg.cases)
+
+
+def _alive(pids):
+    out = []
+    for pid in pids:
+        try:
+            if psutil.Process(pid).status() != psutil.STATUS_ZOMBIE:
+                out.append(pid)
+        except psutil.NoSuchProcess:
+            pass
+    return out
+
+
+def test_case_processes_die_with_a_killed_driver(tmp_path):
+    """SIGKILL to the driver pid alone (as the OOM killer does): the case children running two
+    never-ending cases must not live on as orphans."""
+    cfg = {"name": "orphans", "plugins": ["tests.plugins.crashy"], "meshes": ["knight"],
+           "tasks": {"laplacian": {"methods": ["crashy.sleep",
+                                               {"name": "crashy.slow", "params": {"seconds": [1000.0]}}]}}}
+    cfg_path = tmp_path / "o.yaml"
+    cfg_path.write_text(yaml.safe_dump(cfg))
+    proc = start(cfg_path, tmp_path / "out", "--workers", "2")
+    driver = psutil.Process(proc.pid)
+    t0 = time.time()
+    kids = []
+    while len(kids) < 2:
+        assert proc.poll() is None and time.time() - t0 < 60, "children did not start"
+        kids = [k.pid for k in driver.children(recursive=True)]
+        time.sleep(0.1)
+    time.sleep(0.5)
+    try:
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.wait(30)
+        t0 = time.time()
+        while _alive(kids) and time.time() - t0 < 10:
+            time.sleep(0.1)
+        assert not _alive(kids), "case processes outlived the killed driver"
+    finally:
+        for pid in _alive(kids):                   # never leave them behind, even when failing
+            os.kill(pid, signal.SIGKILL)
