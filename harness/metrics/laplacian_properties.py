@@ -19,7 +19,10 @@ and ``M`` diagonal (or None):
     flag); ``|.|`` is the Euclidean norm of the 2-vector.
     ``LIN`` is ``lin_error <= LIN_TOL``. Both None (blank) for non-planar meshes.
 ``neg_weights``
-    fraction of off-diagonal stored entries with ``W_ij < -ZERO_TOL * max|W|``.
+    fraction of off-diagonal weights with ``W_ij < -ZERO_TOL * max|W|``, out of the directed
+    vertex pairs that are mesh edges or carry a significant weight (``2 * #edges +
+    loc_violations``), so explicit zeros in the storage (libigl keeps them, scipy
+    arithmetic drops them) do not change the value.
     ``POS`` is "no such entry" (Wardetzky's w_ij >= 0).
 ``min_eig``
     smallest eigenvalue of ``S = -(W + W^T) / 2`` divided by the largest eigenvalue magnitude
@@ -138,8 +141,11 @@ def laplacian_properties(W, M, V, F, planar: bool | None = None) -> dict:
     out["sym_error"] = float(abs(D).max()) / wmax if D.nnz else 0.0
     out["SYM"] = out["sym_error"] <= SYM_TOL
 
-    # ---- positivity
-    n_off = int(np.count_nonzero(offd))
+    # ---- positivity (denominator independent of explicit zeros in the storage)
+    n_mesh_edges = int(np.count_nonzero(np.diff(edge_keys))) + 1 if edge_keys.size else 0
+    self_loops = edge_keys[(edge_keys // n) == (edge_keys % n)]
+    n_mesh_edges -= np.unique(self_loops).size
+    n_off = n_mesh_edges + out["loc_violations"]
     n_neg = int(np.count_nonzero(offd & (vals < -ZERO_TOL * wmax)))
     out["neg_weights"] = n_neg / n_off if n_off else 0.0
     out["POS"] = n_neg == 0

@@ -18,13 +18,23 @@ import scipy.sparse as sp
 
 from methods.scratch import operators as op
 
-try:  # numba is a dependency of the project; the pure-Python fallback is only for its absence
-    from numba import njit
-except ImportError:  # pragma: no cover
-    def njit(*args, **kwargs):
-        if args and callable(args[0]):
-            return args[0]
-        return lambda f: f
+_COMPILED = False
+
+
+def _compile() -> None:
+    """Replace the three kernels by their numba versions (lazily, so importing this module
+    does not import numba; ``cache=True``). Without numba they stay plain Python (slow)."""
+    global _area, _needs_flip, _flip_to_delaunay, _COMPILED
+    if _COMPILED:
+        return
+    _COMPILED = True
+    try:
+        from numba import njit
+    except ImportError:  # pragma: no cover - numba is a project dependency
+        return
+    _area = njit(cache=True)(_area)
+    _needs_flip = njit(cache=True)(_needs_flip)
+    _flip_to_delaunay = njit(cache=True)(_flip_to_delaunay)
 
 # Flip only when the Delaunay criterion fails by more than this relative margin: avoids
 # flipping back and forth on (numerically) cocircular quads, where both diagonals give the
@@ -68,7 +78,6 @@ def halfedge_twins(F: np.ndarray) -> np.ndarray:
     return twin
 
 
-@njit(cache=True)
 def _area(a, b, c):
     """Triangle area from side lengths (Kahan's stable Heron); 0 for violated inequality."""
     # sort descending: x >= y >= z
@@ -85,7 +94,6 @@ def _area(a, b, c):
     return 0.25 * np.sqrt(p)
 
 
-@njit(cache=True)
 def _needs_flip(e, a, b, c, d):
     """True if the edge e (apex angle alpha opposite e in triangle (e, a, b), delta in (e, c, d))
     has alpha + delta > pi (beyond the relative margin ``FLIP_RTOL``).
@@ -101,7 +109,6 @@ def _needs_flip(e, a, b, c, d):
     return lhs > rhs * (1.0 + FLIP_RTOL) + 1e-300
 
 
-@njit(cache=True)
 def _flip_to_delaunay(F, L, twin, max_flips):
     """Flip edges in place until every flippable interior edge is intrinsic Delaunay.
 
@@ -230,6 +237,7 @@ def intrinsic_delaunay_triangulation(V: np.ndarray, F: np.ndarray, l: np.ndarray
         return L, F_int, 0
     twin = halfedge_twins(F_int)
     max_flips = 50 * F_int.shape[0] + 1000
+    _compile()
     flips = _flip_to_delaunay(F_int, L, twin, max_flips)
     if flips < 0:
         raise RuntimeError(f"intrinsic Delaunay flips did not terminate after {max_flips} flips")
