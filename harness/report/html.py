@@ -18,6 +18,7 @@ import dataclasses
 import html
 import json
 import math
+import re
 import time
 from collections import Counter, defaultdict
 from datetime import datetime, timezone
@@ -107,6 +108,11 @@ def variant_labels(df, task) -> list[str]:
     return out
 
 
+def natural_key(s: str):
+    """Sort key that orders "iterations=5" before "iterations=20"."""
+    return [(0, float(t), "") if re.fullmatch(r"\d+(\.\d+)?", t) else (1, 0.0, t) for t in re.split(r"(\d+(?:\.\d+)?)", s)]
+
+
 def noise_label(model, level) -> str:
     if model in (None, "none") or (isinstance(model, float) and math.isnan(model)):
         return "no noise"
@@ -135,7 +141,7 @@ def _frame_payload(task, df) -> dict:
     cols += ["_variant", "_noise", "_hist", "_target"]
     for r, v, n, h, t in zip(rows, variants, noise, hist, target):
         r += [v, n, h, _clean(t) if not isinstance(t, str) else t]
-    order = sorted(set(variants))
+    order = sorted(set(variants), key=natural_key)
     return {"columns": cols, "rows": rows, "variants": order}
 
 
@@ -237,7 +243,8 @@ def property_matrix(df) -> list[dict]:
     ok = df[df["status"] == "ok"].copy()
     ok["_variant"] = variant_labels(ok, "laplacian") if len(ok) else []
     out = []
-    for var, g in ok.groupby("_variant", sort=True):
+    for var in sorted(ok["_variant"].unique(), key=natural_key) if len(ok) else []:
+        g = ok[ok["_variant"] == var]
         entry = {"variant": var, "n": len(g), "props": {}}
         for label, flag, val, _ in PROPS + [("M⁻¹W sym", "operator_symmetric", None, "")]:
             if flag not in g:
@@ -316,6 +323,24 @@ def _uniform_note(df) -> str:
     return "".join(parts)
 
 
+def _all_four_html(df) -> str:
+    """Which operators have SYM, LOC, LIN and POS at once on each planar mesh of the run (from the rows)."""
+    ok = df[(df["status"] == "ok") & df["lin_error"].notna()] if "lin_error" in df else df.iloc[0:0]
+    if not len(ok):
+        return ""
+    ok = ok.assign(_variant=variant_labels(ok, "laplacian"))
+    items = []
+    for (mesh, nz), g in ok.groupby([ok["mesh"].astype(str), [noise_label(m, lv) for m, lv in
+                                                             zip(ok["noise_model"], ok["noise_level"])]]):
+        good = g[g["SYM"].astype(bool) & g["LOC"].astype(bool) & g["LIN"].astype(bool) & g["POS"].astype(bool)]
+        names = sorted(good["_variant"].unique(), key=natural_key)
+        items.append(f"<li><b>{_esc(mesh)}</b> ({_esc(nz)}): "
+                     + (_esc(", ".join(names)) if names else "<i>no operator in this run</i>")
+                     + f" <span class='muted'>({len(names)} of {g['_variant'].nunique()})</span></li>")
+    return ("<p>All four of SYM, LOC, LIN and POS at once, per planar mesh of this run (the only meshes where "
+            f"LIN is measured):</p><ul class='allfour'>{''.join(items)}</ul>")
+
+
 def _laplacian_static(frames) -> str:
     if "laplacian" not in frames:
         return ""
@@ -326,7 +351,7 @@ def _laplacian_static(frames) -> str:
             "linear precision (LIN) and positive weights (POS) on all triangle meshes. On the plane, all four hold "
             "at once exactly on regular / weighted Delaunay triangulations, where the cotangent weights are "
             "non-negative; PSD follows from SYM and POS.</p>"
-            + _matrix_html(df) + _uniform_note(df))
+            + _matrix_html(df) + _all_four_html(df) + _uniform_note(df))
 
 
 # ----------------------------------------------------------------------------- 3D views
@@ -362,16 +387,20 @@ def _decimate(V, F, err, limit):
 
 
 def _pack_view(meshes, lo, span, emax) -> list[dict]:
+    """``emax``: one colour-scale maximum for all meshes, or a list with one per mesh."""
     out = []
-    for label, V, F, err, what in meshes:
+    scales = emax if isinstance(emax, list) else [emax] * len(meshes)
+    for (label, V, F, err, what), emax in zip(meshes, scales):
         V, F, err, note = _decimate(V, F, err, MAX_DISPLAY_FACES)
         q = np.clip(np.round((V - lo) / span * 65535.0), 0, 65535).astype("<u2")
         m = {"label": label, "what": what, "nv": int(len(V)), "nf": int(len(F)), "V": _b64(q),
              "F": _b64(F.astype("<u4")), "note": note}
         if err is not None:
-            m["e"] = _b64(np.clip(np.round(err / emax * 255.0), 0, 255).astype(np.uint8)) if emax > 0 else None
+            q = np.clip(np.round(err / emax * 255.0), 0, 255) if emax > 0 else np.zeros(len(err))
+            m["e"] = _b64(q.astype(np.uint8))
             m["emean"] = float(np.mean(err))
             m["emaxv"] = float(np.max(err))
+            m["escale"] = float(emax)
         out.append(m)
     return out
 
@@ -487,15 +516,23 @@ def _view_meshes(run_dir: Path, case, row, metric) -> dict:
         from ..metrics.surface_distance import point_surface_distance
         e_out = point_surface_distance(V_out, V_in, clean.F) / diag
         what_out = "distance of each vertex to the noisy input surface (what the Hausdorff column measures)"
-    emax = float(max(np.percentile(e_in, 99), np.percentile(e_out, 99))) if len(e_out) else 0.0
+    p_in = float(np.percentile(e_in, 99)) if len(e_in) else 0.0
+    p_out = float(np.percentile(e_out, 99)) if len(e_out) else 0.0
+    if case.task == "smoothing":       # the same quantity on both meshes: one colour scale
+        emax = [0.0, max(p_in, p_out), max(p_in, p_out)]
+        out["scale_note"] = "one colour scale for the noisy input and the result (99th percentile of both)"
+    else:                              # two different distances: each mesh gets its own scale
+        emax = [0.0, p_in, p_out]
+        out["scale_note"] = ("separate colour scales: the input shows its noise, the result its distance to the "
+                             "input (each up to its own 99th percentile)")
     allV = np.vstack([clean.V, V_in, V_out])
     lo = allV.min(0)
     span = float((allV.max(0) - lo).max()) or 1.0
     meshes = [("clean", clean.V, clean.F, None, "reference mesh"),
               ("noisy input", V_in, clean.F, e_in, "distance of each vertex to its clean position"),
               ("result", V_out, F_out, e_out, what_out)]
-    out.update(meshes=_pack_view(meshes, lo, span, emax), lo=lo.tolist(), span=span, emax=emax,
-               unit="fraction of the bounding-box diagonal")
+    out.update(meshes=_pack_view(meshes, lo, span, emax), lo=lo.tolist(), span=span,
+               unit="fractions of the bounding-box diagonal")
     return out
 
 
@@ -553,7 +590,7 @@ def render(run_dir) -> str:
             _header_html(meta, frames, run_dir),
             *[_task_section(t, frames) for t in TASKS],
             "<section id='views'><h2>3D views</h2><p>Clean, noisy and result meshes side by side, coloured by "
-            "per-vertex error (same colour scale in a row; the clean mesh is the grey reference). Drag to rotate "
+            "per-vertex error (lengths are fractions of the bounding-box diagonal; the clean mesh is the grey reference). Drag to rotate "
             "(all three turn together), wheel to zoom, double-click to reset. Views are recomputed from the "
             "CSVs and run.json when the run did not save meshes; large meshes are decimated for display only.</p>"
             "<div id='view-list'></div></section>",

@@ -130,7 +130,8 @@
         if (a >= 1e-3 && a < 1e5) return String(parseFloat(v.toPrecision(p)));
         return v.toExponential(p - 1).replace(/\.?0+e/, 'e').replace('e+', 'e');
       });
-      if (new Set(labs).size === labs.length) return labs;
+      var exact = labs.every(function (l, i) { return Math.abs(parseFloat(l) - vals[i]) <= 1e-9 * Math.abs(vals[i]); });
+      if (exact && new Set(labs).size === labs.length) return labs;
     }
     return vals.map(String);
   }
@@ -139,7 +140,7 @@
   /* spec: {w,h,title,xlabel,ylabel,xlog,ylog,yzero,xdomain,diag,series:[{name,color,pts:[[x,y,tip]],line,dash,ring}],
             front:[[x,y]], hlines:[{y,label}]} */
   function chart(spec) {
-    var W = spec.w || 360, H = spec.h || 250;
+    var W = spec.w || 322, H = spec.h || 240;
     var m = {l: 56, r: 12, t: spec.title ? 22 : 10, b: 38};
     var xs = [], ys = [], dropped = 0;
     spec.series.forEach(function (s) {
@@ -397,7 +398,7 @@
           pts.push([r.n_vertices, t, tipOf(r, 'time ' + fmtTime(t) + ', ' + r.n_vertices + ' vertices')]);
         });
         pts.sort(function (a, b) { return a[0] - b[0]; });
-        series.push({name: v, color: d.colors[v], pts: pts, line: false});
+        series.push({name: v, color: d.colors[v], pts: pts, line: true, width: 1.1, r: 3.5});
       });
       addPanel(panels, chart({w: 560, h: 300, xlabel: 'vertices', ylabel: 'time (s)', xlog: true, ylog: true, series: series}));
     }
@@ -555,15 +556,25 @@
       var bt = el('table', {'class': 'best'});
       bt.innerHTML = '<tr><th>mesh</th><th>noise</th><th>target</th><th>most accurate</th><th>' + esc(key) +
         '</th><th>faces</th><th>time</th><th>fastest</th><th>its ' + esc(key) + '</th><th>its time</th></tr>';
-      groupBy(vis, function (r) { return r.mesh + '|' + r._noise + '|' + r._target; }).forEach(function (rs) {
+      groupBy(vis, function (r) { return r.mesh + '|' + r._noise + '|' + r._target; }).forEach(function (rows) {
+        // one entry per method: mean metric and faces over seeds, median time
+        var rs = [];
+        groupBy(rows, function (r) { return r._variant; }).forEach(function (g, v) {
+          var o = Object.assign({}, g[0]);
+          o[key] = mean(g.map(function (r) { return r[key]; }));
+          o.out_faces = Math.round(mean(g.map(function (r) { return r.out_faces; })));
+          var ts = g.map(function (r) { return r.time_s; }).filter(isNum);
+          o.time_s = ts.length ? median(ts) : null;
+          rs.push(o);
+        });
         var best = rs.reduce(function (a, b) { return b[key] < a[key] ? b : a; });
-        var fast = rs.reduce(function (a, b) { return b.time_s < a.time_s ? b : a; });
+        var fast = rs.filter(function (r) { return isNum(r.time_s); }).reduce(function (a, b) { return b.time_s < a.time_s ? b : a; }, rs[0]);
         bt.appendChild(el('tr', {html: '<td>' + esc(best.mesh) + '</td><td>' + esc(best._noise) + '</td><td>' + esc(fmt(best._target)) +
           '</td><td><i style="color:' + d.colors[best._variant] + '">●</i> ' + esc(best._variant) + '</td><td class="num">' + fmt(best[key], 4) +
           '</td><td class="num">' + best.out_faces + '</td><td class="num">' + fmtTime(best.time_s) + '</td><td>' + esc(fast._variant) +
           '</td><td class="num">' + fmt(fast[key], 4) + '</td><td class="num">' + fmtTime(fast.time_s) + '</td>'}));
       });
-      plots.appendChild(el('h4', {text: 'Most accurate and fastest method per mesh, noise level and target'}));
+      plots.appendChild(el('h4', {text: 'Most accurate and fastest method per mesh, noise level and target (mean over seeds)'}));
       plots.appendChild(bt);
       var panels = panelGroup(plots, key + ' vs output face count, per mesh and noise level',
         'One line per method through its face targets (log–log; mean over seeds). Lower-left is better: fewer faces, ' +
@@ -667,12 +678,17 @@
         style: 'width:' + size + 'px;height:' + size + 'px'});
       var capHtml = '<b>' + esc(m.label) + '</b> — ' + m.nf.toLocaleString('en') + ' faces' + (m.note ? ' (' + esc(m.note) + ')' : '') +
         '<br>' + esc(m.what) + (isNum(m.emean) ? '<br>mean ' + fmt(m.emean, 3) + ', max ' + fmt(m.emaxv, 3) : '');
-      var fig = el('figure', {}, [cv, el('figcaption', {html: capHtml})]);
+      var cap = el('figcaption', {html: capHtml});
+      if (isNum(m.escale)) {
+        cap.appendChild(el('div', {'class': 'colorbar'}, [el('span', {text: '0'}), el('span', {'class': 'bar'}),
+          el('span', {text: fmt(m.escale, 3) + '+'})]));
+      }
+      var fig = el('figure', {}, [cv, cap]);
       row.appendChild(fig); canvases.push(cv);
     });
     card.appendChild(row);
-    card.appendChild(el('div', {'class': 'colorbar'}, [el('span', {text: '0'}), el('span', {'class': 'bar'}),
-      el('span', {text: fmt(v.emax, 3) + ' (' + v.unit + '; 99th percentile of the noisy and result errors, larger values saturate)'})]));
+    if (v.scale_note) card.appendChild(el('div', {'class': 'caption', text: 'Colours: ' + v.scale_note +
+      '; larger values saturate. Lengths are ' + v.unit + '.'}));
     var pending = false;
     function redraw() {
       pending = false;

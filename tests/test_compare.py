@@ -1,0 +1,191 @@
+"""`shootout compare` on real run folders (identical, injected regressions, tolerances) and the
+pytest-benchmark JSON export read back by pytest-benchmark's own `compare` command."""
+from __future__ import annotations
+
+import csv
+import io
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import harness
+from harness.cli import main as cli
+from harness.compare import compare_runs, judge, judge_time
+
+SMALL = {
+    "name": "tiny-compare",
+    "repeats": 3,
+    "seed": 0,
+    "hausdorff_samples": 2000,
+    "meshes": ["knight"],
+    "noise": [{"model": "gaussian_normal", "levels": [0.3]}],
+    "tasks": {
+        "laplacian": {"methods": ["scratch.uniform", "scratch.cotan"]},
+        "smoothing": {"methods": [{"name": "scratch.explicit", "params": {"iterations": [3, 8]}}]},
+        "simplification": {"methods": ["fast_simplification.qem"], "params": {"target_ratio": [0.5]}},
+    },
+}
+
+
+@pytest.fixture(scope="module")
+def run_a(tmp_path_factory):
+    out = tmp_path_factory.mktemp("cmp") / "a"
+    harness.run(SMALL, out=out, quiet=True, workers=1,
+                export_benchmark_json=out.parent / "bench.json")
+    return out
+
+
+def copy(run_a, tmp_path, name="b") -> Path:
+    dst = tmp_path / name
+    shutil.copytree(run_a, dst)
+    return dst
+
+
+def edit(path: Path, fn):
+    rows = list(csv.DictReader(path.open()))
+    fields = list(rows[0])
+    fn(rows)
+    with path.open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=fields, lineterminator="\n")
+        w.writeheader()
+        w.writerows(rows)
+
+
+def run_compare(a, b, **kw):
+    buf = io.StringIO()
+    code = compare_runs(a, b, out=buf, **kw)
+    return code, buf.getvalue()
+
+
+def test_identical_runs_exit_0(run_a, tmp_path, capsys):
+    b = copy(run_a, tmp_path)
+    assert cli(["compare", str(run_a), str(b)]) == 0
+    out = capsys.readouterr().out
+    assert "0 regression(s)" in out and "5 cases in both" in out
+
+
+def test_injected_metric_regression_exits_1_and_html(run_a, tmp_path):
+    b = copy(run_a, tmp_path)
+    edit(b / "smoothing.csv", lambda rows: rows[0].update(dist_mean=str(float(rows[0]["dist_mean"]) * 1.05)))
+    html = tmp_path / "diff.html"
+    code, out = run_compare(run_a, b, html_out=html)
+    assert code == 1
+    line = next(ln for ln in out.splitlines() if ln.startswith("REGRESSION"))
+    assert "dist_mean" in line and "+5.0%" in line
+    assert "1 regression(s) in 1 case(s)" in out
+    page = html.read_text()
+    assert "<b>1 regression(s)</b>" in page and "dist_mean" in page
+    assert cli(["compare", str(run_a), str(b)]) == 1           # the CLI returns the same exit code
+
+
+def test_changes_within_tolerance_and_improvements_exit_0(run_a, tmp_path):
+    b = copy(run_a, tmp_path)
+
+    def fn(rows):
+        rows[0]["dist_mean"] = str(float(rows[0]["dist_mean"]) * 1.005)   # 0.5 % worse: within the 1 % tolerance
+        rows[1]["hausdorff"] = str(float(rows[1]["hausdorff"]) * 0.5)      # better
+    edit(b / "smoothing.csv", fn)
+    code, out = run_compare(run_a, b)
+    assert code == 0, out
+    assert "1 improvement(s)" in out and "1 change(s) within tolerance" in out
+
+
+@pytest.mark.parametrize("task, change, metric", [
+    ("laplacian", {"SYM": "false"}, "SYM"),                                # a property is lost
+    ("laplacian", {"loc_violations": "4", "LOC": "false"}, "loc_violations"),
+    ("simplification", {"out_faces": "400"}, "out_faces"),                # misses its 500-face target
+    ("smoothing", {"diverged": "true", "ev_mean": ""}, "diverged"),        # a blow-up, metrics gone
+    ("smoothing", {"volume_ratio": "0.5"}, "volume_ratio"),
+    ("simplification", {"status": "error", "error": "RuntimeError: boom"}, "status"),
+])
+def test_each_kind_of_regression(run_a, tmp_path, task, change, metric):
+    b = copy(run_a, tmp_path)
+    edit(b / f"{task}.csv", lambda rows: rows[0].update(change))
+    code, out = run_compare(run_a, b)
+    assert code == 1, out
+    assert any(ln.startswith("REGRESSION") and f" {metric} " in ln for ln in out.splitlines()), out
+
+
+def test_missing_case_is_a_regression_new_case_is_not(run_a, tmp_path):
+    b = copy(run_a, tmp_path)
+    edit(b / "laplacian.csv", lambda rows: rows.pop())
+    code, out = run_compare(run_a, b)
+    assert code == 1 and "missing in RUN_B" in out
+    code, out = run_compare(b, run_a)          # the extra case in the candidate is only listed
+    assert code == 0 and "new in B: 1 case(s)" in out
+
+
+def test_time_needs_factor_and_spread(run_a, tmp_path):
+    ra = {"time_s": 0.010, "time_min_s": 0.009, "time_max_s": 0.012}
+    assert judge_time(ra, {"time_s": 0.030, "time_min_s": 0.028, "time_max_s": 0.035}) == "regression"
+    # 3x slower median but the repeats overlap the baseline's spread: noise, not a regression
+    assert judge_time(ra, {"time_s": 0.030, "time_min_s": 0.011, "time_max_s": 0.040}) == "same"
+    # beyond the spread but only 1.4x
+    assert judge_time(ra, {"time_s": 0.014, "time_min_s": 0.0135, "time_max_s": 0.015}) == "same"
+    # sub-millisecond differences are never regressions
+    assert judge_time({"time_s": 1e-4, "time_min_s": 1e-4, "time_max_s": 1e-4},
+                      {"time_s": 5e-4, "time_min_s": 5e-4, "time_max_s": 5e-4}) == "same"
+    assert judge_time(ra, {"time_s": 0.004, "time_min_s": 0.003, "time_max_s": 0.005}) == "improvement"
+    b = copy(run_a, tmp_path)
+
+    def slow(rows):
+        r = rows[0]
+        t = max(float(r["time_max_s"]) * 10, float(r["time_s"]) + 0.01)
+        r.update(time_s=str(t), time_min_s=str(t * 0.99), time_max_s=str(t * 1.01))
+    edit(b / "smoothing.csv", slow)
+    code, out = run_compare(run_a, b)
+    assert code == 1 and any(ln.startswith("REGRESSION") and "time_s" in ln for ln in out.splitlines())
+
+
+def test_rules():
+    assert judge("hausdorff", 0.010, 0.0102) == "regression"          # +2 %
+    assert judge("hausdorff", 0.010, 0.01005) == "same"               # +0.5 %
+    assert judge("hausdorff", 1e-9, 5e-7) == "same"                   # tiny in absolute terms
+    assert judge("min_angle", 20.0, 19.0) == "regression"             # higher is better
+    assert judge("min_eig", -1e-17, -1e-3) == "regression"
+    assert judge("volume_ratio", 0.98, 1.01) == "improvement"         # closer to 1
+    assert judge("volume_ratio", 0.99, 1.03) == "regression"
+    assert judge("out_faces", 500, 502, None, {"target_faces": 500}) == "same"
+    assert judge("out_faces", 500, 480, None, {"target_faces": 500}) == "regression"
+    assert judge("psd", True, False) == "regression" and judge("topology_changed", True, False) == "improvement"
+    assert judge("peak_rss_mb", 100.0, 900.0) == "changed"             # informational only
+
+
+def test_not_a_run_folder_is_a_usage_error(run_a, tmp_path):
+    assert cli(["compare", str(run_a), str(tmp_path / "nope")]) == 2
+
+
+def test_benchmark_json_layout(run_a):
+    path = run_a.parent / "bench.json"            # written by harness.run(..., export_benchmark_json=...)
+    doc = json.loads(path.read_text())
+    assert {"machine_info", "commit_info", "benchmarks", "datetime", "version"} <= doc.keys()
+    assert {"node", "processor", "machine", "python_version", "system", "cpu"} <= doc["machine_info"].keys()
+    assert {"id", "time", "dirty", "project", "branch"} <= doc["commit_info"].keys()
+    rows = {}
+    for task in ("laplacian", "smoothing", "simplification"):
+        for r in csv.DictReader((run_a / f"{task}.csv").open()):
+            rows[r["case_id"]] = r
+    assert len(doc["benchmarks"]) == len(rows) == 5
+    for b in doc["benchmarks"]:
+        assert {"group", "name", "fullname", "params", "param", "extra_info", "options", "stats"} <= b.keys()
+        s = b["stats"]
+        assert {"min", "max", "mean", "stddev", "rounds", "median", "iqr", "q1", "q3", "outliers", "ops",
+                "total", "iterations", "ld15iqr", "hd15iqr", "iqr_outliers", "stddev_outliers"} <= s.keys()
+        r = rows[b["extra_info"]["case_id"]]
+        assert s["median"] == float(r["time_s"]) and s["min"] == float(r["time_min_s"])
+        assert s["max"] == float(r["time_max_s"]) and s["rounds"] == 3
+        assert s["min"] <= s["q1"] <= s["median"] <= s["q3"] <= s["max"] and s["min"] <= s["mean"] <= s["max"]
+
+
+def test_pytest_benchmark_reads_the_export(run_a):
+    """pytest-benchmark's own `compare` command loads and tabulates the file."""
+    path = run_a.parent / "bench.json"
+    r = subprocess.run([sys.executable, "-m", "pytest_benchmark", "compare", str(path), "--columns=min,median,max,rounds"],
+                       capture_output=True, text=True, timeout=60, cwd=run_a.parent)
+    assert r.returncode == 0, r.stderr
+    assert "Failed to load" not in r.stderr + r.stdout
+    assert "scratch.cotan[mass=voronoi]" in r.stdout and "laplacian/knight/gaussian_normal-0.3" in r.stdout
