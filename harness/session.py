@@ -47,10 +47,17 @@ def run_session(cfg: Config, out=None, workers=None, executor="local", scheduler
             raise ShootoutError(
                 f"--resume: the config changed since the run in {out_dir} started (its case list differs); "
                 "run without --resume to start over, or use a new --out folder")
-        done = folder.keep_ok_rows()
-        cases = [c for c in cases if c.case_id not in done]
-    else:
-        folder.reset()
+    # before anything is written: an unreachable Dask scheduler is exit 2 with the folder untouched
+    ex = make_executor(executor, workers, timeout, scheduler)
+    try:
+        if resume:
+            done = folder.keep_ok_rows()
+            cases = [c for c in cases if c.case_id not in done]
+        else:
+            folder.reset()
+    except BaseException:
+        ex.close()
+        raise
     started = now_iso()
     meta = {"name": cfg.name, "config_source": cfg.source, "config": cfg.raw, "config_hash": chash,
             "started": started, "finished": None, "status": "running", "executor": executor,
@@ -58,8 +65,9 @@ def run_session(cfg: Config, out=None, workers=None, executor="local", scheduler
             "n_cases": len(cfg.cases), "resumed_ok_cases": len(done),
             "versions": package_versions(), "git_commit": git_commit(), "machine": machine_info(),
             "solver": _solver_info(), "command": " ".join(sys.argv)}
+    if hasattr(ex, "n_workers"):       # dask: the cluster's worker threads, not --workers
+        meta["workers"] = ex.n_workers()
     folder.write_run_json(meta)
-    ex = make_executor(executor, workers, timeout, scheduler)
     bar = None
     if not quiet:
         from tqdm import tqdm
