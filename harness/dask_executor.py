@@ -1,0 +1,327 @@
+"""Run cases on a Dask cluster (``shootout run CONFIG --executor dask --scheduler tcp://HOST:8786``).
+
+Design
+------
+- One Dask task per case, submitted with ``pure=False``, ``retries=0`` and a unique key, and
+  one row per task: whatever Dask does underneath (a task re-run after its worker died,
+  ``distributed.scheduler.allowed-failures``), the driver writes exactly one row per case, when
+  its future completes. A task that Dask gives up on (``KilledWorker``: the worker process
+  itself died, e.g. out of memory) becomes an ``error`` row naming it.
+- Cases are small and self-describing. Bundled and procedural meshes are loaded or
+  regenerated on the worker (deterministically, from the package data and the spec). For
+  ``{file: ...}`` meshes (and the ``clean:`` file of a pair) the *driver* reads the file's
+  bytes and scatters them once per distinct file; the task materialises them in a worker-local
+  cache directory (``$TMPDIR/mesh-shootout-dask/<sha1>/<original name>``) and reads them there
+  with the same reader and repair policy as a local run, so no shared filesystem is needed.
+  The case id, mesh label and error messages (which name the file's base name) are unchanged.
+- Isolation and timeouts hold on the worker: every task runs its case in a child process of
+  the worker via `harness.executors.run_isolated` (a crash is an ``error`` row naming the
+  signal, a case past the timeout is killed and recorded as ``timeout``; the worker lives on).
+  Dask's nanny starts workers as *daemonic* processes by default, and a daemonic process may
+  not start multiprocessing children; on such a worker the task falls back to a fresh
+  ``python -m harness.dask_executor`` subprocess per case (same isolation, about a second more
+  per case for the interpreter start). Start workers with ``DASK_DISTRIBUTED__WORKER__DAEMON=False``
+  to get the faster in-process path.
+- Only the driver writes run files (CSV rows, run.json, result meshes); workers return rows and,
+  with ``save_meshes``, the mesh arrays.
+
+Workers need the same environment as the driver: this package and the backends installed
+(same versions, or the metrics may differ), and every module named under ``plugins:``
+importable.
+"""
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import os
+import pickle
+import signal
+import subprocess
+import sys
+import tempfile
+import threading
+import uuid
+from pathlib import Path
+
+from .config import Case
+from .errors import ShootoutError
+from .runner import base_row
+
+FILE_KEYS = ("file", "clean")
+CACHE_DIR_NAME = "mesh-shootout-dask"
+
+
+# ----------------------------------------------------------------------------- driver side
+
+class DaskExecutor:
+    """Run cases on a Dask cluster; yields ``(case, row, meshes)`` as each case completes.
+
+    Parameters
+    ----------
+    workers : int, optional
+        Only used without ``scheduler``: the size of the local cluster started for the run.
+    timeout : float, optional
+        Seconds per case (enforced on the worker); ``None`` for no limit.
+    scheduler : str, optional
+        Address of a running scheduler (``tcp://HOST:8786``), or a `distributed.Client` /
+        cluster object. ``None`` starts a `distributed.LocalCluster` (processes, one thread
+        each, non-daemonic workers) and closes it in `close`.
+    """
+
+    name = "dask"
+
+    def __init__(self, workers: int | None = None, timeout: float | None = None, scheduler=None, **_):
+        try:
+            import dask
+            from distributed import Client, LocalCluster
+        except ImportError as exc:
+            raise ShootoutError(f"--executor dask needs the 'distributed' package ({exc})") from None
+        self.timeout = timeout
+        self._cluster = None
+        self._own_client = True
+        self._futures: dict = {}
+        if scheduler is None:
+            with dask.config.set({"distributed.worker.daemon": False}):
+                self._cluster = LocalCluster(n_workers=max(1, int(workers or os.cpu_count() or 1)),
+                                             threads_per_worker=1, processes=True,
+                                             dashboard_address=None)
+            self.client = Client(self._cluster)
+        elif isinstance(scheduler, Client):
+            self.client, self._own_client = scheduler, False
+        else:
+            try:
+                # connect timeout: dask config distributed.comm.timeouts.connect (30 s by default;
+                # env DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT=5s)
+                self.client = Client(scheduler)
+            except (OSError, TimeoutError, ValueError, TypeError) as exc:
+                raise ShootoutError(f"--scheduler: cannot connect to a Dask scheduler at {scheduler!r} "
+                                    f"({type(exc).__name__}: {exc}); start one with `dask scheduler` "
+                                    "and workers with `dask worker ADDRESS`") from None
+        self.scheduler = self.client.scheduler.address
+
+    def n_workers(self) -> int:
+        """Worker threads currently in the cluster (the number of cases that run at once)."""
+        return sum(w.get("nthreads", 1) for w in self.client.scheduler_info()["workers"].values())
+
+    def run(self, cases, want_meshes: bool = False):
+        from distributed import as_completed
+        cases = list(cases)
+        shipped, blobs = self._ship_files(cases)
+        futures = {}
+        for case, sent in zip(cases, shipped):
+            need = {h: blobs[h] for h in _hashes(sent)}
+            fut = self.client.submit(run_task, sent, need, self.timeout, want_meshes,
+                                     key=f"shootout-{case.case_id}-{uuid.uuid4().hex[:12]}",
+                                     pure=False, retries=0)
+            futures[fut] = case
+        self._futures = futures
+        for fut in as_completed(list(futures)):
+            case = futures.pop(fut)
+            try:
+                row, meshes = fut.result()
+            except Exception as exc:  # KilledWorker, CancelledError, a lost scheduler: one error row
+                row, meshes = base_row(case), {}
+                name = type(exc).__name__
+                what = ("the Dask worker running this case died" if name == "KilledWorker"
+                        else "the Dask task failed")
+                row["error"] = f"{what} ({name}: {exc})"[:2000]
+            fut.release()
+            yield case, row, meshes
+        self._futures = {}
+
+    def _ship_files(self, cases):
+        """Cases as sent (file specs tagged with the sha1 of their bytes) and sha1 -> scattered bytes.
+
+        Each distinct file is read once by the driver and scattered once; a file the driver
+        cannot read is left untagged and the worker reports it (an ``error`` row).
+        """
+        blobs: dict[str, object] = {}
+        hashes: dict[str, str | None] = {}
+        out = []
+        for c in cases:
+            if not any(k in c.mesh for k in FILE_KEYS):
+                out.append(c)
+                continue
+            spec = dict(c.mesh)
+            for k in FILE_KEYS:
+                p = spec.get(k)
+                if not isinstance(p, str):
+                    continue
+                if p not in hashes:
+                    try:
+                        data = Path(p).read_bytes()
+                    except OSError:
+                        hashes[p] = None
+                    else:
+                        h = hashes[p] = hashlib.sha1(data).hexdigest()
+                        if h not in blobs:
+                            blobs[h] = self.client.scatter(data, hash=False)
+                if hashes[p]:
+                    spec[f"{k}_sha1"] = hashes[p]
+            out.append(dataclasses.replace(c, mesh=spec))
+        return out, blobs
+
+    def close(self):
+        if self._futures:
+            self.client.cancel(list(self._futures))
+            self._futures = {}
+        if self._own_client:
+            self.client.close()
+        if self._cluster is not None:
+            self._cluster.close()
+
+
+def _hashes(case: Case) -> list[str]:
+    return [case.mesh[f"{k}_sha1"] for k in FILE_KEYS if f"{k}_sha1" in case.mesh]
+
+
+# ----------------------------------------------------------------------------- worker side
+
+def materialize(case: Case, blobs: dict) -> Case:
+    """The case with its shipped file bytes written to the worker's cache and the spec pointing there.
+
+    ``blobs`` maps sha1 -> bytes. The file keeps its base name (so the mesh name, the reader
+    chosen by extension and error messages are those of a local run).
+    """
+    if not any(f"{k}_sha1" in case.mesh for k in FILE_KEYS):
+        return case
+    spec = dict(case.mesh)
+    root = Path(tempfile.gettempdir()) / CACHE_DIR_NAME
+    for k in FILE_KEYS:
+        h = spec.pop(f"{k}_sha1", None)
+        if h is None:
+            continue
+        data = blobs[h]
+        if hashlib.sha1(data).hexdigest() != h:
+            raise ShootoutError(f"shipped bytes of {spec[k]} do not match their sha1")
+        target = root / h / Path(spec[k]).name
+        if not target.is_file() or target.stat().st_size != len(data):
+            target.parent.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=".part.")
+            with os.fdopen(fd, "wb") as fh:
+                fh.write(data)
+            os.replace(tmp, target)       # atomic: concurrent tasks on one machine never see a half file
+        spec[k] = str(target)
+    return dataclasses.replace(case, mesh=spec)
+
+
+def _daemonic() -> bool:
+    import multiprocessing as mp
+    return bool(mp.current_process().daemon)
+
+
+def run_task(case: Case, blobs: dict, timeout: float | None, want_meshes: bool):
+    """The Dask task: one case, isolated in a child process of the worker; never raises."""
+    try:
+        case = materialize(case, blobs)
+    except Exception as exc:  # a cache directory we cannot write is this case's error, not the run's
+        row = base_row(case)
+        row["error"] = f"cannot materialise the shipped mesh file on the worker ({type(exc).__name__}: {exc})"
+        return row, {}
+    if _daemonic():
+        return run_in_subprocess(case, timeout, want_meshes)
+    _warm(case)
+    from .executors import run_isolated
+    return run_isolated(case, timeout, want_meshes)
+
+
+def _warm(case: Case) -> None:
+    """Load the registry, the case's plugins and (bundled/procedural) mesh in the worker once,
+    so the forked children inherit them instead of re-importing per case. Best effort: any
+    failure happens again in the isolated child and becomes that case's row. Files are left
+    to the child (a C++ reader could crash on a malformed one)."""
+    try:
+        import methods
+        methods.load_plugins(list(case.plugins))
+        if not any(k in case.mesh for k in FILE_KEYS):
+            from . import datasets
+            datasets.load(case.mesh)
+    except Exception:  # noqa: BLE001 - reported by the child, as a row
+        pass
+
+
+def _signal_name(code: int) -> str:
+    try:
+        return signal.Signals(-code).name
+    except ValueError:
+        return f"signal {-code}"
+
+
+def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: bool = False):
+    """Run one case in a fresh ``python -m harness.dask_executor`` process; ``(row, meshes)``.
+
+    For processes that may not fork multiprocessing children (daemonic Dask workers). The
+    case goes in on stdin (pickled) and the result comes back through a temporary file (the
+    method may print to stdout). The child holds stdin open and exits when it reaches EOF,
+    so it dies with this process. Crash -> ``error`` row naming the signal; past ``timeout``
+    -> killed, ``timeout`` row.
+    """
+    fd, out_path = tempfile.mkstemp(prefix="shootout-case-", suffix=".pkl")
+    os.close(fd)
+    try:
+        env = dict(os.environ)          # this process's sys.path (plugins) for the child too
+        paths = [p for p in sys.path if p and os.path.isdir(p)]
+        env["PYTHONPATH"] = os.pathsep.join(dict.fromkeys(paths + env.get("PYTHONPATH", "").split(os.pathsep)))
+        proc = subprocess.Popen([sys.executable, "-m", "harness.dask_executor", out_path],
+                                stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
+                                stderr=subprocess.PIPE, env=env)
+        err_chunks: list[bytes] = []
+        reader = threading.Thread(target=lambda: err_chunks.append(proc.stderr.read()), daemon=True)
+        reader.start()
+        try:
+            proc.stdin.write(pickle.dumps((case, want_meshes), protocol=pickle.HIGHEST_PROTOCOL))
+            proc.stdin.flush()
+        except BrokenPipeError:
+            pass
+        try:
+            proc.wait(timeout)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+            row = base_row(case)
+            row.update(status="timeout", error=f"killed after {timeout:g} s (timeout)")
+            return row, {}
+        finally:
+            try:
+                proc.stdin.close()
+            except BrokenPipeError:
+                pass
+            reader.join(5)
+        code = proc.returncode
+        if code == 0 and os.path.getsize(out_path) > 0:
+            with open(out_path, "rb") as fh:
+                return pickle.load(fh)
+        row = base_row(case)
+        if code < 0:
+            row["error"] = f"worker process died: {_signal_name(code)} (the method crashed its process)"
+        else:
+            tail = b"".join(err_chunks).decode(errors="replace").strip().splitlines()[-1:]
+            row["error"] = (f"worker process exited with code {code} without a result"
+                            + (f": {tail[0]}" if tail else ""))[:2000]
+        return row, {}
+    finally:
+        os.unlink(out_path)
+
+
+def _subprocess_main(out_path: str) -> int:
+    case, want_meshes = pickle.load(sys.stdin.buffer)
+
+    def die_with_parent():            # stdin EOF: the worker that started us is gone
+        while os.read(0, 65536):      # raw fd: no buffered-stream lock held at shutdown
+            pass
+        os._exit(70)
+
+    threading.Thread(target=die_with_parent, daemon=True).start()
+    from .runner import run_case
+    result = run_case(case, want_meshes=want_meshes)
+    tmp = out_path + ".part"
+    with open(tmp, "wb") as fh:
+        pickle.dump(result, fh, protocol=pickle.HIGHEST_PROTOCOL)
+    os.replace(tmp, out_path)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(0)                       # no interpreter teardown racing the watcher thread
+
+
+if __name__ == "__main__":
+    sys.exit(_subprocess_main(sys.argv[1]))
