@@ -13,6 +13,8 @@ Contenders
 - scratch: ``methods.scratch.laplacians.cotan(V, F, mass="voronoi")`` (the registered
   method's function, no argument validation; at this size it builds the CSR pattern and
   fills weights and areas in one compiled pass)
+- scratch (registered): ``methods.get("scratch.cotan")(V, F)``, the same plus the
+  interface's argument validation (informational)
 - re-assembly: ``CotanPattern(F, n)`` built once, then ``pattern.assemble(V)`` (numeric pass
   only, for the same connectivity with new positions: smoothing iterations, noise sweeps)
 
@@ -34,6 +36,14 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 
+def _version(dist: str) -> str:
+    from importlib.metadata import PackageNotFoundError, version
+    try:
+        return version(dist)
+    except PackageNotFoundError:
+        return "?"
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--subdivisions", type=int, default=8)
@@ -51,7 +61,7 @@ def main(argv=None) -> int:
     n = V.shape[0]
     print(f"mesh: icosphere({args.subdivisions}) {n:,} vertices, {F.shape[0]:,} faces")
     print(f"python {platform.python_version()}, numpy {np.__version__}, libigl "
-          f"{getattr(igl, '__version__', '?')}, cpus {os.cpu_count()}, "
+          f"{_version('libigl')}, cpus {os.cpu_count()}, "
           f"load average {os.getloadavg()[0]:.2f} (at start)")
 
     def run_igl():
@@ -80,7 +90,15 @@ def main(argv=None) -> int:
             return 1
     del L, Mi, W, M
 
-    contenders = {"libigl": run_igl, "scratch": run_scratch, "re-assembly": run_reassembly}
+    import methods
+    registered = methods.get("scratch.cotan")
+
+    def run_registered():
+        r = registered(V, F)
+        return r.W, r.M
+
+    contenders = {"libigl": run_igl, "scratch": run_scratch, "registered": run_registered,
+                  "re-assembly": run_reassembly}
     wall = {k: [] for k in contenders}
     cpu = {k: [] for k in contenders}
     for _ in range(args.repeats):
