@@ -180,7 +180,7 @@ def _label(r: dict) -> str:
     return f"{r.get('mesh')} {noise} {r.get('method')}[{ps}]"
 
 
-def compare_rows(rows_a: dict, rows_b: dict, time_factor: float = TIME_FACTOR) -> dict:
+def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FACTOR) -> dict:
     """Every change between two runs' rows: ``{"changes": [...], "only_a": [...], "only_b": [...], ...}``."""
     changes, input_changes = [], []
     common = [c for c in rows_a if c in rows_b]
@@ -192,11 +192,12 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float = TIME_FACTOR) -
             verdict = "regression" if sa == "ok" else ("improvement" if sb == "ok" else "changed")
             changes.append({**base, "metric": "status", "a": sa, "b": sb, "verdict": verdict,
                             "note": str(rb.get("error") or "")[:200]})
-        if sa == "ok" and sb == "ok":
+        if sa == "ok" and sb == "ok" and time_factor:
             v = judge_time(ra, rb, time_factor)
             a, b = _num(ra.get("time_s")), _num(rb.get("time_s"))
             if a is not None and b is not None and a != b:
-                changes.append({**base, "metric": "time_s", "a": a, "b": b, "verdict": v,
+                changes.append({**base, "metric": "time_s", "a": a, "b": b,
+                                "verdict": "within tolerance" if v == "same" else v,
                                 "note": f"A {_fmt(ra.get('time_min_s'))}..{_fmt(ra.get('time_max_s'))}, "
                                         f"B {_fmt(rb.get('time_min_s'))}..{_fmt(rb.get('time_max_s'))}"})
         if sa != "ok" or sb != "ok":
@@ -210,6 +211,8 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float = TIME_FACTOR) -
                 if not (_blank(a) and _blank(b)) and a != b and not (_num(a) == _num(b) and _num(a) is not None):
                     changes.append({**base, "metric": metric, "a": a, "b": b, "verdict": "within tolerance"})
                 continue
+            if verdict == "changed" and RULES.get(metric, Rule("info")).kind == "info":
+                verdict = "info"              # e.g. peak_rss_mb: counted, not listed
             entry = {**base, "metric": metric, "a": a, "b": b, "verdict": verdict}
             (input_changes if RULES.get(metric, Rule("info")).kind == "input" else changes).append(entry)
     only_a = [c for c in rows_a if c not in rows_b]
@@ -248,29 +251,52 @@ def _change(a, b) -> str:
     return f"{(y - x) / abs(x) * 100:+.1f}%"
 
 
-ORDER = {"regression": 0, "improvement": 1, "changed": 2, "within tolerance": 3}
+ORDER = {"regression": 0, "improvement": 1, "changed": 2, "within tolerance": 3, "info": 4}
+
+
+def timing_notes(meta_a: dict, meta_b: dict, res: dict) -> list[str]:
+    """Why time changes between these two runs may not mean what they seem."""
+    notes = []
+    ma, mb = meta_a.get("machine"), meta_b.get("machine")
+    if ma and mb and ma != mb:
+        notes.append("the runs come from different machines: time changes compare different hardware")
+    wa, wb = meta_a.get("workers"), meta_b.get("workers")
+    if wa and wb and wa != wb:
+        notes.append(f"A ran {wa} worker(s) in parallel, B {wb}: time changes include a different contention")
+    elif (wa or 1) > 1 and ma and (ma.get("cpu_count") or 0) <= (wa or 1):
+        notes.append(f"{wa} workers on {ma.get('cpu_count')} cores: timings include contention "
+                     "(run both with --workers 1 for timing-grade comparisons)")
+    reps = {r.get("repeats") for r in list(res["rows_a"].values()) + list(res["rows_b"].values())}
+    if 1 in reps:
+        notes.append("some cases ran with repeats: 1, so their min-max spread is unknown and only the "
+                     "1.5x factor (and 1 ms floor) guards against timing noise")
+    return notes
 
 
 def _sorted(changes):
     return sorted(changes, key=lambda c: (ORDER.get(c["verdict"], 9), c["task"], c["case"], c["metric"]))
 
 
-def compare_runs(run_a, run_b, html_out=None, time_factor: float = TIME_FACTOR, out=None,
+def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_FACTOR, out=None,
                  max_lines: int = 200) -> int:
-    """Print the changes from RUN_A (baseline) to RUN_B; write an HTML diff if asked; 1 on a regression."""
+    """Print the changes from RUN_A (baseline) to RUN_B; write an HTML diff if asked; 1 on a regression.
+
+    ``time_factor=None`` (or 0) leaves timings out (metrics only), e.g. for runs from different machines.
+    """
     out = out or sys.stdout
     ra, rb = _rows(run_a), _rows(run_b)
     res = compare_rows(ra, rb, time_factor)
     changes = _sorted(res["changes"])
     regress = [c for c in changes if c["verdict"] == "regression"]
-    shown = [c for c in changes if c["verdict"] != "within tolerance"]
-    quiet = len(changes) - len(shown)
-    ma = (RunFolder(run_a).read_run_json() or {}).get("machine")
-    mb = (RunFolder(run_b).read_run_json() or {}).get("machine")
+    shown = [c for c in changes if c["verdict"] not in ("within tolerance", "info")]
+    quiet = sum(c["verdict"] == "within tolerance" for c in changes)
+    n_info = sum(c["verdict"] == "info" for c in changes)
+    meta_a = RunFolder(run_a).read_run_json() or {}
+    meta_b = RunFolder(run_b).read_run_json() or {}
     print(f"compare A={run_a} (baseline) B={run_b}: {res['common']} cases in both, "
           f"{len(res['only_a'])} only in A, {len(res['only_b'])} only in B", file=out)
-    if ma and mb and ma != mb:
-        print("note: the runs come from different machines; time changes compare different hardware", file=out)
+    for note in timing_notes(meta_a, meta_b, res):
+        print(f"note: {note}", file=out)
     if res["input_changes"]:
         n = len({c['case_id'] for c in res['input_changes']})
         print(f"warning: {n} case(s) saw different input data (mesh or noise changed): "
@@ -291,8 +317,9 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float = TIME_FACTOR, 
             print(f"... {len(shown) - max_lines} more changes (see --html)", file=out)
     n_imp = sum(c["verdict"] == "improvement" for c in changes)
     print(f"{len(regress)} regression(s) in {len({c['case_id'] for c in regress})} case(s), {n_imp} improvement(s), "
-          f"{quiet} change(s) within tolerance; tolerances: harness/compare.py (errors: worse by >1% and a small "
-          f"absolute amount; time: >{time_factor:g}x and beyond both runs' min-max spread)", file=out)
+          f"{quiet} change(s) within tolerance, {n_info} informational (peak_rss_mb ...); tolerances: harness/compare.py (errors: worse by >1% and a small "
+          f"absolute amount; " + (f"time: >{time_factor:g}x and beyond both runs' min-max spread)" if time_factor
+                                  else "time not compared)"), file=out)
     if res["only_b"]:
         print(f"new in B: {len(res['only_b'])} case(s), e.g. " + ", ".join(_label(rb[c]) for c in res["only_b"][:3]),
               file=out)
@@ -322,5 +349,5 @@ def _html(run_a, run_b, res, changes, time_factor) -> str:
             f"B (candidate): <code>{e(str(Path(run_b).resolve()))}</code></p><p>{summary}</p>"
             f"<table><tr><th>verdict</th><th>task</th><th>case</th><th>id</th><th>metric</th><th>A</th><th>B</th>"
             f"<th>change</th><th>note</th></tr>{rows}</table>"
-            f"<details><summary>Tolerances (time factor {time_factor:g})</summary><pre>{doc}</pre></details>"
+            f"<details><summary>Tolerances (time factor {time_factor or 'off'})</summary><pre>{doc}</pre></details>"
             "</body></html>")

@@ -189,3 +189,16 @@ def test_pytest_benchmark_reads_the_export(run_a):
     assert r.returncode == 0, r.stderr
     assert "Failed to load" not in r.stderr + r.stdout
     assert "scratch.cotan[mass=voronoi]" in r.stdout and "laplacian/knight/gaussian_normal-0.3" in r.stdout
+
+
+def test_time_can_be_left_out(run_a, tmp_path):
+    b = copy(run_a, tmp_path)
+
+    def slow(rows):
+        r = rows[0]
+        t = float(r["time_max_s"]) * 10 + 0.01
+        r.update(time_s=str(t), time_min_s=str(t), time_max_s=str(t))
+    edit(b / "laplacian.csv", slow)
+    assert run_compare(run_a, b)[0] == 1
+    code, out = run_compare(run_a, b, time_factor=None)
+    assert code == 0 and "time not compared" in out

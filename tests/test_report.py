@@ -180,3 +180,34 @@ def test_report_survives_a_config_that_no_longer_loads_and_groups_errors(run_dir
     text = path.read_text()
     assert re.search(r"<td class='st-error'>error</td><td>2</td><td class='msg'>ValueError: boom at smoothing.py:12",
                      text)
+
+
+PLUGIN = '''
+import os
+from methods import register, SmoothingResult
+
+
+@register("reporttest.crashy", task="smoothing", library="reporttest", params={"iterations": 1})
+def crashy(V, F, *, iterations=1):
+    """Identity smoothing that aborts its process once the marker file exists (tests the report)."""
+    if os.path.exists(os.environ.get("REPORTTEST_CRASH_MARKER", "/nonexistent")):
+        os.abort()
+    return SmoothingResult(V=V.copy())
+'''
+
+
+def test_a_method_that_crashes_when_recomputed_costs_only_its_view(tmp_path, monkeypatch):
+    (tmp_path / "reporttest_plugin.py").write_text(PLUGIN)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    marker = tmp_path / "crash-now"
+    monkeypatch.setenv("REPORTTEST_CRASH_MARKER", str(marker))
+    cfg = {"name": "crashy", "repeats": 1, "hausdorff_samples": 500, "plugins": ["reporttest_plugin"],
+           "meshes": ["knight"], "noise": [{"model": "gaussian_normal", "levels": [0.2]}],
+           "tasks": {"smoothing": {"methods": ["reporttest.crashy"]}}}
+    out = tmp_path / "run"
+    harness.run(cfg, out=out, quiet=True, workers=1)
+    views = page_data(out / "report.html")["views"]
+    assert len(views) == 1 and "error" not in views[0]              # recomputed fine the first time
+    marker.write_text("")
+    views = page_data(build_report(out))["views"]                    # now the method aborts its process
+    assert "SIGABRT" in views[0]["error"] and "recomputing the case failed" in views[0]["error"]

@@ -9,7 +9,8 @@ views. Nothing is loaded from the network.
 3D views need meshes, which a run folder has only with ``save_meshes: true``. Otherwise the
 chosen cases are recomputed deterministically: the cases are rebuilt from ``run.json``'s
 ``config`` with `harness.config.load_config`, found by ``case_id`` and re-run once with
-`harness.runner.run_case`. Failures are written on the page; they never stop the report.
+`harness.runner.run_case` in a child process (`harness.executors.run_isolated`, with a
+timeout). Failures are written on the page; they never stop the report.
 """
 from __future__ import annotations
 
@@ -479,14 +480,15 @@ def build_views(run_dir, meta, frames) -> list[dict]:
                 v["error"] = ("the config in run.json no longer produces this case id (file paths or "
                               "plugins differ from the run?)")
                 continue
-            v.update(_view_meshes(Path(run_dir), case, row, metric))
+            left = max(5.0, VIEW_BUDGET_S - (time.perf_counter() - t0))
+            v.update(_view_meshes(Path(run_dir), case, row, metric, timeout=left))
         except Exception as exc:  # a view must never break the report
             v["error"] = f"could not build the view: {type(exc).__name__}: {exc}"[:500]
     return views
 
 
-def _view_meshes(run_dir: Path, case, row, metric) -> dict:
-    from ..runner import prepare_input, run_case
+def _view_meshes(run_dir: Path, case, row, metric, timeout: float = VIEW_BUDGET_S) -> dict:
+    from ..runner import prepare_input
     clean, V_in, _ = prepare_input(case)
     diag = clean.diagonal() or 1.0
     saved = run_dir / "meshes" / f"{case.case_id}.obj"
@@ -496,9 +498,12 @@ def _view_meshes(run_dir: Path, case, row, metric) -> dict:
         out["source"] = f"result mesh read from meshes/{saved.name}"
     else:
         t = time.perf_counter()
-        new_row, meshes = run_case(dataclasses.replace(case, repeats=1), want_meshes=True)
+        # in a child process with a timeout, like the run itself: a crash or a hang of the method
+        # costs this view, never the report
+        from ..executors import run_isolated
+        new_row, meshes = run_isolated(dataclasses.replace(case, repeats=1), timeout=timeout, want_meshes=True)
         if new_row.get("status") != "ok":
-            raise RuntimeError(f"recomputing the case failed: {new_row.get('error')}")
+            raise RuntimeError(f"recomputing the case failed ({new_row.get('status')}): {new_row.get('error')}")
         V_out, F_out = meshes[f"{case.case_id}.obj"]
         V_out, F_out = np.asarray(V_out, dtype=np.float64), np.asarray(F_out, dtype=np.int64)
         out["source"] = (f"result recomputed from run.json's config in {time.perf_counter() - t:.2f} s "
