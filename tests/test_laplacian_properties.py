@@ -244,3 +244,16 @@ def test_neg_weights_ignores_explicit_zeros():
     for k in ("neg_weights", "loc_violations", "SYM", "LOC", "POS", "psd"):   # nnz is storage
         assert a[k] == b[k], k          # storage differs (explicit zeros), properties may not
     assert a["min_eig"] == pytest.approx(b["min_eig"], abs=1e-12)
+
+
+def test_uniform_is_linear_precise_on_a_regular_grid():
+    """The uniform Laplacian fails LIN only on irregular meshes: on a regular grid (every
+    interior one-ring point-symmetric) sum_j (x_j - x_i) = 0 exactly."""
+    k = 12
+    x, y = np.meshgrid(np.arange(k + 1.0), np.arange(k + 1.0), indexing="ij")
+    V = np.c_[x.ravel(), y.ravel(), np.zeros(x.size)]
+    idx = np.arange((k + 1) ** 2).reshape(k + 1, k + 1)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    F = np.r_[np.c_[a, b, c], np.c_[a, c, d]].astype(np.int64)
+    p = props("scratch.uniform", V, F)
+    assert flags(p) == (True, True, True, True) and p["lin_error"] == 0.0
