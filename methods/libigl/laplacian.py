@@ -70,12 +70,15 @@ def intrinsic_delaunay(V, F, *, mass="voronoi"):
     import igl
     L, l_int, F_int = igl.intrinsic_delaunay_cotmatrix(V, F)
     W = sp.csr_matrix(L)
+    n = V.shape[0]
+    if W.shape[0] < n:  # libigl sizes W by max(F) + 1: pad trailing unreferenced vertices
+        W.resize((n, n))
     M = None
     if mass != "none":
         kind = {"barycentric": igl.MASSMATRIX_TYPE_BARYCENTRIC,
                 "voronoi": igl.MASSMATRIX_TYPE_VORONOI}[mass]
         M = sp.csr_matrix(igl.massmatrix_intrinsic(np.ascontiguousarray(l_int),
                                                    np.ascontiguousarray(F_int), kind))
-        if M.shape[0] < V.shape[0]:  # trailing unreferenced vertices
-            M.resize((V.shape[0], V.shape[0]))
+        if M.shape[0] < n:  # trailing unreferenced vertices
+            M.resize((n, n))
     return LaplacianResult(W=W, M=M)
