@@ -212,6 +212,24 @@ def _interact(cdp, state):
         const inp = document.querySelector('#rows-laplacian input[type=search]');
         inp.value = 'scratch.uniform'; inp.dispatchEvent(new Event('input'));
         return document.querySelector('#rows-laplacian tbody').rows.length; })()""")
+    # drag on a 3D view: the three canvases of the view must all redraw (shared camera)
+    sums = """(() => [...document.querySelectorAll('.view')[0].querySelectorAll('canvas')].map(c => {
+        const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data; let s = 0;
+        for (let i = 0; i < d.length; i += 16) s = (s * 31 + d[i]) % 1000000007; return s; }))()"""
+    before = cdp.eval(sums)
+    box = cdp.eval("""(() => { const c = document.querySelector('.view canvas'); c.scrollIntoView();
+        const r = c.getBoundingClientRect(); return [r.left + r.width / 2, r.top + r.height / 2]; })()""")
+    x, y = box
+    cdp.call("Input.dispatchMouseEvent", {"type": "mousePressed", "x": x, "y": y, "button": "left", "clickCount": 1})
+    for k in range(1, 6):
+        cdp.call("Input.dispatchMouseEvent", {"type": "mouseMoved", "x": x + 12 * k, "y": y + 4 * k, "button": "left",
+                                              "buttons": 1})
+    cdp.call("Input.dispatchMouseEvent", {"type": "mouseReleased", "x": x + 60, "y": y + 20, "button": "left",
+                                          "clickCount": 1})
+    cdp.eval("new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")
+    after = cdp.eval(sums)
+    state["rotated"] = [a != b for a, b in zip(before, after)]
+    cdp.eval("window.scrollTo(0, 0)")
     state["metric_switch"] = cdp.eval("""(() => {
         const s = document.querySelector('#plots-smoothing select'); s.value = 'ev_mean';
         s.dispatchEvent(new Event('change'));
@@ -247,6 +265,7 @@ def test_report_opens_offline_without_errors(tiny_report, tmp_path):
     # interaction works
     assert s["sorted"] and s["sorted"].startswith("time_s")
     assert s["filtered"] == 6
+    assert s["rotated"] == [True, True, True]          # dragging one canvas turns all three
     assert s["metric_switch"] == s["smoothingSvgs"] > 0     # re-rendered, same plots, new metric
     png = shot.read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20_000

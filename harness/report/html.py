@@ -211,7 +211,9 @@ def _header_html(meta, frames, run_dir) -> str:
     workers = meta.get("workers")
     cores = mach.get("cpu_count")
     rows = [("run", f"<b>{_esc(name)}</b> — status {_esc(meta.get('status', 'unknown'))}"),
-            ("date", f"started {_esc(started)}, finished {_esc(finished)}" + (f" ({_fmt(wall)} s wall)" if wall else "")),
+            ("date", f"started {_esc(started or 'unknown')}, "
+                     + (f"finished {_esc(finished)}" if finished else "<span class='warn'>not finished</span>")
+                     + (f" ({_fmt(wall)} s wall)" if wall else "")),
             ("machine", _esc(", ".join(str(x) for x in [mach.get("cpu"), f"{cores} cores" if cores else None,
                                                         f"{mach.get('memory_gb')} GB" if mach.get("memory_gb") else None,
                                                         mach.get("system"), mach.get("release"), mach.get("node")]
