@@ -1,0 +1,395 @@
+"""Sparse symmetric positive-definite solves for the implicit smoothing systems.
+
+The implicit methods (backward Euler ``(M - h W) X' = M X``, screened Poisson
+``(alpha^2 M - W) X = alpha^2 M X0``) solve one SPD system with three right-hand sides per
+step. This module picks a direct solver among those that import here, factors each matrix
+once (callers reuse the factor across iterations) and keeps the *symbolic* analysis (the
+fill-reducing ordering, and where the backend allows it the elimination structure) in a small
+cache keyed on the sparsity pattern, so reassembled systems of the same mesh and repeats of
+the same benchmark case skip the analysis but always redo the numeric factorization (timings
+of repeats stay honest).
+
+Backends (name: what it is; symbolic reuse):
+
+``cholmod``
+    scikit-sparse's CHOLMOD supernodal Cholesky (``sksparse.cholmod``); reuses the symbolic
+    analysis (``analyze`` once, ``cholesky_inplace`` per matrix). Needs SuiteSparse headers to
+    build, so it is not installable from PyPI alone; used when present.
+``pypardiso``
+    Intel MKL PARDISO through pypardiso, matrix type 2 (real SPD), upper triangle; phase 11
+    (analysis) once per pattern, phase 22 (numeric) per matrix, phase 33 (solve).
+``scipy``
+    ``scipy.sparse.linalg.splu`` (SuperLU) in symmetric mode: ``permc_spec="MMD_AT_PLUS_A"``,
+    ``SymmetricMode=True``, ``diag_pivot_thresh=0`` (diagonal pivots, fine for SPD). The
+    column permutation of the first factorization is cached and later matrices of the same
+    pattern are permuted symmetrically and factored with ``NATURAL`` ordering. Always present:
+    the pure-scipy fallback.
+``qdldl``
+    OSQP's QDLDL (``qdldl.Solver``): AMD ordering + up-looking LDL^T, single-threaded;
+    ``update`` reuses the symbolic factorization.
+``cholespy``
+    cholespy's ``CholeskySolverD`` (bundled CHOLMOD); analysis is redone for each matrix.
+
+``auto`` picks the first importable of ``AUTO_ORDER`` (fastest first, from the timings of
+``benchmarks/bench_implicit.py``). The environment variable ``MESH_SHOOTOUT_SOLVER`` overrides
+the automatic choice. :func:`solver_info` reports the choice and what is installed, for
+``run.json``.
+"""
+from __future__ import annotations
+
+import hashlib
+import importlib
+import os
+from collections import OrderedDict
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as sla
+
+SOLVERS = ("cholmod", "pypardiso", "scipy", "qdldl", "cholespy")
+# Fastest first (benchmarks/bench_implicit.py, icosphere subdiv 8, 2 cores).
+AUTO_ORDER = ("cholmod", "pypardiso", "scipy")
+_MODULES = {"cholmod": "sksparse.cholmod", "pypardiso": "pypardiso", "scipy": "scipy",
+            "qdldl": "qdldl", "cholespy": "cholespy"}
+_DIST = {"cholmod": "scikit-sparse", "pypardiso": "pypardiso", "scipy": "scipy",
+         "qdldl": "qdldl", "cholespy": "cholespy"}
+SOLVER_CHOICES = ("auto",) + SOLVERS
+
+_SYMBOLIC: "OrderedDict[tuple, object]" = OrderedDict()
+_CACHE_SIZE = 4
+_LAST_USED: dict = {}
+
+
+_IMPORTABLE: dict = {}
+_PARDISO_TEMPLATE: list = []
+
+
+def _importable(name: str) -> bool:
+    if name in _IMPORTABLE:
+        return _IMPORTABLE[name]
+    ok = True
+    try:
+        importlib.import_module(_MODULES[name])
+        if name == "pypardiso":  # the wheel imports without MKL; mkl_rt is looked up here
+            _new_pardiso()
+    except Exception:  # ImportError, or a broken binary (e.g. mkl_rt not found)
+        ok = False
+    _IMPORTABLE[name] = ok
+    return ok
+
+
+def _new_pardiso(mtype: int = 2):
+    """A fresh PARDISO handle. pypardiso's constructor locates mkl_rt with
+    ``ctypes.util.find_library`` (subprocesses, ~1 s); it runs once and later handles copy the
+    loaded library and get fresh state arrays."""
+    import copy
+
+    import pypardiso
+    if not _PARDISO_TEMPLATE:
+        # pypardiso falls back to a recursive glob of the whole environment (seconds) when
+        # find_library misses mkl_rt, as it does for the pip wheel: point it at the wheel's
+        # library directly when it is where pip puts it.
+        import glob
+        import sys
+        env = os.environ.get("PYPARDISO_MKL_RT")
+        hits = sorted(glob.glob(os.path.join(sys.prefix, "lib", "libmkl_rt.so*")), key=len)
+        if env is None and hits:
+            os.environ["PYPARDISO_MKL_RT"] = hits[0]
+            try:
+                _PARDISO_TEMPLATE.append(pypardiso.PyPardisoSolver(mtype=mtype))
+            finally:
+                del os.environ["PYPARDISO_MKL_RT"]
+        else:
+            _PARDISO_TEMPLATE.append(pypardiso.PyPardisoSolver(mtype=mtype))
+    s = copy.copy(_PARDISO_TEMPLATE[0])
+    s.pt = np.zeros(64, dtype=s._pt_type[1])
+    s.iparm = np.zeros(64, dtype=np.int32)
+    s.perm = np.zeros(0, dtype=np.int32)
+    s.mtype = mtype
+    s.phase = 13
+    s.factorized_A = sp.csr_matrix((0, 0))
+    return s
+
+
+def installed_solvers() -> list[str]:
+    """Backends that import here, in ``SOLVERS`` order."""
+    return [s for s in SOLVERS if _importable(s)]
+
+
+def auto_solver() -> str:
+    """The backend ``auto`` resolves to (``MESH_SHOOTOUT_SOLVER`` overrides)."""
+    env = os.environ.get("MESH_SHOOTOUT_SOLVER", "").strip()
+    if env and env != "auto":
+        if env not in SOLVERS:
+            raise ValueError(f"MESH_SHOOTOUT_SOLVER={env!r}: expected one of {SOLVER_CHOICES}")
+        return env
+    for s in AUTO_ORDER:
+        if _importable(s):
+            return s
+    return "scipy"
+
+
+def solver_info() -> dict:
+    """Provenance for ``run.json``: the automatic choice, installed backends and versions."""
+    from importlib.metadata import PackageNotFoundError, version
+    versions = {}
+    for s in installed_solvers():
+        try:
+            versions[s] = version(_DIST[s])
+        except PackageNotFoundError:
+            versions[s] = None
+    return {"auto": auto_solver(), "auto_order": list(AUTO_ORDER),
+            "installed": installed_solvers(), "versions": versions,
+            "last_used": dict(_LAST_USED)}
+
+
+def _canonical(A) -> sp.csr_matrix:
+    A = sp.csr_matrix(A, dtype=np.float64)
+    A.sum_duplicates()
+    A.sort_indices()
+    return A
+
+
+def _pattern_key(name: str, A: sp.csr_matrix) -> tuple:
+    h = hashlib.blake2b(digest_size=16)
+    h.update(np.asarray(A.shape, np.int64).tobytes())
+    h.update(np.ascontiguousarray(A.indptr, np.int64).tobytes())
+    h.update(np.ascontiguousarray(A.indices, np.int64).tobytes())
+    return (name, h.hexdigest())
+
+
+def _cache_get(key):
+    if key in _SYMBOLIC:
+        _SYMBOLIC.move_to_end(key)
+        return _SYMBOLIC[key]
+    return None
+
+
+def _cache_put(key, value) -> None:
+    _SYMBOLIC[key] = value
+    _SYMBOLIC.move_to_end(key)
+    while len(_SYMBOLIC) > _CACHE_SIZE:
+        _, old = _SYMBOLIC.popitem(last=False)
+        free = getattr(old, "free", None)
+        if callable(free):
+            free()
+
+
+def clear_cache() -> None:
+    """Drop every cached symbolic analysis (benchmarks use it to time cold factorizations)."""
+    while _SYMBOLIC:
+        _, old = _SYMBOLIC.popitem()
+        free = getattr(old, "free", None)
+        if callable(free):
+            free()
+
+
+class Factor:
+    """A numeric factorization of an SPD matrix; ``solve(B)`` for B (n,) or (n, k)."""
+
+    name = ""
+
+    def solve(self, B: np.ndarray) -> np.ndarray:  # pragma: no cover - interface
+        raise NotImplementedError
+
+    def _columns(self, B, one):
+        B = np.asarray(B, dtype=np.float64)
+        if B.ndim == 1:
+            return one(B)
+        return np.column_stack([one(B[:, k]) for k in range(B.shape[1])])
+
+
+class _ScipyFactor(Factor):
+    name = "scipy"
+
+    def __init__(self, A: sp.csr_matrix, key):
+        perm = _cache_get(key) if key is not None else None
+        opts = {"SymmetricMode": True}
+        if perm is None:
+            lu = sla.splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                          options=opts)
+            # SuperLU factors A[:, q] with q = argsort(perm_c) (row perm likewise, diagonal
+            # pivots): q is the symmetric ordering to reuse.
+            perm = np.argsort(np.asarray(lu.perm_c, dtype=np.int64))
+            if key is not None:
+                _cache_put(key, _ScipyOrdering(perm))
+            self._perm = None
+        else:
+            perm = perm.perm
+            Ap = A[perm][:, perm].tocsc()
+            lu = sla.splu(Ap, permc_spec="NATURAL", diag_pivot_thresh=0.0, options=opts)
+            self._perm = perm
+        self._lu = lu
+
+    def solve(self, B):
+        B = np.asarray(B, dtype=np.float64)
+        if self._perm is None:
+            return self._lu.solve(B)
+        X = np.empty_like(B)
+        X[self._perm] = self._lu.solve(np.ascontiguousarray(B[self._perm]))
+        return X
+
+
+class _ScipyOrdering:
+    __slots__ = ("perm",)
+
+    def __init__(self, perm):
+        self.perm = perm
+
+
+class _PardisoSymbolic:
+    """A PARDISO handle that has run the analysis phase (11) for one pattern."""
+
+    owner = None
+
+    def __init__(self, U: sp.csr_matrix):
+        self.solver = _new_pardiso(mtype=2)
+        self.solver._check_A(U)
+        self.solver.set_phase(11)
+        self.solver._call_pardiso(U, np.zeros((U.shape[0], 1)))
+
+    def free(self):
+        try:
+            self.solver.free_memory(everything=True)
+        except Exception:  # already released; nothing else to do
+            pass
+
+
+class _PardisoFactor(Factor):
+    name = "pypardiso"
+
+    def __init__(self, A: sp.csr_matrix, key):
+        U = sp.triu(A, format="csr")
+        U.sort_indices()
+        sym = _cache_get(key) if key is not None else None
+        if sym is None:
+            sym = _PardisoSymbolic(U)
+            if key is not None:
+                _cache_put(key, sym)
+        self._sym = sym
+        self._U = U
+        self._numeric()
+
+    def _numeric(self):
+        # The cached handle holds one numeric factor: the last Factor that ran phase 22 owns it.
+        s = self._sym.solver
+        s.set_phase(22)
+        s._call_pardiso(self._U, np.zeros((self._U.shape[0], 1)))
+        self._sym.owner = self
+
+    def solve(self, B):
+        B = np.asarray(B, dtype=np.float64)
+        if getattr(self._sym, "owner", None) is not self:
+            self._numeric()
+        s = self._sym.solver
+        s.set_phase(33)
+        one = B.ndim == 1
+        X = s._call_pardiso(self._U, np.asfortranarray(B[:, None] if one else B))
+        return X[:, 0] if one else X
+
+
+class _QdldlFactor(Factor):
+    name = "qdldl"
+
+    def __init__(self, A: sp.csr_matrix, key):
+        import qdldl
+        U = sp.triu(A, format="csc")
+        U.sort_indices()
+        holder = _cache_get(key) if key is not None else None
+        if holder is None:
+            holder = _QdldlHolder(qdldl.Solver(U, upper=True))
+            if key is not None:
+                _cache_put(key, holder)
+        else:
+            holder.solver.update(U, upper=True)
+        holder.owner = self
+        self._holder = holder
+        self._U = U
+
+    def solve(self, B):
+        h = self._holder
+        if h.owner is not self:  # another matrix of the same pattern was factored since
+            h.solver.update(self._U, upper=True)
+            h.owner = self
+        return self._columns(B, h.solver.solve)
+
+
+class _QdldlHolder:
+    __slots__ = ("solver", "owner")
+
+    def __init__(self, solver):
+        self.solver = solver
+        self.owner = None
+
+
+class _CholespyFactor(Factor):
+    name = "cholespy"
+
+    def __init__(self, A: sp.csr_matrix, key):
+        import cholespy
+        self._n = A.shape[0]
+        self._s = cholespy.CholeskySolverD(
+            self._n, A.indptr.astype(np.int32), A.indices.astype(np.int32),
+            np.ascontiguousarray(A.data), cholespy.MatrixType.CSR)
+
+    def solve(self, B):
+        B = np.ascontiguousarray(B, dtype=np.float64)
+        X = np.zeros_like(B)
+        self._s.solve(B, X)
+        return X
+
+
+class _CholmodFactor(Factor):
+    name = "cholmod"
+
+    def __init__(self, A: sp.csr_matrix, key):
+        from sksparse.cholmod import analyze
+        Ac = A.tocsc()
+        sym = _cache_get(key) if key is not None else None
+        if sym is None:
+            sym = analyze(Ac)
+            if key is not None:
+                _cache_put(key, sym)
+        self._f = sym.cholesky(Ac)
+
+    def solve(self, B):
+        return np.asarray(self._f(np.asarray(B, dtype=np.float64)))
+
+
+_BACKENDS = {"scipy": _ScipyFactor, "pypardiso": _PardisoFactor, "qdldl": _QdldlFactor,
+             "cholespy": _CholespyFactor, "cholmod": _CholmodFactor}
+
+
+def factorize(A, solver: str = "auto", reuse_symbolic: bool = True) -> Factor:
+    """Factor the SPD matrix ``A`` with ``solver`` (a name of ``SOLVER_CHOICES``).
+
+    Parameters
+    ----------
+    A : (n, n) scipy sparse, symmetric positive definite
+    solver : str
+        ``auto`` (see :func:`auto_solver`) or a backend name; ValueError when unknown or not
+        installed.
+    reuse_symbolic : bool
+        Look up / store the symbolic analysis in the pattern-keyed cache.
+
+    Returns
+    -------
+    Factor
+        ``.solve(B)`` returns ``A^-1 B``; ``.name`` is the backend used.
+    """
+    name = auto_solver() if solver == "auto" else solver
+    if name not in _BACKENDS:
+        raise ValueError(f"unknown solver {solver!r}; expected one of {SOLVER_CHOICES}")
+    if not _importable(name):
+        raise ValueError(f"solver {name!r} is not installed here (installed: {installed_solvers()})")
+    A = _canonical(A)
+    key = _pattern_key(name, A) if reuse_symbolic else None
+    fac = _BACKENDS[name](A, key)
+    _LAST_USED["solver"] = name
+    _LAST_USED["n"] = int(A.shape[0])
+    return fac
+
+
+def spd_solve(A, B, solver: str = "auto") -> np.ndarray:
+    """``A^-1 B`` for one SPD system (factor, solve, discard the numeric factor)."""
+    return factorize(A, solver).solve(B)
