@@ -22,7 +22,11 @@ def _igl_mass(igl, V, F, mass):
         return None
     kind = {"barycentric": igl.MASSMATRIX_TYPE_BARYCENTRIC,
             "voronoi": igl.MASSMATRIX_TYPE_VORONOI}[mass]
-    return sp.csr_matrix(igl.massmatrix(V, F, kind))
+    M = sp.csr_matrix(igl.massmatrix(V, F, kind))
+    n = V.shape[0]
+    if M.shape[0] < n:  # libigl sizes M by max(F) + 1: pad trailing unreferenced vertices
+        M.resize((n, n))
+    return M
 
 
 @register("libigl.cotan", task="laplacian", library="libigl", params={"mass": _MASS},
