@@ -184,6 +184,7 @@ def test_report_survives_a_config_that_no_longer_loads_and_groups_errors(run_dir
 
 PLUGIN = '''
 import os
+
 from methods import register, SmoothingResult
 
 
@@ -191,6 +192,8 @@ from methods import register, SmoothingResult
 def crashy(V, F, *, iterations=1):
     """Identity smoothing that aborts its process once the marker file exists (tests the report)."""
     if os.path.exists(os.environ.get("REPORTTEST_CRASH_MARKER", "/nonexistent")):
+        import faulthandler
+        faulthandler.disable()          # no traceback dump from pytest's handler in the child
         os.abort()
     return SmoothingResult(V=V.copy())
 '''
