@@ -106,7 +106,8 @@ class DaskExecutor:
     def run(self, cases, want_meshes: bool = False):
         from distributed import as_completed
         cases = list(cases)
-        shipped, blobs = self._ship_files(cases)
+        shipped, data = ship_files(cases)
+        blobs = {h: self.client.scatter(b, hash=False) for h, b in data.items()}   # once per file
         futures = {}
         for case, sent in zip(cases, shipped):
             need = {h: blobs[h] for h in _hashes(sent)}
@@ -129,38 +130,6 @@ class DaskExecutor:
             yield case, row, meshes
         self._futures = {}
 
-    def _ship_files(self, cases):
-        """Cases as sent (file specs tagged with the sha1 of their bytes) and sha1 -> scattered bytes.
-
-        Each distinct file is read once by the driver and scattered once; a file the driver
-        cannot read is left untagged and the worker reports it (an ``error`` row).
-        """
-        blobs: dict[str, object] = {}
-        hashes: dict[str, str | None] = {}
-        out = []
-        for c in cases:
-            if not any(k in c.mesh for k in FILE_KEYS):
-                out.append(c)
-                continue
-            spec = dict(c.mesh)
-            for k in FILE_KEYS:
-                p = spec.get(k)
-                if not isinstance(p, str):
-                    continue
-                if p not in hashes:
-                    try:
-                        data = Path(p).read_bytes()
-                    except OSError:
-                        hashes[p] = None
-                    else:
-                        h = hashes[p] = hashlib.sha1(data).hexdigest()
-                        if h not in blobs:
-                            blobs[h] = self.client.scatter(data, hash=False)
-                if hashes[p]:
-                    spec[f"{k}_sha1"] = hashes[p]
-            out.append(dataclasses.replace(c, mesh=spec))
-        return out, blobs
-
     def close(self):
         if self._futures:
             self.client.cancel(list(self._futures))
@@ -169,6 +138,38 @@ class DaskExecutor:
             self.client.close()
         if self._cluster is not None:
             self._cluster.close()
+
+
+def ship_files(cases):
+    """Cases as sent (file specs tagged with the sha1 of their bytes) and ``{sha1: bytes}``.
+
+    Each distinct file is read once by the driver; a file the driver cannot read is left
+    untagged and the worker reports it (an ``error`` row naming the file).
+    """
+    data: dict[str, bytes] = {}
+    hashes: dict[str, str | None] = {}
+    out = []
+    for c in cases:
+        if not any(k in c.mesh for k in FILE_KEYS):
+            out.append(c)
+            continue
+        spec = dict(c.mesh)
+        for k in FILE_KEYS:
+            p = spec.get(k)
+            if not isinstance(p, str):
+                continue
+            if p not in hashes:
+                try:
+                    raw = Path(p).read_bytes()
+                except OSError:
+                    hashes[p] = None
+                else:
+                    hashes[p] = hashlib.sha1(raw).hexdigest()
+                    data.setdefault(hashes[p], raw)
+            if hashes[p]:
+                spec[f"{k}_sha1"] = hashes[p]
+        out.append(dataclasses.replace(c, mesh=spec))
+    return out, data
 
 
 def _hashes(case: Case) -> list[str]:
