@@ -37,6 +37,10 @@ def _parser() -> argparse.ArgumentParser:
     c.add_argument("run_a")
     c.add_argument("run_b")
     c.add_argument("--html", metavar="FILE", help="also write an HTML diff")
+    c.add_argument("--time-factor", type=float, default=None, metavar="X",
+                   help="a time regression needs B slower than X times A (default 1.5)")
+    c.add_argument("--no-time", action="store_true",
+                   help="compare metrics only (runs from different or loaded machines)")
     return p
 
 
@@ -96,8 +100,15 @@ def _cmd_report(a) -> int:
 
 
 def _cmd_compare(a) -> int:
-    from .compare import compare_runs
-    return compare_runs(a.run_a, a.run_b, html_out=a.html)
+    from .compare import TIME_FACTOR, compare_runs
+    for d in (a.run_a, a.run_b):
+        from pathlib import Path
+        if not Path(d).is_dir():
+            raise ShootoutError(f"compare: {d} is not a run folder")
+    if a.time_factor is not None and a.time_factor <= 1:
+        raise ShootoutError(f"--time-factor: expected a number > 1, got {a.time_factor}")
+    factor = None if a.no_time else (a.time_factor or TIME_FACTOR)
+    return compare_runs(a.run_a, a.run_b, html_out=a.html, time_factor=factor)
 
 
 def main(argv=None) -> int:
