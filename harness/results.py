@@ -143,9 +143,13 @@ class RunFolder:
 
 
 def load_csv(path) -> pd.DataFrame:
-    """Read a task CSV with true/false columns as booleans and ids as strings."""
+    """Read a task CSV with true/false columns as booleans and ids as strings.
+
+    Only an empty cell is missing (that is how rows are written): a mesh or file named
+    ``nan``, ``NA`` or ``null`` keeps its name.
+    """
     df = pd.read_csv(path, dtype={"case_id": str, "error": str, "params": str},
-                     keep_default_na=True, true_values=["true"], false_values=["false"])
+                     keep_default_na=False, na_values=[""], true_values=["true"], false_values=["false"])
     if "error" in df:
         df["error"] = df["error"].fillna("")
     return df
