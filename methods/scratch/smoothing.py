@@ -98,6 +98,15 @@ def time_step(V: np.ndarray, F: np.ndarray, step: float, weights: str) -> float:
     return float(step)
 
 
+def boundary_vertices(F: np.ndarray, n: int) -> np.ndarray:
+    """Boolean mask (n,) of vertices on an edge that belongs to exactly one face."""
+    E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+    uniq, counts = np.unique(E, axis=0, return_counts=True)
+    mask = np.zeros(n, dtype=bool)
+    mask[uniq[counts == 1].ravel()] = True
+    return mask
+
+
 def _finite(X: np.ndarray) -> bool:
     return bool(np.isfinite(X).all())
 
@@ -106,8 +115,17 @@ def _finite(X: np.ndarray) -> bool:
           params={"weights": Param("weights", "uniform", choices=WEIGHTS, doc=_WEIGHTS_DOC),
                   "step": Param("step", 0.25, "float", low=0.0, doc=_STEP_DOC),
                   "iterations": Param("iterations", 10, "int", low=0, high=100000,
-                                      doc="number of forward-Euler steps")})
-def explicit(V, F, *, weights="uniform", step=0.25, iterations=10):
+                                      doc="number of forward-Euler steps"),
+                  "self_weight": Param("self_weight", 0.0, "float", low=0.0,
+                                       doc="weight of the vertex itself in the neighbour "
+                                           "average, in units of M (MeshLab's Laplacian: 0.5)"),
+                  "fix_boundary": Param("fix_boundary", False, "bool",
+                                        doc="keep boundary vertices in place"),
+                  "reassemble": Param("reassemble", False, "bool",
+                                      doc="rebuild the operator from the current positions "
+                                          "every step (MeshLab's cotangent Laplacian does)")})
+def explicit(V, F, *, weights="uniform", step=0.25, iterations=10, self_weight=0.0,
+             fix_boundary=False, reassemble=False):
     """Explicit (forward Euler) Laplacian smoothing ``X <- X + h L X``.
 
     Parameters
@@ -123,6 +141,16 @@ def explicit(V, F, *, weights="uniform", step=0.25, iterations=10):
         cotan_area (``lbar`` = mean input edge length).
     iterations : int
         Number of steps.
+    self_weight : float
+        ``s >= 0``: the step of vertex ``i`` is scaled by ``m_i / (m_i + s)``. With
+        ``step = 1`` the update is ``x' = (s x + sum_j W_ij x_j) / (s + m_i)``: the vertex
+        itself joins the weighted average with weight ``s``. 0 (default) is the plain
+        Laplacian step; MeshLab's classic Laplacian is ``step 1, self_weight 0.5``.
+    fix_boundary : bool
+        Boundary vertices (on an edge with one incident face) do not move.
+    reassemble : bool
+        Rebuild ``W`` and ``M`` from the current positions before every step (no effect for
+        uniform weights). ``h`` stays the one of the input.
 
     Returns
     -------
@@ -137,12 +165,22 @@ def explicit(V, F, *, weights="uniform", step=0.25, iterations=10):
     1999, Sec. 2). One sparse mat-vec per step. With ``uniform`` weights and ``step = 1`` each
     vertex moves to the mean of its neighbours (the vertex itself not averaged in).
     """
-    W, m = smoothing_operator(V, F, weights)
     h = time_step(V, F, step, weights)
-    L = (sp.diags(h / m) @ W).tocsr()
+    fixed = boundary_vertices(F, V.shape[0]) if fix_boundary else None
+
+    def operator(P):
+        W, m = smoothing_operator(P, F, weights)
+        scale = h / (m + float(self_weight))
+        if fixed is not None:
+            scale = np.where(fixed, 0.0, scale)
+        return (sp.diags(scale) @ W).tocsr()
+
+    L = operator(V)
     X = V.copy()
     with np.errstate(over="ignore", invalid="ignore"):
-        for _ in range(iterations):
+        for it in range(iterations):
+            if reassemble and it > 0 and weights != "uniform":
+                L = operator(X)
             X = X + L @ X
             if not _finite(X):
                 break
@@ -233,7 +271,9 @@ def implicit(V, F, *, weights="cotan_area", step=1.0, iterations=1, reassemble=F
                               doc="inflating step (negative, |mu| > lambda)"),
                   "iterations": Param("iterations", 10, "int", low=0, high=100000,
                                       doc="number of (lambda, mu) step pairs"),
-                  "weights": Param("weights", "uniform", choices=WEIGHTS, doc=_WEIGHTS_DOC)})
+                  "weights": Param("weights", "uniform", choices=WEIGHTS, doc=_WEIGHTS_DOC),
+                  "fix_boundary": Param("fix_boundary", False, "bool",
+                                        doc="keep boundary vertices in place")})
 def taubin(V, F, **params):
     """Taubin's lambda|mu smoothing: ``X <- X + lambda L X`` then ``X <- X + mu L X``.
 
@@ -252,6 +292,8 @@ def taubin(V, F, **params):
     weights : {"uniform", "cotan", "cotan_area"}
         Operator (module docstring), built once from the input. For cotan_area the factors are
         multiplied by ``lbar^2`` like ``step``.
+    fix_boundary : bool
+        Boundary vertices do not move.
 
     Returns
     -------
@@ -260,16 +302,19 @@ def taubin(V, F, **params):
     Notes
     -----
     Taubin, "A signal processing approach to fair surface design", SIGGRAPH 1995. With
-    uniform weights ``(L X)_i = mean of neighbours - x_i``, MeshLab's
-    ``apply_coord_taubin_smoothing`` computes the same steps on closed meshes.
+    uniform weights ``(L X)_i = mean of neighbours - x_i``; MeshLab's
+    ``apply_coord_taubin_smoothing`` computes the same steps on closed meshes, PyGEL3D's
+    ``taubin_smooth`` is this with ``lambda 0.5, mu -0.52`` on any mesh.
     """
     lam = float(params.get("lambda", 0.5))
     mu = float(params.get("mu", -0.53))
     iterations = int(params.get("iterations", 10))
     weights = params.get("weights", "uniform")
     W, m = smoothing_operator(V, F, weights)
-    scale = time_step(V, F, 1.0, weights)
-    L = (sp.diags(scale / m) @ W).tocsr()
+    scale = time_step(V, F, 1.0, weights) / m
+    if params.get("fix_boundary", False):
+        scale = np.where(boundary_vertices(F, V.shape[0]), 0.0, scale)
+    L = (sp.diags(scale) @ W).tocsr()
     X = V.copy()
     with np.errstate(over="ignore", invalid="ignore"):
         for _ in range(iterations):

@@ -1,0 +1,116 @@
+"""PyGEL3D smoothing adapters: ``laplacian_smooth``, ``taubin_smooth``, ``anisotropic_smooth``.
+
+Vertex order: ``hmesh.Manifold.from_triangles`` does *not* keep the caller's vertex order
+(measured: on bunny.off 3,482 of 3,485 rows move). Every adapter therefore maps the result back
+by the input coordinates (:func:`to_caller_order`): each input vertex takes the new position
+of the manifold vertex that had exactly its coordinates when the manifold was built. Input
+vertices the manifold does not contain (unreferenced ones) keep their position; coincident
+input vertices get the same result.
+
+Formulas of GEL (``src/GEL/HMesh/smooth.cpp``), Jacobi-style (new positions from the old
+ones). Measured on PyGEL3D 0.8.2 (tests/test_smoothing_xval.py): boundary vertices move too,
+by the same uniform rule over all their neighbours (older GEL sources skip them):
+
+``laplacian_smooth(m, w, n)``
+    ``x_i <- x_i + w (mean of the 1-ring neighbours - x_i)``: exactly ``scratch.explicit``
+    with uniform weights and ``step = w`` on any mesh (the vertex itself is not averaged in).
+    ``w`` is passed as a C float (0.5, 0.25 exact).
+``taubin_smooth(m, n)``
+    ``n`` pairs of uniform steps with the fixed factors ``+0.5`` and ``-0.52``:
+    ``scratch.taubin`` with ``lambda 0.5, mu -0.52``.
+``anisotropic_smooth(m, sharpness, n)``
+    Per iteration: face normals filtered with weights ``area * exp(angle-based Gaussian)``
+    controlled by ``sharpness`` (0 = area-weighted average of the incident faces' normals),
+    then faces rotated to the new normals and each vertex set to the mean of its rotated
+    corners (Baerentzen's GEL notes; cf. Sun et al. 2007 vertex update).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from methods import Param, SmoothingResult, register
+
+
+def _row_keys(X: np.ndarray) -> np.ndarray:
+    X = np.ascontiguousarray(X, dtype=np.float64) + 0.0   # -0.0 -> 0.0: keys compare values
+    return X.view(np.dtype((np.void, 24))).ravel()
+
+
+def match_rows(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """For each row of ``A`` the index of a bit-identical row of ``B``, or -1."""
+    a, b = _row_keys(A), _row_keys(B)
+    order = np.argsort(b, kind="stable")
+    bs = b[order]
+    pos = np.searchsorted(bs, a)
+    pos = np.minimum(pos, len(bs) - 1)
+    hit = bs[pos] == a
+    return np.where(hit, order[pos], -1)
+
+
+def build_manifold(V: np.ndarray, F: np.ndarray):
+    """``(manifold, index)``: ``index[i]`` is the manifold vertex holding input vertex ``i``
+    (-1 when absent), found by exact coordinates right after ``from_triangles``."""
+    from pygel3d import hmesh
+    m = hmesh.Manifold.from_triangles(V, F)
+    P0 = np.array(m.positions(), dtype=np.float64, copy=True)
+    return m, match_rows(V, P0)
+
+
+def to_caller_order(V: np.ndarray, m, index: np.ndarray) -> np.ndarray:
+    """New positions of ``m`` in the caller's vertex order (absent vertices keep ``V``)."""
+    P = np.array(m.positions(), dtype=np.float64, copy=True)
+    out = V.copy()
+    ok = index >= 0
+    out[ok] = P[index[ok]]
+    return out
+
+
+@register("pygel.laplacian", task="smoothing", library="pygel3d", requires=("pygel3d",),
+          params={"step": Param("step", 0.25, "float", low=0.0, high=10.0,
+                                doc="GEL's weight w: x += w (neighbour mean - x)"),
+                  "iterations": Param("iterations", 10, "int", low=0, high=100000)})
+def laplacian(V, F, *, step=0.25, iterations=10):
+    """PyGEL3D ``hmesh.laplacian_smooth(m, w=step, no_iters=iterations)``.
+
+    Uniform umbrella step on every vertex (module docstring). The shared
+    ``step`` is GEL's weight ``w`` (row-normalized operator: the same meaning as
+    ``scratch.explicit``'s uniform step).
+    """
+    from pygel3d import hmesh
+    m, index = build_manifold(V, F)
+    if iterations > 0:
+        hmesh.laplacian_smooth(m, float(step), int(iterations))
+    return SmoothingResult(V=to_caller_order(V, m, index))
+
+
+@register("pygel.taubin", task="smoothing", library="pygel3d", requires=("pygel3d",),
+          params={"iterations": Param("iterations", 10, "int", low=0, high=100000,
+                                      doc="number of (0.5, -0.52) step pairs")})
+def taubin(V, F, *, iterations=10):
+    """PyGEL3D ``hmesh.taubin_smooth(m, no_iters=iterations)``: fixed lambda 0.5, mu -0.52.
+
+    Uniform weights; GEL exposes no lambda/mu.
+    """
+    from pygel3d import hmesh
+    m, index = build_manifold(V, F)
+    if iterations > 0:
+        hmesh.taubin_smooth(m, int(iterations))
+    return SmoothingResult(V=to_caller_order(V, m, index))
+
+
+@register("pygel.anisotropic", task="smoothing", library="pygel3d", requires=("pygel3d",),
+          params={"sharpness": Param("sharpness", 0.5, "float", low=0.0, high=100.0,
+                                     doc="0: area-weighted normal average; larger: more "
+                                         "feature-preserving (anisotropic)"),
+                  "iterations": Param("iterations", 1, "int", low=0, high=1000)})
+def anisotropic(V, F, *, sharpness=0.5, iterations=1):
+    """PyGEL3D ``hmesh.anisotropic_smooth(m, sharpness, no_iters=iterations)``.
+
+    Bilateral filtering of face normals followed by a rotation of the faces to the filtered
+    normals; vertices move to the average of their rotated corners (module docstring).
+    """
+    from pygel3d import hmesh
+    m, index = build_manifold(V, F)
+    if iterations > 0:
+        hmesh.anisotropic_smooth(m, float(sharpness), int(iterations))
+    return SmoothingResult(V=to_caller_order(V, m, index))
