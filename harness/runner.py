@@ -105,6 +105,11 @@ def _measure(case: Case, method, result, clean, V_in) -> dict:
     from .mesh import topology
     diag = clean.diagonal()
     if case.task == "laplacian":
+        for name, A in (("W", result.W), ("M", result.M)):     # NaN weights would pass as NaN metrics
+            data = None if A is None else getattr(A, "data", None)
+            if data is not None and not np.isfinite(data).all():
+                k = int((~np.isfinite(data)).sum())
+                raise ValueError(f"{case.method} returned {name} with {k} non-finite (NaN or inf) entries")
         return measure_laplacian(result, V_in, clean.F)
     if case.task == "smoothing":
         V_out = np.asarray(result.V, dtype=np.float64)
