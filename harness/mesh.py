@@ -2,6 +2,7 @@
 
 Repair policy (each repair is recorded in ``Mesh.repairs`` and in the run's rows):
 - polygons with more than 3 corners are fan-triangulated;
+- STL corners at exactly the same position are welded into one vertex (STL has no indices);
 - faces with a repeated vertex index and exact duplicate faces are removed;
 - unreferenced vertices are removed, ``Mesh.vertex_map`` keeps the original index of each kept one.
 Errors (``InvalidMeshError``): unreadable or empty file, unsupported extension, NaN/inf
@@ -105,6 +106,105 @@ def _read_off(text: str):
     return V, polys
 
 
+_PLY_TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2",
+              "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
+              "float": "f4", "float32": "f4", "double": "f8", "float64": "f8"}
+
+
+def _read_ply(data: bytes):
+    """PLY (ascii, binary_little_endian, binary_big_endian): vertex x, y, z and face index lists."""
+    end = data.find(b"end_header")
+    if not data.startswith(b"ply") or end < 0:
+        raise InvalidMeshError("missing PLY header")
+    nl = data.find(b"\n", end)
+    header = data[:end].decode("ascii", "replace").splitlines()
+    body = data[nl + 1:] if nl >= 0 else b""
+    fmt, elements = None, []
+    for line in header:
+        t = line.split()
+        if not t or t[0] in ("ply", "comment", "obj_info"):
+            continue
+        if t[0] == "format":
+            fmt = t[1]
+        elif t[0] == "element":
+            elements.append((t[1], int(t[2]), []))
+        elif t[0] == "property" and elements:
+            elements[-1][2].append(t[1:])
+    if fmt not in ("ascii", "binary_little_endian", "binary_big_endian"):
+        raise InvalidMeshError(f"unsupported PLY format {fmt!r}")
+    V, polys = None, []
+    if fmt == "ascii":
+        tokens = body.split()
+        pos = 0
+        for name, count, props in elements:
+            if name == "vertex":
+                k = len(props)
+                if any(p[0] == "list" for p in props):
+                    raise InvalidMeshError("list property in PLY vertex element")
+                vals = np.asarray(tokens[pos:pos + k * count], dtype=np.float64)
+                if vals.size != k * count:
+                    raise InvalidMeshError("truncated PLY vertex data")
+                names = [p[-1] for p in props]
+                vals = vals.reshape(count, k)
+                V = vals[:, [names.index("x"), names.index("y"), names.index("z")]]
+                pos += k * count
+            else:
+                for _ in range(count):
+                    row = []
+                    for p in props:
+                        if p[0] == "list":
+                            m = int(tokens[pos])
+                            row.append([int(x) for x in tokens[pos + 1:pos + 1 + m]])
+                            pos += 1 + m
+                        else:
+                            pos += 1
+                    if name == "face":
+                        polys.append(row[0])
+                if pos > len(tokens):
+                    raise InvalidMeshError(f"truncated PLY {name} data")
+        return V, polys
+    order = "<" if fmt == "binary_little_endian" else ">"
+    off = 0
+    for name, count, props in elements:
+        if all(p[0] != "list" for p in props):
+            dt = np.dtype([(p[-1], order + _PLY_TYPES[p[0]]) for p in props])
+            arr = np.frombuffer(body, dtype=dt, count=count, offset=off)
+            off += dt.itemsize * count
+            if name == "vertex":
+                V = np.stack([arr["x"], arr["y"], arr["z"]], 1).astype(np.float64)
+            continue
+        # elements with lists (faces): fast path when every list has 3 entries
+        fields = []
+        for p in props:
+            if p[0] == "list":
+                fields.append((p[-1] + "_n", order + _PLY_TYPES[p[1]]))
+                fields.append((p[-1], order + _PLY_TYPES[p[2]], (3,)))
+            else:
+                fields.append((p[-1], order + _PLY_TYPES[p[0]]))
+        dt = np.dtype(fields)
+        lst = [p[-1] for p in props if p[0] == "list"][0]
+        arr = np.frombuffer(body, dtype=dt, count=count, offset=off) if len(body) - off >= dt.itemsize * count else None
+        if arr is not None and np.all(arr[lst + "_n"] == 3):
+            off += dt.itemsize * count
+            if name == "face":
+                polys = arr[lst].astype(np.int64)
+            continue
+        for _ in range(count):                       # general polygons: a loop over faces
+            row = None
+            for p in props:
+                if p[0] == "list":
+                    ct, it = np.dtype(order + _PLY_TYPES[p[1]]), np.dtype(order + _PLY_TYPES[p[2]])
+                    m = int(np.frombuffer(body, ct, 1, off)[0])
+                    off += ct.itemsize
+                    row = np.frombuffer(body, it, m, off).astype(np.int64).tolist()
+                    off += it.itemsize * m
+                else:
+                    off += np.dtype(_PLY_TYPES[p[0]]).itemsize
+            if name == "face":
+                polys.append(row)
+    return V, polys
+
+
 def read_mesh(path, name: str | None = None, repair: bool = True) -> Mesh:
     """Read a triangle mesh file and validate it (see the module docstring for the policy)."""
     path = Path(path)
@@ -117,10 +217,18 @@ def read_mesh(path, name: str | None = None, repair: bool = True) -> Mesh:
         raise InvalidMeshError(f"{path.name}: empty file")
     notes = []
     try:
-        if ext in (".obj", ".off"):
-            text = path.read_text(errors="replace")
-            V, polys = _read_obj(text) if ext == ".obj" else _read_off(text)
-            F, n_poly = _fan(polys) if polys else (np.zeros((0, 3), np.int64), 0)
+        if ext in (".obj", ".off", ".ply"):
+            if ext == ".ply":
+                V, polys = _read_ply(path.read_bytes())
+                if V is None:
+                    raise InvalidMeshError("PLY file has no vertex element")
+            else:
+                text = path.read_text(errors="replace")
+                V, polys = _read_obj(text) if ext == ".obj" else _read_off(text)
+            if isinstance(polys, np.ndarray):
+                F, n_poly = polys, 0
+            else:
+                F, n_poly = _fan(polys) if len(polys) else (np.zeros((0, 3), np.int64), 0)
             if n_poly:
                 notes.append(f"fan-triangulated {n_poly} polygon(s) with more than 3 corners")
         else:
@@ -128,9 +236,13 @@ def read_mesh(path, name: str | None = None, repair: bool = True) -> Mesh:
             V, F = igl.read_triangle_mesh(str(path))
             V = np.asarray(V, dtype=np.float64)
             F = np.asarray(F, dtype=np.int64)
+            if len(V):       # STL stores each triangle's corners separately: weld exact copies
+                V, inv = np.unique(V, axis=0, return_inverse=True)
+                F = inv.ravel()[F]
+                notes.append("welded exactly coincident STL corners into shared vertices")
     except InvalidMeshError as exc:
         raise InvalidMeshError(f"{path.name}: {exc}") from None
-    except (ValueError, IndexError, UnicodeDecodeError, RuntimeError) as exc:
+    except (ValueError, IndexError, KeyError, TypeError, UnicodeDecodeError, RuntimeError) as exc:
         raise InvalidMeshError(f"{path.name}: unreadable ({type(exc).__name__}: {exc})") from None
     mesh = validate(V, F, name=name or path.stem, repair=repair)
     mesh.repairs[:0] = notes

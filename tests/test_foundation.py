@@ -322,3 +322,28 @@ def test_unavailable_library_is_a_row_not_a_crash(tmp_path):
 def harness_run_serial(cfg, tmp_path):
     import harness
     return harness.run(cfg, out=tmp_path / "s", executor="serial", quiet=True)
+
+
+def test_ply_ascii_binary_and_stl_round_trip(tmp_path):
+    import igl
+    import pymeshlab
+    V, F = datasets.icosphere(2)
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(V, F))
+    for binary in (True, False):
+        p = tmp_path / f"m{int(binary)}.ply"
+        ms.save_current_mesh(str(p), binary=binary)
+        m = read_mesh(p)
+        assert (m.n_vertices, m.n_faces) == (162, 320) and np.array_equal(m.F, F)
+        assert np.abs(m.V - V).max() < 1e-6
+    p = tmp_path / "hand.ply"
+    head = (f"ply\nformat ascii 1.0\nelement vertex {len(V)}\nproperty float x\nproperty float y\n"
+            f"property float z\nelement face {len(F)}\nproperty list uchar int vertex_indices\nend_header\n")
+    p.write_text(head + "".join("%r %r %r\n" % tuple(v) for v in V) + "".join("3 %d %d %d\n" % tuple(t) for t in F))
+    assert np.array_equal(read_mesh(p).F, F)
+    p = tmp_path / "s.stl"
+    igl.write_triangle_mesh(str(p), V, F)
+    m = read_mesh(p)
+    t = topology(m.V, m.F)
+    assert (m.n_vertices, m.n_faces) == (162, 320) and t["boundary_edges"] == 0 and t["components"] == 1
+    assert any("welded" in r for r in m.repairs)
