@@ -339,7 +339,7 @@ def test_ply_ascii_binary_and_stl_round_trip(tmp_path):
     p = tmp_path / "hand.ply"
     head = (f"ply\nformat ascii 1.0\nelement vertex {len(V)}\nproperty float x\nproperty float y\n"
             f"property float z\nelement face {len(F)}\nproperty list uchar int vertex_indices\nend_header\n")
-    p.write_text(head + "".join("%r %r %r\n" % tuple(v) for v in V) + "".join("3 %d %d %d\n" % tuple(t) for t in F))
+    p.write_text(head + "".join("%.17g %.17g %.17g\n" % tuple(v) for v in V) + "".join("3 %d %d %d\n" % tuple(t) for t in F))
     assert np.array_equal(read_mesh(p).F, F)
     p = tmp_path / "s.stl"
     igl.write_triangle_mesh(str(p), V, F)
