@@ -9,13 +9,17 @@ import difflib
 import hashlib
 import itertools
 import json
+import math
+import re
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import yaml
 
 from . import datasets
-from .errors import ConfigError
+from .errors import ConfigError, ShootoutError
+from .mesh import SUPPORTED
 from .noise import MODELS
 
 TOP_KEYS = {"name", "repeats", "save_meshes", "plugins", "seed", "meshes", "noise", "tasks",
@@ -77,6 +81,42 @@ def case_id(task, mesh_spec, model, level, seed, fraction, method, params) -> st
     return hashlib.sha1(blob.encode()).hexdigest()[:12]
 
 
+def _resolved(meth, params: dict) -> dict:
+    """Declared defaults filled in, floats as floats: equal settings give equal case ids."""
+    out = {k: p.default for k, p in meth.params.items()}
+    out.update(params)
+    for k, p in meth.params.items():
+        if p.kind == "float" and _is_num(out[k]):
+            out[k] = float(out[k])
+    return out
+
+
+def _identity(spec: dict) -> dict:
+    """What defines a mesh for the case id: file contents (sha1), not where the file lies."""
+    out = {}
+    for k, v in spec.items():
+        if k in ("file", "clean"):
+            out[k + "_sha1"] = hashlib.sha1(Path(v).read_bytes()).hexdigest()
+        else:
+            out[k] = v
+    return out
+
+
+def _unique_labels(meshes: list[dict]) -> list[str]:
+    """``mesh`` column labels; file meshes with the same stem get their parent folder prepended
+    (``d1-Noisy``), then an index, so no two different meshes share a label."""
+    labels = [datasets.spec_key(s) for s in meshes]
+    for i, s in enumerate(meshes):
+        if "file" in s and labels.count(labels[i]) > 1:
+            labels[i] = f"{Path(s['file']).parent.name}-{labels[i]}"
+    seen: dict[str, int] = {}
+    for i, lab in enumerate(labels):
+        if labels.count(lab) > 1 and _identity(meshes[i]) != _identity(meshes[labels.index(lab)]):
+            seen[lab] = seen.get(lab, 0) + 1
+            labels[i] = f"{lab}-{seen[lab]}"
+    return labels
+
+
 def _grid(params: dict) -> list[dict]:
     """Cartesian product over list-valued parameters."""
     keys = list(params)
@@ -89,6 +129,15 @@ def load_config(source, base_dir: Path | None = None) -> Config:
     label = "<config>"
     if isinstance(source, dict):
         raw = source
+    elif isinstance(source, Path):
+        label = str(source)
+        if not source.is_file():
+            raise ConfigError(label, [f"config file not found (or not a file): {source}"])
+        base_dir = base_dir or source.parent
+        try:
+            raw = yaml.safe_load(source.read_text())
+        except (yaml.YAMLError, UnicodeDecodeError) as exc:
+            raise ConfigError(label, [f"not valid YAML: {exc}".replace("\n", " ")]) from None
     else:
         p = Path(str(source))
         if "\n" not in str(source) and p.suffix in (".yaml", ".yml", ".json"):
@@ -105,7 +154,7 @@ def load_config(source, base_dir: Path | None = None) -> Config:
             raise ConfigError(label, [f"not valid YAML: {exc}".replace("\n", " ")]) from None
     if not isinstance(raw, dict):
         raise ConfigError(label, [f"top level: expected a mapping, got {type(raw).__name__}"])
-    return _validate(raw, label, base_dir or Path.cwd())
+    return _validate(raw, label, (base_dir or Path.cwd()).resolve())
 
 
 def _validate(raw: dict, label: str, base_dir: Path) -> Config:
@@ -117,8 +166,8 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
             P.append(f"{k}: unknown key{_close(k, TOP_KEYS)}; expected one of {sorted(TOP_KEYS)}")
 
     name = raw.get("name", Path(label).stem if label != "<config>" else "run")
-    if not isinstance(name, str) or not name or "/" in name:
-        P.append(f"name: expected a non-empty string without '/', got {name!r}")
+    if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,99}", name) or ".." in name:
+        P.append(f"name: expected letters, digits, '_', '-' or '.' (a folder name under results/), got {name!r}")
     repeats = raw.get("repeats", 1)
     if not _is_int(repeats) or repeats < 1:
         P.append(f"repeats: expected an integer >= 1, got {repeats!r}")
@@ -126,10 +175,10 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
     if not isinstance(save, bool):
         P.append(f"save_meshes: expected true or false, got {save!r}")
     seed = raw.get("seed", 0)
-    if not _is_int(seed) or seed < 0:
-        P.append(f"seed: expected an integer >= 0, got {seed!r}")
+    if not _is_int(seed) or not 0 <= seed < 2 ** 32 - 1000:
+        P.append(f"seed: expected an integer in [0, 2**32 - 1000), got {seed!r}")
     timeout = raw.get("timeout")
-    if timeout is not None and (not _is_num(timeout) or timeout <= 0):
+    if timeout is not None and (not _is_num(timeout) or not math.isfinite(timeout) or timeout <= 0):
         P.append(f"timeout: expected a number of seconds > 0, got {timeout!r}")
     hs = raw.get("hausdorff_samples", 20000)
     if not _is_int(hs) or hs < 0:
@@ -143,33 +192,39 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
     if not isinstance(plugins, list) or not all(isinstance(x, str) for x in plugins):
         P.append(f"plugins: expected a list of module names, got {plugins!r}")
         plugins = []
+    plugin_failed = False
+    for d in (str(base_dir), str(Path.cwd())):   # a plugin package beside the config, or here
+        if d not in sys.path:
+            sys.path.append(d)
     for i, mod in enumerate(plugins):
         try:
             methods.load_plugins([mod])
         except Exception as exc:       # any failure of a user's module is a config problem
+            plugin_failed = True
             P.append(f"plugins[{i}]: cannot import {mod!r} ({type(exc).__name__}: {exc})")
     methods.load_plugins([])
 
     meshes = _check_meshes(raw.get("meshes"), base_dir, P)
     noises = _check_noise(raw.get("noise", [{"model": "none"}]), P)
-    tasks = _check_tasks(raw.get("tasks"), P)
+    tasks = _check_tasks(raw.get("tasks"), P, skip_unknown=plugin_failed)
 
     if P:
         raise ConfigError(label, P)
 
     cases = []
-    seeds_base = seed
-    for spec in meshes:
-        key = datasets.spec_key(spec)
+    labels = _unique_labels(meshes)
+    for spec, key in zip(meshes, labels):
+        ident = _identity(spec)
         is_pair = "clean" in spec or datasets.resolve_bundled(spec.get("bundled", "")) in datasets.PAIRS
-        noise_list = [("given", float("nan"), 0, 1.0)] if is_pair else [
-            (n["model"], float(lv), seeds_base + s, float(n.get("fraction", 1.0)))
-            for n in noises for lv in (n.get("levels") or [0.0]) for s in range(n.get("seeds", 1))]
+        noise_list = [("given", float("nan"), seed, 1.0)] if is_pair else [
+            (n["model"], float(lv), seed + s, float(n.get("fraction", 1.0)))
+            for n in noises for lv in (n.get("levels") or [0.0])
+            for s in range(1 if n["model"] == "none" else n.get("seeds", 1))]
         for model, level, s, frac in noise_list:
             for task, entries in tasks.items():
                 for mname, grid in entries:
                     for params in grid:
-                        cid = case_id(task, spec, model, level, s, frac, mname, params)
+                        cid = case_id(task, ident, model, level, s, frac, mname, params)
                         cases.append(Case(cid, task, spec, key, model, level, s, frac, mname,
                                           params, repeats, tuple(plugins), hs))
     seen = set()
@@ -190,13 +245,13 @@ def _check_meshes(meshes, base_dir: Path, P: list) -> list[dict]:
             if datasets.resolve_bundled(m):
                 out.append({"bundled": datasets.resolve_bundled(m)})
             elif m in datasets.PROCEDURAL:
-                out.append({"procedural": m})
+                out.append({"procedural": m, **datasets.PROCEDURAL[m]})
             else:
                 opts = datasets.bundled_names() + list(datasets.PROCEDURAL)
                 P.append(f"{at}: unknown mesh {m!r}{_close(m, opts)}; see `shootout datasets`")
         elif isinstance(m, dict) and "procedural" in m:
             kind = m["procedural"]
-            if kind not in datasets.PROCEDURAL:
+            if not isinstance(kind, str) or kind not in datasets.PROCEDURAL:
                 P.append(f"{at}.procedural: unknown procedural mesh {kind!r}{_close(kind, datasets.PROCEDURAL)}; "
                          f"expected one of {sorted(datasets.PROCEDURAL)}")
                 continue
@@ -214,7 +269,7 @@ def _check_meshes(meshes, base_dir: Path, P: list) -> list[dict]:
                     P.append(f"{at}.{k}: expected {'an integer' if want_int else 'a number'} in [{lo}, {hi}], got {v!r}")
                     continue
                 spec[k] = v
-            out.append(spec)
+            out.append({**{"procedural": kind}, **datasets.PROCEDURAL[kind], **spec})
         elif isinstance(m, dict) and "file" in m:
             extra = set(m) - {"file", "clean"}
             if extra:
@@ -233,8 +288,17 @@ def _check_meshes(meshes, base_dir: Path, P: list) -> list[dict]:
                 if not path.is_file():
                     P.append(f"{at}.{k}: file not found: {f} (relative paths are resolved against {base_dir})")
                     continue
+                if path.suffix.lower() not in SUPPORTED:
+                    P.append(f"{at}.{k}: unsupported extension {path.suffix!r} of {f}; expected one of {list(SUPPORTED)}")
+                    continue
                 spec[k] = str(path.resolve())
-            if "file" in spec:
+            if "file" in spec and "clean" in spec:
+                try:
+                    datasets.load(spec)
+                except ShootoutError as exc:
+                    P.append(f"{at}: {exc}")
+                    continue
+            if "file" in spec and ("clean" in spec or "clean" not in m):
                 out.append(spec)
         else:
             P.append(f"{at}: expected a bundled name, {{procedural: ...}} or {{file: ...}}, got {m!r}")
@@ -286,7 +350,7 @@ def _check_noise(noise, P: list) -> list[dict]:
     return out
 
 
-def _check_tasks(tasks, P: list) -> dict:
+def _check_tasks(tasks, P: list, skip_unknown: bool = False) -> dict:
     import methods
     from methods.base import TASKS
     out = {}
@@ -331,7 +395,8 @@ def _check_tasks(tasks, P: list) -> dict:
             try:
                 meth = methods.get(mname)
             except KeyError as exc:
-                P.append(f"{mat}: {exc.args[0]}; see `shootout methods`")
+                if not skip_unknown:      # a failed plugin already explains its missing methods
+                    P.append(f"{mat}: {exc.args[0]}; see `shootout methods`")
                 continue
             if meth.task != task:
                 P.append(f"{mat}: {mname} is a {meth.task} method, not {task}")
@@ -345,6 +410,6 @@ def _check_tasks(tasks, P: list) -> dict:
                 for val in values:
                     for prob in meth.param_problems({k: val}):
                         P.append(f"{src}: {prob}")
-            entries.append((mname, _grid(params)))
+            entries.append((mname, [_resolved(meth, g) for g in _grid(params)]))
         out[task] = entries
     return out

@@ -83,7 +83,9 @@ def spec_key(spec: dict) -> str:
     if "bundled" in spec:
         return spec["bundled"]
     if "procedural" in spec:
-        extra = ",".join(f"{k}={spec[k]}" for k in sorted(spec) if k != "procedural")
+        defaults = PROCEDURAL.get(spec["procedural"], {})
+        extra = ",".join(f"{k}={spec[k]}" for k in sorted(spec)
+                         if k != "procedural" and spec[k] != defaults.get(k))
         return spec["procedural"] + (f"({extra})" if extra else "")
     return Path(spec["file"]).stem
 
