@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from .errors import ShootoutError
 
@@ -48,19 +49,22 @@ def _cmd_run(a) -> int:
     from .config import load_config
     if a.workers is not None and a.workers < 1:
         raise ShootoutError(f"--workers: expected an integer >= 1, got {a.workers}")
-    if a.timeout is not None and a.timeout <= 0:
+    if a.timeout is not None and not a.timeout > 0:
         raise ShootoutError(f"--timeout: expected seconds > 0, got {a.timeout}")
     if a.executor == "dask" and not a.scheduler:
         raise ShootoutError("--executor dask needs --scheduler tcp://HOST:PORT")
-    cfg = load_config(a.config)
+    if a.timeout is not None and not a.timeout < float("inf"):
+        raise ShootoutError(f"--timeout: expected a finite number of seconds, got {a.timeout}")
+    cfg = load_config(Path(a.config))
     from .runner import run
     frames = run(cfg, out=a.out, workers=a.workers, executor=a.executor, scheduler=a.scheduler,
                  resume=a.resume, timeout=a.timeout, quiet=a.quiet,
                  export_benchmark_json=a.export_benchmark_json)
-    from pathlib import Path
     out = Path(a.out) if a.out else Path("results") / cfg.name
     total = {}
     for df in frames.values():
+        if "status" not in df:
+            continue
         for s, n in df["status"].value_counts().items():
             total[s] = total.get(s, 0) + int(n)
     summary = ", ".join(f"{n} {s}" for s, n in sorted(total.items()))
@@ -90,7 +94,6 @@ def _cmd_datasets(a) -> int:
 
 
 def _cmd_report(a) -> int:
-    from pathlib import Path
     from .report import build_report
     d = Path(a.run_dir)
     if not (d / "run.json").exists() and not any(d.glob("*.csv")):
@@ -102,7 +105,6 @@ def _cmd_report(a) -> int:
 def _cmd_compare(a) -> int:
     from .compare import TIME_FACTOR, compare_runs
     for d in (a.run_a, a.run_b):
-        from pathlib import Path
         if not Path(d).is_dir():
             raise ShootoutError(f"compare: {d} is not a run folder")
     if a.time_factor is not None and a.time_factor <= 1:

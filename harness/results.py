@@ -92,11 +92,23 @@ class RunFolder:
         return [r for r in rows if None not in r and len(r) == n]
 
     def reset(self) -> None:
-        """Remove the CSVs, run.json and report of a previous run (a fresh run, not --resume)."""
+        """Remove the CSVs, run.json, report and saved meshes of a previous run (a fresh run)."""
         for task in TASK_FILES:
             self.csv_path(task).unlink(missing_ok=True)
         for name in ("run.json", "report.html"):
             (self.path / name).unlink(missing_ok=True)
+        mdir = self.path / "meshes"
+        if mdir.is_dir():
+            for f in mdir.glob("*.obj"):
+                f.unlink()
+
+    def status_counts(self) -> dict:
+        """Rows per status over all task CSVs."""
+        out: dict[str, int] = {}
+        for task in TASK_FILES:
+            for r in self.read_rows(task):
+                out[r["status"]] = out.get(r["status"], 0) + 1
+        return out
 
     def keep_ok_rows(self) -> set[str]:
         """For --resume: rewrite each CSV with only its ok rows; return their case ids."""

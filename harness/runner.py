@@ -79,8 +79,9 @@ def run_case(case: Case, want_meshes: bool = False) -> tuple[dict, dict]:
         F = clean.F
         times, result = [], None
         for _ in range(case.repeats):
+            V_arg, F_arg = V_in.copy(), F.copy()   # a method that writes into its input spoils nothing
             t0 = time.perf_counter()
-            result = method(V_in, F, **case.params)
+            result = method(V_arg, F_arg, **case.params)
             times.append(time.perf_counter() - t0)
         row.update(time_s=statistics.median(times), time_min_s=min(times), time_max_s=max(times))
         row.update(_measure(case, method, result, clean, V_in))
@@ -91,7 +92,7 @@ def run_case(case: Case, want_meshes: bool = False) -> tuple[dict, dict]:
             row["error"] = "input repaired: " + "; ".join(clean.repairs)
     except ShootoutError as exc:
         row.update(status="error", error=f"{type(exc).__name__}: {exc}")
-    except Exception as exc:  # a method's own failure is data: one error row, the run goes on
+    except (Exception, SystemExit) as exc:  # a method's own failure is data: one error row
         tb = traceback.extract_tb(exc.__traceback__)
         where = f" at {Path(tb[-1].filename).name}:{tb[-1].lineno}" if tb else ""
         row.update(status="error", error=f"{type(exc).__name__}: {exc}{where}"[:2000])
@@ -119,8 +120,9 @@ def _measure(case: Case, method, result, clean, V_in) -> dict:
         return measure_smoothing(V_out, V_in, clean.V, clean.F, closed, diag, case.hausdorff_samples)
     from methods.base import check_arrays, target_face_count
     V_out, F_out = np.asarray(result.V, dtype=np.float64), np.asarray(result.F)
-    if len(F_out):
-        check_arrays(V_out, F_out)     # a malformed output is an error row, not a metric
+    if F_out.size == 0:
+        raise ValueError(f"{case.method} returned an empty mesh ({len(V_out)} vertices, 0 faces)")
+    check_arrays(V_out, F_out)         # a malformed output is an error row, not a metric
     p = {**{k: pp.default for k, pp in method.params.items()}, **case.params}
     target = target_face_count(clean.n_faces, p.get("target_ratio"), p.get("target_faces"))
     return measure_simplification(V_out, F_out, V_in, clean.F, target, diag, case.hausdorff_samples)

@@ -16,8 +16,10 @@ from .results import RunFolder, git_commit, machine_info, now_iso, package_versi
 
 
 def config_hash(cfg: Config) -> str:
-    """sha1 of the resolved case list (ids), so a resume with a changed config is detected."""
-    blob = json.dumps(sorted(c.case_id for c in cfg.cases)).encode()
+    """sha1 of what the rows depend on (case ids, repeats, Hausdorff samples), so a resume
+    with a changed config is detected."""
+    hs = cfg.cases[0].hausdorff_samples if cfg.cases else None
+    blob = json.dumps([sorted(c.case_id for c in cfg.cases), cfg.repeats, hs]).encode()
     return hashlib.sha1(blob).hexdigest()[:16]
 
 
@@ -45,8 +47,9 @@ def run_session(cfg: Config, out=None, workers=None, executor="local", scheduler
         prev = folder.read_run_json()
         if prev and prev.get("config_hash") not in (None, chash):
             raise ShootoutError(
-                f"--resume: the config changed since the run in {out_dir} started (its case list differs); "
-                "run without --resume to start over, or use a new --out folder")
+                f"--resume: the config changed since the run in {out_dir} started "
+                "(cases, repeats or hausdorff_samples differ); run without --resume to start over, "
+                "or use a new --out folder")
     # before anything is written: an unreachable Dask scheduler is exit 2 with the folder untouched
     ex = make_executor(executor, workers, timeout, scheduler)
     try:
@@ -59,12 +62,17 @@ def run_session(cfg: Config, out=None, workers=None, executor="local", scheduler
         ex.close()
         raise
     started = now_iso()
+    prev_meta = folder.read_run_json() if resume else None
+    if prev_meta and prev_meta.get("started"):
+        started = prev_meta["started"]
     meta = {"name": cfg.name, "config_source": cfg.source, "config": cfg.raw, "config_hash": chash,
             "started": started, "finished": None, "status": "running", "executor": executor,
             "scheduler": scheduler, "workers": workers, "timeout_s": timeout,
             "n_cases": len(cfg.cases), "resumed_ok_cases": len(done),
             "versions": package_versions(), "git_commit": git_commit(), "machine": machine_info(),
             "solver": _solver_info(), "command": " ".join(sys.argv)}
+    if resume:
+        meta["resumed_at"] = now_iso()
     if hasattr(ex, "n_workers"):       # dask: the cluster's worker threads, not --workers
         meta["workers"] = ex.n_workers()
     folder.write_run_json(meta)
@@ -95,7 +103,8 @@ def run_session(cfg: Config, out=None, workers=None, executor="local", scheduler
         if bar is not None:
             bar.close()
         ex.close()
-        meta.update(finished=now_iso(), wall_s=round(time.perf_counter() - t0, 3), status_counts=counts)
+        meta.update(finished=now_iso(), wall_s=round(time.perf_counter() - t0, 3),
+                    status_counts=folder.status_counts(), status_counts_this_session=counts)
         folder.write_run_json(meta)
     from .report import build_report
     try:
