@@ -105,10 +105,9 @@ def _identity(spec: dict) -> dict:
 def _unique_labels(meshes: list[dict]) -> list[str]:
     """``mesh`` column labels; file meshes with the same stem get their parent folder prepended
     (``d1-Noisy``), then an index, so no two different meshes share a label."""
-    labels = [datasets.spec_key(s) for s in meshes]
-    for i, s in enumerate(meshes):
-        if "file" in s and labels.count(labels[i]) > 1:
-            labels[i] = f"{Path(s['file']).parent.name}-{labels[i]}"
+    base = [datasets.spec_key(s) for s in meshes]
+    labels = [f"{Path(s['file']).parent.name}-{b}" if "file" in s and base.count(b) > 1 else b
+              for s, b in zip(meshes, base)]
     seen: dict[str, int] = {}
     for i, lab in enumerate(labels):
         if labels.count(lab) > 1 and _identity(meshes[i]) != _identity(meshes[labels.index(lab)]):

@@ -347,3 +347,55 @@ def test_ply_ascii_binary_and_stl_round_trip(tmp_path):
     t = topology(m.V, m.F)
     assert (m.n_vertices, m.n_faces) == (162, 320) and t["boundary_edges"] == 0 and t["components"] == 1
     assert any("welded" in r for r in m.repairs)
+
+
+def test_case_ids_follow_file_contents_not_location(tmp_path):
+    import shutil
+    src = datasets.DATA_DIR / "decimated-knight.off"
+    for d in ("a", "b"):
+        (tmp_path / d).mkdir()
+        shutil.copy(src, tmp_path / d / "k.off")
+    ids = [[c.case_id for c in load_config({**GOOD, "meshes": [{"file": f"{d}/k.off"}]},
+                                           base_dir=tmp_path).cases] for d in ("a", "b")]
+    assert ids[0] == ids[1]
+    (tmp_path / "b" / "k.off").write_text(src.read_text().replace("OFF", "OFF\n# changed", 1))
+    changed = [c.case_id for c in load_config({**GOOD, "meshes": [{"file": "b/k.off"}]}, base_dir=tmp_path).cases]
+    assert changed != ids[0]          # the id hashes the file's bytes: an edited file is a new case
+
+
+def test_same_stem_files_get_distinct_labels_and_defaults_dedupe(tmp_path):
+    import shutil
+    for d in ("d1", "d2"):
+        (tmp_path / d).mkdir()
+        shutil.copy(datasets.DATA_DIR / "decimated-knight.off", tmp_path / d / "Noisy.off")
+    (tmp_path / "d2" / "Noisy.off").write_text(
+        (tmp_path / "d2" / "Noisy.off").read_text().replace("\n", "\n# x\n", 1))
+    cfg = load_config({**GOOD, "meshes": [{"file": "d1/Noisy.off"}, {"file": "d2/Noisy.off"}]}, base_dir=tmp_path)
+    assert sorted({c.mesh_key for c in cfg.cases}) == ["d1-Noisy", "d2-Noisy"]
+    cfg = load_config({**GOOD, "tasks": {"laplacian": {"methods": [
+        "scratch.cotan", {"name": "scratch.cotan", "params": {"mass": "voronoi"}}]}}})
+    assert len(cfg.cases) == 1
+
+
+@pytest.mark.parametrize("name", ["..", ".hidden", "a/b", "a\\b", ""])
+def test_unsafe_run_names_rejected(name):
+    assert any(p.startswith("name:") for p in _problems({**GOOD, "name": name}))
+
+
+def test_in_place_method_does_not_spoil_repeats_or_input(tmp_path):
+    import harness
+    import methods
+    from methods import SmoothingResult, register
+    name = "testlib.inplace_halve"
+    if name not in [m.name for m in methods.all_methods()]:
+        @register(name, task="smoothing", library="testlib")
+        def _halve(V, F):
+            """Scale in place by 1/2 (a rude method)."""
+            V *= 0.5
+            return SmoothingResult(V)
+    cfg = {**GOOD, "name": "inplace", "repeats": 3, "noise": [{"model": "gaussian_normal", "levels": [0.1]}],
+           "tasks": {"smoothing": {"methods": [name]}}}
+    row = harness.run(cfg, out=tmp_path / "r", executor="serial", quiet=True)["smoothing"].iloc[0]
+    assert row["status"] == "ok"
+    assert row["input_ev_mean"] < 0.01                 # the noisy input itself, not a halved copy
+    assert row["volume_ratio"] == pytest.approx(0.125, rel=0.05)   # one halving, not three
