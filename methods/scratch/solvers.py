@@ -19,21 +19,22 @@ Backends (name: what it is; symbolic reuse):
     Intel MKL PARDISO through pypardiso, matrix type 2 (real SPD), upper triangle; phase 11
     (analysis) once per pattern, phase 22 (numeric) per matrix, phase 33 (solve).
 ``scipy``
-    ``scipy.sparse.linalg.splu`` (SuperLU) in symmetric mode: ``permc_spec="MMD_AT_PLUS_A"``,
-    ``SymmetricMode=True``, ``diag_pivot_thresh=0`` (diagonal pivots, fine for SPD). The
-    column permutation of the first factorization is cached and later matrices of the same
-    pattern are permuted symmetrically and factored with ``NATURAL`` ordering. Always present:
-    the pure-scipy fallback.
+    ``scipy.sparse.linalg.splu`` (SuperLU) in symmetric mode (``SymmetricMode=True``,
+    ``diag_pivot_thresh=0``: diagonal pivots, fine for SPD). The ordering is reverse
+    Cuthill-McKee followed by ``permc_spec="MMD_AT_PLUS_A"``; it is cached per pattern and the
+    matrix, permuted symmetrically, is factored with ``NATURAL``. Always present: the
+    pure-scipy fallback.
 ``qdldl``
     OSQP's QDLDL (``qdldl.Solver``): AMD ordering + up-looking LDL^T, single-threaded;
     ``update`` reuses the symbolic factorization.
 ``cholespy``
     cholespy's ``CholeskySolverD`` (bundled CHOLMOD); analysis is redone for each matrix.
 
-``auto`` picks the first importable of ``AUTO_ORDER`` (fastest first, from the timings of
+``auto`` picks by size, the first importable of ``AUTO_SMALL`` below ``AUTO_SMALL_MAX_N``
+unknowns and of ``AUTO_LARGE`` above (fastest first, from the timings of
 ``benchmarks/bench_implicit.py``). The environment variable ``MESH_SHOOTOUT_SOLVER`` overrides
-the automatic choice. :func:`solver_info` reports the choice and what is installed, for
-``run.json``.
+the automatic choice. :func:`solver_info` reports the policy, what is installed and the
+backend last used, for ``run.json``.
 """
 from __future__ import annotations
 
@@ -47,8 +48,14 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
 SOLVERS = ("cholmod", "pypardiso", "scipy", "qdldl", "cholespy")
-# Fastest first (benchmarks/bench_implicit.py, icosphere subdiv 8, 2 cores).
-AUTO_ORDER = ("cholmod", "pypardiso", "scipy")
+# Fastest first, from benchmarks/bench_implicit.py (2 cores). Small systems: the
+# single-threaded LDL^T of QDLDL has no start-up cost (PARDISO's first call loads MKL, ~3 s,
+# in every fresh process: the runner forks one per case) and wins up to ~50k vertices.
+# Large systems: supernodal, multithreaded factorizations win.
+AUTO_SMALL = ("qdldl", "scipy")
+AUTO_LARGE = ("cholmod", "pypardiso", "cholespy", "scipy")
+AUTO_SMALL_MAX_N = 50_000
+AUTO_ORDER = AUTO_LARGE
 _MODULES = {"cholmod": "sksparse.cholmod", "pypardiso": "pypardiso", "scipy": "scipy",
             "qdldl": "qdldl", "cholespy": "cholespy"}
 _DIST = {"cholmod": "scikit-sparse", "pypardiso": "pypardiso", "scipy": "scipy",
@@ -116,14 +123,18 @@ def installed_solvers() -> list[str]:
     return [s for s in SOLVERS if _importable(s)]
 
 
-def auto_solver() -> str:
-    """The backend ``auto`` resolves to (``MESH_SHOOTOUT_SOLVER`` overrides)."""
+def auto_solver(n: int | None = None) -> str:
+    """The backend ``auto`` resolves to for an ``n``-by-``n`` system (``n`` None: large).
+
+    ``MESH_SHOOTOUT_SOLVER`` (a backend name) overrides the choice.
+    """
     env = os.environ.get("MESH_SHOOTOUT_SOLVER", "").strip()
     if env and env != "auto":
         if env not in SOLVERS:
             raise ValueError(f"MESH_SHOOTOUT_SOLVER={env!r}: expected one of {SOLVER_CHOICES}")
         return env
-    for s in AUTO_ORDER:
+    order = AUTO_SMALL if (n is not None and n < AUTO_SMALL_MAX_N) else AUTO_LARGE
+    for s in order:
         if _importable(s):
             return s
     return "scipy"
@@ -138,7 +149,10 @@ def solver_info() -> dict:
             versions[s] = version(_DIST[s])
         except PackageNotFoundError:
             versions[s] = None
-    return {"auto": auto_solver(), "auto_order": list(AUTO_ORDER),
+    return {"auto": auto_solver(), "auto_small": auto_solver(1),
+            "auto_small_max_n": AUTO_SMALL_MAX_N,
+            "auto_order_small": list(AUTO_SMALL), "auto_order_large": list(AUTO_LARGE),
+            "env_override": os.environ.get("MESH_SHOOTOUT_SOLVER") or None,
             "installed": installed_solvers(), "versions": versions,
             "last_used": dict(_LAST_USED)}
 
@@ -203,28 +217,39 @@ class _ScipyFactor(Factor):
     name = "scipy"
 
     def __init__(self, A: sp.csr_matrix, key):
-        perm = _cache_get(key) if key is not None else None
+        cached = _cache_get(key) if key is not None else None
         opts = {"SymmetricMode": True}
-        if perm is None:
-            lu = sla.splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                          options=opts)
-            # SuperLU factors A[:, q] with q = argsort(perm_c) (row perm likewise, diagonal
-            # pivots): q is the symmetric ordering to reuse.
-            perm = np.argsort(np.asarray(lu.perm_c, dtype=np.int64))
+        if cached is None:
+            # first matrix of this pattern: order and factor in one SuperLU call
+            perm, self._lu, self._perm = self._ordering(A)
             if key is not None:
                 _cache_put(key, _ScipyOrdering(perm))
-            self._perm = None
         else:
-            perm = perm.perm
+            perm = cached.perm
             Ap = A[perm][:, perm].tocsc()
-            lu = sla.splu(Ap, permc_spec="NATURAL", diag_pivot_thresh=0.0, options=opts)
+            self._lu = sla.splu(Ap, permc_spec="NATURAL", diag_pivot_thresh=0.0, options=opts)
             self._perm = perm
-        self._lu = lu
+
+    @staticmethod
+    def _ordering(A: sp.csr_matrix):
+        """Symmetric fill-reducing ordering: reverse Cuthill-McKee, then SuperLU's MMD on
+        A + A^T. MMD breaks its many ties by index, and on very regular meshes (icospheres)
+        the input numbering alone made SuperLU 5-10x slower at equal fill; the RCM
+        pre-ordering removes that (bunny, armadillo: no change).
+
+        Returns ``(perm, lu, r)``: the ordering to cache, and the factorization of
+        ``A[r][:, r]`` made while computing it."""
+        from scipy.sparse.csgraph import reverse_cuthill_mckee
+        r = np.asarray(reverse_cuthill_mckee(A, symmetric_mode=True), dtype=np.int64)
+        Ar = A[r][:, r].tocsc()
+        lu = sla.splu(Ar, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                      options={"SymmetricMode": True})
+        # SuperLU factors Ar[:, q] with q = argsort(perm_c) (rows alike, diagonal pivots)
+        q = np.argsort(np.asarray(lu.perm_c, dtype=np.int64))
+        return r[q], lu, r
 
     def solve(self, B):
         B = np.asarray(B, dtype=np.float64)
-        if self._perm is None:
-            return self._lu.solve(B)
         X = np.empty_like(B)
         X[self._perm] = self._lu.solve(np.ascontiguousarray(B[self._perm]))
         return X
@@ -377,7 +402,7 @@ def factorize(A, solver: str = "auto", reuse_symbolic: bool = True) -> Factor:
     Factor
         ``.solve(B)`` returns ``A^-1 B``; ``.name`` is the backend used.
     """
-    name = auto_solver() if solver == "auto" else solver
+    name = auto_solver(A.shape[0]) if solver == "auto" else solver
     if name not in _BACKENDS:
         raise ValueError(f"unknown solver {solver!r}; expected one of {SOLVER_CHOICES}")
     if not _importable(name):
