@@ -8,19 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from methods import Param, SimplificationResult, register
-
-
-def compact(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Drop unreferenced vertices and reindex faces; returns (V float64, F int64).
-
-    Faces are renumbered in the order the kept vertices appear in ``V`` (stable).
-    """
-    V = np.ascontiguousarray(V, dtype=np.float64)
-    F = np.ascontiguousarray(F, dtype=np.int64).reshape(-1, 3)
-    used = np.zeros(V.shape[0], dtype=bool)
-    used[F.ravel()] = True
-    remap = np.cumsum(used) - 1
-    return V[used], remap[F]
+from methods.scratch.qem import compact
 
 
 @register(

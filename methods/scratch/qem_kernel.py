@@ -1,0 +1,579 @@
+"""The sequential part of `scratch.qem`: the edge-collapse loop, compiled with numba.
+
+Everything here is plain Python until `kernel()` is called: it imports numba and replaces the
+module's functions by ``numba.njit(cache=True)`` versions (helpers first, so the callers see
+compiled callees when they are compiled on first use). The registry imports every module of
+`methods`, so importing numba lazily keeps ``shootout methods`` fast and makes a missing numba an
+"unavailable" method rather than an import error.
+
+Data structures (all flat arrays, no Python objects):
+
+* ``F`` (m, 3) faces, edited in place (a collapsed vertex is replaced by the survivor, so face
+  orientation is never changed); ``falive`` (m,) marks live faces.
+* per-vertex singly linked lists of face corners: corner ``c = 3 f + k`` belongs to vertex
+  ``F[f, k]``; ``head[v]`` is the first corner of ``v``, ``nxt[c]`` the next. A collapse of ``v``
+  into ``u`` rewrites ``v``'s corners and splices its list in front of ``u``'s; corners of dead
+  faces are unlinked lazily by the next walk over the list.
+* quadrics ``Q`` (n, 10): ``a11 a12 a13 a22 a23 a33 b1 b2 b3 c`` of
+  ``x^T A x + 2 b^T x + c``.
+* a 4-ary min-heap of candidate collapses in one int64 array, two words per entry:
+  ``key code << 30 | stamp sum`` and ``u << 32 | v`` (survivor, removed vertex). The key code
+  is an order-preserving 32-bit code of the quadric error (exponent and 21 mantissa bits, see
+  `key_code`), so integer comparison of the first word orders by error. 16-byte entries put a
+  node's 4 children in one 64-byte cache line (the array is aligned for that): the heap holds
+  millions of entries and the loop is memory bound, so the layout matters more than the
+  number of comparisons.
+* lazy invalidation with version stamps: every vertex has a counter ``stamp`` that grows
+  whenever the vertex changes (it survives a collapse: new position, new quadric) and is set
+  to a large negative value when it dies. An entry stores ``stamp[u] + stamp[v]`` at push
+  time and is stale when the sum differs at pop time (live counters only grow, so any change
+  shows in the sum); stale entries are skipped, and every collapse pushes fresh entries for
+  all edges around the survivor.
+"""
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+
+INF = np.inf
+DEAD = -(1 << 40)   # stamp of a removed vertex: no stamp sum of live vertices can match it
+
+
+# ----------------------------------------------------------------------------- placement
+def place(Q, V, u, v, cond_max, dist_max):
+    """Position and quadric error of collapsing edge (u, v).
+
+    Optimal placement ``p = -A^-1 b`` for the summed quadric when ``A`` is well conditioned
+    (Frobenius condition number ``|A|_F |adj A|_F / |det A| <= cond_max``) and ``p`` lies
+    within ``dist_max`` edge lengths of the midpoint; otherwise the best of the endpoints, the
+    midpoint and the quadric's minimiser on the segment (clamped to [0, 1]).
+    """
+    a11 = Q[u, 0] + Q[v, 0]
+    a12 = Q[u, 1] + Q[v, 1]
+    a13 = Q[u, 2] + Q[v, 2]
+    a22 = Q[u, 3] + Q[v, 3]
+    a23 = Q[u, 4] + Q[v, 4]
+    a33 = Q[u, 5] + Q[v, 5]
+    b1 = Q[u, 6] + Q[v, 6]
+    b2 = Q[u, 7] + Q[v, 7]
+    b3 = Q[u, 8] + Q[v, 8]
+    c = Q[u, 9] + Q[v, 9]
+    ux, uy, uz = V[u, 0], V[u, 1], V[u, 2]
+    vx, vy, vz = V[v, 0], V[v, 1], V[v, 2]
+    mx, my, mz = 0.5 * (ux + vx), 0.5 * (uy + vy), 0.5 * (uz + vz)
+    ex, ey, ez = vx - ux, vy - uy, vz - uz
+    elen2 = ex * ex + ey * ey + ez * ez
+
+    # cofactors (adjugate of the symmetric A)
+    c11 = a22 * a33 - a23 * a23
+    c12 = a13 * a23 - a12 * a33
+    c13 = a12 * a23 - a13 * a22
+    c22 = a11 * a33 - a13 * a13
+    c23 = a12 * a13 - a11 * a23
+    c33 = a11 * a22 - a12 * a12
+    det = a11 * c11 + a12 * c12 + a13 * c13
+    nA = math.sqrt(a11 * a11 + a22 * a22 + a33 * a33 + 2.0 * (a12 * a12 + a13 * a13 + a23 * a23))
+    nC = math.sqrt(c11 * c11 + c22 * c22 + c33 * c33 + 2.0 * (c12 * c12 + c13 * c13 + c23 * c23))
+    if det > 0.0 and nA * nC <= cond_max * det:
+        inv = 1.0 / det
+        px = -(c11 * b1 + c12 * b2 + c13 * b3) * inv
+        py = -(c12 * b1 + c22 * b2 + c23 * b3) * inv
+        pz = -(c13 * b1 + c23 * b2 + c33 * b3) * inv
+        dx, dy, dz = px - mx, py - my, pz - mz
+        if dx * dx + dy * dy + dz * dz <= dist_max * dist_max * elen2:
+            err = (a11 * px * px + a22 * py * py + a33 * pz * pz
+                   + 2.0 * (a12 * px * py + a13 * px * pz + a23 * py * pz)
+                   + 2.0 * (b1 * px + b2 * py + b3 * pz) + c)
+            return px, py, pz, max(err, 0.0)
+    # fallback: candidates on the segment u + t (v - u)
+    best = INF
+    bx, by, bz = mx, my, mz
+    # error(t) = e0 + 2 t g + t^2 h
+    Aex = a11 * ex + a12 * ey + a13 * ez
+    Aey = a12 * ex + a22 * ey + a23 * ez
+    Aez = a13 * ex + a23 * ey + a33 * ez
+    h = ex * Aex + ey * Aey + ez * Aez
+    g = (ux * Aex + uy * Aey + uz * Aez) + (b1 * ex + b2 * ey + b3 * ez)
+    e0 = (a11 * ux * ux + a22 * uy * uy + a33 * uz * uz
+          + 2.0 * (a12 * ux * uy + a13 * ux * uz + a23 * uy * uz)
+          + 2.0 * (b1 * ux + b2 * uy + b3 * uz) + c)
+    tstar = 0.5
+    if h > 0.0:
+        tstar = min(1.0, max(0.0, -g / h))
+    for k in range(4):
+        t = 0.0 if k == 0 else (1.0 if k == 1 else (0.5 if k == 2 else tstar))
+        err = e0 + 2.0 * t * g + t * t * h
+        if err < best:
+            best = err
+            bx, by, bz = ux + t * ex, uy + t * ey, uz + t * ez
+    return bx, by, bz, max(best, 0.0)
+
+
+# ----------------------------------------------------------------------------- heap
+HB = 6        # heap position p lives at words HB + 2 p, HB + 2 p + 1 (see `heap_alloc`)
+SMASK = (1 << 30) - 1
+
+
+def key_code(err):
+    """Order-preserving 32-bit integer code of a non-negative error (relative step 2.4e-7)."""
+    if not err > 0.0:
+        return 0
+    m, e = math.frexp(err)              # err = m 2^e, 0.5 <= m < 1
+    e = min(max(e + 1024, 0), 2047)
+    return (e << 21) | int((m - 0.5) * 4194304.0)
+
+
+def heap_alloc(cap):
+    """Heap array for ``cap`` entries, aligned so that the 4 children of every node (words
+    HB + 8 p + 2 .. HB + 8 p + 9) share one 64-byte cache line."""
+    buf = np.empty(2 * cap + HB + 16, dtype=np.int64)
+    o = ((-buf.ctypes.data) % 64) // 8
+    return buf[o:]
+
+
+def heap_sift_down(H, hn, i, w0, w1):
+    """Place entry (w0, w1) at position i and sift it down a heap of size hn."""
+    while True:
+        c = 4 * i + 1
+        if c >= hn:
+            break
+        m = c
+        mk = H[HB + 2 * c]
+        e = min(c + 4, hn)
+        for j in range(c + 1, e):
+            kj = H[HB + 2 * j]
+            if kj < mk:
+                mk = kj
+                m = j
+        if mk >= w0:
+            break
+        H[HB + 2 * i] = mk
+        H[HB + 2 * i + 1] = H[HB + 2 * m + 1]
+        i = m
+    H[HB + 2 * i] = w0
+    H[HB + 2 * i + 1] = w1
+
+
+def heap_push(H, hn, w0, w1):
+    """Insert entry (w0, w1) into a heap of size hn (capacity checked by the caller)."""
+    i = hn
+    while i > 0:
+        p = (i - 1) >> 2
+        if H[HB + 2 * p] <= w0:
+            break
+        H[HB + 2 * i] = H[HB + 2 * p]
+        H[HB + 2 * i + 1] = H[HB + 2 * p + 1]
+        i = p
+    H[HB + 2 * i] = w0
+    H[HB + 2 * i + 1] = w1
+
+
+def heap_compact(H, hn, stamp):
+    """Drop the stale entries (stamp sums that no longer match) and re-heapify; returns the
+    new size. Keeps the heap, and so the cache misses of every sift, small."""
+    j = 0
+    for i in range(hn):
+        w0 = H[HB + 2 * i]
+        w1 = H[HB + 2 * i + 1]
+        if (w0 & SMASK) == stamp[w1 >> 32] + stamp[w1 & 0xFFFFFFFF]:
+            H[HB + 2 * j] = w0
+            H[HB + 2 * j + 1] = w1
+            j += 1
+    if j > 1:
+        for i in range((j - 2) // 4, -1, -1):
+            heap_sift_down(H, j, i, H[HB + 2 * i], H[HB + 2 * i + 1])
+    return j
+
+
+def heap_grow(H, hn, cap):
+    """A larger heap array holding the same hn entries."""
+    H2 = heap_alloc(cap)
+    H2[:HB + 2 * hn] = H[:HB + 2 * hn]
+    return H2
+
+
+def clean_list(head, nxt, falive, v):
+    """Unlink the corners of dead faces from v's list; returns the number of live faces."""
+    prev = -1
+    c = head[v]
+    cnt = 0
+    while c != -1:
+        nc = nxt[c]
+        if not falive[c // 3]:
+            if prev == -1:
+                head[v] = nc
+            else:
+                nxt[prev] = nc
+        else:
+            cnt += 1
+            prev = c
+        c = nc
+    return cnt
+
+
+def tri_quality(ax, ay, az, bx, by, bz, cx, cy, cz):
+    """Normal (unnormalised, twice the area) and quality 4 sqrt(3) A / sum(l^2) in [0, 1]."""
+    e1x, e1y, e1z = bx - ax, by - ay, bz - az
+    e2x, e2y, e2z = cx - ax, cy - ay, cz - az
+    e3x, e3y, e3z = cx - bx, cy - by, cz - bz
+    nx = e1y * e2z - e1z * e2y
+    ny = e1z * e2x - e1x * e2z
+    nz = e1x * e2y - e1y * e2x
+    dbl = math.sqrt(nx * nx + ny * ny + nz * nz)
+    s = (e1x * e1x + e1y * e1y + e1z * e1z + e2x * e2x + e2y * e2y + e2z * e2z
+         + e3x * e3x + e3y * e3y + e3z * e3z)
+    q = 0.0
+    if s > 0.0:
+        q = 2.0 * math.sqrt(3.0) * dbl / s
+    return nx, ny, nz, dbl, q
+
+
+def face_after(V, F, f, k, px, py, pz, cos_max):
+    """Face f with its corner k moved to p: (rejected, old quality, new quality).
+
+    Rejected when its normal turns by more than acos(cos_max) or its area vanishes.
+    """
+    i0 = F[f, 0]
+    i1 = F[f, 1]
+    i2 = F[f, 2]
+    ax, ay, az = V[i0, 0], V[i0, 1], V[i0, 2]
+    bx, by, bz = V[i1, 0], V[i1, 1], V[i1, 2]
+    cx, cy, cz = V[i2, 0], V[i2, 1], V[i2, 2]
+    onx, ony, onz, odbl, qo = tri_quality(ax, ay, az, bx, by, bz, cx, cy, cz)
+    if k == 0:
+        ax, ay, az = px, py, pz
+    elif k == 1:
+        bx, by, bz = px, py, pz
+    else:
+        cx, cy, cz = px, py, pz
+    nnx, nny, nnz, ndbl, qn = tri_quality(ax, ay, az, bx, by, bz, cx, cy, cz)
+    bad = False
+    if odbl > 0.0:
+        if ndbl <= 0.0:
+            bad = True
+        elif onx * nnx + ony * nny + onz * nnz < cos_max * odbl * ndbl:
+            bad = True
+    return bad, qo, qn
+
+
+def can_collapse(V, F, falive, head, nxt, bnd, tag, token, u, v, px, py, pz,
+                 cos_max, q_min):
+    """Topological (link condition) and geometric (normal flip, needle) tests of u <- v at p.
+
+    Returns 0 when the collapse is allowed, else a reason code: 1 link condition / non-manifold
+    result, 2 would shrink a closed fan below a tetrahedron (or orphan a vertex), 3 normal
+    flip beyond the threshold, 4 needle below the quality threshold. One walk over the faces
+    of u and one over those of v do both the link and the geometric tests.
+    """
+    qold = INF
+    qnew = INF
+    # --- faces of u: tag u's neighbours, find the faces shared with v and their apexes
+    n_uv = 0
+    o0 = -1
+    o1 = -1
+    c = head[u]
+    while c != -1:
+        f = c // 3
+        if falive[f]:
+            i0 = F[f, 0]
+            i1 = F[f, 1]
+            i2 = F[f, 2]
+            tag[i0] = token
+            tag[i1] = token
+            tag[i2] = token
+            if i0 == v or i1 == v or i2 == v:
+                n_uv += 1
+                if n_uv == 1:
+                    o0 = i0 + i1 + i2 - u - v
+                elif n_uv == 2:
+                    o1 = i0 + i1 + i2 - u - v
+                else:
+                    return 1
+                _, _, _, _, qo = tri_quality(V[i0, 0], V[i0, 1], V[i0, 2], V[i1, 0], V[i1, 1],
+                                             V[i1, 2], V[i2, 0], V[i2, 1], V[i2, 2])
+                qold = min(qold, qo)
+            else:
+                bad, qo, qn = face_after(V, F, f, c % 3, px, py, pz, cos_max)
+                if bad:
+                    return 3
+                qold = min(qold, qo)
+                qnew = min(qnew, qn)
+        c = nxt[c]
+    if n_uv == 0:
+        return 1
+    if n_uv == 2 and bnd[u] and bnd[v]:
+        return 1
+    # --- faces of v: common neighbours of u and v must be exactly the apexes
+    common = 0
+    c = head[v]
+    while c != -1:
+        f = c // 3
+        if falive[f]:
+            i0 = F[f, 0]
+            i1 = F[f, 1]
+            i2 = F[f, 2]
+            for k in range(3):
+                w = F[f, k]
+                if w != v and w != u and tag[w] == token:
+                    tag[w] = token + 1
+                    common += 1
+            if not (i0 == u or i1 == u or i2 == u):
+                bad, qo, qn = face_after(V, F, f, c % 3, px, py, pz, cos_max)
+                if bad:
+                    return 3
+                qold = min(qold, qo)
+                qnew = min(qnew, qn)
+        c = nxt[c]
+    if common != n_uv:
+        return 1
+    if qnew < q_min and qnew < qold:
+        return 4
+    # --- the apexes must keep a valid fan
+    for j in range(n_uv):
+        w = o0 if j == 0 else o1
+        cnt = 0
+        c = head[w]
+        while c != -1:
+            if falive[c // 3]:
+                cnt += 1
+            c = nxt[c]
+        if cnt <= 1 or ((not bnd[w]) and cnt <= 3):
+            return 2
+    return 0
+
+
+def push_ring(Q, V, F, falive, head, nxt, bnd, stamp, tag, token, u, H, hn,
+              cond_max, dist_max, fix_boundary):
+    """Push the collapses of every edge (u, w) of u's ring; returns the new heap size.
+
+    The caller guarantees capacity for 2 valence(u) more entries.
+    """
+    c = head[u]
+    while c != -1:
+        f = c // 3
+        if falive[f]:
+            for k in range(3):
+                w = F[f, k]
+                if w != u and tag[w] != token:
+                    tag[w] = token
+                    hn = push_edge(Q, V, bnd, stamp, u, w, H, hn, cond_max, dist_max,
+                                   fix_boundary)
+        c = nxt[c]
+    return hn
+
+
+def edge_cost(Q, V, bnd, a, b, cond_max, dist_max, fix_boundary):
+    """(survivor, removed, error) of collapsing edge (a, b); error inf if it is not allowed.
+
+    With ``fix_boundary`` a boundary vertex never moves: an edge with one boundary end keeps
+    that end (error = the summed quadric at its position) and an edge with two is never
+    collapsed.
+    """
+    if fix_boundary:
+        if bnd[a] and bnd[b]:
+            return a, b, INF
+        if bnd[b]:
+            a, b = b, a
+        if bnd[a]:
+            x, y, z = V[a, 0], V[a, 1], V[a, 2]
+            err = 0.0
+            for j in range(2):
+                w = a if j == 0 else b
+                err += (Q[w, 0] * x * x + Q[w, 3] * y * y + Q[w, 5] * z * z
+                        + 2.0 * (Q[w, 1] * x * y + Q[w, 2] * x * z + Q[w, 4] * y * z)
+                        + 2.0 * (Q[w, 6] * x + Q[w, 7] * y + Q[w, 8] * z) + Q[w, 9])
+            return a, b, max(err, 0.0)
+    _, _, _, err = place(Q, V, a, b, cond_max, dist_max)
+    return a, b, err
+
+
+def push_edge(Q, V, bnd, stamp, a, b, H, hn, cond_max, dist_max, fix_boundary):
+    """Push the collapse of edge (a, b) (survivor chosen by `edge_cost`); returns the size."""
+    a, b, err = edge_cost(Q, V, bnd, a, b, cond_max, dist_max, fix_boundary)
+    if err == INF:
+        return hn
+    heap_push(H, hn, (key_code(err) << 30) | (stamp[a] + stamp[b]), (a << 32) | b)
+    return hn + 1
+
+
+def placement_of(Q, V, bnd, u, v, cond_max, dist_max, fix_boundary):
+    if fix_boundary and bnd[u]:
+        return V[u, 0], V[u, 1], V[u, 2]
+    px, py, pz, _ = place(Q, V, u, v, cond_max, dist_max)
+    return px, py, pz
+
+
+# ----------------------------------------------------------------------------- main loop
+def build_lists(F, n):
+    """Per-vertex corner lists (head (n,), nxt (3m,)), each in increasing corner order."""
+    m = F.shape[0]
+    head = np.full(n, -1, dtype=np.int64)
+    nxt = np.full(3 * m, -1, dtype=np.int64)
+    for c in range(3 * m - 1, -1, -1):
+        v = F[c // 3, c % 3]
+        nxt[c] = head[v]
+        head[v] = c
+    return head, nxt
+
+
+def collapse_loop(V, F, Q, bnd, E, head, nxt, target, cos_stages, q_stages, cond_max,
+                  dist_max, fix_boundary):
+    """Collapse edges in order of quadric error until ``target`` faces remain.
+
+    ``V``, ``F``, ``Q``, ``bnd``, ``head``, ``nxt`` are modified in place. ``E`` (e, 2) are
+    the initial edges. ``cos_stages``/``q_stages``: geometric thresholds of successive
+    stages. A round ends when the queue empties; the next round re-queues every live edge
+    (rejected collapses may have become valid): the same stage once more if the round made
+    progress, else the next stage. The loop stops at the target or when no stage is left.
+
+    Returns (falive, n_faces, n_collapses, stage reached, rejections per reason (5,)).
+    """
+    n = V.shape[0]
+    m = F.shape[0]
+    falive = np.ones(m, dtype=np.bool_)
+    stamp = np.zeros(n, dtype=np.int64)
+    tag = np.zeros(n, dtype=np.int64)
+    token = 1
+    nfaces = m
+    ncoll = 0
+    reasons = np.zeros(5, dtype=np.int64)
+
+    cap = max(64, E.shape[0] + E.shape[0] // 2)
+    H = heap_alloc(cap)
+    hn = 0
+
+    stage = 0
+    rounds = 0
+    rounds_at_stage = 0
+    nstages = cos_stages.shape[0]
+    while stage < nstages and nfaces > target:
+        cos_max = cos_stages[stage]
+        q_min = q_stages[stage]
+        # (re)build the queue from all live edges (the initial E, later every face's
+        # edges, interior ones twice: the duplicate is harmless), heapified bottom-up
+        need = E.shape[0] if rounds == 0 else 3 * nfaces
+        if need + 64 > cap:
+            cap = need + need // 2 + 64
+            H = heap_alloc(cap)
+        hn = 0
+        nedge = E.shape[0] if rounds == 0 else 3 * m
+        for i in range(nedge):
+            if rounds == 0:
+                a = E[i, 0]
+                b = E[i, 1]
+            else:
+                f = i // 3
+                if not falive[f]:
+                    continue
+                a = F[f, i % 3]
+                b = F[f, (i + 1) % 3]
+            a, b, err = edge_cost(Q, V, bnd, a, b, cond_max, dist_max, fix_boundary)
+            if err != INF:
+                H[HB + 2 * hn] = (key_code(err) << 30) | (stamp[a] + stamp[b])
+                H[HB + 2 * hn + 1] = (a << 32) | b
+                hn += 1
+        if hn > 1:
+            for i in range((hn - 2) // 4, -1, -1):
+                heap_sift_down(H, hn, i, H[HB + 2 * i], H[HB + 2 * i + 1])
+        next_compact = hn + hn // 4 + 4096
+
+        done_in_stage = 0
+        while hn > 0 and nfaces > target:
+            s = H[HB] & SMASK
+            uv = H[HB + 1]
+            hn -= 1
+            if hn > 0:
+                heap_sift_down(H, hn, 0, H[HB + 2 * hn], H[HB + 2 * hn + 1])
+            u = uv >> 32
+            v = uv & 0xFFFFFFFF
+            if s != stamp[u] + stamp[v]:
+                continue  # stale entry (a dead vertex has a hugely negative stamp)
+            px, py, pz = placement_of(Q, V, bnd, u, v, cond_max, dist_max, fix_boundary)
+            token += 2
+            why = can_collapse(V, F, falive, head, nxt, bnd, tag, token, u, v, px, py, pz,
+                               cos_max, q_min)
+            if why != 0:
+                reasons[why] += 1
+                continue
+            # --- collapse v into u at p
+            V[u, 0] = px
+            V[u, 1] = py
+            V[u, 2] = pz
+            for j in range(10):
+                Q[u, j] += Q[v, j]
+            c = head[v]
+            tail = -1
+            while c != -1:
+                f = c // 3
+                if falive[f]:
+                    if F[f, 0] == u or F[f, 1] == u or F[f, 2] == u:
+                        falive[f] = False
+                        nfaces -= 1
+                    else:
+                        F[f, c % 3] = u
+                tail = c
+                c = nxt[c]
+            if tail != -1:
+                nxt[tail] = head[u]
+                head[u] = head[v]
+            head[v] = -1
+            stamp[v] = DEAD
+            stamp[u] += 1
+            if bnd[v]:
+                bnd[u] = True
+            ncoll += 1
+            done_in_stage += 1
+            val = clean_list(head, nxt, falive, u)
+            if hn > next_compact:
+                hn = heap_compact(H, hn, stamp)
+                next_compact = hn + hn // 4 + 4096
+            if hn + 2 * val + 4 > cap:
+                cap = 2 * cap
+                H = heap_grow(H, hn, cap)
+            token += 2
+            hn = push_ring(Q, V, F, falive, head, nxt, bnd, stamp, tag, token, u, H, hn,
+                           cond_max, dist_max, fix_boundary)
+        rounds += 1
+        rounds_at_stage += 1
+        if done_in_stage == 0 or rounds_at_stage >= 2:
+            stage += 1
+            rounds_at_stage = 0
+    return falive, nfaces, ncoll, stage, reasons
+
+
+# explicit signatures for the helpers: one specialisation each (numba would otherwise
+# compile separate versions for int32/int64/literal arguments, doubling the compile time)
+_SIGS = {
+    "place": "UniTuple(f8, 4)(f8[:, ::1], f8[:, ::1], i8, i8, f8, f8)",
+    "key_code": "i8(f8)",
+    "heap_alloc": "i8[::1](i8)",
+    "heap_sift_down": "void(i8[::1], i8, i8, i8, i8)",
+    "heap_push": "void(i8[::1], i8, i8, i8)",
+    "heap_grow": "i8[::1](i8[::1], i8, i8)",
+    "heap_compact": "i8(i8[::1], i8, i8[::1])",
+    "clean_list": "i8(i8[::1], i8[::1], b1[::1], i8)",
+    "tri_quality": "UniTuple(f8, 5)(f8, f8, f8, f8, f8, f8, f8, f8, f8)",
+    "face_after": "Tuple((b1, f8, f8))(f8[:, ::1], i8[:, ::1], i8, i8, f8, f8, f8, f8)",
+    "edge_cost": "Tuple((i8, i8, f8))(f8[:, ::1], f8[:, ::1], b1[::1], i8, i8, f8, f8, b1)",
+    "placement_of": "UniTuple(f8, 3)(f8[:, ::1], f8[:, ::1], b1[::1], i8, i8, f8, f8, b1)",
+    "build_lists": "Tuple((i8[::1], i8[::1]))(i8[:, ::1], i8)",
+}
+_JIT_ORDER = ("place", "key_code", "heap_alloc", "heap_sift_down", "heap_push", "heap_grow", "heap_compact",
+              "clean_list", "tri_quality", "face_after", "can_collapse", "edge_cost", "push_edge",
+              "push_ring", "placement_of", "build_lists", "collapse_loop")
+
+
+@functools.lru_cache(maxsize=None)
+def kernel():
+    """Compile (or load from numba's on-disk cache); returns (`build_lists`, `collapse_loop`)."""
+    import numba
+
+    g = globals()
+    for name in _JIT_ORDER:
+        if name in _SIGS:
+            g[name] = numba.njit(_SIGS[name], cache=True)(g[name])
+        else:
+            g[name] = numba.njit(cache=True)(g[name])
+    return g["build_lists"], g["collapse_loop"]
