@@ -187,7 +187,8 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
         P.append(f"report: expected a mapping, got {type(report).__name__}")
         report = {}
 
-    plugins = raw.get("plugins", []) or []
+    plugins = raw.get("plugins")
+    plugins = [] if plugins is None else plugins
     if not isinstance(plugins, list) or not all(isinstance(x, str) for x in plugins):
         P.append(f"plugins: expected a list of module names, got {plugins!r}")
         plugins = []
@@ -367,7 +368,8 @@ def _check_tasks(tasks, P: list, skip_unknown: bool = False) -> dict:
         for k in body:
             if k not in TASK_KEYS:
                 P.append(f"{at}.{k}: unknown key{_close(k, TASK_KEYS)}; expected {sorted(TASK_KEYS)}")
-        shared = body.get("params", {}) or {}
+        shared = body.get("params")
+        shared = {} if shared is None else shared
         if not isinstance(shared, dict):
             P.append(f"{at}.params: expected a mapping of parameter -> value or list, got {shared!r}")
             shared = {}
@@ -381,7 +383,8 @@ def _check_tasks(tasks, P: list, skip_unknown: bool = False) -> dict:
             if isinstance(m, str):
                 mname, own = m, {}
             elif isinstance(m, dict) and isinstance(m.get("name"), str):
-                mname, own = m["name"], m.get("params", {}) or {}
+                mname, own = m["name"], m.get("params")
+                own = {} if own is None else own
                 extra = set(m) - {"name", "params"}
                 if extra:
                     P.append(f"{mat}: unknown key(s) {sorted(extra)}; expected 'name' and 'params'")

@@ -218,9 +218,6 @@ FALSY_SLOTS = {"plugins": (("plugins",),),
                "task params": (("tasks", "laplacian", "params"),)}
 
 
-@pytest.mark.xfail(strict=True, reason="harness/config.py: `x.get(key, default) or default` turns "
-                                       "plugins / params given as 0, false or '' into the default "
-                                       "instead of a type error")
 @pytest.mark.parametrize("slot", sorted(FALSY_SLOTS))
 @pytest.mark.parametrize("value", [0, False, ""])
 def test_falsy_values_of_the_wrong_type_are_rejected(slot, value):
