@@ -14,7 +14,8 @@ Backends (name: what it is; symbolic reuse):
 ``cholmod``
     scikit-sparse's CHOLMOD supernodal Cholesky (``sksparse.cholmod``); reuses the symbolic
     analysis (``analyze`` once, ``cholesky_inplace`` per matrix). Needs SuiteSparse headers to
-    build, so it is not installable from PyPI alone; used when present.
+    build, so it is not installable from PyPI alone (0.4.x builds against Debian's
+    SuiteSparse 5; 0.5 needs SuiteSparse 7).
 ``pypardiso``
     Intel MKL PARDISO through pypardiso, matrix type 2 (real SPD), upper triangle; phase 11
     (analysis) once per pattern, phase 22 (numeric) per matrix, phase 33 (solve).
@@ -51,9 +52,10 @@ SOLVERS = ("cholmod", "pypardiso", "scipy", "qdldl", "cholespy")
 # Fastest first, from benchmarks/bench_implicit.py (2 cores). Small systems: the
 # single-threaded LDL^T of QDLDL has no start-up cost (PARDISO's first call loads MKL, ~3 s,
 # in every fresh process: the runner forks one per case) and wins up to ~50k vertices.
-# Large systems: supernodal, multithreaded factorizations win.
+# Large systems: supernodal, multithreaded factorizations win; a scikit-sparse built on the
+# OS SuiteSparse (Debian 5.12, its BLAS) measured 4x slower than PARDISO at 1.3M faces.
 AUTO_SMALL = ("qdldl", "scipy")
-AUTO_LARGE = ("cholmod", "pypardiso", "cholespy", "scipy")
+AUTO_LARGE = ("pypardiso", "cholespy", "cholmod", "scipy")
 AUTO_SMALL_MAX_N = 50_000
 AUTO_ORDER = AUTO_LARGE
 _MODULES = {"cholmod": "sksparse.cholmod", "pypardiso": "pypardiso", "scipy": "scipy",
