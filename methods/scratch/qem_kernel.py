@@ -74,9 +74,9 @@ def place(Q, V, u, v, cond_max, dist_max):
     c23 = a12 * a13 - a11 * a23
     c33 = a11 * a22 - a12 * a12
     det = a11 * c11 + a12 * c12 + a13 * c13
-    nA = math.sqrt(a11 * a11 + a22 * a22 + a33 * a33 + 2.0 * (a12 * a12 + a13 * a13 + a23 * a23))
-    nC = math.sqrt(c11 * c11 + c22 * c22 + c33 * c33 + 2.0 * (c12 * c12 + c13 * c13 + c23 * c23))
-    if det > 0.0 and nA * nC <= cond_max * det:
+    nA2 = a11 * a11 + a22 * a22 + a33 * a33 + 2.0 * (a12 * a12 + a13 * a13 + a23 * a23)
+    nC2 = c11 * c11 + c22 * c22 + c33 * c33 + 2.0 * (c12 * c12 + c13 * c13 + c23 * c23)
+    if det > 0.0 and nA2 * nC2 <= cond_max * cond_max * det * det:
         inv = 1.0 / det
         px = -(c11 * b1 + c12 * b2 + c13 * b3) * inv
         py = -(c12 * b1 + c22 * b2 + c23 * b3) * inv
@@ -114,6 +114,7 @@ def place(Q, V, u, v, cond_max, dist_max):
 # ----------------------------------------------------------------------------- heap
 HB = 6        # heap position p lives at words HB + 2 p, HB + 2 p + 1 (see `heap_alloc`)
 SMASK = (1 << 30) - 1
+HEAP_K = 1 << 15   # entries moved from the pool into the heap per refill
 
 
 def key_code(err):
@@ -137,16 +138,29 @@ def heap_sift_down(H, hn, i, w0, w1):
     """Place entry (w0, w1) at position i and sift it down a heap of size hn."""
     while True:
         c = 4 * i + 1
-        if c >= hn:
+        if c + 3 < hn:
+            # all four children: branch-free selection of the smallest (compiles to cmov;
+            # data-dependent branches here mispredict about half the time)
+            k0 = H[HB + 2 * c]
+            k1 = H[HB + 2 * c + 2]
+            k2 = H[HB + 2 * c + 4]
+            k3 = H[HB + 2 * c + 6]
+            m01 = c + (k1 < k0)
+            k01 = min(k0, k1)
+            m23 = c + 2 + (k3 < k2)
+            k23 = min(k2, k3)
+            m = m23 if k23 < k01 else m01
+            mk = min(k01, k23)
+        elif c < hn:
+            m = c
+            mk = H[HB + 2 * c]
+            for j in range(c + 1, hn):
+                kj = H[HB + 2 * j]
+                if kj < mk:
+                    mk = kj
+                    m = j
+        else:
             break
-        m = c
-        mk = H[HB + 2 * c]
-        e = min(c + 4, hn)
-        for j in range(c + 1, e):
-            kj = H[HB + 2 * j]
-            if kj < mk:
-                mk = kj
-                m = j
         if mk >= w0:
             break
         H[HB + 2 * i] = mk
@@ -168,6 +182,66 @@ def heap_push(H, hn, w0, w1):
         i = p
     H[HB + 2 * i] = w0
     H[HB + 2 * i + 1] = w1
+
+
+def pool_compact(P, pn, stamp):
+    """Drop the stale entries of the pool (stamp sums that no longer match); returns its size."""
+    j = 0
+    for i in range(pn):
+        w0 = P[2 * i]
+        w1 = P[2 * i + 1]
+        if (w0 & SMASK) == stamp[w1 >> 32] + stamp[w1 & 0xFFFFFFFF]:
+            P[2 * j] = w0
+            P[2 * j + 1] = w1
+            j += 1
+    return j
+
+
+def pool_threshold(P, pn, k):
+    """A key code with about k of the pool's pn entries at or below it (from a sample)."""
+    ns = min(pn, 4096)
+    sample = np.empty(ns, dtype=np.int64)
+    for i in range(ns):
+        sample[i] = P[2 * ((i * pn) // ns)] >> 30
+    sample.sort()
+    idx = min(ns - 1, (k * ns) // pn)
+    return sample[idx]
+
+
+def refill(H, hcap, P, pn, tau, stamp):
+    """Move the fresh pool entries with key code <= tau into the (empty) heap, drop the stale
+    ones among them, keep the rest in the pool; heapify. Returns (H, hcap, hn, pn)."""
+    cnt = 0
+    for i in range(pn):
+        if (P[2 * i] >> 30) <= tau:
+            cnt += 1
+    if cnt + 64 > hcap:
+        hcap = cnt + cnt // 2 + 64
+        H = heap_alloc(hcap)
+    hn = 0
+    j = 0
+    for i in range(pn):
+        w0 = P[2 * i]
+        w1 = P[2 * i + 1]
+        if (w0 >> 30) <= tau:
+            if (w0 & SMASK) == stamp[w1 >> 32] + stamp[w1 & 0xFFFFFFFF]:
+                H[HB + 2 * hn] = w0
+                H[HB + 2 * hn + 1] = w1
+                hn += 1
+        else:
+            P[2 * j] = w0
+            P[2 * j + 1] = w1
+            j += 1
+    if hn > 1:
+        for i in range((hn - 2) // 4, -1, -1):
+            heap_sift_down(H, hn, i, H[HB + 2 * i], H[HB + 2 * i + 1])
+    return H, hcap, hn, j
+
+
+def grow_pool(P, pn, cap):
+    P2 = np.empty(2 * cap, dtype=np.int64)
+    P2[:2 * pn] = P[:2 * pn]
+    return P2
 
 
 def heap_compact(H, hn, stamp):
@@ -344,11 +418,10 @@ def can_collapse(V, F, falive, head, nxt, bnd, tag, token, u, v, px, py, pz,
     return 0
 
 
-def push_ring(Q, V, F, falive, head, nxt, bnd, stamp, tag, token, u, H, hn,
+def push_ring(Q, V, F, falive, head, nxt, bnd, stamp, tag, token, u, H, hn, P, pn, tau,
               cond_max, dist_max, fix_boundary):
-    """Push the collapses of every edge (u, w) of u's ring; returns the new heap size.
-
-    The caller guarantees capacity for 2 valence(u) more entries.
+    """Queue the collapses of every edge (u, w) of u's ring; returns the new (heap size,
+    pool size). The caller guarantees capacity for 2 valence(u) more entries in each.
     """
     c = head[u]
     while c != -1:
@@ -358,10 +431,10 @@ def push_ring(Q, V, F, falive, head, nxt, bnd, stamp, tag, token, u, H, hn,
                 w = F[f, k]
                 if w != u and tag[w] != token:
                     tag[w] = token
-                    hn = push_edge(Q, V, bnd, stamp, u, w, H, hn, cond_max, dist_max,
-                                   fix_boundary)
+                    hn, pn = push_edge(Q, V, bnd, stamp, u, w, H, hn, P, pn, tau, cond_max,
+                                       dist_max, fix_boundary)
         c = nxt[c]
-    return hn
+    return hn, pn
 
 
 def edge_cost(Q, V, bnd, a, b, cond_max, dist_max, fix_boundary):
@@ -389,13 +462,21 @@ def edge_cost(Q, V, bnd, a, b, cond_max, dist_max, fix_boundary):
     return a, b, err
 
 
-def push_edge(Q, V, bnd, stamp, a, b, H, hn, cond_max, dist_max, fix_boundary):
-    """Push the collapse of edge (a, b) (survivor chosen by `edge_cost`); returns the size."""
+def push_edge(Q, V, bnd, stamp, a, b, H, hn, P, pn, tau, cond_max, dist_max, fix_boundary):
+    """Queue the collapse of edge (a, b) (survivor chosen by `edge_cost`): into the heap if
+    its key code is <= tau, else appended to the pool. Returns (heap size, pool size)."""
     a, b, err = edge_cost(Q, V, bnd, a, b, cond_max, dist_max, fix_boundary)
     if err == INF:
-        return hn
-    heap_push(H, hn, (key_code(err) << 30) | (stamp[a] + stamp[b]), (a << 32) | b)
-    return hn + 1
+        return hn, pn
+    code = key_code(err)
+    w0 = (code << 30) | (stamp[a] + stamp[b])
+    w1 = (a << 32) | b
+    if code <= tau:
+        heap_push(H, hn, w0, w1)
+        return hn + 1, pn
+    P[2 * pn] = w0
+    P[2 * pn + 1] = w1
+    return hn, pn + 1
 
 
 def placement_of(Q, V, bnd, u, v, cond_max, dist_max, fix_boundary):
@@ -440,9 +521,13 @@ def collapse_loop(V, F, Q, bnd, E, head, nxt, target, cos_stages, q_stages, cond
     ncoll = 0
     reasons = np.zeros(5, dtype=np.int64)
 
-    cap = max(64, E.shape[0] + E.shape[0] // 2)
-    H = heap_alloc(cap)
+    pcap = max(64, E.shape[0] + E.shape[0] // 2)
+    P = np.empty(2 * pcap, dtype=np.int64)
+    pn = 0
+    hcap = HEAP_K + HEAP_K // 2
+    H = heap_alloc(hcap)
     hn = 0
+    tau = -1
 
     stage = 0
     rounds = 0
@@ -454,10 +539,12 @@ def collapse_loop(V, F, Q, bnd, E, head, nxt, target, cos_stages, q_stages, cond
         # (re)build the queue from all live edges (the initial E, later every face's
         # edges, interior ones twice: the duplicate is harmless), heapified bottom-up
         need = E.shape[0] if rounds == 0 else 3 * nfaces
-        if need + 64 > cap:
-            cap = need + need // 2 + 64
-            H = heap_alloc(cap)
+        if need + 64 > pcap:
+            pcap = need + need // 2 + 64
+            P = np.empty(2 * pcap, dtype=np.int64)
         hn = 0
+        pn = 0
+        tau = -1
         nedge = E.shape[0] if rounds == 0 else 3 * m
         for i in range(nedge):
             if rounds == 0:
@@ -471,16 +558,20 @@ def collapse_loop(V, F, Q, bnd, E, head, nxt, target, cos_stages, q_stages, cond
                 b = F[f, (i + 1) % 3]
             a, b, err = edge_cost(Q, V, bnd, a, b, cond_max, dist_max, fix_boundary)
             if err != INF:
-                H[HB + 2 * hn] = (key_code(err) << 30) | (stamp[a] + stamp[b])
-                H[HB + 2 * hn + 1] = (a << 32) | b
-                hn += 1
-        if hn > 1:
-            for i in range((hn - 2) // 4, -1, -1):
-                heap_sift_down(H, hn, i, H[HB + 2 * i], H[HB + 2 * i + 1])
-        next_compact = hn + hn // 4 + 4096
+                P[2 * pn] = (key_code(err) << 30) | (stamp[a] + stamp[b])
+                P[2 * pn + 1] = (a << 32) | b
+                pn += 1
+        next_compact = pn + pn // 4 + 4096
 
         done_in_stage = 0
-        while hn > 0 and nfaces > target:
+        while nfaces > target:
+            if hn == 0:
+                if pn == 0:
+                    break
+                tau = pool_threshold(P, pn, HEAP_K)
+                H, hcap, hn, pn = refill(H, hcap, P, pn, tau, stamp)
+                next_compact = pn + pn // 4 + 4096
+                continue
             s = H[HB] & SMASK
             uv = H[HB + 1]
             hn -= 1
@@ -526,15 +617,18 @@ def collapse_loop(V, F, Q, bnd, E, head, nxt, target, cos_stages, q_stages, cond
             ncoll += 1
             done_in_stage += 1
             val = clean_list(head, nxt, falive, u)
-            if hn > next_compact:
-                hn = heap_compact(H, hn, stamp)
-                next_compact = hn + hn // 4 + 4096
-            if hn + 2 * val + 4 > cap:
-                cap = 2 * cap
-                H = heap_grow(H, hn, cap)
+            if pn > next_compact:
+                pn = pool_compact(P, pn, stamp)
+                next_compact = pn + pn // 4 + 4096
+            if hn + 2 * val + 4 > hcap:
+                hcap = 2 * hcap
+                H = heap_grow(H, hn, hcap)
+            if pn + 2 * val + 4 > pcap:
+                pcap = 2 * pcap
+                P = grow_pool(P, pn, pcap)
             token += 2
-            hn = push_ring(Q, V, F, falive, head, nxt, bnd, stamp, tag, token, u, H, hn,
-                           cond_max, dist_max, fix_boundary)
+            hn, pn = push_ring(Q, V, F, falive, head, nxt, bnd, stamp, tag, token, u, H, hn,
+                               P, pn, tau, cond_max, dist_max, fix_boundary)
         rounds += 1
         rounds_at_stage += 1
         if done_in_stage == 0 or rounds_at_stage >= 2:
@@ -553,6 +647,10 @@ _SIGS = {
     "heap_push": "void(i8[::1], i8, i8, i8)",
     "heap_grow": "i8[::1](i8[::1], i8, i8)",
     "heap_compact": "i8(i8[::1], i8, i8[::1])",
+    "pool_compact": "i8(i8[::1], i8, i8[::1])",
+    "pool_threshold": "i8(i8[::1], i8, i8)",
+    "refill": "Tuple((i8[::1], i8, i8, i8))(i8[::1], i8, i8[::1], i8, i8, i8[::1])",
+    "grow_pool": "i8[::1](i8[::1], i8, i8)",
     "clean_list": "i8(i8[::1], i8[::1], b1[::1], i8)",
     "tri_quality": "UniTuple(f8, 5)(f8, f8, f8, f8, f8, f8, f8, f8, f8)",
     "face_after": "Tuple((b1, f8, f8))(f8[:, ::1], i8[:, ::1], i8, i8, f8, f8, f8, f8)",
@@ -561,6 +659,7 @@ _SIGS = {
     "build_lists": "Tuple((i8[::1], i8[::1]))(i8[:, ::1], i8)",
 }
 _JIT_ORDER = ("place", "key_code", "heap_alloc", "heap_sift_down", "heap_push", "heap_grow", "heap_compact",
+              "pool_compact", "pool_threshold", "refill", "grow_pool",
               "clean_list", "tri_quality", "face_after", "can_collapse", "edge_cost", "push_edge",
               "push_ring", "placement_of", "build_lists", "collapse_loop")
 
