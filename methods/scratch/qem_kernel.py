@@ -16,19 +16,25 @@ Data structures (all flat arrays, no Python objects):
   faces are unlinked lazily by the next walk over the list.
 * quadrics ``Q`` (n, 10): ``a11 a12 a13 a22 a23 a33 b1 b2 b3 c`` of
   ``x^T A x + 2 b^T x + c``.
-* a 4-ary min-heap of candidate collapses in one int64 array, two words per entry:
-  ``key code << 30 | stamp sum`` and ``u << 32 | v`` (survivor, removed vertex). The key code
-  is an order-preserving 32-bit code of the quadric error (exponent and 21 mantissa bits, see
-  `key_code`), so integer comparison of the first word orders by error. 16-byte entries put a
-  node's 4 children in one 64-byte cache line (the array is aligned for that): the heap holds
-  millions of entries and the loop is memory bound, so the layout matters more than the
-  number of comparisons.
+* the priority queue of candidate collapses: a 4-ary min-heap holding the cheapest entries
+  plus an unordered, append-only pool holding the others (a two-level queue). Entries are two
+  int64 words: ``key code << 30 | stamp sum`` and ``u << 32 | v`` (survivor, removed vertex);
+  the key code is an order-preserving 32-bit code of the quadric error (exponent and 21
+  mantissa bits, see `key_code`), so integer comparison of the first word orders by error.
+  Every entry with key code <= ``tau`` is in the heap, every other one in the pool; a new
+  entry goes to the heap or the pool accordingly. When the heap runs empty, ``tau`` is raised
+  to about the ``max(2^15, pool / 16)``-th smallest key of the pool (estimated from a sample)
+  and those entries are moved into the heap (`refill`). Pops therefore come out in exactly
+  the order of a single heap, but the heap stays small (cache resident) and most pushes are a
+  sequential append. 16-byte entries put a node's 4 children in one 64-byte cache line (the
+  heap array is aligned for that).
 * lazy invalidation with version stamps: every vertex has a counter ``stamp`` that grows
   whenever the vertex changes (it survives a collapse: new position, new quadric) and is set
   to a large negative value when it dies. An entry stores ``stamp[u] + stamp[v]`` at push
   time and is stale when the sum differs at pop time (live counters only grow, so any change
-  shows in the sum); stale entries are skipped, and every collapse pushes fresh entries for
-  all edges around the survivor.
+  shows in the sum); stale entries are skipped when popped, dropped when moved from the pool,
+  and the pool is purged of them whenever it has grown by a quarter since the last purge
+  (`pool_compact`). Every collapse queues fresh entries for all edges around the survivor.
 """
 from __future__ import annotations
 
@@ -114,7 +120,7 @@ def place(Q, V, u, v, cond_max, dist_max):
 # ----------------------------------------------------------------------------- heap
 HB = 6        # heap position p lives at words HB + 2 p, HB + 2 p + 1 (see `heap_alloc`)
 SMASK = (1 << 30) - 1
-HEAP_K = 1 << 15   # entries moved from the pool into the heap per refill
+HEAP_K = 1 << 15   # minimum number of entries moved from the pool into the heap per refill
 
 
 def key_code(err):
@@ -242,23 +248,6 @@ def grow_pool(P, pn, cap):
     P2 = np.empty(2 * cap, dtype=np.int64)
     P2[:2 * pn] = P[:2 * pn]
     return P2
-
-
-def heap_compact(H, hn, stamp):
-    """Drop the stale entries (stamp sums that no longer match) and re-heapify; returns the
-    new size. Keeps the heap, and so the cache misses of every sift, small."""
-    j = 0
-    for i in range(hn):
-        w0 = H[HB + 2 * i]
-        w1 = H[HB + 2 * i + 1]
-        if (w0 & SMASK) == stamp[w1 >> 32] + stamp[w1 & 0xFFFFFFFF]:
-            H[HB + 2 * j] = w0
-            H[HB + 2 * j + 1] = w1
-            j += 1
-    if j > 1:
-        for i in range((j - 2) // 4, -1, -1):
-            heap_sift_down(H, j, i, H[HB + 2 * i], H[HB + 2 * i + 1])
-    return j
 
 
 def heap_grow(H, hn, cap):
@@ -568,7 +557,7 @@ def collapse_loop(V, F, Q, bnd, E, head, nxt, target, cos_stages, q_stages, cond
             if hn == 0:
                 if pn == 0:
                     break
-                tau = pool_threshold(P, pn, HEAP_K)
+                tau = pool_threshold(P, pn, max(HEAP_K, pn // 16))
                 H, hcap, hn, pn = refill(H, hcap, P, pn, tau, stamp)
                 next_compact = pn + pn // 4 + 4096
                 continue
@@ -646,7 +635,6 @@ _SIGS = {
     "heap_sift_down": "void(i8[::1], i8, i8, i8, i8)",
     "heap_push": "void(i8[::1], i8, i8, i8)",
     "heap_grow": "i8[::1](i8[::1], i8, i8)",
-    "heap_compact": "i8(i8[::1], i8, i8[::1])",
     "pool_compact": "i8(i8[::1], i8, i8[::1])",
     "pool_threshold": "i8(i8[::1], i8, i8)",
     "refill": "Tuple((i8[::1], i8, i8, i8))(i8[::1], i8, i8[::1], i8, i8, i8[::1])",
@@ -658,9 +646,9 @@ _SIGS = {
     "placement_of": "UniTuple(f8, 3)(f8[:, ::1], f8[:, ::1], b1[::1], i8, i8, f8, f8, b1)",
     "build_lists": "Tuple((i8[::1], i8[::1]))(i8[:, ::1], i8)",
 }
-_JIT_ORDER = ("place", "key_code", "heap_alloc", "heap_sift_down", "heap_push", "heap_grow", "heap_compact",
-              "pool_compact", "pool_threshold", "refill", "grow_pool",
-              "clean_list", "tri_quality", "face_after", "can_collapse", "edge_cost", "push_edge",
+_JIT_ORDER = ("place", "key_code", "heap_alloc", "heap_sift_down", "heap_push", "heap_grow",
+              "pool_compact", "pool_threshold", "refill", "grow_pool", "clean_list",
+              "tri_quality", "face_after", "can_collapse", "edge_cost", "push_edge",
               "push_ring", "placement_of", "build_lists", "collapse_loop")
 
 
