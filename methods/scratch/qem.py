@@ -184,6 +184,8 @@ def qem(V, F, *, target_faces, preserve_boundary=False, boundary_weight=100.0,
 
     Algorithm
     ---------
+    0. Vertices are renumbered along a Morton curve and faces sorted (`spatial_order`): a
+       relabelling for memory locality; the output's vertex order is this order.
     1. Vertex quadrics ``Q_v = sum_f K_f`` over incident faces, ``K_f`` the area-weighted
        plane quadric (see `face_quadrics`); boundary edges add a perpendicular-plane penalty
        quadric (`setup`).
@@ -191,8 +193,10 @@ def qem(V, F, *, target_faces, preserve_boundary=False, boundary_weight=100.0,
        is well conditioned (Frobenius condition number <= 1e5) and ``p`` is within 3 edge
        lengths of the midpoint; otherwise the best (lowest ``Q``) of the two endpoints, the
        midpoint and the minimiser of ``Q`` on the segment. Cost = ``p^T Q p`` (length^4).
-    3. A binary heap ordered by cost, with lazy invalidation by per-vertex version stamps
-       (see `methods.scratch.qem_kernel`). A popped collapse is rejected when
+    3. A priority queue ordered by cost (a small 4-ary heap of the cheapest entries plus an
+       append-only pool for the rest, refilled by threshold), with lazy invalidation by
+       per-vertex version stamps (see `methods.scratch.qem_kernel`). A popped collapse is
+       rejected when
        (a) it breaks the link condition (Dey et al. 1999; the common neighbours of u and v
        must be exactly the apexes of their 1 or 2 shared faces), joins two boundary vertices
        through an interior edge, or would leave an apex with a degenerate fan: this keeps the
@@ -230,6 +234,12 @@ def qem(V, F, *, target_faces, preserve_boundary=False, boundary_weight=100.0,
     SimplificationResult
         ``V`` (k, 3), ``F`` (l, 3): compacted (every vertex referenced), orientation of the
         input.
+
+    Notes
+    -----
+    The collapse loop is compiled by numba on the first call in a fresh environment (about
+    9 s of CPU, 10-20 s wall on the shared 2-core test machine) and cached on disk next to the
+    module; later processes load it in about 0.3-0.5 s on their first call.
 
     References
     ----------

@@ -294,9 +294,10 @@ def tri_quality(ax, ay, az, bx, by, bz, cx, cy, cz):
 
 
 def face_after(V, F, f, k, px, py, pz, cos_max):
-    """Face f with its corner k moved to p: (rejected, old quality, new quality).
+    """Face f with its corner k moved to p: (rejected, new quality).
 
-    Rejected when its normal turns by more than acos(cos_max) or its area vanishes.
+    Rejected when its normal turns by more than acos(cos_max) or its area vanishes. The old
+    face's quality is not computed here (only needed when the new one is poor: `face_quality`).
     """
     i0 = F[f, 0]
     i1 = F[f, 1]
@@ -304,7 +305,11 @@ def face_after(V, F, f, k, px, py, pz, cos_max):
     ax, ay, az = V[i0, 0], V[i0, 1], V[i0, 2]
     bx, by, bz = V[i1, 0], V[i1, 1], V[i1, 2]
     cx, cy, cz = V[i2, 0], V[i2, 1], V[i2, 2]
-    onx, ony, onz, odbl, qo = tri_quality(ax, ay, az, bx, by, bz, cx, cy, cz)
+    e1x, e1y, e1z = bx - ax, by - ay, bz - az
+    e2x, e2y, e2z = cx - ax, cy - ay, cz - az
+    onx = e1y * e2z - e1z * e2y
+    ony = e1z * e2x - e1x * e2z
+    onz = e1x * e2y - e1y * e2x
     if k == 0:
         ax, ay, az = px, py, pz
     elif k == 1:
@@ -312,13 +317,36 @@ def face_after(V, F, f, k, px, py, pz, cos_max):
     else:
         cx, cy, cz = px, py, pz
     nnx, nny, nnz, ndbl, qn = tri_quality(ax, ay, az, bx, by, bz, cx, cy, cz)
+    oo = onx * onx + ony * ony + onz * onz
     bad = False
-    if odbl > 0.0:
+    if oo > 0.0:
         if ndbl <= 0.0:
             bad = True
-        elif onx * nnx + ony * nny + onz * nnz < cos_max * odbl * ndbl:
+        elif onx * nnx + ony * nny + onz * nnz < cos_max * math.sqrt(oo) * ndbl:
             bad = True
-    return bad, qo, qn
+    return bad, qn
+
+
+def face_quality(V, F, f):
+    i0 = F[f, 0]
+    i1 = F[f, 1]
+    i2 = F[f, 2]
+    _, _, _, _, q = tri_quality(V[i0, 0], V[i0, 1], V[i0, 2], V[i1, 0], V[i1, 1], V[i1, 2],
+                                V[i2, 0], V[i2, 1], V[i2, 2])
+    return q
+
+
+def min_quality_around(V, F, falive, head, nxt, u, v):
+    """Worst face quality among the live faces of u and v (before the collapse)."""
+    q = INF
+    for side in range(2):
+        c = head[u] if side == 0 else head[v]
+        while c != -1:
+            f = c // 3
+            if falive[f]:
+                q = min(q, face_quality(V, F, f))
+            c = nxt[c]
+    return q
 
 
 def can_collapse(V, F, falive, head, nxt, bnd, tag, token, u, v, px, py, pz,
@@ -330,7 +358,6 @@ def can_collapse(V, F, falive, head, nxt, bnd, tag, token, u, v, px, py, pz,
     flip beyond the threshold, 4 needle below the quality threshold. One walk over the faces
     of u and one over those of v do both the link and the geometric tests.
     """
-    qold = INF
     qnew = INF
     # --- faces of u: tag u's neighbours, find the faces shared with v and their apexes
     n_uv = 0
@@ -354,14 +381,10 @@ def can_collapse(V, F, falive, head, nxt, bnd, tag, token, u, v, px, py, pz,
                     o1 = i0 + i1 + i2 - u - v
                 else:
                     return 1
-                _, _, _, _, qo = tri_quality(V[i0, 0], V[i0, 1], V[i0, 2], V[i1, 0], V[i1, 1],
-                                             V[i1, 2], V[i2, 0], V[i2, 1], V[i2, 2])
-                qold = min(qold, qo)
             else:
-                bad, qo, qn = face_after(V, F, f, c % 3, px, py, pz, cos_max)
+                bad, qn = face_after(V, F, f, c % 3, px, py, pz, cos_max)
                 if bad:
                     return 3
-                qold = min(qold, qo)
                 qnew = min(qnew, qn)
         c = nxt[c]
     if n_uv == 0:
@@ -383,15 +406,14 @@ def can_collapse(V, F, falive, head, nxt, bnd, tag, token, u, v, px, py, pz,
                     tag[w] = token + 1
                     common += 1
             if not (i0 == u or i1 == u or i2 == u):
-                bad, qo, qn = face_after(V, F, f, c % 3, px, py, pz, cos_max)
+                bad, qn = face_after(V, F, f, c % 3, px, py, pz, cos_max)
                 if bad:
                     return 3
-                qold = min(qold, qo)
                 qnew = min(qnew, qn)
         c = nxt[c]
     if common != n_uv:
         return 1
-    if qnew < q_min and qnew < qold:
+    if qnew < q_min and qnew < min_quality_around(V, F, falive, head, nxt, u, v):
         return 4
     # --- the apexes must keep a valid fan
     for j in range(n_uv):
@@ -641,15 +663,18 @@ _SIGS = {
     "grow_pool": "i8[::1](i8[::1], i8, i8)",
     "clean_list": "i8(i8[::1], i8[::1], b1[::1], i8)",
     "tri_quality": "UniTuple(f8, 5)(f8, f8, f8, f8, f8, f8, f8, f8, f8)",
-    "face_after": "Tuple((b1, f8, f8))(f8[:, ::1], i8[:, ::1], i8, i8, f8, f8, f8, f8)",
+    "face_after": "Tuple((b1, f8))(f8[:, ::1], i8[:, ::1], i8, i8, f8, f8, f8, f8)",
+    "face_quality": "f8(f8[:, ::1], i8[:, ::1], i8)",
+    "min_quality_around": "f8(f8[:, ::1], i8[:, ::1], b1[::1], i8[::1], i8[::1], i8, i8)",
     "edge_cost": "Tuple((i8, i8, f8))(f8[:, ::1], f8[:, ::1], b1[::1], i8, i8, f8, f8, b1)",
     "placement_of": "UniTuple(f8, 3)(f8[:, ::1], f8[:, ::1], b1[::1], i8, i8, f8, f8, b1)",
     "build_lists": "Tuple((i8[::1], i8[::1]))(i8[:, ::1], i8)",
 }
 _JIT_ORDER = ("place", "key_code", "heap_alloc", "heap_sift_down", "heap_push", "heap_grow",
               "pool_compact", "pool_threshold", "refill", "grow_pool", "clean_list",
-              "tri_quality", "face_after", "can_collapse", "edge_cost", "push_edge",
-              "push_ring", "placement_of", "build_lists", "collapse_loop")
+              "tri_quality", "face_after", "face_quality", "min_quality_around",
+              "can_collapse", "edge_cost", "push_edge", "push_ring", "placement_of",
+              "build_lists", "collapse_loop")
 
 
 @functools.lru_cache(maxsize=None)
