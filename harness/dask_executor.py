@@ -88,6 +88,8 @@ class DaskExecutor:
             self.client = Client(self._cluster)
         elif isinstance(scheduler, Client):
             self.client, self._own_client = scheduler, False
+        elif hasattr(scheduler, "scheduler_address"):          # a cluster object (LocalCluster, ...)
+            self.client = Client(scheduler)
         else:
             try:
                 # connect timeout: dask config distributed.comm.timeouts.connect (30 s by default;

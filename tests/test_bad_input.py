@@ -18,6 +18,7 @@ are sane (what `check_ok_row` checks, column by column) or an ``error`` row with
 that is not a process death: a C++ backend crashing on a valid mesh is a bug in its adapter
 (it must check the precondition and raise), and this test names the exact case.
 """
+import struct
 import sys
 from pathlib import Path
 
@@ -31,6 +32,8 @@ if str(ROOT) not in sys.path:
 
 import harness  # noqa: E402
 import methods  # noqa: E402
+from harness.config import load_config  # noqa: E402
+from harness.errors import ConfigError  # noqa: E402
 from harness.mesh import read_mesh, topology  # noqa: E402
 
 TASKS = ("laplacian", "smoothing", "simplification")
@@ -75,9 +78,21 @@ def _files() -> dict[str, str | bytes]:
     t = _off(V, OCTA_F)
     out["truncated.off"] = t[: len(t) // 2]
     out["badtoken.obj"] = _obj(V, OCTA_F, "f 1 x 3\n")
-    out["garbage.ply"] = bytes(range(256)) * 4
-    out["garbage.stl"] = b"solid x\n facet normal 0 0 1\n  outer loop\n   vertex 0 0"
-    out["points.xyz"] = "0 0 0\n1 0 0\n0 1 0\n"
+    out["garbage_ply.ply"] = bytes(range(256)) * 4
+    out["garbage_stl.stl"] = b"solid x\n facet normal 0 0 1\n  outer loop\n   vertex 0 0"
+    # binary PLY and STL of the octahedron, whole and cut short
+    hdr = ("ply\nformat binary_little_endian 1.0\nelement vertex 6\nproperty float x\nproperty float y\n"
+           "property float z\nelement face 8\nproperty list uchar int vertex_indices\nend_header\n").encode()
+    vb = np.asarray(V, "<f4").tobytes()
+    fb = b"".join(struct.pack("<B3i", 3, *f) for f in OCTA_F)
+    out["octa_binary.ply"] = hdr + vb + fb
+    out["truncated_binary.ply"] = hdr + vb + fb[:30]
+    out["lying_header.ply"] = hdr.replace(b"element face 8", b"element face 800000000") + vb + fb
+    Va = np.asarray(V, float)
+    body = b"".join(struct.pack("<12fH", 0, 0, 0, *Va[f[0]], *Va[f[1]], *Va[f[2]], 0) for f in OCTA_F)
+    stl = b"\0" * 80 + struct.pack("<I", len(OCTA_F)) + body
+    out["octa_binary.stl"] = stl
+    out["truncated_binary.stl"] = stl[: 84 + 50 * 3 + 20]
     out["out_of_range.obj"] = _obj(V, OCTA_F + [(0, 1, 98)])
     # unit cube of quads
     CV = [(x, y, z) for x in (0, 1) for y in (0, 1) for z in (0, 1)]
@@ -115,9 +130,10 @@ LOAD_ERRORS = {
     "empty": "empty file",
     "truncated": "truncated OFF",
     "badtoken": "unreadable",
-    "garbage.ply": "no vertices",
-    "garbage.stl": "unreadable",
-    "points": "unsupported extension '.xyz'",
+    "garbage_ply": "missing PLY header",
+    "garbage_stl": "unreadable",
+    "truncated_binary": "unreadable",            # .ply and .stl: both stems map here
+    "lying_header": "unreadable (ValueError: buffer is smaller",
     "out_of_range": "face indices out of range",
 }
 # stem -> (repair note in every row, vertices, faces after reading) -------------------------
@@ -127,6 +143,7 @@ REPAIRED = {
     "duplicate_faces": ("removed 2 duplicate face(s)", 6, 8),
     "repeated_vertex": ("removed 1 face(s) with a repeated vertex", 6, 8),
     "unreferenced": ("removed 2 unreferenced vertex/vertices", 6, 8),
+    "octa_binary": ("", 6, 8),                  # .ply: nothing to repair; .stl: corners welded
 }
 # stem -> topology facts that must survive reading unchanged --------------------------------
 KEPT = {
@@ -147,7 +164,7 @@ def bad_dir(tmp_path_factory):
 
 
 def _stem(path: Path) -> str:
-    return path.name if path.stem == "garbage" else path.stem
+    return path.stem
 
 
 def representative(task: str) -> list[str]:
@@ -251,8 +268,11 @@ def crashes(task, df) -> list[str]:
 
 def run_and_check(tmp_path, paths, method_lists, noise=None):
     """Run the config; return (rows by task, problems as 'file method: what')."""
-    frames = harness.run(config([{"file": str(p)} for p in paths], method_lists, noise),
-                         out=tmp_path / "out", workers=2)
+    cfg = load_config(config([{"file": str(p)} for p in paths], method_lists, noise))
+    source = {c.mesh_key: Path(c.mesh["file"]) for c in cfg.cases}    # mesh label -> file
+    frames = harness.run(cfg, out=tmp_path / "out", workers=2)
+    for df in frames.values():
+        df["file"] = df["mesh"].map(lambda m: source[m].name)
     n_expected = {t: len(paths) * len(ms) for t, ms in method_lists.items()}
     problems = []
     for task, df in frames.items():
@@ -260,8 +280,7 @@ def run_and_check(tmp_path, paths, method_lists, noise=None):
         for _, row in df.iterrows():
             where = f"{row['mesh']} {row['method']} ({task})"
             if row["status"] == "ok":
-                path = next(p for p in paths if p.stem == row["mesh"])
-                m = read_mesh(path)
+                m = read_mesh(source[row["mesh"]])
                 closed = topology(m.V, m.F)["boundary_edges"] == 0
                 problems += [f"{where}: ok row with {p}" for p in check_ok_row(task, row, closed)]
             elif row["status"] == "error":
@@ -286,7 +305,12 @@ def test_the_reader_applies_the_documented_policy(bad_dir):
         m = read_mesh(p)
         if stem in REPAIRED:
             note, nv, nf = REPAIRED[stem]
-            assert any(note in r for r in m.repairs), (stem, m.repairs)
+            if p.suffix == ".stl":
+                note = "welded exactly coincident STL corners"
+            if note:
+                assert any(note in r for r in m.repairs), (stem, m.repairs)
+            else:
+                assert m.repairs == [], (p.name, m.repairs)
             assert (m.n_vertices, m.n_faces) == (nv, nf)
         else:
             assert m.repairs == [], (stem, m.repairs)
@@ -297,21 +321,32 @@ def test_the_reader_applies_the_documented_policy(bad_dir):
 
 def test_unusable_files_are_error_rows_naming_the_problem(bad_dir, tmp_path):
     paths = sorted(p for p in bad_dir.iterdir() if _stem(p) in LOAD_ERRORS)
-    assert len(paths) == len(LOAD_ERRORS)
+    assert {_stem(p) for p in paths} == set(LOAD_ERRORS)
     one_each = {t: representative(t)[:1] for t in TASKS}
     frames, problems = run_and_check(tmp_path, paths, one_each)
     assert not problems, "\n".join(problems)
     for task, df in frames.items():
+        assert set(df["status"]) == {"error"}, task
         for _, row in df.iterrows():
-            stem = next(_stem(p) for p in paths if p.stem == row["mesh"] and
-                        (p.stem != "garbage" or LOAD_ERRORS[_stem(p)] in row["error"]))
-            assert row["status"] == "error", (task, stem)
-            assert row["error"].startswith("InvalidMeshError") and LOAD_ERRORS[stem] in row["error"], row["error"]
+            assert row["error"].startswith("InvalidMeshError"), row["error"]
+            assert LOAD_ERRORS[Path(row["file"]).stem] in row["error"], (row["file"], row["error"])
+
+
+def test_unsupported_extension_is_a_config_error(tmp_path):
+    """Caught at validation (exit 2, nothing written), before any case runs."""
+    from harness.cli import main
+    (tmp_path / "points.xyz").write_text("0 0 0\n1 0 0\n0 1 0\n")
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("meshes: [{file: points.xyz}]\ntasks: {laplacian: {methods: [scratch.uniform]}}\n")
+    with pytest.raises(ConfigError, match=r"unsupported extension '\.xyz'"):
+        harness.run(str(cfg), out=tmp_path / "out")
+    assert main(["run", str(cfg), "--out", str(tmp_path / "out")]) == 2
+    assert not (tmp_path / "out").exists()
 
 
 # the repaired files that become the plain octahedron: all methods on one of them
 # (unreferenced: the vertex-map path), one method per task on the others
-SAME_AFTER_REPAIR = ("duplicate_faces", "repeated_vertex")
+SAME_AFTER_REPAIR = ("duplicate_faces", "repeated_vertex", "octa_binary")
 
 
 def test_repaired_and_kept_meshes_through_compiled_backends(bad_dir, tmp_path):
@@ -328,11 +363,12 @@ def test_repaired_and_kept_meshes_through_compiled_backends(bad_dir, tmp_path):
         df = pd.concat([frames[task], frames_l[task]], ignore_index=True)
         problems += crashes(task, df)
         for stem, (note, nv, nf) in REPAIRED.items():
-            rows = df[df["mesh"] == stem]
+            rows = df[df["file"].map(lambda f: Path(f).stem) == stem]
             assert len(rows), (stem, task)
             ok = rows[rows.status == "ok"]
             assert (ok["n_vertices"] == nv).all() and (ok["n_faces"] == nf).all(), stem
-            assert ok["error"].str.contains(note, regex=False).all(), (stem, task)
+            if note:
+                assert ok["error"].str.contains(note, regex=False).all(), (stem, task)
     assert not problems, "\n".join(problems)
 
 
@@ -365,7 +401,6 @@ def test_every_available_method_on_every_usable_bad_mesh(bad_dir, tmp_path):
 @pytest.mark.xfail(strict=True, reason="known adapter bug, reported (see KNOWN_ADAPTER_BUGS)")
 def test_known_adapter_bugs_still_present(bad_dir, method, text):
     """Each known bug, reproduced on the plain octahedron (unreferenced.obj after its repair)."""
-    from harness.config import load_config
     from harness.executors import run_isolated
     if method not in methods.available():
         pytest.skip(f"{method} not available here")
