@@ -257,3 +257,17 @@ def test_uniform_is_linear_precise_on_a_regular_grid():
     F = np.r_[np.c_[a, b, c], np.c_[a, c, d]].astype(np.int64)
     p = props("scratch.uniform", V, F)
     assert flags(p) == (True, True, True, True) and p["lin_error"] == 0.0
+
+
+def test_large_mesh_psd_certificate_without_factorisation(monkeypatch):
+    """Above EIG_MAX_N the PSD column comes from diagonal dominance (exact), never a guess."""
+    import harness.metrics.laplacian_properties as lp
+    from harness.datasets import icosphere, plane_nondelaunay
+    from methods.scratch.operators import cotan_weights, uniform_weights
+    monkeypatch.setattr(lp, "EIG_MAX_N", 10)
+    V, F = icosphere(2)
+    out = lp.laplacian_properties(uniform_weights(F, len(V)), None, V, F)
+    assert out["psd"] is True and out["min_eig"] == 0.0          # graph Laplacian: certified
+    V, F = plane_nondelaunay(200, 0, 0.3)
+    out = lp.laplacian_properties(cotan_weights(V, F), None, V, F)
+    assert out["POS"] is False and out["psd"] is None and out["min_eig"] is None   # not measured
