@@ -39,14 +39,9 @@ from harness.mesh import read_mesh, topology  # noqa: E402
 TASKS = ("laplacian", "smoothing", "simplification")
 C_BACKENDS = ("libigl.", "meshlab.", "pygel.", "fast_simplification.", "pyfqmr.", "robust.")
 SCRATCH_REFERENCE = ("scratch.cotan", "scratch.explicit")
-# Adapter bugs found by this matrix and reported to their owners: (method, text of the error
-# row) -> reason. They are listed, not hidden: `test_known_adapter_bugs_still_present` is a
-# strict xfail per entry, so a fix makes it fail until the entry is removed here.
-KNOWN_ADAPTER_BUGS = {
-    ("pygel.laplacian", "SIGFPE"): "PyGEL3D 0.8.2 hmesh.laplacian_smooth dies of SIGFPE on any mesh "
-                                   "with fewer than 8 vertices (octahedron, 7-vertex fan); the adapter "
-                                   "should refuse such meshes with a ValueError",
-}
+# Adapter bugs this matrix found are fixed in the adapters, not listed here: e.g. PyGEL3D 0.8.2's
+# laplacian_smooth dies of SIGFPE on meshes with fewer than 8 vertices, so pygel.laplacian now
+# refuses them (test_pygel_laplacian_refuses_tiny_meshes).
 
 # ----------------------------------------------------------------------------- the files
 
@@ -258,12 +253,9 @@ def check_ok_row(task: str, row, closed: bool) -> list[str]:
 
 
 def crashes(task, df) -> list[str]:
-    """Rows whose process died, except the known adapter bugs."""
-    out = []
-    for r in df[df["error"].str.contains("worker process", na=False)].itertuples():
-        if not any(r.method == m and t in r.error for m, t in KNOWN_ADAPTER_BUGS):
-            out.append(f"{r.mesh} {r.method} ({task}): {r.error}")
-    return out
+    """Rows whose process died (no method may crash on these inputs)."""
+    return [f"{r.mesh} {r.method} ({task}): {r.error}"
+            for r in df[df["error"].str.contains("worker process", na=False)].itertuples()]
 
 
 def run_and_check(tmp_path, paths, method_lists, noise=None):
@@ -397,15 +389,9 @@ def test_every_available_method_on_every_usable_bad_mesh(bad_dir, tmp_path):
     assert not problems, "\n".join(problems)
 
 
-@pytest.mark.parametrize("method,text", sorted(KNOWN_ADAPTER_BUGS))
-@pytest.mark.xfail(strict=True, reason="known adapter bug, reported (see KNOWN_ADAPTER_BUGS)")
-def test_known_adapter_bugs_still_present(bad_dir, method, text):
-    """Each known bug, reproduced on the plain octahedron (unreferenced.obj after its repair)."""
+def test_pygel_laplacian_refuses_tiny_meshes(bad_dir):
+    """The octahedron used to kill the worker (SIGFPE); now a ValueError row naming the reason."""
     from harness.executors import run_isolated
-    if method not in methods.available():
-        pytest.skip(f"{method} not available here")
-    task = methods.get(method).task
-    cfg = load_config(config([{"file": str(bad_dir / "unreferenced.obj")}], {task: [method]}))
-    case = next(c for c in cfg.cases if c.method == method)
-    row, _ = run_isolated(case, timeout=60)
-    assert text not in row["error"] and row["status"] == "ok", row["error"]
+    cfg = load_config(config([{"file": str(bad_dir / "unreferenced.obj")}], {"smoothing": ["pygel.laplacian"]}))
+    row, _ = run_isolated(cfg.cases[0], timeout=60)
+    assert row["status"] == "error" and "SIGFPE on meshes with fewer than 8 vertices" in row["error"], row["error"]

@@ -65,6 +65,11 @@ def to_caller_order(V: np.ndarray, m, index: np.ndarray) -> np.ndarray:
     return out
 
 
+# PyGEL3D 0.8.2's laplacian_smooth divides by zero (SIGFPE, the process dies) on meshes with
+# fewer than 8 vertices (octahedron, 7-vertex fan): found by tests/test_bad_input.py.
+MIN_VERTICES_LAPLACIAN = 8
+
+
 @register("pygel.laplacian", task="smoothing", library="pygel3d", requires=("pygel3d",),
           params={"step": Param("step", 0.25, "float", low=0.0, high=10.0,
                                 doc="GEL's weight w: x += w (neighbour mean - x)"),
@@ -77,6 +82,10 @@ def laplacian(V, F, *, step=0.25, iterations=10):
     ``scratch.explicit``'s uniform step).
     """
     from pygel3d import hmesh
+    n_used = np.unique(F).size
+    if n_used < MIN_VERTICES_LAPLACIAN:
+        raise ValueError(f"pygel.laplacian: PyGEL3D's laplacian_smooth dies with SIGFPE on meshes with "
+                         f"fewer than {MIN_VERTICES_LAPLACIAN} vertices (this one has {n_used}); refused")
     m, index = build_manifold(V, F)
     if iterations > 0:
         hmesh.laplacian_smooth(m, float(step), int(iterations))
