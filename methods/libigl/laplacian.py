@@ -11,6 +11,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from methods import LaplacianResult, Param, register
+from methods.libigl import reject_zero_area
 
 _MASS = Param("mass", "voronoi", choices=("barycentric", "voronoi", "none"),
               doc="igl.massmatrix type: barycentric -> MASSMATRIX_TYPE_BARYCENTRIC, voronoi -> "
@@ -47,6 +48,7 @@ def cotan(V, F, *, mass="voronoi"):
         ``W_ij = (cot a_ij + cot b_ij) / 2`` (Pinkall & Polthier 1993), ``M`` diagonal areas.
     """
     import igl
+    reject_zero_area(V, F, "libigl.cotan")
     W = sp.csr_matrix(igl.cotmatrix(V, F))
     return LaplacianResult(W=W, M=_igl_mass(igl, V, F, mass))
 

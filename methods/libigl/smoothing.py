@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from methods import Param, SmoothingResult, register
+from methods.libigl import reject_zero_area
 from methods.scratch.smoothing import backward_euler, _solver_param
 
 
@@ -14,6 +15,7 @@ def _igl_operator(P, F):
     stays positive definite and the vertex stays put, as in ``scratch.implicit``.
     """
     import igl
+    reject_zero_area(P, F, "libigl.implicit")
     W = igl.cotmatrix(P, F).tocsr()
     M = igl.massmatrix(P, F, igl.MASSMATRIX_TYPE_VORONOI)
     m = np.asarray(M.diagonal(), dtype=np.float64)
