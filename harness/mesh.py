@@ -205,6 +205,34 @@ def _read_ply(data: bytes):
     return V, polys
 
 
+def _read_stl(data: bytes):
+    """STL, binary (80-byte header, uint32 count, 50 bytes a triangle) or ASCII.
+
+    Binary is recognised by its size (84 + 50 n); an ASCII file must close with ``endsolid``
+    and hold three ``vertex`` lines per ``facet``, so a truncated file is an error, not a
+    smaller mesh. Returns one vertex per corner; the caller welds them.
+    """
+    if len(data) >= 84:
+        n = int(np.frombuffer(data, "<u4", 1, 80)[0])
+        if len(data) == 84 + 50 * n:
+            rec = np.dtype([("normal", "<f4", 3), ("v", "<f4", (3, 3)), ("attr", "<u2")])
+            tri = np.frombuffer(data, rec, n, 84)["v"].astype(np.float64)
+            return tri.reshape(-1, 3), np.arange(3 * n, dtype=np.int64).reshape(-1, 3)
+    text = data.decode("ascii", "replace")
+    if not text.lstrip().startswith("solid"):
+        raise InvalidMeshError("unreadable STL: not ASCII, and its size does not match a binary STL's "
+                               "triangle count (truncated?)")
+    if "endsolid" not in text:
+        raise InvalidMeshError("truncated ASCII STL (no 'endsolid')")
+    lines = [ln.split() for ln in text.splitlines()]
+    verts = [t[1:4] for t in lines if t and t[0] == "vertex"]
+    facets = sum(1 for t in lines if t and t[0] == "facet")
+    if len(verts) != 3 * facets:
+        raise InvalidMeshError(f"ASCII STL has {facets} facets but {len(verts)} vertex lines")
+    V = np.asarray(verts, dtype=np.float64).reshape(-1, 3)
+    return V, np.arange(len(V), dtype=np.int64).reshape(-1, 3)
+
+
 def read_mesh(path, name: str | None = None, repair: bool = True) -> Mesh:
     """Read a triangle mesh file and validate it (see the module docstring for the policy)."""
     path = Path(path)
@@ -232,10 +260,7 @@ def read_mesh(path, name: str | None = None, repair: bool = True) -> Mesh:
             if n_poly:
                 notes.append(f"fan-triangulated {n_poly} polygon(s) with more than 3 corners")
         else:
-            import igl
-            V, F = igl.read_triangle_mesh(str(path))
-            V = np.asarray(V, dtype=np.float64)
-            F = np.asarray(F, dtype=np.int64)
+            V, F = _read_stl(path.read_bytes())
             if len(V):       # STL stores each triangle's corners separately: weld exact copies
                 V, inv = np.unique(V, axis=0, return_inverse=True)
                 F = inv.ravel()[F]

@@ -126,7 +126,7 @@ LOAD_ERRORS = {
     "truncated": "truncated OFF",
     "badtoken": "unreadable",
     "garbage_ply": "missing PLY header",
-    "garbage_stl": "unreadable",
+    "garbage_stl": "truncated ASCII STL",
     "truncated_binary": "unreadable",            # .ply and .stl: both stems map here
     "lying_header": "unreadable (ValueError: buffer is smaller",
     "out_of_range": "face indices out of range",

@@ -399,3 +399,25 @@ def test_in_place_method_does_not_spoil_repeats_or_input(tmp_path):
     assert row["status"] == "ok"
     assert row["input_ev_mean"] < 0.01                 # the noisy input itself, not a halved copy
     assert row["volume_ratio"] == pytest.approx(0.125, rel=0.05)   # one halving, not three
+
+
+def test_stl_binary_ascii_and_truncated(tmp_path):
+    V, F = datasets.icosphere(1)
+    tri = V[F].astype("<f4")
+    rec = np.zeros(len(F), dtype=[("normal", "<f4", 3), ("v", "<f4", (3, 3)), ("attr", "<u2")])
+    rec["v"] = tri
+    b = tmp_path / "b.stl"
+    b.write_bytes(b"\0" * 80 + np.uint32(len(F)).tobytes() + rec.tobytes())
+    m = read_mesh(b)
+    assert (m.n_vertices, m.n_faces) == (42, 80) and topology(m.V, m.F)["manifold"]
+    b.write_bytes(b.read_bytes()[:-30])                      # a binary file cut short
+    with pytest.raises(InvalidMeshError, match="unreadable STL"):
+        read_mesh(b)
+    a = tmp_path / "a.stl"
+    body = "".join(" facet normal 0 0 1\n  outer loop\n" + "".join(
+        "   vertex %.9g %.9g %.9g\n" % tuple(v) for v in t) + "  endloop\n endfacet\n" for t in tri)
+    a.write_text("solid t\n" + body + "endsolid t\n")
+    assert read_mesh(a).n_faces == 80
+    a.write_text("solid t\n" + body[: len(body) // 2])
+    with pytest.raises(InvalidMeshError, match="truncated ASCII STL"):
+        read_mesh(a)
