@@ -29,12 +29,20 @@ def peak_rss_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
+def _library(name: str):
+    import methods
+    try:
+        return methods.get(name).library
+    except KeyError:
+        return None
+
+
 def base_row(case: Case) -> dict:
     """The common columns known before running (status error until proven otherwise)."""
     return {"case_id": case.case_id, "task": case.task, "mesh": case.mesh_key, "n_vertices": None,
             "n_faces": None, "noise_model": case.noise_model,
             "noise_level": None if math.isnan(case.noise_level) else case.noise_level,
-            "seed": case.seed, "method": case.method, "library": None,
+            "seed": case.seed, "method": case.method, "library": _library(case.method),
             "params": json.dumps(case.params, sort_keys=True), "status": "error", "error": "",
             "time_s": None, "time_min_s": None, "time_max_s": None, "repeats": case.repeats,
             "peak_rss_mb": None}
