@@ -33,7 +33,6 @@ distributed = pytest.importorskip("distributed")
 import harness  # noqa: E402
 from harness.config import load_config  # noqa: E402
 from harness.dask_executor import DaskExecutor, materialize, run_in_subprocess, ship_files  # noqa: E402
-from harness.datasets import DATA_DIR  # noqa: E402
 from harness.measure import TASK_COLUMNS  # noqa: E402
 
 SHOOTOUT = Path(sys.executable).with_name("shootout")

@@ -95,7 +95,6 @@ def test_intrinsic_delaunay_matches_libigl(path):
     assert abs(rb.M.diagonal().sum() - area) < 1e-12 * area
     # every flippable interior edge of our result is Delaunay: cot a + cot b >= -1e-9
     C, _ = cotangents_from_lengths(l_int)
-    W_int = 0.5 * np.concatenate([C[:, 0], C[:, 1], C[:, 2]])
     from methods.scratch.intrinsic_delaunay import halfedge_twins
     tw = halfedge_twins(F_int)
     h = np.flatnonzero(tw >= 0)

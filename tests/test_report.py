@@ -18,26 +18,11 @@ from harness.results import load_csv
 from harness.report import build_report
 from harness.report import html as rh
 
-TINY = {
-    "name": "tiny-report",
-    "repeats": 1,
-    "seed": 0,
-    "hausdorff_samples": 2000,
-    "meshes": ["knight", {"procedural": "plane_nondelaunay", "n_points": 120}],
-    "noise": [{"model": "gaussian_normal", "levels": [0.2, 0.5]}, {"model": "none"}],
-    "tasks": {
-        "laplacian": {"methods": ["scratch.uniform", "scratch.cotan"]},
-        "smoothing": {"methods": [{"name": "scratch.explicit", "params": {"iterations": [2, 6]}}]},
-        "simplification": {"methods": ["fast_simplification.qem"], "params": {"target_ratio": [0.5, 0.2]}},
-    },
-}
 
 
 @pytest.fixture(scope="module")
-def run_dir(tmp_path_factory):
-    out = tmp_path_factory.mktemp("report_run")
-    harness.run(TINY, out=out, quiet=True, workers=1)
-    return out
+def run_dir(tiny_run):
+    return tiny_run
 
 
 def page_data(path) -> dict:

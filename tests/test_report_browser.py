@@ -23,25 +23,11 @@ from pathlib import Path
 
 import pytest
 
-import harness
 
 CHROMIUM = next((shutil.which(n) for n in ("chromium", "chromium-browser", "google-chrome", "chrome")
                  if shutil.which(n)), None)
 pytestmark = pytest.mark.skipif(CHROMIUM is None, reason="no chromium binary on PATH (apt-get install chromium)")
 
-TINY = {
-    "name": "tiny-browser",
-    "repeats": 1,
-    "seed": 0,
-    "hausdorff_samples": 2000,
-    "meshes": ["knight", {"procedural": "plane_nondelaunay", "n_points": 120}],
-    "noise": [{"model": "gaussian_normal", "levels": [0.2, 0.5]}, {"model": "none"}],
-    "tasks": {
-        "laplacian": {"methods": ["scratch.uniform", "scratch.cotan"]},
-        "smoothing": {"methods": [{"name": "scratch.explicit", "params": {"iterations": [2, 6]}}]},
-        "simplification": {"methods": ["fast_simplification.qem"], "params": {"target_ratio": [0.5, 0.2]}},
-    },
-}
 
 
 class CDP:
@@ -237,10 +223,8 @@ def _interact(cdp, state):
 
 
 @pytest.fixture(scope="module")
-def tiny_report(tmp_path_factory):
-    out = tmp_path_factory.mktemp("browser_run")
-    harness.run(TINY, out=out, quiet=True, workers=1)
-    return out / "report.html"
+def tiny_report(tiny_run):
+    return tiny_run / "report.html"
 
 
 def test_report_opens_offline_without_errors(tiny_report, tmp_path):

@@ -83,7 +83,7 @@ def setup(V: np.ndarray, F: np.ndarray, boundary_weight: float):
     ``boundary_weight * |v_b - v_a|^2`` (an area, like the face quadrics), added to both ends.
     It keeps the boundary from drifting or shrinking.
     """
-    n, m = V.shape[0], F.shape[0]
+    n = V.shape[0]
     fn, fd, fw = face_quadrics(V, F)
     Q = accumulate_quadrics((F[:, 0], F[:, 1], F[:, 2]), fn, fd, fw, n)
 

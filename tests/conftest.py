@@ -1,0 +1,27 @@
+"""Shared fixtures: one small run of all three tasks, reused by the report tests."""
+import pytest
+
+import harness
+
+# every task, two meshes (one planar so LIN is measured), two noise levels plus none
+TINY = {
+    "name": "tiny-report",
+    "repeats": 1,
+    "seed": 0,
+    "hausdorff_samples": 2000,
+    "meshes": ["knight", {"procedural": "plane_nondelaunay", "n_points": 120}],
+    "noise": [{"model": "gaussian_normal", "levels": [0.2, 0.5]}, {"model": "none"}],
+    "tasks": {
+        "laplacian": {"methods": ["scratch.uniform", "scratch.cotan"]},
+        "smoothing": {"methods": [{"name": "scratch.explicit", "params": {"iterations": [2, 6]}}]},
+        "simplification": {"methods": ["fast_simplification.qem"], "params": {"target_ratio": [0.5, 0.2]}},
+    },
+}
+
+
+@pytest.fixture(scope="session")
+def tiny_run(tmp_path_factory):
+    """Run folder of `TINY` (read-only: tests that change files work on a copy)."""
+    out = tmp_path_factory.mktemp("tiny_run")
+    harness.run(TINY, out=out, quiet=True, workers=1)
+    return out
