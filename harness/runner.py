@@ -139,6 +139,14 @@ def _measure(case: Case, method, result, clean, V_in) -> dict:
         V_out = np.asarray(result.V, dtype=np.float64)
         if V_out.shape != V_in.shape:
             raise ValueError(f"{case.method} returned V of shape {V_out.shape}, expected {V_in.shape}")
+        if not np.isfinite(V_out).all():
+            # non-finite output is instability (diverged, kept as data) on a sound mesh, but a
+            # library dividing by zero on a degenerate one: that is an error row naming the faces
+            from methods.scratch.operators import zero_area_faces
+            bad = zero_area_faces(V_in, clean.F)
+            if bad.size:
+                raise ValueError(f"{case.method} returned non-finite coordinates on an input with "
+                                 f"{bad.size} zero-area face(s) (first: {bad[:5].tolist()})")
         closed = topology(clean.V, clean.F)["boundary_edges"] == 0
         return measure_smoothing(V_out, V_in, clean.V, clean.F, closed, diag, case.hausdorff_samples)
     from methods.base import check_arrays, target_face_count

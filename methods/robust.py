@@ -9,9 +9,11 @@ from methods import LaplacianResult, Param, register
 
 @register("robust.tufted", task="laplacian", library="robust_laplacian",
           params={"mollify_factor": Param("mollify_factor", 1e-5, low=0.0, high=1.0,
-                                          doc="intrinsic mollification: edge lengths are "
-                                              "increased by this factor times the mean edge "
-                                              "length so every triangle is strictly valid")},
+                                          doc="intrinsic mollification (Sharp & Crane 2020): "
+                                              "edge lengths are increased by the least amount "
+                                              "that makes every triangle inequality hold with "
+                                              "a margin of this factor times the mean edge "
+                                              "length (0 on already valid meshes)")},
           requires=("robust_laplacian",))
 def tufted(V, F, *, mollify_factor=1e-5):
     """Tufted-cover intrinsic Delaunay Laplacian, ``robust_laplacian.mesh_laplacian``.

@@ -421,3 +421,21 @@ def test_stl_binary_ascii_and_truncated(tmp_path):
     a.write_text("solid t\n" + body[: len(body) // 2])
     with pytest.raises(InvalidMeshError, match="truncated ASCII STL"):
         read_mesh(a)
+
+
+def test_nan_output_on_degenerate_input_is_an_error_row_not_divergence(tmp_path):
+    """PyGEL's anisotropic filter and MeshLab's scale-dependent Laplacian divide by zero on a
+    zero-length edge; that is an error naming the faces, not 'diverged' (instability)."""
+    import harness
+    m = datasets.load("woody").clean
+    V = m.V.copy()
+    V[m.F[0, 1]] = V[m.F[0, 0]]                        # a zero-length edge
+    p = tmp_path / "woody_flat.obj"
+    from harness.mesh import write_obj
+    write_obj(p, V, m.F)
+    cfg = {**GOOD, "name": "deg", "meshes": [{"file": str(p)}],
+           "tasks": {"smoothing": {"methods": ["pygel.anisotropic", "meshlab.scale_dependent", "scratch.explicit"]}}}
+    df = harness.run(cfg, out=tmp_path / "r", workers=1, quiet=True)["smoothing"].set_index("method")
+    for name in ("pygel.anisotropic", "meshlab.scale_dependent"):
+        assert df.loc[name, "status"] == "error" and "zero-area face" in df.loc[name, "error"], df.loc[name, "error"]
+    assert df.loc["scratch.explicit", "status"] == "ok" and df.loc["scratch.explicit", "diverged"] == False  # noqa: E712

@@ -5,9 +5,27 @@ import numpy as np
 
 def reject_zero_area(V: np.ndarray, F: np.ndarray, name: str) -> None:
     """Raise ValueError naming the zero-area faces, on which libigl's cotangent weights are
-    inf/NaN (it divides by the double area); our scratch operators skip such faces instead."""
-    from methods.scratch.operators import double_areas
-    bad = np.flatnonzero(double_areas(V, F) == 0)
+    inf/NaN (it divides by the double area); our scratch operators skip such faces instead.
+
+    A face counts as zero-area when either its cross product or, as libigl computes it,
+    Kahan's Heron formula on its edge lengths gives 0 (a numerically flat face can have a
+    cross-product area of 1e-20 and a Heron area of exactly 0).
+    """
+    from methods.scratch.operators import zero_area_faces
+    bad = zero_area_faces(V, F)
     if bad.size:
         raise ValueError(f"{name}: {bad.size} zero-area face(s) (first: {bad[:5].tolist()}); "
                          "libigl's cotangent weights are undefined there")
+
+
+def check_finite(A, V: np.ndarray, F: np.ndarray, name: str) -> None:
+    """Raise ValueError naming the faces when a libigl matrix came back with inf/NaN entries."""
+    import scipy.sparse as sp
+    data = sp.csr_matrix(A).data
+    if np.isfinite(data).all():
+        return
+    import igl
+    C = np.asarray(igl.cotmatrix_entries(V, F))
+    bad = np.flatnonzero(~np.isfinite(C).all(axis=1))
+    raise ValueError(f"{name}: libigl returned {int((~np.isfinite(data)).sum())} non-finite entries "
+                     f"from {bad.size} degenerate face(s) (first: {bad[:5].tolist()})")

@@ -2,8 +2,10 @@
 
 libigl's sign convention is the project's: off-diagonal weights positive where POS holds,
 rows sum to zero, ``W`` negative semi-definite on Delaunay meshes.
-Note: libigl does not clamp degenerate faces; a zero-area face gives inf/NaN cotangents.
-These adapters return what libigl returns (the harness records non-finite values as such).
+Note: libigl does not clamp degenerate faces: a zero-area face gives inf/NaN cotangents (and
+``intrinsic_delaunay_cotmatrix`` may throw std::bad_alloc). These adapters therefore refuse
+zero-area faces with a ValueError naming them (`methods.libigl.reject_zero_area`), and name
+the faces behind any non-finite entry libigl still returns (`methods.libigl.check_finite`).
 """
 from __future__ import annotations
 
@@ -11,7 +13,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from methods import LaplacianResult, Param, register
-from methods.libigl import reject_zero_area
+from methods.libigl import check_finite, reject_zero_area
 
 _MASS = Param("mass", "voronoi", choices=("barycentric", "voronoi", "none"),
               doc="igl.massmatrix type: barycentric -> MASSMATRIX_TYPE_BARYCENTRIC, voronoi -> "
@@ -50,6 +52,7 @@ def cotan(V, F, *, mass="voronoi"):
     import igl
     reject_zero_area(V, F, "libigl.cotan")
     W = sp.csr_matrix(igl.cotmatrix(V, F))
+    check_finite(W, V, F, "libigl.cotan")
     return LaplacianResult(W=W, M=_igl_mass(igl, V, F, mass))
 
 
@@ -74,6 +77,7 @@ def intrinsic_delaunay(V, F, *, mass="voronoi"):
         non-negative (POS), but between vertices that need not share a mesh edge (no LOC).
     """
     import igl
+    reject_zero_area(V, F, "libigl.intrinsic_delaunay")   # libigl: NaN, or std::bad_alloc
     L, l_int, F_int = igl.intrinsic_delaunay_cotmatrix(V, F)
     W = sp.csr_matrix(L)
     n = V.shape[0]

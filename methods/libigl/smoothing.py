@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from methods import Param, SmoothingResult, register
-from methods.libigl import reject_zero_area
+from methods.libigl import check_finite, reject_zero_area
 from methods.scratch.smoothing import backward_euler, _solver_param
 
 
@@ -17,8 +17,13 @@ def _igl_operator(P, F):
     import igl
     reject_zero_area(P, F, "libigl.implicit")
     W = igl.cotmatrix(P, F).tocsr()
+    check_finite(W, P, F, "libigl.implicit")
+    n = P.shape[0]
+    if W.shape[0] < n:   # libigl sizes W and M by max(F) + 1: pad trailing unreferenced vertices
+        W.resize((n, n))
     M = igl.massmatrix(P, F, igl.MASSMATRIX_TYPE_VORONOI)
     m = np.asarray(M.diagonal(), dtype=np.float64)
+    m = np.concatenate([m, np.zeros(n - m.size)])
     m = np.where((m > 0) & np.isfinite(m), m, 1.0)
     return W, m
 

@@ -2,10 +2,9 @@
 
 Vertex order: ``hmesh.Manifold.from_triangles`` does *not* keep the caller's vertex order
 (measured: on bunny.off 3,482 of 3,485 rows move). Every adapter therefore maps the result back
-by the input coordinates (:func:`to_caller_order`): each input vertex takes the new position
-of the manifold vertex that had exactly its coordinates when the manifold was built. Input
-vertices the manifold does not contain (unreferenced ones) keep their position; coincident
-input vertices get the same result.
+through the faces, which PyGEL keeps in order (:func:`build_manifold`), so distinct vertices
+at the same position (UV seams) keep their own results. Input vertices the manifold does not
+contain (unreferenced ones) keep their position.
 
 Formulas of GEL (``src/GEL/HMesh/smooth.cpp``), Jacobi-style (new positions from the old
 ones). Measured on PyGEL3D 0.8.2 (tests/test_smoothing_xval.py): boundary vertices move too,
@@ -49,10 +48,32 @@ def match_rows(A: np.ndarray, B: np.ndarray) -> np.ndarray:
 
 def build_manifold(V: np.ndarray, F: np.ndarray):
     """``(manifold, index)``: ``index[i]`` is the manifold vertex holding input vertex ``i``
-    (-1 when absent), found by exact coordinates right after ``from_triangles``."""
+    (-1 when absent).
+
+    ``from_triangles`` keeps the faces in order (each up to a rotation of its corners), so the
+    map is read through the faces: corner k of face f is the manifold vertex at the rotation
+    whose positions equal the input's. This is exact even where distinct input vertices share
+    a position (UV seams). Only if the faces cannot be aligned (PyGEL dropped or reoriented
+    some) does it fall back to matching exact coordinates.
+    """
     from pygel3d import hmesh
+
+    from methods.pygel import triangles
     m = hmesh.Manifold.from_triangles(V, F)
     P0 = np.array(m.positions(), dtype=np.float64, copy=True)
+    try:
+        G = triangles(m)
+    except RuntimeError:
+        G = None
+    if G is not None and G.shape == F.shape and G.size and G.max() < len(P0):
+        cols = [(np.arange(3) + r) % 3 for r in range(3)]
+        err = np.stack([np.abs(P0[G[:, c]] - V[F]).max(axis=(1, 2)) for c in cols], axis=1)
+        r = err.argmin(axis=1)
+        if np.all(err[np.arange(len(F)), r] == 0):
+            Gr = G[np.arange(len(F))[:, None], (np.arange(3)[None, :] + r[:, None]) % 3]
+            index = np.full(len(V), -1, dtype=np.int64)
+            index[F.ravel()] = Gr.ravel()
+            return m, index
     return m, match_rows(V, P0)
 
 

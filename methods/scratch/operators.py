@@ -355,3 +355,12 @@ def cotan_laplacian(V: np.ndarray, F: np.ndarray, mass: str = "voronoi", pattern
     if pattern is None:
         pattern = CotanPattern(F, V.shape[0])
     return pattern.assemble(V, mass)
+
+
+def zero_area_faces(V: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """Indices of faces with zero area by the cross product or by Kahan's Heron formula on the
+    edge lengths (how libigl measures it: a numerically flat face may have a cross-product
+    area of 1e-20 and a Heron area of exactly 0)."""
+    from .intrinsic_delaunay import cotangents_from_lengths, edge_lengths
+    heron = cotangents_from_lengths(edge_lengths(V, F))[1]
+    return np.flatnonzero((double_areas(V, F) == 0) | ~(heron > 0))

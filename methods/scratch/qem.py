@@ -266,7 +266,8 @@ def qem(V, F, *, target_faces, preserve_boundary=False, boundary_weight=100.0,
         warnings.warn(f"scratch.qem: stopped at {nfaces} faces (asked {target_faces}): every "
                       "remaining collapse is rejected by "
                       + ("the topology (link condition) tests" if relax else
-                         "the topology or geometry tests (relax=False)"),
+                         "the topology or geometry tests (relax=False)")
+                      + (" or keeps a boundary vertex (preserve_boundary=True)" if preserve_boundary else ""),
                       RuntimeWarning, stacklevel=2)
     Vo, Fo = compact(V, F[falive])
     return SimplificationResult(V=Vo, F=Fo)

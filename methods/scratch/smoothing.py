@@ -20,8 +20,10 @@ row-normalized (``L`` has eigenvalues in ``[-2, 0]`` for non-negative weights), 
 step is ``h = step``. ``cotan_area`` is area-normalized (``L`` has units 1/length^2), so the
 time step is ``h = step * lbar^2`` with ``lbar`` the mean edge length of the *input* mesh;
 that makes one ``step`` value mean the same amount of smoothing on meshes of any scale and
-resolution. For an equilateral triangulation the forward-Euler stability limit is
-``step < 1/3`` for ``cotan_area`` and ``step < 1`` for ``uniform``.
+resolution. For an equilateral (valence-6) triangulation the forward-Euler stability limit
+is ``step < 1/3`` for ``cotan_area`` (largest eigenvalue 6 / l^2) and ``step < 4/3`` for
+``uniform`` (spectrum [-1.5, 0]; measured on the procedural torus: 1.3 stable, 1.4
+diverges); ``step < 1`` is the bound for any mesh from the general [-2, 0] spectrum.
 
 Degenerate rows: a vertex whose mass is zero (isolated vertex; vertex only in zero-area
 faces) has an all-zero ``W`` row; its mass is set to 1 so it simply stays put. With ``cotan``
