@@ -66,6 +66,13 @@ def _close(word, options):
     return f" (did you mean {', '.join(m)}?)" if m else ""
 
 
+def _unknown_keys(mapping: dict, allowed, prefix: str, P: list) -> None:
+    """One problem per key of ``mapping`` not in ``allowed``, with close matches."""
+    for k in mapping:
+        if k not in allowed:
+            P.append(f"{prefix}{k}: unknown key{_close(k, allowed)}; expected one of {sorted(allowed)}")
+
+
 def _is_int(x):
     return isinstance(x, int) and not isinstance(x, bool)
 
@@ -160,9 +167,7 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
     import methods
     P: list[str] = []
 
-    for k in raw:
-        if k not in TOP_KEYS:
-            P.append(f"{k}: unknown key{_close(k, TOP_KEYS)}; expected one of {sorted(TOP_KEYS)}")
+    _unknown_keys(raw, TOP_KEYS, "", P)
 
     name = raw.get("name", Path(label).stem if label != "<config>" else "run")
     if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,99}", name) or ".." in name:
@@ -315,9 +320,7 @@ def _check_noise(noise, P: list) -> list[dict]:
         if not isinstance(n, dict):
             P.append(f"{at}: expected a mapping like {{model: gaussian_normal, levels: [0.1]}}, got {n!r}")
             continue
-        for k in n:
-            if k not in NOISE_KEYS:
-                P.append(f"{at}.{k}: unknown key{_close(k, NOISE_KEYS)}; expected {sorted(NOISE_KEYS)}")
+        _unknown_keys(n, NOISE_KEYS, f"{at}.", P)
         model = n.get("model")
         if model not in MODELS:
             P.append(f"{at}.model: expected one of {list(MODELS)}, got {model!r}{_close(model, MODELS)}")
@@ -365,9 +368,7 @@ def _check_tasks(tasks, P: list, skip_unknown: bool = False) -> dict:
         if not isinstance(body, dict):
             P.append(f"{at}: expected a mapping with 'methods' (and optional 'params'), got {body!r}")
             continue
-        for k in body:
-            if k not in TASK_KEYS:
-                P.append(f"{at}.{k}: unknown key{_close(k, TASK_KEYS)}; expected {sorted(TASK_KEYS)}")
+        _unknown_keys(body, TASK_KEYS, f"{at}.", P)
         shared = body.get("params")
         shared = {} if shared is None else shared
         if not isinstance(shared, dict):
