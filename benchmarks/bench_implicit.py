@@ -4,7 +4,7 @@ The system is backward Euler with the Laplace-Beltrami operator, ``(M - h W) X' 
 ``h = step * lbar^2`` (``weights: cotan_area``, ``step`` 1 by default), on an icosphere with
 ``--subdivisions`` 8 (655,362 vertices, 1,310,720 faces) unless told otherwise.
 
-For each installed backend of ``methods.scratch.solvers`` it times, in one process:
+For each installed backend of ``harness.core.solvers`` it times, in one process:
 
 * ``cold``: symbolic analysis + numeric factorization + solve (empty symbolic cache), the
   cost of a first step;
@@ -43,7 +43,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
 from harness.datasets import icosphere  # noqa: E402
-from methods.scratch import solvers  # noqa: E402
+from harness.core import solvers  # noqa: E402
 from methods.scratch.smoothing import mean_edge_length, smoothing_operator  # noqa: E402
 
 

@@ -8,5 +8,5 @@ def run(config_or_path, **overrides):
     ``overrides`` are the CLI options by name (``out``, ``workers``, ``executor``,
     ``scheduler``, ``resume``, ``timeout``, ``quiet``).
     """
-    from .runner import run as _run
+    from .session import run as _run
     return _run(config_or_path, **overrides)

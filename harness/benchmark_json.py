@@ -21,6 +21,7 @@ import statistics
 from pathlib import Path
 
 from .results import RunFolder
+from .schema import scalar
 
 FORMAT_VERSION = "5.1.0"      # the pytest-benchmark JSON layout written here
 
@@ -31,16 +32,6 @@ def _f(v):
     except (TypeError, ValueError):
         return None
     return x if math.isfinite(x) else None
-
-
-def _scalar(v):
-    if isinstance(v, bool) or v is None or isinstance(v, str):
-        return v
-    if hasattr(v, "item"):
-        v = v.item()
-    if isinstance(v, float) and not math.isfinite(v):
-        return None
-    return v
 
 
 def stats_from_row(row: dict) -> dict | None:
@@ -62,7 +53,7 @@ def stats_from_row(row: dict) -> dict | None:
             "iterations": 1}
 
 
-def machine_info(meta: dict) -> dict:
+def _machine_info(meta: dict) -> dict:
     m = meta.get("machine") or {}
     v = meta.get("versions") or {}
     return {"node": m.get("node", platform.node()), "processor": m.get("cpu", ""), "machine": m.get("machine", ""),
@@ -102,19 +93,19 @@ def build(run_dir) -> dict:
             pstr = ",".join(f"{k}={params[k]}" for k in sorted(params) if params[k] is not None)
             name = f"{rec['method']}[{pstr}]" if pstr else str(rec["method"])
             group = f"{task}/{rec.get('mesh')}/{noise}"
-            extra = {k: _scalar(v) for k, v in rec.items()
+            extra = {k: scalar(v) for k, v in rec.items()
                      if k not in ("params", "time_s", "time_min_s", "time_max_s", "min_angle_hist", "error")}
             extra["stats_note"] = ("the run records median/min/max of the repeats only: min, max, median, rounds "
                                    "are exact; mean, stddev, q1, q3 are derived (see harness/benchmark_json.py)")
             benchmarks.append({
                 "group": group, "name": name, "fullname": f"{group}::{name}[seed={rec.get('seed')}]",
-                "params": {k: _scalar(v) for k, v in params.items()}, "param": pstr or None,
+                "params": {k: scalar(v) for k, v in params.items()}, "param": pstr or None,
                 "extra_info": extra,
                 "options": {"disable_gc": False, "timer": "perf_counter", "min_rounds": int(rec.get("repeats") or 1),
                             "max_time": None, "min_time": None, "warmup": False},
                 "stats": stats,
             })
-    return {"machine_info": machine_info(meta), "commit_info": commit_info(meta), "benchmarks": benchmarks,
+    return {"machine_info": _machine_info(meta), "commit_info": commit_info(meta), "benchmarks": benchmarks,
             "datetime": meta.get("finished") or meta.get("started"), "version": FORMAT_VERSION}
 
 

@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from . import tasks
 from .errors import ShootoutError
 
 
@@ -30,10 +31,12 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.add_argument("--export-benchmark-json", metavar="FILE", help="also write timings in pytest-benchmark's JSON layout")
     m = sub.add_parser("methods", help="list registered methods")
-    m.add_argument("--task", choices=["laplacian", "smoothing", "simplification"])
+    m.add_argument("--task", choices=tasks.names())
     sub.add_parser("datasets", help="list bundled and procedural meshes")
-    rp = sub.add_parser("report", help="rebuild report.html from a run folder")
+    rp = sub.add_parser("report", help="rebuild report.html from a run folder (reads files only, runs no code)")
     rp.add_argument("run_dir")
+    vw = sub.add_parser("views", help="recompute a run folder's 3D views (runs the chosen methods again)")
+    vw.add_argument("run_dir")
     c = sub.add_parser("compare", help="compare two run folders; exit 1 on a regression")
     c.add_argument("run_a")
     c.add_argument("run_b")
@@ -56,7 +59,7 @@ def _cmd_run(a) -> int:
     if a.timeout is not None and not a.timeout < float("inf"):
         raise ShootoutError(f"--timeout: expected a finite number of seconds, got {a.timeout}")
     cfg = load_config(Path(a.config))
-    from .runner import run
+    from .session import run
     frames = run(cfg, out=a.out, workers=a.workers, executor=a.executor, scheduler=a.scheduler,
                  resume=a.resume, timeout=a.timeout, quiet=a.quiet,
                  export_benchmark_json=a.export_benchmark_json)
@@ -102,6 +105,19 @@ def _cmd_report(a) -> int:
     return 0
 
 
+def _cmd_views(a) -> int:
+    from .session import recompute_views
+    d = Path(a.run_dir)
+    if not (d / "run.json").exists():
+        raise ShootoutError(f"{d}: not a run folder (no run.json)")
+    print(f"shootout views: rebuilding the cases from {d / 'run.json'} and running the chosen ones again "
+          "(this executes the methods, including plugins named there)", file=sys.stderr)
+    n = recompute_views(d)
+    from .report import build_report
+    print(f"{n} view(s) written to {d / 'views'}; report: {build_report(d)}")
+    return 0
+
+
 def _cmd_compare(a) -> int:
     from .compare import TIME_FACTOR, compare_runs
     for d in (a.run_a, a.run_b):
@@ -116,7 +132,7 @@ def _cmd_compare(a) -> int:
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
     handler = {"run": _cmd_run, "methods": _cmd_methods, "datasets": _cmd_datasets,
-               "report": _cmd_report, "compare": _cmd_compare}[args.command]
+               "report": _cmd_report, "views": _cmd_views, "compare": _cmd_compare}[args.command]
     try:
         return handler(args)
     except ShootoutError as exc:

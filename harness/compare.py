@@ -1,7 +1,8 @@
 """``shootout compare RUN_A RUN_B``: match cases by ``case_id``, show what changed, flag regressions.
 
 RUN_A is the baseline, RUN_B the candidate. For every case present in both runs and every
-metric column, the two values are compared with the metric's rule (`RULES`):
+metric column, the two values are compared with the rule its task declares (`harness.tasks`:
+each metric's ``better`` direction and ``rel``/``abs`` tolerance, recorded in run.json):
 
 * error-like metrics (lower is better: ``ev_*``, ``dist_mean``, ``hausdorff``, normal errors,
   ``sym_error``, ``lin_error``, ``neg_weights``, ``obtuse_fraction``, ``max_angle``) regress when
@@ -51,29 +52,40 @@ class Rule:
     abs: float = 0.0
 
 
-_LEN = Rule("lower", 0.01, 1e-6)
-_DEG = Rule("lower", 0.01, 0.01)
-RULES: dict[str, Rule] = {
-    # smoothing and simplification accuracy
-    "ev_mean": _LEN, "ev_rms": _LEN, "dist_mean": _LEN, "ev_sun": _LEN, "hausdorff": _LEN,
-    "normal_error_deg": _DEG, "normal_error_rms_deg": _DEG,
-    "volume_ratio": Rule("one", 0.01, 1e-4), "area_ratio": Rule("one", 0.01, 1e-4),
-    "min_angle": Rule("higher", 0.01, 0.01), "max_angle": Rule("lower", 0.01, 0.01),
-    "radius_ratio_mean": Rule("higher", 0.01, 1e-3), "obtuse_fraction": Rule("lower", 0.01, 2e-3),
-    "diverged": Rule("false"), "manifold": Rule("true"), "topology_changed": Rule("false"),
-    "out_faces": Rule("target"), "target_faces": Rule("info"),
-    "genus_change": Rule("info"), "boundary_loops_change": Rule("info"),
-    # Laplacian properties (absolute floors = the metric's own tolerances)
-    "sym_error": Rule("lower", 0.01, 1e-10), "lin_error": Rule("lower", 0.01, 1e-9),
-    "neg_weights": Rule("lower", 0.01, 1e-6), "min_eig": Rule("higher", 0.01, 1e-10),
-    "loc_violations": Rule("count"), "nnz": Rule("info"),
-    "SYM": Rule("true"), "LOC": Rule("true"), "LIN": Rule("true"), "POS": Rule("true"), "psd": Rule("true"),
-    "operator_symmetric": Rule("true"),
-    # the data each case saw
-    "input_ev_mean": Rule("input"), "input_dist_mean": Rule("input"), "input_normal_error_deg": Rule("input"),
-    "n_vertices": Rule("input"), "n_faces": Rule("input"),
-    "peak_rss_mb": Rule("info"),
-}
+COMMON_RULES = {"n_vertices": Rule("input"), "n_faces": Rule("input"), "peak_rss_mb": Rule("info")}
+
+
+def rules_from_specs(specs: dict) -> dict[str, dict[str, Rule]]:
+    """``{task: {metric: Rule}}`` from task declarations (run.json's ``tasks``)."""
+    out = {}
+    for task, spec in (specs or {}).items():
+        try:
+            out[task] = {m["name"]: Rule(m.get("better", "info"), float(m.get("rel", 0.01)), float(m.get("abs", 0.0)))
+                         for m in spec.get("metrics", [])}
+        except (AttributeError, KeyError, TypeError, ValueError):
+            continue
+    return out
+
+
+def _known_rules() -> dict[str, dict[str, Rule]]:
+    from . import tasks
+    return rules_from_specs({n: t.spec() for n, t in tasks.all_tasks().items()})
+
+
+KNOWN = _known_rules()
+# metric -> rule over every known task (used when a row's task is not given)
+RULES: dict[str, Rule] = {**{m: r for t in KNOWN.values() for m, r in t.items()}, **COMMON_RULES}
+
+
+def rule_for(metric: str, task: str | None = None, rules: dict | None = None) -> Rule:
+    """The compare rule of ``metric`` in ``task`` (from ``rules``, else the known tasks)."""
+    for source in (rules or {}, KNOWN):
+        r = source.get(task, {}).get(metric) if task else None
+        if r is not None:
+            return r
+    return RULES.get(metric, Rule("info"))
+
+
 SKIP = {"case_id", "task", "mesh", "noise_model", "noise_level", "seed", "method", "library", "params",
         "status", "error", "time_s", "time_min_s", "time_max_s", "repeats", "min_angle_hist"}
 
@@ -91,9 +103,9 @@ def _num(v):
         return None
 
 
-def judge(metric: str, a, b, row_a=None, row_b=None) -> str:
+def judge(metric: str, a, b, row_a=None, row_b=None, rule: Rule | None = None) -> str:
     """'regression' | 'improvement' | 'changed' (beyond tolerance, no direction) | 'same' (within it)."""
-    rule = RULES.get(metric, Rule("info"))
+    rule = rule or rule_for(metric, (row_b or row_a or {}).get("task"))
     if _blank(a) and _blank(b):
         return "same"
     if rule.kind in ("info", "input"):
@@ -159,7 +171,7 @@ def _rows(run) -> dict[str, dict]:
         raise ShootoutError(f"{run}: no such run folder")
     frames = folder.frames()
     if not frames:
-        raise ShootoutError(f"{run}: not a run folder (no laplacian.csv, smoothing.csv or simplification.csv)")
+        raise ShootoutError(f"{run}: not a run folder (no task CSV such as smoothing.csv)")
     out = {}
     for task, df in frames.items():
         for rec in df.to_dict("records"):
@@ -180,8 +192,11 @@ def _label(r: dict) -> str:
     return f"{r.get('mesh')} {noise} {r.get('method')}[{ps}]"
 
 
-def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FACTOR) -> dict:
-    """Every change between two runs' rows: ``{"changes": [...], "only_a": [...], "only_b": [...], ...}``."""
+def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FACTOR, rules=None) -> dict:
+    """Every change between two runs' rows: ``{"changes": [...], "only_a": [...], "only_b": [...], ...}``.
+
+    ``rules``: ``{task: {metric: Rule}}`` from the runs' task declarations (default: the known tasks).
+    """
     changes, input_changes = [], []
     common = [c for c in rows_a if c in rows_b]
     for cid in common:
@@ -206,15 +221,16 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
             if metric in SKIP or metric.startswith("_"):
                 continue
             a, b = ra.get(metric), rb.get(metric)
-            verdict = judge(metric, a, b, ra, rb)
+            rule = rule_for(metric, rb.get("task"), rules)
+            verdict = judge(metric, a, b, ra, rb, rule=rule)
             if verdict == "same":
                 if not (_blank(a) and _blank(b)) and a != b and not (_num(a) == _num(b) and _num(a) is not None):
                     changes.append({**base, "metric": metric, "a": a, "b": b, "verdict": "within tolerance"})
                 continue
-            if verdict == "changed" and RULES.get(metric, Rule("info")).kind == "info":
+            if verdict == "changed" and rule.kind == "info":
                 verdict = "info"              # e.g. peak_rss_mb: counted, not listed
             entry = {**base, "metric": metric, "a": a, "b": b, "verdict": verdict}
-            (input_changes if RULES.get(metric, Rule("info")).kind == "input" else changes).append(entry)
+            (input_changes if rule.kind == "input" else changes).append(entry)
     only_a = [c for c in rows_a if c not in rows_b]
     only_b = [c for c in rows_b if c not in rows_a]
     for cid in only_a:
@@ -285,14 +301,15 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
     """
     out = out or sys.stdout
     ra, rb = _rows(run_a), _rows(run_b)
-    res = compare_rows(ra, rb, time_factor)
+    meta_a = RunFolder(run_a).read_run_json() or {}
+    meta_b = RunFolder(run_b).read_run_json() or {}
+    rules = {**rules_from_specs(meta_a.get("tasks")), **rules_from_specs(meta_b.get("tasks"))}
+    res = compare_rows(ra, rb, time_factor, rules)
     changes = _sorted(res["changes"])
     regress = [c for c in changes if c["verdict"] == "regression"]
     shown = [c for c in changes if c["verdict"] not in ("within tolerance", "info")]
     quiet = sum(c["verdict"] == "within tolerance" for c in changes)
     n_info = sum(c["verdict"] == "info" for c in changes)
-    meta_a = RunFolder(run_a).read_run_json() or {}
-    meta_b = RunFolder(run_b).read_run_json() or {}
     print(f"compare A={run_a} (baseline) B={run_b}: {res['common']} cases in both, "
           f"{len(res['only_a'])} only in A, {len(res['only_b'])} only in B", file=out)
     for note in timing_notes(meta_a, meta_b, res):

@@ -355,7 +355,8 @@ def _check_noise(noise, P: list) -> list[dict]:
 
 def _check_tasks(tasks, P: list, skip_unknown: bool = False) -> dict:
     import methods
-    from methods.base import TASKS
+    from .tasks import names
+    TASKS = names()
     out = {}
     if not isinstance(tasks, dict) or not tasks:
         P.append(f"tasks: expected a mapping with one or more of {list(TASKS)}")

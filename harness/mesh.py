@@ -19,8 +19,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from methods.scratch.operators import unique_edges
-
+from .core.geometry import edge_face_counts, mean_edge_length  # noqa: F401
 from .errors import InvalidMeshError
 
 SUPPORTED = (".obj", ".off", ".ply", ".stl")
@@ -331,14 +330,6 @@ def validate(V, F, name: str = "", repair: bool = True) -> Mesh:
 
 # ----------------------------------------------------------------------------- topology
 
-def edge_face_counts(F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Unique undirected edges (e, 2) and how many faces use each (e,)."""
-    E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
-    n = int(F.max()) + 1
-    keys, counts = np.unique(E[:, 0] * n + E[:, 1], return_counts=True)
-    return np.stack([keys // n, keys % n], 1), counts
-
-
 def nonmanifold_vertices(F: np.ndarray, n: int) -> np.ndarray:
     """Indices of vertices whose incident faces form more than one edge-connected fan."""
     m = len(F)
@@ -400,7 +391,3 @@ def topology(V: np.ndarray, F: np.ndarray) -> dict:
     }
 
 
-def mean_edge_length(V: np.ndarray, F: np.ndarray) -> float:
-    """Mean length of the unique edges."""
-    E = unique_edges(F)
-    return float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean())

@@ -14,19 +14,9 @@ import hashlib
 
 import numpy as np
 
-from .mesh import mean_edge_length
+from .core.geometry import mean_edge_length, vertex_normals
 
 MODELS = ("gaussian_normal", "gaussian_random", "impulsive", "none")
-
-
-def vertex_normals(V: np.ndarray, F: np.ndarray) -> np.ndarray:
-    """Area-weighted unit vertex normals (n, 3); zero for vertices with no area around them."""
-    C = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])   # 2 x area x unit normal
-    idx = F.ravel()
-    CC = np.repeat(C, 3, axis=0)
-    N = np.stack([np.bincount(idx, weights=CC[:, j], minlength=len(V)) for j in range(3)], 1)
-    nrm = np.linalg.norm(N, axis=1, keepdims=True)
-    return np.divide(N, nrm, out=np.zeros_like(N), where=nrm > 0)
 
 
 def rng_for(mesh_key: str, model: str, level: float, seed: int) -> np.random.Generator:

@@ -10,43 +10,20 @@ from __future__ import annotations
 import csv
 import io
 import json
-import math
 import os
-import platform
-import subprocess
 import tempfile
-from datetime import datetime, timezone
-from importlib import metadata
 from pathlib import Path
 
 import pandas as pd
 
-from .measure import TASK_COLUMNS
-from .runner import COMMON_COLUMNS
-
-TASK_FILES = {t: f"{t}.csv" for t in TASK_COLUMNS}
-VERSION_PACKAGES = ["numpy", "scipy", "pandas", "libigl", "pymeshlab", "fast-simplification", "pygel3d",
-                    "numba", "robust-laplacian", "pyfqmr", "distributed", "mesh-shootout"]
-
-
-def columns(task: str) -> list[str]:
-    return COMMON_COLUMNS + TASK_COLUMNS[task]
-
-
-def _cell(v):
-    if v is None:
-        return ""
-    if isinstance(v, float) and math.isnan(v):
-        return ""
-    if isinstance(v, (bool,)) or type(v).__name__ == "bool_":
-        return "true" if v else "false"
-    return v
+from . import tasks
+from .schema import cell, columns, scalar, task_file
 
 
 def format_row(task: str, row: dict) -> str:
     """One CSV line (with newline) in the task's column order; unknown keys are dropped."""
     buf = io.StringIO()
-    csv.writer(buf, lineterminator="\n").writerow([_cell(row.get(c)) for c in columns(task)])
+    csv.writer(buf, lineterminator="\n").writerow([cell(row.get(c)) for c in columns(task)])
     return buf.getvalue()
 
 
@@ -57,7 +34,7 @@ class RunFolder:
         self.path = Path(path)
 
     def csv_path(self, task: str) -> Path:
-        return self.path / TASK_FILES[task]
+        return self.path / task_file(task)
 
     @property
     def run_json(self) -> Path:
@@ -93,7 +70,7 @@ class RunFolder:
 
     def reset(self) -> None:
         """Remove the CSVs, run.json, report and saved meshes of a previous run (a fresh run)."""
-        for task in TASK_FILES:
+        for task in tasks.names():
             self.csv_path(task).unlink(missing_ok=True)
         for name in ("run.json", "report.html"):
             (self.path / name).unlink(missing_ok=True)
@@ -105,7 +82,7 @@ class RunFolder:
     def status_counts(self) -> dict:
         """Rows per status over all task CSVs."""
         out: dict[str, int] = {}
-        for task in TASK_FILES:
+        for task in tasks.names():
             for r in self.read_rows(task):
                 out[r["status"]] = out.get(r["status"], 0) + 1
         return out
@@ -113,7 +90,7 @@ class RunFolder:
     def keep_ok_rows(self) -> set[str]:
         """For --resume: rewrite each CSV with only its ok rows; return their case ids."""
         done = set()
-        for task in TASK_FILES:
+        for task in tasks.names():
             rows = [r for r in self.read_rows(task) if r.get("status") == "ok"]
             seen = set()
             rows = [r for r in rows if not (r["case_id"] in seen or seen.add(r["case_id"]))]
@@ -148,9 +125,43 @@ class RunFolder:
     def frames(self) -> dict[str, pd.DataFrame]:
         """One DataFrame per task CSV present."""
         out = {}
-        for task in TASK_FILES:
+        for task in tasks.names():
             if self.csv_path(task).exists():
                 out[task] = load_csv(self.csv_path(task))
+        return out
+
+    # ------------------------------------------------------------------------- views
+
+    def write_views(self, views: list[dict]) -> None:
+        """``views/NN-<case_id>.json`` for each view and ``views/index.json`` listing them in order."""
+        vdir = self.path / "views"
+        vdir.mkdir(parents=True, exist_ok=True)
+        index = []
+        for i, v in enumerate(views):
+            cid = str(v.get("case_id", ""))
+            name = f"{i:02d}-{cid}.json" if cid.isalnum() else f"{i:02d}.json"
+            _atomic_json(vdir / name, v)
+            index.append({"file": name, "case_id": cid, "why": v.get("why")})
+        keep = {e["file"] for e in index} | {"index.json"}
+        for old in vdir.glob("*.json"):
+            if old.name not in keep:
+                old.unlink()
+        _atomic_json(vdir / "index.json", {"views": index})
+
+    def read_views(self) -> list[dict]:
+        """The stored views in order ([] when there are none); an unreadable one is a view with an error."""
+        vdir = self.path / "views"
+        try:
+            index = json.loads((vdir / "index.json").read_text())["views"]
+        except (OSError, ValueError, KeyError, TypeError):
+            return []
+        out = []
+        for e in index if isinstance(index, list) else []:
+            try:
+                out.append(json.loads((vdir / Path(str(e["file"])).name).read_text()))   # never leave views/
+            except (OSError, ValueError, KeyError, TypeError) as exc:
+                cid = str(e.get("case_id", "?")) if isinstance(e, dict) else "?"
+                out.append({"case_id": cid, "why": "", "error": f"view file unreadable ({type(exc).__name__})"})
         return out
 
 
@@ -167,44 +178,9 @@ def load_csv(path) -> pd.DataFrame:
     return df
 
 
-# ----------------------------------------------------------------------------- provenance
-
-def package_versions() -> dict:
-    out = {}
-    for name in VERSION_PACKAGES:
-        try:
-            out[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            out[name] = None
-    out["python"] = platform.python_version()
-    return out
-
-
-def git_commit() -> str | None:
-    try:
-        here = Path(__file__).resolve().parent
-        r = subprocess.run(["git", "rev-parse", "HEAD"], cwd=here, capture_output=True, text=True, timeout=5)
-        return r.stdout.strip() or None if r.returncode == 0 else None
-    except (OSError, subprocess.SubprocessError):
-        return None
-
-
-def machine_info() -> dict:
-    import psutil
-    freq = psutil.cpu_freq()
-    cpu = platform.processor() or platform.machine()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    return {"node": platform.node(), "system": platform.system(), "release": platform.release(),
-            "machine": platform.machine(), "cpu": cpu, "cpu_count": os.cpu_count(),
-            "cpu_freq_mhz": freq.max if freq else None,
-            "memory_gb": round(psutil.virtual_memory().total / 2 ** 30, 1)}
-
-
-def now_iso() -> str:
-    return datetime.now(timezone.utc).isoformat(timespec="seconds")
+def _atomic_json(path: Path, data) -> None:
+    """Write JSON to a temporary file in the same folder and rename it over ``path``."""
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    with os.fdopen(fd, "w") as fh:
+        json.dump(data, fh, separators=(",", ":"), allow_nan=False, default=scalar)
+    os.replace(tmp, path)

@@ -1,4 +1,5 @@
-"""One run of a config: prepare the folder, run the cases, write rows, run.json and the report."""
+"""One run of a config: prepare the folder, run the cases through an executor, write the rows,
+run.json, the 3D views and the report. ``harness.run`` and ``shootout run`` call `run`."""
 from __future__ import annotations
 
 import hashlib
@@ -8,11 +9,13 @@ import sys
 import time
 from pathlib import Path
 
-from .config import Config
+from . import tasks
+from .config import Config, load_config
 from .errors import ShootoutError
 from .executors import make_executor
 from .mesh import write_obj
-from .results import RunFolder, git_commit, machine_info, now_iso, package_versions
+from .provenance import git_commit, machine_info, now_iso, package_versions
+from .results import RunFolder
 
 
 def config_hash(cfg: Config) -> str:
@@ -25,17 +28,23 @@ def config_hash(cfg: Config) -> str:
 
 def _solver_info() -> dict | None:
     try:
-        from methods.scratch.solvers import solver_info
-    except ImportError:
-        return None
-    try:
+        from .core.solvers import solver_info
         return solver_info()
     except Exception as exc:  # provenance must never fail a run
         return {"error": f"{type(exc).__name__}: {exc}"}
 
 
-def run_session(cfg: Config, out=None, workers=None, executor="local", scheduler=None, resume=False,
-                timeout=None, quiet=True, export_benchmark_json=None):
+def task_specs(cfg: Config) -> dict:
+    """The declarations of the tasks this run uses (the report and compare read them)."""
+    used = sorted({c.task for c in cfg.cases})
+    return {t: tasks.get(t).spec() for t in used}
+
+
+def run(config_or_path, out=None, workers=None, executor="local", scheduler=None, resume=False,
+        timeout=None, quiet=True, export_benchmark_json=None):
+    """Run a config (a `Config`, a path, YAML text or a dict) end to end; returns
+    ``{task: DataFrame}`` of the rows in the run folder."""
+    cfg: Config = config_or_path if isinstance(config_or_path, Config) else load_config(config_or_path)
     out_dir = Path(out) if out else Path("results") / cfg.name
     folder = RunFolder(out_dir)
     workers = int(workers) if workers else (os.cpu_count() or 1)
@@ -70,11 +79,11 @@ def run_session(cfg: Config, out=None, workers=None, executor="local", scheduler
             "scheduler": scheduler, "workers": workers, "timeout_s": timeout,
             "n_cases": len(cfg.cases), "resumed_ok_cases": len(done),
             "versions": package_versions(), "git_commit": git_commit(), "machine": machine_info(),
-            "solver": _solver_info(), "command": " ".join(sys.argv)}
+            "solver": _solver_info(), "command": " ".join(sys.argv), "tasks": task_specs(cfg)}
     if resume:
         meta["resumed_at"] = now_iso()
-    if hasattr(ex, "n_workers"):       # dask: the cluster's worker threads, not --workers
-        meta["workers"] = ex.n_workers()
+    if executor == "dask":       # the cluster's worker threads, not --workers
+        meta.update(ex.describe())
     folder.write_run_json(meta)
     bar = None
     if not quiet:
@@ -84,9 +93,9 @@ def run_session(cfg: Config, out=None, workers=None, executor="local", scheduler
     counts: dict[str, int] = {}
     t0 = time.perf_counter()
     try:
-        for case, row, meshes in ex.run(cases, want_meshes=cfg.save_meshes):
+        for case, row, extras in ex.run(cases, want_meshes=cfg.save_meshes):
             folder.append(case.task, row)
-            for fname, (V, F) in meshes.items():
+            for fname, (V, F) in (extras.get("meshes") or {}).items():
                 mdir = out_dir / "meshes"
                 mdir.mkdir(parents=True, exist_ok=True)
                 if not (mdir / fname).exists() or fname.startswith(case.case_id):
@@ -106,13 +115,42 @@ def run_session(cfg: Config, out=None, workers=None, executor="local", scheduler
         meta.update(finished=now_iso(), wall_s=round(time.perf_counter() - t0, 3),
                     status_counts=folder.status_counts(), status_counts_this_session=counts)
         folder.write_run_json(meta)
+    finish(out_dir, cfg, timeout=timeout, export_benchmark_json=export_benchmark_json)
+    return folder.frames()
+
+
+def finish(out_dir, cfg: Config, timeout=None, export_benchmark_json=None) -> None:
+    """After the last row: the 3D views (views/), the report and the optional benchmark export.
+    The rows are safe on disk; a failure here is a warning, never a lost run."""
     from .report import build_report
+    from .views import compute_views
+    folder = RunFolder(out_dir)
+    try:
+        views = compute_views({c.case_id: c for c in cfg.cases}, folder.frames(), cfg.report, timeout=timeout)
+        folder.write_views(views)
+    except Exception as exc:  # noqa: BLE001
+        print(f"shootout: warning: 3D views could not be computed ({type(exc).__name__}: {exc})", file=sys.stderr)
     try:
         build_report(out_dir)
-    except Exception as exc:  # the rows are safe on disk; a report bug must not lose the run
+    except Exception as exc:  # noqa: BLE001
         print(f"shootout: warning: report.html could not be built ({type(exc).__name__}: {exc}); "
               f"rows are in {out_dir}; retry with `shootout report {out_dir}`", file=sys.stderr)
     if export_benchmark_json:
         from .benchmark_json import export_benchmark_json as _export
         _export(out_dir, export_benchmark_json)
-    return folder.frames()
+
+
+def recompute_views(run_dir) -> int:
+    """Rebuild the cases from run.json's config and compute the 3D views again (this runs the
+    chosen methods, including any plugin named in run.json). Returns the number of views."""
+    from .views import compute_views
+    folder = RunFolder(run_dir)
+    meta = folder.read_run_json()
+    if not meta or not isinstance(meta.get("config"), dict):
+        raise ShootoutError(f"{run_dir}: no run.json with a config to rebuild the cases from")
+    src = meta.get("config_source")
+    base = Path(src).parent if src and Path(src).parent.is_dir() else Path.cwd()
+    cfg = load_config(meta["config"], base_dir=base.resolve())
+    views = compute_views({c.case_id: c for c in cfg.cases}, folder.frames(), cfg.report)
+    folder.write_views(views)
+    return len(views)

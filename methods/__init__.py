@@ -2,10 +2,15 @@
 
 ``methods.get(name)`` returns a callable `Method`; ``methods.available(task)`` lists the names
 that can run here; ``register`` adds a method (built-ins, plugins and entry points alike).
+Result types are declared by the tasks (`harness.tasks`) and re-exported here.
 """
-from .base import (LaplacianResult, Method, Param, SimplificationResult, SmoothingResult,
-                   TASKS, check_arrays)
+from harness.errors import MethodFailed
+from harness.tasks.laplacian import LaplacianResult
+from harness.tasks.simplification import SimplificationResult
+from harness.tasks.smoothing import SmoothingResult
+
+from .base import Method, Param, check_arrays
 from .registry import all_methods, available, get, load_plugins, register
 
-__all__ = ["LaplacianResult", "SmoothingResult", "SimplificationResult", "Method", "Param",
-           "TASKS", "check_arrays", "register", "get", "available", "all_methods", "load_plugins"]
+__all__ = ["LaplacianResult", "SmoothingResult", "SimplificationResult", "Method", "Param", "MethodFailed",
+           "check_arrays", "register", "get", "available", "all_methods", "load_plugins"]

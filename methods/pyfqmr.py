@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from methods import Param, SimplificationResult, register
-from methods.scratch.qem import compact
+from harness.core.geometry import compact
 
 
 @register(

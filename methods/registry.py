@@ -12,28 +12,31 @@ import importlib
 import pkgutil
 from importlib.metadata import entry_points
 
-from .base import TASKS, Method, Param
+from harness import tasks as _tasks
+
+from .base import Method, Param
 
 ENTRY_POINT_GROUP = "mesh_shootout.methods"
 _REGISTRY: dict[str, Method] = {}
 _LOADED = False
-_SKIP = {"methods.base", "methods.registry"}
+_SKIP = {"methods.base", "methods.registry", "methods.vocabulary", "methods.checks"}
 # modules (built-in or entry point) that failed to import: name -> reason. A broken backend
 # module costs its own methods, not the registry; `shootout methods` and the tests show it.
 BROKEN: dict[str, str] = {}
 
 
 def register(name: str, *, task: str, library: str, params: dict | None = None,
-             requires: tuple | list | None = None, doc: str | None = None):
+             requires: tuple | list | None = None, doc: str | None = None, cite: str = ""):
     """Decorator registering ``func(V, F, **params)`` as method ``name``.
 
     ``params`` maps each parameter name to its default or to a `Param` (bounds, choices).
     ``requires`` lists importable modules the method needs (availability check).
-    Simplification methods receive ``target_faces`` (int) in place of the shared
-    ``target_ratio``/``target_faces`` parameters, which are added automatically.
+    The task's shared parameters (e.g. simplification's ``target_ratio``/``target_faces``) are
+    added automatically; the task's ``prepare`` decides what the function receives.
+    ``cite``: the paper or documentation the method follows (shown by ``shootout methods``).
     """
-    if task not in TASKS:
-        raise ValueError(f"register({name!r}): task must be one of {TASKS}, got {task!r}")
+    if task not in _tasks.names():
+        raise ValueError(f"register({name!r}): task must be one of {_tasks.names()}, got {task!r}")
     if "." not in name:
         raise ValueError(f"register({name!r}): name must be '<backend>.<method>'")
 
@@ -44,12 +47,10 @@ def register(name: str, *, task: str, library: str, params: dict | None = None,
         declared = {}
         for k, v in (params or {}).items():
             declared[k] = v if isinstance(v, Param) else Param(k, v)
-        if task == "simplification":
-            from .base import SIMPLIFICATION_TARGET_PARAMS
-            declared = {**SIMPLIFICATION_TARGET_PARAMS, **declared}
+        declared = {**_tasks.get(task).params, **declared}
         _REGISTRY[name] = Method(name=name, task=task, library=library, func=func,
                                  params=declared, requires=tuple(requires or ()),
-                                 doc=(doc or (func.__doc__ or "")).strip())
+                                 doc=(doc or (func.__doc__ or "")).strip(), cite=cite)
         return func
 
     return deco

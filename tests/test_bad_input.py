@@ -391,7 +391,7 @@ def test_every_available_method_on_every_usable_bad_mesh(bad_dir, tmp_path):
 
 def test_pygel_laplacian_refuses_tiny_meshes(bad_dir):
     """The octahedron used to kill the worker (SIGFPE); now a ValueError row naming the reason."""
-    from harness.executors import run_isolated
+    from harness.executors.isolation import run_isolated
     cfg = load_config(config([{"file": str(bad_dir / "unreferenced.obj")}], {"smoothing": ["pygel.laplacian"]}))
     row, _ = run_isolated(cfg.cases[0], timeout=60)
     assert row["status"] == "error" and "SIGFPE on meshes with fewer than 8 vertices" in row["error"], row["error"]

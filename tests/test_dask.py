@@ -32,8 +32,8 @@ distributed = pytest.importorskip("distributed")
 
 import harness  # noqa: E402
 from harness.config import load_config  # noqa: E402
-from harness.dask_executor import DaskExecutor, materialize, run_in_subprocess, ship_files  # noqa: E402
-from harness.measure import TASK_COLUMNS  # noqa: E402
+from harness.executors.dask import DaskExecutor, materialize, run_in_subprocess, ship_files  # noqa: E402
+from harness import tasks  # noqa: E402
 
 SHOOTOUT = Path(sys.executable).with_name("shootout")
 NOT_COMPARED = {"time_s", "time_min_s", "time_max_s", "peak_rss_mb"}
@@ -95,7 +95,7 @@ def test_dask_run_equals_local_run(cluster, tmp_path):
         for c, atol in NOISY.items():
             if c in a:
                 np.testing.assert_allclose(a[c], b[c], rtol=0, atol=atol, equal_nan=True)
-        compared += int(a["status"].eq("ok").sum()) * len(TASK_COLUMNS[task])
+        compared += int(a["status"].eq("ok").sum()) * len(tasks.get(task).columns)
         assert b["peak_rss_mb"][b["status"] == "ok"].gt(0).all()
     assert compared > 100
     lap = remote["laplacian"]

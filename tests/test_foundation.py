@@ -11,15 +11,16 @@ from harness import datasets
 from harness.cli import main
 from harness.config import load_config
 from harness.errors import ConfigError, InvalidMeshError
-from harness.measure import TASK_COLUMNS, diverged
+from harness.tasks.smoothing import diverged
+from harness.schema import COMMON_COLUMNS, columns
 from harness.mesh import read_mesh, topology
 from harness.metrics.hausdorff import hausdorff
 from harness.metrics.normal_error import normal_error
 from harness.metrics.surface_distance import point_surface_distance
 from harness.metrics.triangle_quality import triangle_quality
-from harness.metrics.volume_area import area, volume
+from harness.core.geometry import area, volume
 from harness.noise import apply_noise
-from harness.runner import COMMON_COLUMNS
+
 
 
 # ----------------------------------------------------------------------------- metrics
@@ -265,7 +266,7 @@ def test_cli_end_to_end(tmp_path):
     assert r.returncode == 0, r.stderr
     for task, n in (("laplacian", 12), ("smoothing", 8), ("simplification", 4)):
         df = pd.read_csv(out / f"{task}.csv")
-        assert list(df.columns) == COMMON_COLUMNS + TASK_COLUMNS[task]
+        assert list(df.columns) == columns(task)
         assert len(df) == n and (df["status"] == "ok").all(), df[["method", "error"]]
         assert (df["repeats"] == 2).all() and (df["time_min_s"] <= df["time_s"]).all()
         assert df["peak_rss_mb"].gt(0).all()

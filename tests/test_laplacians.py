@@ -78,8 +78,8 @@ def test_intrinsic_delaunay_matches_libigl(path):
     quads are split (fandisk has many), so it is checked against ``igl.massmatrix_intrinsic``
     on our own triangulation (1e-10), and its total against the surface area (1e-12).
     """
-    from methods.scratch.intrinsic_delaunay import (cotangents_from_lengths,
-                                                    intrinsic_delaunay_triangulation)
+    from harness.core.geometry import cotangents_from_lengths
+    from methods.scratch.intrinsic_delaunay import intrinsic_delaunay_triangulation
     V, F = load(path)
     r = methods.get("scratch.intrinsic_delaunay")(V, F, mass="voronoi")
     L, l_ref, F_ref = igl.intrinsic_delaunay_cotmatrix(V, F)

@@ -95,14 +95,16 @@ def test_property_matrix_and_uniform_note(run_dir):
     assert f"lin_error = {rh._fmt(lin)}" in text                          # the numbers come from the row
 
 
-def test_views_recomputed_from_run_json(run_dir):
+def test_views_computed_by_the_session_and_stored_in_the_run_folder(run_dir):
     d = page_data(run_dir / "report.html")
     views = d["views"]
+    index = json.loads((run_dir / "views" / "index.json").read_text())["views"]
+    assert [e["case_id"] for e in index] == [v["case_id"] for v in views]
     assert [v["why"].split()[0] for v in views] == ["best", "worst", "best", "worst"]
     for v in views:
         assert "error" not in v, v.get("error")
-        assert "recomputed" in v["source"] and "mismatch" not in v
-        assert [m["label"] for m in v["meshes"]] == ["clean", "noisy input", "result"]
+        assert "mismatch" not in v
+        assert [m["label"] for m in v["meshes"]][0] == "clean" and len(v["meshes"]) == 3
         for m in v["meshes"]:
             V = np.frombuffer(base64.b64decode(m["V"]), "<u2")
             F = np.frombuffer(base64.b64decode(m["F"]), "<u4")
@@ -113,11 +115,12 @@ def test_views_recomputed_from_run_json(run_dir):
 
 def test_decimation_for_display_only():
     from harness import datasets
+    from harness.views import _decimate
     mesh = datasets.load("bunny").clean
     err = np.linalg.norm(mesh.V, axis=1)
-    V, F, e, note = rh._decimate(mesh.V, mesh.F, err, 2000)
+    V, F, e, note = _decimate(mesh.V, mesh.F, err, 2000)
     assert len(F) <= 2000 * 1.01 and len(e) == len(V) and "decimated" in note
-    assert rh._decimate(mesh.V, mesh.F, err, 10**6)[3] is None
+    assert _decimate(mesh.V, mesh.F, err, 10**6)[3] is None
 
 
 def test_shootout_report_rebuilds(run_dir, tmp_path):
@@ -129,27 +132,24 @@ def test_shootout_report_rebuilds(run_dir, tmp_path):
     assert cli(["report", str(empty)]) == 2
 
 
-def test_views_from_config_saved_meshes_and_errors(run_dir, tmp_path):
+def test_views_chosen_in_the_config_and_their_errors(run_dir, tmp_path):
     dst = copy_run(run_dir, tmp_path)
     lap = next(csv.DictReader((dst / "laplacian.csv").open()))["case_id"]
     smo = next(csv.DictReader((dst / "smoothing.csv").open()))
     meta = json.loads((dst / "run.json").read_text())
     meta["config"]["report"] = {"views": [smo["case_id"], lap, "000000000000"]}
     (dst / "run.json").write_text(json.dumps(meta))
-    # a saved result mesh is used instead of recomputing
-    (dst / "meshes").mkdir()
-    from harness import datasets
-    clean = datasets.load("knight").clean
-    write_obj(dst / "meshes" / f"{smo['case_id']}.obj", clean.V * 1.01, clean.F)
-    views = page_data(build_report(dst))["views"]
+    assert cli(["views", str(dst)]) == 0                              # explicit: runs the methods again
+    views = page_data(dst / "report.html")["views"]
     assert [v["case_id"] for v in views] == [smo["case_id"], lap, "000000000000"]
-    assert "read from meshes/" in views[0]["source"] and views[0]["why"].startswith("chosen in the config")
-    assert "no result mesh" in views[1]["error"]
+    assert "error" not in views[0] and views[0]["why"].startswith("chosen in the config")
+    assert "no mesh to show" in views[1]["error"]
     assert "not in this run" in views[2]["error"]
 
 
-def test_report_survives_a_config_that_no_longer_loads_and_groups_errors(run_dir, tmp_path):
+def test_report_reads_files_only_even_when_the_config_no_longer_loads(run_dir, tmp_path, capsys):
     dst = copy_run(run_dir, tmp_path)
+    before = page_data(build_report(dst))["views"]
     meta = json.loads((dst / "run.json").read_text())
     meta["config"]["tasks"]["smoothing"]["methods"] = ["nobody.nothing"]
     (dst / "run.json").write_text(json.dumps(meta))
@@ -160,11 +160,12 @@ def test_report_survives_a_config_that_no_longer_loads_and_groups_errors(run_dir
     rewrite_csv(dst / "smoothing.csv", fail_two)
     path = build_report(dst)
     d = page_data(path)
-    assert d["views"] and all("cannot rebuild the cases" in v["error"] and "nobody.nothing" in v["error"]
-                              for v in d["views"])
+    assert [v["case_id"] for v in d["views"]] == [v["case_id"] for v in before]     # the stored views
     text = path.read_text()
     assert re.search(r"<td class='st-error'>error</td><td>2</td><td class='msg'>ValueError: boom at smoothing.py:12",
                      text)
+    assert cli(["views", str(dst)]) == 2                              # recomputing needs the config
+    assert "nobody.nothing" in capsys.readouterr().err
 
 
 PLUGIN = '''
@@ -195,7 +196,10 @@ def test_a_method_that_crashes_when_recomputed_costs_only_its_view(tmp_path, mon
     out = tmp_path / "run"
     harness.run(cfg, out=out, quiet=True, workers=1)
     views = page_data(out / "report.html")["views"]
-    assert len(views) == 1 and "error" not in views[0]              # recomputed fine the first time
+    assert len(views) == 1 and "error" not in views[0]              # computed fine when the run finished
     marker.write_text("")
-    views = page_data(build_report(out))["views"]                    # now the method aborts its process
-    assert "SIGABRT" in views[0]["error"] and "recomputing the case failed" in views[0]["error"]
+    views = page_data(build_report(out))["views"]                    # the report runs nothing
+    assert len(views) == 1 and "error" not in views[0]
+    assert cli(["views", str(out)]) == 0                             # recomputing: the method aborts
+    views = page_data(out / "report.html")["views"]
+    assert "SIGABRT" in views[0]["error"] and "computing the view failed" in views[0]["error"]

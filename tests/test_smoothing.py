@@ -71,7 +71,7 @@ def test_screened_poisson_is_one_implicit_step(knight):
 
 def test_solver_backends_agree():
     """Every installed solver backend gives the same implicit step (1e-10 relative)."""
-    from methods.scratch import solvers
+    from harness.core import solvers
     V, F = load("bunny.off")
     ref = methods.get("scratch.implicit")(V, F, solver="scipy", iterations=2).V
     for s in solvers.installed_solvers():
@@ -86,7 +86,7 @@ def test_solver_shared_pattern_cache_keeps_factors_apart():
     when solves interleave (1e-10 relative to spsolve)."""
     import scipy.sparse as sp
     import scipy.sparse.linalg as sla
-    from methods.scratch import solvers
+    from harness.core import solvers
     from methods.scratch.smoothing import smoothing_operator
     V, F = load("decimated-knight.off")
     W, m = smoothing_operator(V, F, "uniform")
@@ -163,7 +163,7 @@ def test_tangential_keeps_shape_improves_angles():
 
 def _normal_error_deg(X, F, C):
     """Mean angle (degrees) between each face normal of X and of the clean mesh C."""
-    from methods.scratch.operators import face_normals
+    from harness.core.geometry import face_normals
     a, b = face_normals(X, F), face_normals(C, F)
     return float(np.degrees(np.arccos(np.clip((a * b).sum(1), -1, 1))).mean())
 
@@ -179,7 +179,7 @@ def fandisk_pair():
 @pytest.fixture(scope="module")
 def noisy_bunny():
     """bunny.off with Gaussian noise along the vertex normals, sigma 0.5 x mean edge length."""
-    from methods.scratch.smoothing import mean_edge_length
+    from harness.core.geometry import mean_edge_length
     C, F = load("bunny.off")
     Nv = igl.per_vertex_normals(C, F)
     rng = np.random.default_rng(2)

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import methods
-from methods.scratch.smoothing import boundary_vertices
+from harness.core.geometry import boundary_vertices
 from methods.scratch.operators import adjacency
 
 MESHES = Path(__file__).resolve().parents[1] / "harness" / "data" / "meshes"

@@ -1,7 +1,7 @@
 """Symmetric Hausdorff distance between two triangle meshes, from vertices and samples."""
 import numpy as np
 
-from .sampling import sample_surface
+from ..core.geometry import sample_surface
 from .surface_distance import point_surface_distance
 
 

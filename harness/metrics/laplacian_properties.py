@@ -1,7 +1,6 @@
 """Wardetzky et al. (2007) properties of a discrete Laplacian, measured on its weights.
 
-One public function, `laplacian_properties`. Definitions (the ``laplacian`` columns of
-CONTRACT.md), for ``W`` in libigl's sign convention (off-diagonal weights, rows sum to zero)
+One public function, `laplacian_properties`. Definitions, for ``W`` in libigl's sign convention (off-diagonal weights, rows sum to zero)
 and ``M`` diagonal (or None):
 
 ``sym_error``

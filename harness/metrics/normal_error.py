@@ -1,7 +1,7 @@
 """Angle between each face normal of the result and of the clean mesh (same faces)."""
 import numpy as np
 
-from methods.scratch.operators import face_normals
+from harness.core.geometry import face_normals
 
 
 def normal_error(V: np.ndarray, V_clean: np.ndarray, F: np.ndarray) -> dict:

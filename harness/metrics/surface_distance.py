@@ -1,6 +1,8 @@
 """Exact point-to-surface distance (closest point on any triangle, libigl's AABB tree)."""
 import numpy as np
 
+from ..core.geometry import double_areas
+
 
 def point_surface_distance(P: np.ndarray, V: np.ndarray, F: np.ndarray) -> np.ndarray:
     """Unsigned distance (k,) from each point of ``P`` (k, 3) to the triangle mesh (V, F)."""
@@ -19,7 +21,7 @@ def surface_distance(V: np.ndarray, F: np.ndarray, V_clean: np.ndarray, F_clean:
     the result mesh (one third of its incident faces' areas).
     """
     d = point_surface_distance(V, V_clean, F_clean)
-    dbl = np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
+    dbl = double_areas(V, F)
     A = np.bincount(F.ravel(), weights=np.repeat(dbl / 6.0, 3), minlength=len(V))
     tot = A.sum()
     ev_sun = float(np.sqrt((A * d ** 2).sum() / tot)) if tot > 0 else float("nan")

@@ -3,17 +3,9 @@ import json
 
 import numpy as np
 
+from ..core.geometry import corner_angles, edge_lengths
+
 HIST_EDGES = np.arange(0, 65, 5.0)       # min angle of a triangle is at most 60 degrees
-
-
-def corner_angles(V: np.ndarray, F: np.ndarray) -> np.ndarray:
-    """Interior angles (m, 3) in degrees; corner k opposite edge (F[:, k+1], F[:, k+2])."""
-    p = [V[F[:, k]] for k in range(3)]
-    out = np.empty((len(F), 3))
-    for k in range(3):
-        a, b = p[(k + 1) % 3] - p[k], p[(k + 2) % 3] - p[k]
-        out[:, k] = np.degrees(np.arctan2(np.linalg.norm(np.cross(a, b), axis=1), (a * b).sum(1)))
-    return out
 
 
 def triangle_quality(V: np.ndarray, F: np.ndarray) -> dict:
@@ -23,7 +15,7 @@ def triangle_quality(V: np.ndarray, F: np.ndarray) -> dict:
     ``min_angle_hist``: JSON counts of per-face minimum angles in 5-degree bins over [0, 60].
     """
     ang = corner_angles(V, F)
-    l = np.stack([np.linalg.norm(V[F[:, (k + 1) % 3]] - V[F[:, (k + 2) % 3]], axis=1) for k in range(3)], 1)
+    l = edge_lengths(V, F)
     a, b, c = l[:, 0], l[:, 1], l[:, 2]
     with np.errstate(divide="ignore", invalid="ignore"):
         # 2 r_in / R = 8 (s-a)(s-b)(s-c) / (abc), s the semi-perimeter

@@ -717,7 +717,7 @@
     var host = document.getElementById('view-list');
     var views = D.views || [];
     if (!views.length) {
-      host.appendChild(el('p', {'class': 'muted', text: 'No 3D views: this run has no smoothing or simplification case with status ok.'}));
+      host.appendChild(el('p', {'class': 'muted', text: 'No 3D views: this run has no case with a mesh to show and status ok.'}));
       body.dataset.view3d = 'none';
       return;
     }
@@ -729,13 +729,74 @@
     body.dataset.view3dCount = String(nOk);
   }
 
+
+  // A task without a dedicated renderer: built from its declared metric specs (run.json).
+  function genericSection(task, d) {
+    var host = document.getElementById('plots-' + task);
+    var spec = d.T.spec || {};
+    var metrics = (spec.metrics || []).filter(function (m) {
+      return (m.better === 'lower' || m.better === 'higher') && d.rows.some(function (r) { return isNum(r[m.name]); });
+    });
+    if (!metrics.length) { host.appendChild(el('p', {'class': 'muted', text: 'No numeric metric to plot.'})); return; }
+    var ranked = metrics.filter(function (m) { return m.rank; });
+    var state = {metric: (spec.view_metric && metrics.some(function (m) { return m.name === spec.view_metric; })) ?
+      spec.view_metric : (ranked[0] || metrics[0]).name, mesh: ''};
+    var hidden = new Set();
+    var controls = el('div', {'class': 'controls'}), leg = el('div'), plots = el('div');
+    host.appendChild(controls); host.appendChild(leg); host.appendChild(plots);
+    controls.appendChild(el('label', {}, ['metric ', selectEl(metrics.map(function (m) {
+      return [m.name, m.name + ' — ' + m.doc + (m.unit ? ' [' + m.unit + ']' : '') + ' (' + m.better + ' is better)'];
+    }), state.metric, function (v) { state.metric = v; render(); })]));
+    var mf = meshFilter(d.rows, state, function () { render(); });
+    if (mf) controls.appendChild(mf);
+    function render() {
+      leg.innerHTML = ''; plots.innerHTML = '';
+      var key = state.metric;
+      var m = metrics.filter(function (x) { return x.name === key; })[0];
+      var lower = m.better === 'lower';
+      var vis = d.rows.filter(function (r) {
+        return r.status === 'ok' && isNum(r[key]) && (!state.mesh || r.mesh === state.mesh) && !hidden.has(r._variant);
+      });
+      var bt = el('table', {'class': 'best'});
+      bt.innerHTML = '<tr><th>mesh</th><th>noise</th><th>best</th><th>' + esc(key) + '</th><th>time</th></tr>';
+      groupBy(vis, function (r) { return r.mesh + '|' + r._noise; }).forEach(function (rows) {
+        var rs = [];
+        groupBy(rows, function (r) { return r._variant; }).forEach(function (g) {
+          var o = Object.assign({}, g[0]);
+          o[key] = mean(g.map(function (r) { return r[key]; }));
+          var ts = g.map(function (r) { return r.time_s; }).filter(isNum);
+          o.time_s = ts.length ? median(ts) : null;
+          rs.push(o);
+        });
+        var best = rs.reduce(function (a, b) { return (lower ? b[key] < a[key] : b[key] > a[key]) ? b : a; });
+        bt.appendChild(el('tr', {html: '<td>' + esc(best.mesh) + '</td><td>' + esc(best._noise) + '</td><td><i style="color:' +
+          d.colors[best._variant] + '">●</i> ' + esc(best._variant) + '</td><td class="num">' + fmt(best[key], 4) +
+          '</td><td class="num">' + fmtTime(best.time_s) + '</td>'}));
+      });
+      plots.appendChild(el('h4', {text: 'Best method per mesh and noise level by ' + key + ' (mean over seeds)'}));
+      plots.appendChild(bt);
+      var panels = panelGroup(plots, key + ' vs time, per mesh', 'One point per case; ' + m.better +
+        ' is better' + (m.unit ? ' (' + m.unit + ')' : '') + '.', function () { return legend(d.variants, d.colors, hidden, render); });
+      groupBy(vis.filter(function (r) { return isNum(r.time_s); }), function (r) { return r.mesh + ' · ' + r._noise; }).forEach(function (rs, title) {
+        var series = [];
+        groupBy(rs, function (r) { return r._variant; }).forEach(function (vr, v) {
+          series.push({name: v, color: d.colors[v], pts: vr.map(function (r) {
+            return [r.time_s, r[key], tipOf(r, key + ' ' + fmt(r[key]) + ', time ' + fmtTime(r.time_s))]; })});
+        });
+        addPanel(panels, chart({title: title, xlabel: 'time (s)', ylabel: key, xlog: true, ylog: false, series: series}));
+      });
+    }
+    render();
+  }
+
   // ------------------------------------------------------------------ main
   var sections = {laplacian: laplacianSection, smoothing: smoothingSection, simplification: simplificationSection};
-  Object.keys(sections).forEach(function (task) {
+  Object.keys(D.tasks).forEach(function (task) {
     var d = taskRows(task);
     if (!d) return;
     var host = document.getElementById('plots-' + task);
-    guard(task + ' plots', host, function () { sections[task](d); });
+    if (!host) return;
+    guard(task + ' plots', host, function () { (sections[task] || function (x) { genericSection(task, x); })(d); });
     guard(task + ' table', document.getElementById('rows-' + task), function () { rowsTable(task, d); });
   });
   body.dataset.plotsRendered = String(plotsRendered);

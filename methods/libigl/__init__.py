@@ -11,7 +11,7 @@ def reject_zero_area(V: np.ndarray, F: np.ndarray, name: str) -> None:
     Kahan's Heron formula on its edge lengths gives 0 (a numerically flat face can have a
     cross-product area of 1e-20 and a Heron area of exactly 0).
     """
-    from methods.scratch.operators import zero_area_faces
+    from harness.core.geometry import zero_area_faces
     bad = zero_area_faces(V, F)
     if bad.size:
         raise ValueError(f"{name}: {bad.size} zero-area face(s) (first: {bad[:5].tolist()}); "

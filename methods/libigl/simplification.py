@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from methods import SimplificationResult, register
-from methods.scratch.qem import compact
+from harness.core.geometry import compact
 
 
 @register("libigl.qslim", task="simplification", library="libigl", params={},

@@ -5,7 +5,8 @@ import numpy as np
 
 from methods import Param, SmoothingResult, register
 from methods.libigl import check_finite, reject_zero_area
-from methods.scratch.smoothing import backward_euler, _solver_param
+from harness.core.solvers import backward_euler
+from methods.vocabulary import solver_param
 
 
 def _igl_operator(P, F):
@@ -41,7 +42,7 @@ def _mean_edge_length(V, F) -> float:
                                       doc="number of backward-Euler steps"),
                   "reassemble": Param("reassemble", False, "bool",
                                       doc="rebuild W and M from the current positions each step"),
-                  "solver": _solver_param()})
+                  "solver": solver_param()})
 def implicit(V, F, *, step=1.0, iterations=1, reassemble=False, solver="auto"):
     """Implicit fairing ``(M - h W) X' = M X`` with ``W = igl.cotmatrix``, ``M = igl.massmatrix``.
 
@@ -55,7 +56,7 @@ def implicit(V, F, *, step=1.0, iterations=1, reassemble=False, solver="auto"):
     reassemble : bool
         Rebuild ``W`` and ``M`` from the current positions before every step.
     solver : str
-        Sparse SPD solver of ``methods.scratch.solvers``.
+        Sparse SPD solver of ``harness.core.solvers``.
 
     Returns
     -------

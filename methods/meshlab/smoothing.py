@@ -183,7 +183,7 @@ def scale_dependent(V, F, *, step=0.25, iterations=10):
     """
     import pymeshlab
 
-    from methods.scratch.smoothing import mean_edge_length
+    from harness.core.geometry import mean_edge_length
     ms = _meshset(V, F)
     if iterations > 0:
         delta = float(step) * mean_edge_length(V, F) ** 2

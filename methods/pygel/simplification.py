@@ -10,7 +10,7 @@ import numpy as np
 
 from methods import Param, SimplificationResult, register
 from methods.pygel import triangles as _triangles
-from methods.scratch.qem import compact
+from harness.core.geometry import compact
 
 
 # passes of quadric_simplify: a mesh with a long boundary reaches the target in a few

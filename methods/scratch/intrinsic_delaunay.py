@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from harness.core.geometry import cotangents_from_lengths, edge_lengths  # noqa: F401
 from methods.scratch import operators as op
 
 _COMPILED = False
@@ -40,13 +41,6 @@ def _compile() -> None:
 # flipping back and forth on (numerically) cocircular quads, where both diagonals give the
 # same Laplacian (a zero weight) anyway.
 FLIP_RTOL = 1e-12
-
-
-def edge_lengths(V: np.ndarray, F: np.ndarray) -> np.ndarray:
-    """Corner-opposite edge lengths (m, 3): ``l[f, c] = |V[F[f, c+1]] - V[F[f, c+2]]|``."""
-    p0, p1, p2 = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
-    return np.stack([np.linalg.norm(p2 - p1, axis=1), np.linalg.norm(p0 - p2, axis=1),
-                     np.linalg.norm(p1 - p0, axis=1)], axis=1)
 
 
 def halfedge_twins(F: np.ndarray) -> np.ndarray:
@@ -242,24 +236,6 @@ def intrinsic_delaunay_triangulation(V: np.ndarray, F: np.ndarray, l: np.ndarray
     if flips < 0:
         raise RuntimeError(f"intrinsic Delaunay flips did not terminate after {max_flips} flips")
     return L, F_int, int(flips)
-
-
-def cotangents_from_lengths(l: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Corner cotangents (m, 3) and double areas (m,) from corner-opposite edge lengths.
-
-    ``cot_c = (l_{c+1}^2 + l_{c+2}^2 - l_c^2) / (4 A)``; area by Kahan's stable Heron formula.
-    Zero-area faces get cotangent 0 (same policy as `operators.corner_cotangents`).
-    """
-    s = -np.sort(-l, axis=1)            # descending
-    x, y, z = s[:, 0], s[:, 1], s[:, 2]
-    p = (x + (y + z)) * (z - (x - y)) * (z + (x - y)) * (x + (y - z))
-    area = 0.25 * np.sqrt(np.maximum(p, 0.0))
-    sq = l * l
-    num = np.stack([sq[:, 1] + sq[:, 2] - sq[:, 0], sq[:, 2] + sq[:, 0] - sq[:, 1],
-                    sq[:, 0] + sq[:, 1] - sq[:, 2]], axis=1)
-    ok = area > 0
-    C = np.where(ok[:, None], num / np.where(ok, 4.0 * area, 1.0)[:, None], 0.0)
-    return C, 2.0 * area
 
 
 def intrinsic_delaunay_cotmatrix(V: np.ndarray, F: np.ndarray):

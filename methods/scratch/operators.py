@@ -15,41 +15,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-
-def unique_edges(F: np.ndarray) -> np.ndarray:
-    """Undirected edges (e, 2) int64 with ``E[:, 0] < E[:, 1]``, sorted lexicographically."""
-    E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
-    E.sort(axis=1)
-    return np.unique(E, axis=0)
-
-
-def double_areas(V: np.ndarray, F: np.ndarray) -> np.ndarray:
-    """Twice the area of each face (m,): ``|(v1 - v0) x (v2 - v0)|``."""
-    return np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
-
-
-def face_normals(V: np.ndarray, F: np.ndarray) -> np.ndarray:
-    """Unit face normals (m, 3) by the right-hand rule; zero rows for zero-area faces."""
-    N = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-    nrm = np.linalg.norm(N, axis=1, keepdims=True)
-    return np.divide(N, nrm, out=np.zeros_like(N), where=nrm > 0)
-
-
-def corner_cotangents(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Cotangent of each corner angle (m, 3) and the face double areas (m,).
-
-    Corner k's angle is opposite the edge (F[:, k+1], F[:, k+2]).
-    ``cot = (a . b) / |a x b|`` for the two edge vectors leaving the corner. Faces of zero
-    area get cotangent 0 (they contribute nothing: the policy of PMP's clamped weights,
-    which keeps W finite; libigl would produce inf/NaN there).
-    """
-    p0, p1, p2 = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
-    e0, e1, e2 = p2 - p1, p0 - p2, p1 - p0          # edge opposite corner k
-    dbl = np.linalg.norm(np.cross(e1, e2), axis=1)
-    dots = np.stack([-(e1 * e2).sum(1), -(e2 * e0).sum(1), -(e0 * e1).sum(1)], axis=1)
-    safe = np.where(dbl > 0, dbl, 1.0)
-    C = np.where((dbl > 0)[:, None], dots / safe[:, None], 0.0)
-    return C, dbl
+from harness.core.geometry import (corner_cotangents, double_areas, face_normals,  # noqa: F401
+                                   unique_edges, zero_area_faces)
 
 
 def assemble_weights(F: np.ndarray, half_w: np.ndarray, n: int) -> sp.csr_matrix:
@@ -357,10 +324,3 @@ def cotan_laplacian(V: np.ndarray, F: np.ndarray, mass: str = "voronoi", pattern
     return pattern.assemble(V, mass)
 
 
-def zero_area_faces(V: np.ndarray, F: np.ndarray) -> np.ndarray:
-    """Indices of faces with zero area by the cross product or by Kahan's Heron formula on the
-    edge lengths (how libigl measures it: a numerically flat face may have a cross-product
-    area of 1e-20 and a Heron area of exactly 0)."""
-    from .intrinsic_delaunay import cotangents_from_lengths, edge_lengths
-    heron = cotangents_from_lengths(edge_lengths(V, F))[1]
-    return np.flatnonzero((double_areas(V, F) == 0) | ~(heron > 0))

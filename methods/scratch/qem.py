@@ -11,21 +11,8 @@ import warnings
 
 import numpy as np
 
+from harness.core.geometry import compact
 from methods import Param, SimplificationResult, register
-
-
-def compact(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Drop unreferenced vertices and reindex the faces.
-
-    Returns ``(V, F)`` as float64 (k, 3) and int64 (l, 3); kept vertices stay in their
-    original order. Used by every simplification adapter so all outputs are compacted.
-    """
-    V = np.ascontiguousarray(V, dtype=np.float64).reshape(-1, 3)
-    F = np.ascontiguousarray(F, dtype=np.int64).reshape(-1, 3)
-    used = np.zeros(V.shape[0], dtype=bool)
-    used[F.ravel()] = True
-    remap = np.cumsum(used) - 1
-    return V[used], remap[F]
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -36,8 +36,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from methods import Param, SmoothingResult, register
-from methods.scratch.operators import (cotan_weights, unique_edges, uniform_weights,
-                                       voronoi_areas)
+from harness.core.geometry import boundary_vertices, mean_edge_length
+from harness.core.solvers import backward_euler
+from methods.vocabulary import solver_param
+from methods.scratch.operators import cotan_weights, uniform_weights, voronoi_areas
 
 WEIGHTS = ("uniform", "cotan", "cotan_area")
 
@@ -45,12 +47,6 @@ _WEIGHTS_DOC = ("operator L = M^-1 W: uniform (umbrella, M = diag(deg)), cotan (
                 "M = diag of its off-diagonal row sums), cotan_area (cotangent W, Voronoi mass)")
 _STEP_DOC = ("dimensionless step: time step h = step for uniform/cotan, "
              "h = step * (mean edge length)^2 for cotan_area")
-
-
-def mean_edge_length(V: np.ndarray, F: np.ndarray) -> float:
-    """Mean length of the unique undirected edges of ``(V, F)``."""
-    E = unique_edges(F)
-    return float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean())
 
 
 def smoothing_operator(V: np.ndarray, F: np.ndarray, weights: str = "cotan_area"
@@ -98,15 +94,6 @@ def time_step(V: np.ndarray, F: np.ndarray, step: float, weights: str) -> float:
     if weights == "cotan_area":
         return float(step) * mean_edge_length(V, F) ** 2
     return float(step)
-
-
-def boundary_vertices(F: np.ndarray, n: int) -> np.ndarray:
-    """Boolean mask (n,) of vertices on an edge that belongs to exactly one face."""
-    E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
-    uniq, counts = np.unique(E, axis=0, return_counts=True)
-    mask = np.zeros(n, dtype=bool)
-    mask[uniq[counts == 1].ravel()] = True
-    return mask
 
 
 def _finite(X: np.ndarray) -> bool:
@@ -189,34 +176,6 @@ def explicit(V, F, *, weights="uniform", step=0.25, iterations=10, self_weight=0
     return SmoothingResult(V=X)
 
 
-_SOLVER_DOC = ("sparse SPD solver: auto (fastest installed, see methods/scratch/solvers.py) or a "
-               "backend name")
-
-
-def _solver_param():
-    from methods.scratch.solvers import SOLVER_CHOICES
-    return Param("solver", "auto", choices=SOLVER_CHOICES, doc=_SOLVER_DOC)
-
-
-def backward_euler(V, F, operator, h, iterations, reassemble, solver="auto"):
-    """Shared core of the implicit methods: ``(M - h W) X_{k+1} = M X_k``, ``iterations`` times.
-
-    ``operator(X) -> (W, m)`` builds the operator at positions ``X``; with ``reassemble``
-    false it is built once from ``V`` and the matrix is factored once; with ``reassemble``
-    true it is rebuilt (and refactored, reusing the cached symbolic analysis of the unchanged
-    pattern) before every step. ``h`` stays fixed.
-    """
-    from methods.scratch.solvers import factorize
-    X = V.copy()
-    fac = m = None
-    for it in range(iterations):
-        if fac is None or reassemble:
-            W, m = operator(X)
-            fac = factorize(sp.diags(m) - h * W, solver)
-        X = fac.solve(m[:, None] * X)
-    return X
-
-
 @register("scratch.implicit", task="smoothing", library="scratch",
           params={"weights": Param("weights", "cotan_area", choices=WEIGHTS, doc=_WEIGHTS_DOC),
                   "step": Param("step", 1.0, "float", low=0.0, doc=_STEP_DOC),
@@ -225,7 +184,7 @@ def backward_euler(V, F, operator, h, iterations, reassemble, solver="auto"):
                   "reassemble": Param("reassemble", False, "bool",
                                       doc="rebuild W and M from the current positions each step "
                                           "(mean-curvature flow)"),
-                  "solver": _solver_param()})
+                  "solver": solver_param()})
 def implicit(V, F, *, weights="cotan_area", step=1.0, iterations=1, reassemble=False,
              solver="auto"):
     """Implicit (backward Euler) Laplacian smoothing, symmetric form ``(M - h W) X' = M X``.
@@ -246,7 +205,7 @@ def implicit(V, F, *, weights="cotan_area", step=1.0, iterations=1, reassemble=F
         (linear diffusion). True: rebuilt from the current positions before each step
         (mean-curvature flow, Desbrun et al. 1999 Sec. 5).
     solver : str
-        Sparse SPD solver (``methods.scratch.solvers``), ``auto`` by default.
+        Sparse SPD solver (``harness.core.solvers``), ``auto`` by default.
 
     Returns
     -------
@@ -331,7 +290,7 @@ def taubin(V, F, **params):
           params={"alpha": Param("alpha", 1.0, "float", low=1e-6, high=1e6,
                                  doc="screening weight, dimensionless: alpha_phys = alpha / lbar"),
                   "weights": Param("weights", "cotan_area", choices=WEIGHTS, doc=_WEIGHTS_DOC),
-                  "solver": _solver_param()})
+                  "solver": solver_param()})
 def screened_poisson(V, F, *, alpha=1.0, weights="cotan_area", solver="auto"):
     """Screened-Poisson smoothing ``(a^2 M - W) X = a^2 M X0``.
 
@@ -362,6 +321,6 @@ def screened_poisson(V, F, *, alpha=1.0, weights="cotan_area", solver="auto"):
     if weights == "cotan_area":
         a2 = a2 / mean_edge_length(V, F) ** 2
     W, m = smoothing_operator(V, F, weights)
-    from methods.scratch.solvers import factorize
+    from harness.core.solvers import factorize
     X = factorize(a2 * sp.diags(m) - W, solver).solve(a2 * m[:, None] * V)
     return SmoothingResult(V=X)

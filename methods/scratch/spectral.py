@@ -20,14 +20,14 @@ def lowest_eigenpairs(W: sp.spmatrix, m: np.ndarray, k: int, solver: str = "auto
     ascending. Sparse path: ARPACK (``eigsh``) in shift-invert mode around a small negative
     shift ``sigma`` (``-W - sigma M`` is then positive definite even though ``W`` has the
     constant vector in its kernel), the shifted matrix factored once with
-    ``methods.scratch.solvers``; the start vector is fixed so results are deterministic.
+    ``harness.core.solvers``; the start vector is fixed so results are deterministic.
     """
     n = W.shape[0]
     k = int(min(k, n))
     if n <= _DENSE_MAX or k >= n - 1:
         lam, Phi = sla_dense.eigh(-W.toarray(), np.diag(m), subset_by_index=[0, k - 1])
         return lam, Phi
-    from methods.scratch.solvers import factorize
+    from harness.core.solvers import factorize
     scale = float(np.median(-W.diagonal() / m))          # typical eigenvalue magnitude
     sigma = -1e-3 * scale
     M = sp.diags(m).tocsc()

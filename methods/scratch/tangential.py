@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 
 from methods import Param, SmoothingResult, register
-from methods.scratch.smoothing import boundary_vertices
+from harness.core.geometry import boundary_vertices
 
 
 @register("scratch.tangential", task="smoothing", library="scratch",

@@ -15,11 +15,11 @@ Design
   with the same reader and repair policy as a local run, so no shared filesystem is needed.
   The case id, mesh label and error messages (which name the file's base name) are unchanged.
 - Isolation and timeouts hold on the worker: every task runs its case in a child process of
-  the worker via `harness.executors.run_isolated` (a crash is an ``error`` row naming the
+  the worker via `harness.executors.isolation.run_isolated` (a crash is an ``error`` row naming the
   signal, a case past the timeout is killed and recorded as ``timeout``; the worker lives on).
   Dask's nanny starts workers as *daemonic* processes by default, and a daemonic process may
   not start multiprocessing children; on such a worker the task falls back to a fresh
-  ``python -m harness.dask_executor`` subprocess per case (same isolation, about a second more
+  ``python -m harness.executors.dask`` subprocess per case (same isolation, about a second more
   per case for the interpreter start). Start workers with ``DASK_DISTRIBUTED__WORKER__DAEMON=False``
   to get the faster in-process path.
 - Only the driver writes run files (CSV rows, run.json, result meshes); workers return rows and,
@@ -35,7 +35,6 @@ import dataclasses
 import hashlib
 import os
 import pickle
-import signal
 import subprocess
 import sys
 import tempfile
@@ -43,9 +42,10 @@ import threading
 import uuid
 from pathlib import Path
 
-from .config import Case
-from .errors import ShootoutError
-from .runner import base_row
+from ..config import Case
+from ..errors import ShootoutError
+from ..runner import base_row
+from .isolation import signal_name
 
 FILE_KEYS = ("file", "clean")
 CACHE_DIR_NAME = "mesh-shootout-dask"
@@ -121,16 +121,19 @@ class DaskExecutor:
         for fut in as_completed(list(futures)):
             case = futures.pop(fut)
             try:
-                row, meshes = fut.result()
+                row, extras = fut.result()
             except Exception as exc:  # KilledWorker, CancelledError, a lost scheduler: one error row
-                row, meshes = base_row(case), {}
+                row, extras = base_row(case), {}
                 name = type(exc).__name__
                 what = ("the Dask worker running this case died" if name == "KilledWorker"
                         else "the Dask task failed")
                 row["error"] = f"{what} ({name}: {exc})"[:2000]
             fut.release()
-            yield case, row, meshes
+            yield case, row, extras
         self._futures = {}
+
+    def describe(self) -> dict:
+        return {"executor": self.name, "workers": self.n_workers(), "scheduler": self.scheduler}
 
     def close(self):
         if self._futures:
@@ -224,7 +227,7 @@ def run_task(case: Case, blobs: dict, timeout: float | None, want_meshes: bool):
     if _daemonic():
         return run_in_subprocess(case, timeout, want_meshes)
     _warm(case)
-    from .executors import run_isolated
+    from .isolation import run_isolated
     return run_isolated(case, timeout, want_meshes)
 
 
@@ -237,21 +240,14 @@ def _warm(case: Case) -> None:
         import methods
         methods.load_plugins(list(case.plugins))
         if not any(k in case.mesh for k in FILE_KEYS):
-            from . import datasets
+            from .. import datasets
             datasets.load(case.mesh)
     except Exception:  # noqa: BLE001 - reported by the child, as a row
         pass
 
 
-def _signal_name(code: int) -> str:
-    try:
-        return signal.Signals(-code).name
-    except ValueError:
-        return f"signal {-code}"
-
-
 def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: bool = False):
-    """Run one case in a fresh ``python -m harness.dask_executor`` process; ``(row, meshes)``.
+    """Run one case in a fresh ``python -m harness.executors.dask`` process; ``(row, meshes)``.
 
     For processes that may not fork multiprocessing children (daemonic Dask workers). The
     case goes in on stdin (pickled) and the result comes back through a temporary file (the
@@ -265,7 +261,7 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
         env = dict(os.environ)          # this process's sys.path (plugins) for the child too
         paths = [p for p in sys.path if p and os.path.isdir(p)]
         env["PYTHONPATH"] = os.pathsep.join(dict.fromkeys(paths + env.get("PYTHONPATH", "").split(os.pathsep)))
-        proc = subprocess.Popen([sys.executable, "-m", "harness.dask_executor", out_path],
+        proc = subprocess.Popen([sys.executable, "-m", "harness.executors.dask", out_path],
                                 stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
                                 stderr=subprocess.PIPE, env=env)
         err_chunks: list[bytes] = []
@@ -296,7 +292,7 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
                 return pickle.load(fh)
         row = base_row(case)
         if code < 0:
-            row["error"] = f"worker process died: {_signal_name(code)} (the method crashed its process)"
+            row["error"] = f"worker process died: {signal_name(code)} (the method crashed its process)"
         else:
             tail = b"".join(err_chunks).decode(errors="replace").strip().splitlines()[-1:]
             row["error"] = (f"worker process exited with code {code} without a result"
@@ -315,7 +311,7 @@ def _subprocess_main(out_path: str) -> int:
         os._exit(70)
 
     threading.Thread(target=die_with_parent, daemon=True).start()
-    from .runner import run_case
+    from ..runner import run_case
     result = run_case(case, want_meshes=want_meshes)
     tmp = out_path + ".part"
     with open(tmp, "wb") as fh:

@@ -420,3 +420,21 @@ def factorize(A, solver: str = "auto", reuse_symbolic: bool = True) -> Factor:
 def spd_solve(A, B, solver: str = "auto") -> np.ndarray:
     """``A^-1 B`` for one SPD system (factor, solve, discard the numeric factor)."""
     return factorize(A, solver).solve(B)
+
+
+def backward_euler(V, F, operator, h, iterations, reassemble, solver="auto"):
+    """Shared core of the implicit methods: ``(M - h W) X_{k+1} = M X_k``, ``iterations`` times.
+
+    ``operator(X) -> (W, m)`` builds the operator at positions ``X``; with ``reassemble``
+    false it is built once from ``V`` and the matrix is factored once; with ``reassemble``
+    true it is rebuilt (and refactored, reusing the cached symbolic analysis of the unchanged
+    pattern) before every step. ``h`` stays fixed.
+    """
+    X = V.copy()
+    fac = m = None
+    for it in range(iterations):
+        if fac is None or reassemble:
+            W, m = operator(X)
+            fac = factorize(sp.diags(m) - h * W, solver)
+        X = fac.solve(m[:, None] * X)
+    return X

@@ -1,0 +1,78 @@
+"""A declared parameter: name, default, type, bounds or choices, and a one-line doc.
+
+Shared by task declarations (parameters every method of a task takes) and method
+declarations; validation messages name the parameter and what was expected.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Param:
+    """A declared method parameter.
+
+    ``kind`` is one of ``int``, ``float``, ``bool``, ``str``; ``low``/``high`` are inclusive
+    bounds for numbers, ``choices`` the allowed values of a string. ``default=None`` with
+    ``optional=True`` means "not given".
+    """
+
+    name: str
+    default: Any
+    kind: str = ""
+    low: float | None = None
+    high: float | None = None
+    choices: tuple | None = None
+    doc: str = ""
+    optional: bool = False
+
+    def __post_init__(self):
+        if not self.kind:
+            d = self.default
+            kind = ("bool" if isinstance(d, bool) else "int" if isinstance(d, int)
+                    else "float" if isinstance(d, float) else "str" if isinstance(d, str) else "")
+            if not kind:
+                raise TypeError(f"parameter {self.name!r}: give kind= for default {d!r}")
+            object.__setattr__(self, "kind", kind)
+        if self.choices is not None:
+            object.__setattr__(self, "choices", tuple(self.choices))
+
+    def problem(self, value) -> str | None:
+        """Return why ``value`` is not acceptable, or None."""
+        if value is None and self.optional:
+            return None
+        k = self.kind
+        if k == "bool":
+            ok = isinstance(value, (bool, np.bool_))
+        elif k == "int":
+            ok = isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+        elif k == "float":
+            ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+        else:
+            ok = isinstance(value, str)
+        if not ok:
+            return f"expected {k}, got {type(value).__name__} {value!r}"
+        if k in ("int", "float"):
+            if not math.isfinite(float(value)):
+                return f"expected a finite number, got {value!r}"
+            if self.low is not None and value < self.low:
+                return f"must be >= {self.low}, got {value!r}"
+            if self.high is not None and value > self.high:
+                return f"must be <= {self.high}, got {value!r}"
+        if self.choices is not None and value not in self.choices:
+            return f"must be one of {list(self.choices)}, got {value!r}"
+        return None
+
+    def describe(self) -> str:
+        s = f"{self.name}={self.default!r}"
+        if self.choices:
+            s += f" {{{'|'.join(map(str, self.choices))}}}"
+        elif self.low is not None or self.high is not None:
+            lo = "-inf" if self.low is None else self.low
+            hi = "inf" if self.high is None else self.high
+            s += f" [{lo}, {hi}]"
+        return s

@@ -1,0 +1,99 @@
+"""Local executors: ``local`` runs ``workers`` cases at a time, each in its own child process
+(isolation and timeout, see `harness.executors.isolation`); ``serial`` runs in-process without
+isolation (debugging only).
+
+The local executor is a single-threaded scheduler waiting on the children's pipes: no threads in
+the forking process, and no re-import of the user's ``__main__`` (scripts need no
+``if __name__ == "__main__"`` guard).
+"""
+from __future__ import annotations
+
+import time
+from multiprocessing.connection import wait as mp_wait
+
+from ..runner import run_case
+from .isolation import _Job
+
+
+class SerialExecutor:
+    """In-process, one case at a time, no isolation or timeout (for debugging)."""
+
+    name = "serial"
+
+    def __init__(self, **_):
+        pass
+
+    def run(self, cases, want_meshes=False):
+        for c in cases:
+            row, extras = run_case(c, want_meshes=want_meshes)
+            yield c, row, extras
+
+    def close(self):
+        pass
+
+    def describe(self) -> dict:
+        return {"executor": self.name, "workers": getattr(self, "workers", 1)}
+
+
+class LocalExecutor:
+    """``workers`` cases at a time, each in its own child process (isolation + timeout)."""
+
+    name = "local"
+
+    def __init__(self, workers: int = 1, timeout: float | None = None, **_):
+        self.workers = max(1, int(workers))
+        self.timeout = timeout
+
+    def run(self, cases, want_meshes=False):
+        todo = list(cases)
+        _warm_mesh_cache(todo)
+        todo.reverse()
+        running: list[_Job] = []
+        try:
+            while todo or running:
+                while todo and len(running) < self.workers:
+                    running.append(_Job(todo.pop(), want_meshes))
+                wait_s = None
+                if self.timeout is not None:
+                    now = time.perf_counter()
+                    wait_s = max(0.0, min(j.t0 + self.timeout - now for j in running))
+                ready = mp_wait([j.conn for j in running], timeout=wait_s)
+                for job in [j for j in running if j.conn in ready]:
+                    running.remove(job)
+                    row, extras = job.collect()
+                    yield job.case, row, extras
+                if self.timeout is not None:
+                    now = time.perf_counter()
+                    for job in [j for j in running if now - j.t0 >= self.timeout and j.conn not in ready]:
+                        running.remove(job)
+                        row, extras = job.kill_timeout(self.timeout)
+                        yield job.case, row, extras
+        finally:
+            for job in running:                # interrupted: leave no orphan behind
+                job.proc.kill()
+                job.proc.join()
+
+    def close(self):
+        pass
+
+    def describe(self) -> dict:
+        return {"executor": self.name, "workers": getattr(self, "workers", 1)}
+
+
+def _warm_mesh_cache(cases) -> None:
+    """Load each distinct bundled or procedural mesh once in the driver so forked children
+    inherit it. File meshes are never read here: a reader that crashes on a bad file must
+    cost that file's rows, not the driver (best effort: failures fail again, as error rows)."""
+    from .. import datasets
+    seen = set()
+    for c in cases:
+        if "file" in c.mesh:
+            continue
+        key = repr(sorted(c.mesh.items()))
+        if key in seen or len(seen) >= 8:
+            continue
+        seen.add(key)
+        try:
+            datasets.load(c.mesh)
+        except Exception:  # noqa: BLE001 - the case's own child reports it as an error row
+            pass

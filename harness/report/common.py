@@ -1,0 +1,74 @@
+"""Helpers shared by the report's sections: escaping, the one number formatter, variant labels."""
+from __future__ import annotations
+
+import html
+import json
+import math
+import re
+from collections import defaultdict
+
+import numpy as np
+
+
+def esc(x) -> str:
+    return html.escape("" if x is None else str(x))
+
+
+def fmt(v, digits=3) -> str:
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "—"
+    if isinstance(v, (bool, np.bool_)):
+        return "true" if v else "false"
+    if isinstance(v, (int, np.integer)):
+        return str(int(v))
+    v = float(v)
+    if v == 0:
+        return "0"
+    if 1e-3 <= abs(v) < 1e5:
+        return f"{v:.{digits}g}"
+    return f"{v:.{max(digits - 1, 1)}e}"
+
+
+def params_of(s) -> dict:
+    try:
+        p = json.loads(s) if isinstance(s, str) and s else {}
+        return p if isinstance(p, dict) else {}
+    except json.JSONDecodeError:
+        return {}
+
+
+def short(v) -> str:
+    return json.dumps(v) if isinstance(v, (dict, list)) else str(v)
+
+
+def variant_labels(df, axis_params=frozenset()) -> list[str]:
+    """Method name plus the parameters that vary between this method's rows (axis params excluded)."""
+    skip = set(axis_params)
+    ps = [params_of(s) for s in df["params"]] if "params" in df else [{} for _ in range(len(df))]
+    varying: dict[str, set] = defaultdict(set)
+    by_method: dict[str, list[dict]] = defaultdict(list)
+    for m, p in zip(df["method"], ps):
+        by_method[m].append(p)
+    for m, plist in by_method.items():
+        keys = set().union(*plist) if plist else set()
+        varying[m] = {k for k in keys - skip if len({short(p.get(k)) for p in plist}) > 1}
+    out = []
+    for m, p in zip(df["method"], ps):
+        extra = " ".join(f"{k}={short(p.get(k))}" for k in sorted(varying[m]))
+        out.append(f"{m} {extra}".strip())
+    return out
+
+
+def natural_key(s: str):
+    """Sort key that orders "iterations=5" before "iterations=20"."""
+    return [(0, float(t), "") if re.fullmatch(r"\d+(\.\d+)?", t) else (1, 0.0, t) for t in re.split(r"(\d+(?:\.\d+)?)", s)]
+
+
+def noise_label(model, level) -> str:
+    if model in (None, "none") or (isinstance(model, float) and math.isnan(model)):
+        return "no noise"
+    if level is None or (isinstance(level, float) and math.isnan(level)):
+        return str(model)
+    return f"{model} {level:g}"
+
+

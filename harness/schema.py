@@ -1,0 +1,51 @@
+"""The columns of a task CSV and the one function that turns a value into a CSV/JSON scalar.
+
+A row is a flat dict: the common columns below, then the task's metric columns in the order
+its `harness.tasks` declaration gives them.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import tasks
+
+COMMON_COLUMNS = ["case_id", "task", "mesh", "n_vertices", "n_faces", "noise_model", "noise_level", "seed",
+                  "method", "library", "params", "status", "error", "time_s", "time_min_s", "time_max_s",
+                  "repeats", "peak_rss_mb"]
+STATUSES = ("ok", "error", "timeout", "unavailable")
+
+
+def columns(task: str) -> list[str]:
+    """Every column of ``task``'s CSV, in order."""
+    return COMMON_COLUMNS + tasks.get(task).columns
+
+
+def task_file(task: str) -> str:
+    return f"{task}.csv"
+
+
+def scalar(v):
+    """A JSON-ready scalar: None for missing or non-finite numbers, Python bool/int/float for
+    numpy and Python numbers, ``str(v)`` for anything else."""
+    if v is None:
+        return None
+    if isinstance(v, (bool, np.bool_)):
+        return bool(v)
+    if isinstance(v, (int, np.integer)):
+        return int(v)
+    if isinstance(v, (float, np.floating)):
+        f = float(v)
+        return f if math.isfinite(f) else None
+    return str(v)
+
+
+def cell(v) -> str | int | float:
+    """A CSV cell: empty for missing, ``true``/``false`` for flags, numbers as they are."""
+    v = scalar(v)
+    if v is None:
+        return ""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    return v

@@ -1,0 +1,128 @@
+"""What a task kind is: a declared object the registry, runner, compare, report and CLI read.
+
+A task module (one file in ``harness/tasks/``) defines ``TASK = Task(...)``: the result type its
+methods return, the parameters every method of the task takes, its metric specs, the function
+that measures a result against the case's input, the output mesh it can save, and what the
+report needs. Nothing else in the pipeline names a task.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+
+from ..errors import MethodFailed
+
+BETTER = ("lower", "higher", "one", "true", "false", "count", "target", "info", "input")
+
+
+@dataclass(frozen=True)
+class Metric:
+    """One result column.
+
+    ``better``: ``lower``/``higher`` (numbers), ``one`` (a ratio that should be 1), ``true``/
+    ``false`` (the good value of a flag), ``count`` (an integer that may not grow), ``target``
+    (a count that should hit a target column), ``info`` (no direction), ``input`` (describes the
+    case's input, not the result). ``rel``/``abs``: the compare tolerance, a change counts when
+    it exceeds ``max(rel * |a|, abs)``. ``unit``: ``diag`` (fraction of the clean mesh's
+    bounding-box diagonal), ``deg``, ``s``, ``MiB`` or empty. ``kind``: ``float``, ``int``,
+    ``bool`` or ``json`` (a JSON-encoded list).
+    """
+
+    name: str
+    better: str = "info"
+    doc: str = ""
+    unit: str = ""
+    rel: float = 0.01
+    abs: float = 0.0
+    kind: str = "float"
+    rank: bool = False          # offered as a ranking metric in the report
+
+    def __post_init__(self):
+        if self.better not in BETTER:
+            raise ValueError(f"metric {self.name}: better must be one of {BETTER}, got {self.better!r}")
+
+    def spec(self) -> dict:
+        return {"name": self.name, "better": self.better, "doc": self.doc, "unit": self.unit,
+                "rel": self.rel, "abs": self.abs, "kind": self.kind, "rank": self.rank}
+
+
+@dataclass
+class CaseInput:
+    """What a method is run on and measured against.
+
+    ``clean``: the reference `harness.mesh.Mesh`; ``V``: the input positions (clean plus noise,
+    or the given noisy file); ``F``: the faces (``clean.F``); ``diag``: the clean mesh's
+    bounding-box diagonal; ``settings``: case-level measurement settings (e.g.
+    ``hausdorff_samples``); ``cache``: per-input facts a task may memoise (topology, ...).
+    """
+
+    clean: Any
+    V: np.ndarray
+    F: np.ndarray
+    diag: float
+    settings: dict = field(default_factory=dict)
+    cache: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Task:
+    """A task kind. See the module docstring; README "Adding a task kind" walks through one."""
+
+    name: str
+    title: str
+    intro: str
+    result_type: type
+    metrics: tuple
+    measure: Callable[[CaseInput, Any, dict], dict]
+    params: dict = field(default_factory=dict)
+    prepare: Callable[[dict, np.ndarray, np.ndarray], dict] | None = None
+    check_result: Callable[[Any, np.ndarray, np.ndarray], Any] | None = None
+    output_mesh: Callable[[CaseInput, Any], tuple] | None = None
+    view: Callable[[CaseInput, Any], list] | None = None
+    view_metric: str | None = None
+    axis_params: frozenset = frozenset()
+    sections: tuple = ()
+    order: int = 100            # position in the report and listings
+
+    @property
+    def columns(self) -> list[str]:
+        return [m.name for m in self.metrics]
+
+    def metric(self, name: str) -> Metric | None:
+        return next((m for m in self.metrics if m.name == name), None)
+
+    def validate_result(self, name: str, result, V: np.ndarray, F: np.ndarray):
+        """The method's result, normalised; `MethodFailed` naming what came back otherwise."""
+        if not isinstance(result, self.result_type):
+            raise MethodFailed(f"{name} returned {type(result).__name__}, expected {self.result_type.__name__}")
+        if self.check_result is None:
+            return result
+        try:
+            return self.check_result(result, V, F)
+        except MethodFailed as exc:
+            raise MethodFailed(f"{name} {exc}") from None
+
+    def spec(self) -> dict:
+        """JSON-ready declaration (written to run.json, read by the report and compare)."""
+        return {"name": self.name, "title": self.title, "intro": self.intro,
+                "metrics": [m.spec() for m in self.metrics], "view_metric": self.view_metric,
+                "axis_params": sorted(self.axis_params), "sections": list(self.sections),
+                "params": sorted(self.params)}
+
+
+def float_array(name: str, what: str, X, shape: tuple) -> np.ndarray:
+    """``X`` as float64 of ``shape`` (``-1`` = any length); `MethodFailed` naming what came back.
+
+    Refuses complex, boolean, string and object arrays instead of converting them.
+    """
+    A = np.asarray(X) if not isinstance(X, np.ndarray) else X
+    if not isinstance(X, np.ndarray):
+        raise MethodFailed(f"{name} returned {what} as {type(X).__name__}, expected a float64 numpy array")
+    if A.dtype.kind != "f":
+        raise MethodFailed(f"{name} returned {what} of dtype {A.dtype}, expected float64")
+    if A.ndim != len(shape) or any(s != -1 and s != a for s, a in zip(shape, A.shape)):
+        want = "(" + ", ".join("k" if s == -1 else str(s) for s in shape) + ")"
+        raise MethodFailed(f"{name} returned {what} of shape {A.shape}, expected {want}")
+    return np.ascontiguousarray(A, dtype=np.float64)

@@ -1,0 +1,76 @@
+"""Task ``laplacian``: a discrete Laplace operator ``W`` (and mass ``M``) of the input mesh,
+measured for the properties of Wardetzky, Mathur, Kaelberer & Grinspun 2007 (SGP), "Discrete
+Laplace operators: no free lunch" (definitions in `harness.metrics.laplacian_properties`)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import MethodFailed
+from ..metrics.laplacian_properties import laplacian_properties
+from .base import Metric, Task
+
+
+@dataclass
+class LaplacianResult:
+    """Laplacian in libigl's sign convention.
+
+    ``W``: scipy sparse (n, n); off-diagonal entries are the edge weights (positive where POS
+    holds), each row sums to zero. ``M``: diagonal mass matrix (n, n) or None. The pointwise
+    operator is ``M^-1 W``.
+    """
+
+    W: Any
+    M: Any = None
+
+
+def _check(result: LaplacianResult, V, F):
+    n = V.shape[0]
+    for what in ("W", "M"):
+        A = getattr(result, what)
+        if A is None and what == "M":
+            continue
+        if not (sp.issparse(A) or isinstance(A, np.ndarray)):
+            raise MethodFailed(f"returned {what} as {type(A).__name__}, expected a scipy sparse matrix")
+        A = sp.csr_matrix(A)
+        if A.dtype.kind != "f":
+            raise MethodFailed(f"returned {what} of dtype {A.dtype}, expected float64")
+        if A.shape != (n, n):
+            raise MethodFailed(f"returned {what} of shape {A.shape}, expected ({n}, {n})")
+        A = A.astype(np.float64)
+        if not np.isfinite(A.data).all():      # NaN weights would pass as NaN metrics
+            k = int((~np.isfinite(A.data)).sum())
+            raise MethodFailed(f"returned {what} with {k} non-finite (NaN or inf) entries")
+        setattr(result, what, A)
+    return result
+
+
+def _measure(inp, result, params) -> dict:
+    return laplacian_properties(result.W, result.M, inp.V, inp.F)
+
+
+_REL = 0.01
+TASK = Task(
+    name="laplacian", title="Laplacians", result_type=LaplacianResult,
+    intro="Discrete Laplacians W (libigl's sign convention) measured for Wardetzky et al.'s properties "
+          "on each input mesh.",
+    metrics=(
+        Metric("sym_error", "lower", "max |W - W^T| / max |W|", rel=_REL, abs=1e-10),
+        Metric("loc_violations", "count", "non-zeros between vertices that share no edge", kind="int"),
+        Metric("lin_error", "lower", "max |W X| / (max|W| diag) at interior vertices (planar meshes only)",
+               rel=_REL, abs=1e-9),
+        Metric("neg_weights", "lower", "fraction of negative off-diagonal weights", rel=_REL, abs=1e-6),
+        Metric("min_eig", "higher", "smallest eigenvalue of -(W + W^T)/2 over the largest magnitude",
+               rel=_REL, abs=1e-10),
+        Metric("psd", "true", "-(W + W^T)/2 positive semi-definite (min_eig >= -1e-10)", kind="bool"),
+        Metric("nnz", "info", "stored non-zero entries of W", kind="int"),
+        Metric("SYM", "true", "sym_error <= 1e-10", kind="bool"),
+        Metric("LOC", "true", "loc_violations == 0", kind="bool"),
+        Metric("LIN", "true", "lin_error <= 1e-9 (planar meshes only)", kind="bool"),
+        Metric("POS", "true", "no negative off-diagonal weight", kind="bool"),
+        Metric("operator_symmetric", "true", "the pointwise operator M^-1 W is a symmetric matrix", kind="bool"),
+    ),
+    measure=_measure, check_result=_check, sections=("property_matrix",), order=10)

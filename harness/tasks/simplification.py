@@ -1,0 +1,126 @@
+"""Task ``simplification``: a mesh with fewer faces approximating the input surface, measured
+against the input (the noisy positions when noise is applied). Lengths are fractions of the
+clean mesh's bounding-box diagonal."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core.params import Param
+from ..errors import MethodFailed
+from ..metrics.hausdorff import hausdorff
+from ..metrics.surface_distance import point_surface_distance
+from ..metrics.triangle_quality import triangle_quality
+from .base import Metric, Task, float_array
+
+
+@dataclass
+class SimplificationResult:
+    """Simplified mesh: ``V`` (k, 3) float64, ``F`` (l, 3) integer indices into ``V``."""
+
+    V: np.ndarray
+    F: np.ndarray
+
+
+PARAMS = {
+    "target_ratio": Param("target_ratio", 0.5, "float", low=1e-6, high=1.0,
+                          doc="fraction of input faces to keep (ignored when target_faces is set)"),
+    "target_faces": Param("target_faces", None, "int", low=1, optional=True,
+                          doc="number of faces to keep; overrides target_ratio"),
+}
+
+
+def target_face_count(n_faces: int, target_ratio: float | None, target_faces: int | None) -> int:
+    """Faces asked for: ``target_faces`` if given, else ``round(target_ratio * n_faces)``, >= 1."""
+    if target_faces is not None:
+        return max(1, int(target_faces))
+    return max(1, int(round(float(target_ratio) * n_faces)))
+
+
+def prepare(params: dict, V, F) -> dict:
+    """The adapter receives one integer ``target_faces`` in place of the two shared parameters."""
+    p = dict(params)
+    p["target_faces"] = target_face_count(F.shape[0], p.pop("target_ratio"), p.pop("target_faces"))
+    return p
+
+
+def _check(result: SimplificationResult, V, F):
+    Vo = float_array("", "V", result.V, (-1, 3))
+    Fo = result.F
+    if not isinstance(Fo, np.ndarray) or Fo.dtype.kind not in "iu" or Fo.ndim != 2 or Fo.shape[1:] != (3,):
+        what = f"{type(Fo).__name__} of dtype {getattr(Fo, 'dtype', '?')} and shape {getattr(Fo, 'shape', '?')}"
+        raise MethodFailed(f"returned F as {what}, expected an integer array (l, 3)")
+    if Fo.size == 0:
+        raise MethodFailed(f"returned an empty mesh ({len(Vo)} vertices, 0 faces)")
+    if not np.isfinite(Vo).all():
+        raise MethodFailed("returned non-finite vertex coordinates")
+    if Fo.min() < 0 or Fo.max() >= len(Vo):
+        raise MethodFailed(f"returned face indices out of range [0, {len(Vo)}): min {Fo.min()}, max {Fo.max()}")
+    result.V, result.F = Vo, np.ascontiguousarray(Fo, dtype=np.int64)
+    return result
+
+
+def _topology_in(inp) -> dict:
+    if "topology" not in inp.cache:
+        from ..mesh import topology
+        inp.cache["topology"] = topology(inp.V, inp.F)
+    return inp.cache["topology"]
+
+
+def measure(inp, result, params) -> dict:
+    """Output size, symmetric Hausdorff distance to the input surface, manifoldness, topology change."""
+    from ..mesh import topology
+    V_out, F_out, diag = result.V, result.F, inp.diag
+    target = target_face_count(inp.F.shape[0], params.get("target_ratio"), params.get("target_faces"))
+    topo_in = _topology_in(inp)
+    row = {"target_faces": int(target), "out_faces": int(len(F_out))}
+    hd = hausdorff(V_out, F_out, inp.V, inp.F, n_samples=inp.settings.get("hausdorff_samples", 20000))
+    topo = topology(V_out, F_out)
+    row.update({"hausdorff": hd["hausdorff"] / diag, "dist_mean": hd["dist_mean"] / diag,
+                "manifold": topo["manifold"],
+                "genus_change": topo["genus"] - topo_in["genus"],
+                "boundary_loops_change": topo["boundary_loops"] - topo_in["boundary_loops"]})
+    row["topology_changed"] = bool(row["genus_change"] != 0 or row["boundary_loops_change"] != 0)
+    q = triangle_quality(V_out, F_out)
+    row.update({k: q[k] for k in ("min_angle", "radius_ratio_mean", "obtuse_fraction", "min_angle_hist")})
+    return row
+
+
+def output_mesh(inp, result):
+    return result.V, result.F
+
+
+def view(inp, result) -> list:
+    """Meshes of the 3D view: the input coloured by its distance to the result and the result by
+    its distance to the input (the two directions of the Hausdorff distance)."""
+    e_in = point_surface_distance(inp.V, result.V, result.F) / inp.diag
+    e_out = point_surface_distance(result.V, inp.V, inp.F) / inp.diag
+    return [("clean", inp.clean.V, inp.F, None, "reference mesh"),
+            ("input", inp.V, inp.F, e_in, "distance of each input vertex to the simplified surface"),
+            ("result", result.V, result.F, e_out, "distance of each result vertex to the input surface")]
+
+
+_LEN = dict(unit="diag", rel=0.01, abs=1e-6)
+TASK = Task(
+    name="simplification", title="Simplification", result_type=SimplificationResult,
+    intro="Simplified meshes against their (noisy) input. Hausdorff and mean distances are fractions of the "
+          "bounding-box diagonal; lower is better.",
+    metrics=(
+        Metric("target_faces", "info", "faces asked for", kind="int"),
+        Metric("out_faces", "target", "faces returned", kind="int"),
+        Metric("hausdorff", "lower", "symmetric Hausdorff distance to the input surface", rank=True, **_LEN),
+        Metric("dist_mean", "lower", "mean distance between the two surfaces", rank=True, **_LEN),
+        Metric("manifold", "true", "output is edge- and vertex-manifold", kind="bool"),
+        Metric("topology_changed", "false", "genus or number of boundary loops changed", kind="bool"),
+        Metric("genus_change", "info", "output genus minus input genus"),
+        Metric("boundary_loops_change", "info", "output boundary loops minus input's", kind="int"),
+        Metric("min_angle", "higher", "smallest triangle angle", unit="deg", rel=0.01, abs=0.01),
+        Metric("radius_ratio_mean", "higher", "mean of 2 r_in / r_circ over faces (1 = equilateral)",
+               rel=0.01, abs=1e-3),
+        Metric("obtuse_fraction", "lower", "fraction of faces with an angle above 90 degrees", rel=0.01, abs=2e-3),
+        Metric("min_angle_hist", "info", "histogram of the smallest angle per face (12 bins of 5 degrees)",
+               kind="json"),
+    ),
+    params=PARAMS, prepare=prepare, measure=measure, check_result=_check, output_mesh=output_mesh, view=view,
+    view_metric="hausdorff", axis_params=frozenset({"target_ratio", "target_faces"}), order=30)

@@ -1,0 +1,132 @@
+"""Task ``smoothing``: new vertex positions for the noisy input (same vertices, same faces),
+measured against the clean mesh. Lengths are fractions of the clean mesh's bounding-box
+diagonal, angles in degrees."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core.geometry import area, volume, zero_area_faces
+from ..errors import MethodFailed
+from ..metrics.hausdorff import hausdorff
+from ..metrics.normal_error import normal_error
+from ..metrics.surface_distance import point_surface_distance, surface_distance
+from ..metrics.triangle_quality import triangle_quality
+from ..metrics.vertex_error import vertex_error
+from .base import Metric, Task, float_array
+
+
+@dataclass
+class SmoothingResult:
+    """Smoothed vertex positions ``V`` (n, 3) float64, same order as the input; faces unchanged."""
+
+    V: np.ndarray
+
+
+def _check(result: SmoothingResult, V, F):
+    result.V = float_array("", "V", result.V, (V.shape[0], 3))
+    return result
+
+
+def diverged(V_out: np.ndarray, V_in: np.ndarray) -> bool:
+    """True when coordinates are non-finite or leave 100x the input bounding box (about its centre)."""
+    if not np.isfinite(V_out).all():
+        return True
+    lo, hi = V_in.min(0), V_in.max(0)
+    c, half = (lo + hi) / 2, np.maximum((hi - lo) / 2, 1e-300)
+    return bool((np.abs(V_out - c) > 100 * half).any())
+
+
+def _closed(inp) -> bool:
+    if "closed" not in inp.cache:
+        from ..mesh import topology
+        inp.cache["closed"] = topology(inp.clean.V, inp.clean.F)["boundary_edges"] == 0
+    return inp.cache["closed"]
+
+
+def _input_metrics(inp) -> dict:
+    if "input_metrics" not in inp.cache:
+        V_clean, F, diag = inp.clean.V, inp.F, inp.diag
+        inp.cache["input_metrics"] = {
+            "input_ev_mean": vertex_error(inp.V, V_clean)["ev_mean"] / diag,
+            "input_dist_mean": surface_distance(inp.V, F, V_clean, F)["dist_mean"] / diag,
+            "input_normal_error_deg": normal_error(inp.V, V_clean, F)["normal_error_deg"]}
+    return dict(inp.cache["input_metrics"])
+
+
+def measure(inp, result, params) -> dict:
+    """Accuracy of the smoothed positions against the clean mesh (same vertices and faces)."""
+    V_out, V_in, V_clean, F, diag = result.V, inp.V, inp.clean.V, inp.F, inp.diag
+    if not np.isfinite(V_out).all():
+        # non-finite output is instability (diverged, kept as data) on a sound mesh, but a
+        # library dividing by zero on a degenerate one: that is an error row naming the faces
+        bad = zero_area_faces(V_in, F)
+        if bad.size:
+            raise MethodFailed(f"returned non-finite coordinates on an input with {bad.size} zero-area "
+                               f"face(s) (first: {bad[:5].tolist()})")
+    row = _input_metrics(inp)
+    row["diverged"] = diverged(V_out, V_in)
+    if row["diverged"]:
+        return row
+    ve = vertex_error(V_out, V_clean)
+    sd = surface_distance(V_out, F, V_clean, F)
+    hd = hausdorff(V_out, F, V_clean, F, n_samples=inp.settings.get("hausdorff_samples", 20000))
+    row.update({"ev_mean": ve["ev_mean"] / diag, "ev_rms": ve["ev_rms"] / diag,
+                "dist_mean": sd["dist_mean"] / diag, "ev_sun": sd["ev_sun"] / diag,
+                "hausdorff": hd["hausdorff"] / diag})
+    row.update(normal_error(V_out, V_clean, F))
+    a0 = area(V_clean, F)
+    row["area_ratio"] = area(V_out, F) / a0 if a0 > 0 else None
+    if _closed(inp):
+        v0 = volume(V_clean, F)
+        row["volume_ratio"] = volume(V_out, F) / v0 if v0 != 0 else None
+    row.update(triangle_quality(V_out, F))
+    return row
+
+
+def output_mesh(inp, result):
+    return result.V, inp.F
+
+
+def view(inp, result) -> list:
+    """Meshes of the 3D view: coloured by the distance of each vertex to the clean surface."""
+    e_in = point_surface_distance(inp.V, inp.clean.V, inp.F) / inp.diag
+    e_out = point_surface_distance(result.V, inp.clean.V, inp.F) / inp.diag
+    what = "distance of each vertex to the clean surface"
+    return [("clean", inp.clean.V, inp.F, None, "reference mesh"),
+            ("noisy input", inp.V, inp.F, e_in, what), ("result", result.V, inp.F, e_out, what)]
+
+
+_LEN = dict(unit="diag", rel=0.01, abs=1e-6)
+_DEG = dict(unit="deg", rel=0.01, abs=0.01)
+TASK = Task(
+    name="smoothing", title="Smoothing", result_type=SmoothingResult,
+    intro="Smoothed meshes against the clean mesh. Lengths are fractions of the clean mesh's bounding-box "
+          "diagonal; lower is better.",
+    metrics=(
+        Metric("ev_mean", "lower", "mean distance of each vertex to its clean position", rank=True, **_LEN),
+        Metric("ev_rms", "lower", "RMS distance of each vertex to its clean position", **_LEN),
+        Metric("dist_mean", "lower", "mean distance of the result's vertices to the clean surface",
+               rank=True, **_LEN),
+        Metric("ev_sun", "lower", "area-weighted RMS vertex-to-clean-surface distance (Sun et al. 2007)",
+               rank=True, **_LEN),
+        Metric("hausdorff", "lower", "symmetric Hausdorff distance to the clean surface (vertices + samples)",
+               **_LEN),
+        Metric("normal_error_deg", "lower", "mean angle between result and clean face normals", rank=True, **_DEG),
+        Metric("normal_error_rms_deg", "lower", "RMS angle between result and clean face normals", **_DEG),
+        Metric("volume_ratio", "one", "enclosed volume / clean volume (closed meshes)", rel=0.01, abs=1e-4),
+        Metric("area_ratio", "one", "surface area / clean area", rel=0.01, abs=1e-4),
+        Metric("min_angle", "higher", "smallest triangle angle", unit="deg", rel=0.01, abs=0.01),
+        Metric("max_angle", "lower", "largest triangle angle", unit="deg", rel=0.01, abs=0.01),
+        Metric("radius_ratio_mean", "higher", "mean of 2 r_in / r_circ over faces (1 = equilateral)",
+               rel=0.01, abs=1e-3),
+        Metric("obtuse_fraction", "lower", "fraction of faces with an angle above 90 degrees", rel=0.01, abs=2e-3),
+        Metric("diverged", "false", "non-finite or left 100x the input's bounding box", kind="bool"),
+        Metric("input_ev_mean", "input", "ev_mean of the noisy input", unit="diag"),
+        Metric("input_dist_mean", "input", "dist_mean of the noisy input", unit="diag"),
+        Metric("input_normal_error_deg", "input", "normal_error_deg of the noisy input", unit="deg"),
+        Metric("min_angle_hist", "info", "histogram of the smallest angle per face (12 bins of 5 degrees over [0, 60])",
+               kind="json"),
+    ),
+    measure=measure, check_result=_check, output_mesh=output_mesh, view=view, view_metric="dist_mean", order=20)
