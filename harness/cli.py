@@ -76,7 +76,8 @@ def _cmd_run(a) -> int:
 
 
 def _cmd_methods(a) -> int:
-    import methods
+    from .plugins import import_methods
+    methods = import_methods()
     for m in methods.all_methods(a.task):
         why = m.unavailable_reason()
         params = ", ".join(p.describe() for p in m.params.values()) or "-"

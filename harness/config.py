@@ -164,7 +164,8 @@ def load_config(source, base_dir: Path | None = None) -> Config:
 
 
 def _validate(raw: dict, label: str, base_dir: Path) -> Config:
-    import methods
+    from .plugins import import_methods
+    methods = import_methods()
     P: list[str] = []
 
     _unknown_keys(raw, TOP_KEYS, "", P)
@@ -354,7 +355,8 @@ def _check_noise(noise, P: list) -> list[dict]:
 
 
 def _check_tasks(tasks, P: list, skip_unknown: bool = False) -> dict:
-    import methods
+    from .plugins import import_methods
+    methods = import_methods()
     from .tasks import names
     TASKS = names()
     out = {}

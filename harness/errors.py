@@ -19,9 +19,5 @@ class InvalidMeshError(ShootoutError, ValueError):
     """A mesh that cannot be used (unreadable, empty, NaN, non-triangle, out-of-range indices)."""
 
 
-class MethodUnavailable(ShootoutError):
-    """The library a method needs is not installed."""
-
-
 class MethodFailed(ShootoutError):
     """A method raised, crashed its process, or returned malformed output."""

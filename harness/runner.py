@@ -26,7 +26,8 @@ def peak_rss_mb() -> float:
 
 
 def _library(name: str):
-    import methods
+    from .plugins import import_methods
+    methods = import_methods()
     try:
         return methods.get(name).library
     except KeyError:
@@ -73,7 +74,8 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
     row = base_row(case)
     extras: dict = {}
     try:
-        import methods
+        from .plugins import import_methods
+        methods = import_methods()
         methods.load_plugins(list(case.plugins))
         method = methods.get(case.method)
         task = tasks.get(case.task)

@@ -66,6 +66,7 @@ class Method:
     requires: tuple = ()
     doc: str = ""
     cite: str = ""
+    expected_failures: dict = field(default_factory=dict, compare=False)
 
     @property
     def backend(self) -> str:

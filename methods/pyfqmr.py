@@ -18,7 +18,7 @@ from harness.core.geometry import compact
         "aggressiveness": Param("aggressiveness", 7.0, "float", low=0.0, high=20.0,
                                 doc="growth exponent of the error threshold "
                                     "alpha * (iteration + K) ** aggressiveness"),
-        "preserve_border": Param("preserve_border", False,
+        "preserve_boundary": Param("preserve_boundary", False,
                                  doc="forbid collapses touching open-boundary vertices "
                                      "(pyfqmr's own default is true; false here to match "
                                      "the other methods)"),
@@ -27,7 +27,7 @@ from harness.core.geometry import compact
     },
     requires=("pyfqmr",),
 )
-def qem(V, F, *, target_faces, aggressiveness=7.0, preserve_border=False, max_iterations=100):
+def qem(V, F, *, target_faces, aggressiveness=7.0, preserve_boundary=False, max_iterations=100):
     """FQMS quadric decimation through pyfqmr.
 
     Same algorithm as fast-simplification (threshold sweeps over unweighted face-plane
@@ -39,7 +39,7 @@ def qem(V, F, *, target_faces, aggressiveness=7.0, preserve_border=False, max_it
     F : (m, 3) int64 array
     target_faces : int
         ``target_count``.
-    aggressiveness, preserve_border, max_iterations
+    aggressiveness, preserve_boundary, max_iterations
         Passed through.
 
     Returns
@@ -52,7 +52,7 @@ def qem(V, F, *, target_faces, aggressiveness=7.0, preserve_border=False, max_it
     s = pyfqmr.Simplify()
     s.setMesh(V, F.astype(np.int32))
     s.simplify_mesh(target_count=int(target_faces), aggressiveness=float(aggressiveness),
-                    preserve_border=bool(preserve_border), max_iterations=int(max_iterations),
+                    preserve_border=bool(preserve_boundary), max_iterations=int(max_iterations),
                     verbose=False)
     Vo, Fo, _ = s.getMesh()
     Vo, Fo = compact(Vo, Fo)

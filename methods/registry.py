@@ -26,7 +26,8 @@ BROKEN: dict[str, str] = {}
 
 
 def register(name: str, *, task: str, library: str, params: dict | None = None,
-             requires: tuple | list | None = None, doc: str | None = None, cite: str = ""):
+             requires: tuple | list | None = None, doc: str | None = None, cite: str = "",
+             expected_failures: dict | None = None):
     """Decorator registering ``func(V, F, **params)`` as method ``name``.
 
     ``params`` maps each parameter name to its default or to a `Param` (bounds, choices).
@@ -34,6 +35,8 @@ def register(name: str, *, task: str, library: str, params: dict | None = None,
     The task's shared parameters (e.g. simplification's ``target_ratio``/``target_faces``) are
     added automatically; the task's ``prepare`` decides what the function receives.
     ``cite``: the paper or documentation the method follows (shown by ``shootout methods``).
+    ``expected_failures``: ``{check name: why}`` for conformance checks (`methods.checks`) the
+    method is known to fail.
     """
     if task not in _tasks.names():
         raise ValueError(f"register({name!r}): task must be one of {_tasks.names()}, got {task!r}")
@@ -50,7 +53,8 @@ def register(name: str, *, task: str, library: str, params: dict | None = None,
         declared = {**_tasks.get(task).params, **declared}
         _REGISTRY[name] = Method(name=name, task=task, library=library, func=func,
                                  params=declared, requires=tuple(requires or ()),
-                                 doc=(doc or (func.__doc__ or "")).strip(), cite=cite)
+                                 doc=(doc or (func.__doc__ or "")).strip(), cite=cite,
+                                 expected_failures=dict(expected_failures or {}))
         return func
 
     return deco

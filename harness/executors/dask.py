@@ -237,7 +237,8 @@ def _warm(case: Case) -> None:
     failure happens again in the isolated child and becomes that case's row. Files are left
     to the child (a C++ reader could crash on a malformed one)."""
     try:
-        import methods
+        from ..plugins import import_methods
+        methods = import_methods()
         methods.load_plugins(list(case.plugins))
         if not any(k in case.mesh for k in FILE_KEYS):
             from .. import datasets

@@ -85,6 +85,7 @@ class Task:
     axis_params: frozenset = frozenset()
     sections: tuple = ()
     order: int = 100            # position in the report and listings
+    checks: tuple = ()          # (name, fn(method, V, F)) conformance checks of this task's methods
 
     @property
     def columns(self) -> list[str]:

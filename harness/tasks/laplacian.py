@@ -52,6 +52,20 @@ def _measure(inp, result, params) -> dict:
     return laplacian_properties(result.W, result.M, inp.V, inp.F)
 
 
+def _rows_sum_to_zero(method, V, F):
+    res = method(V, F)
+    W = res.W
+    n = len(V)
+    scale = abs(W).max()
+    assert scale > 0, "W is all zero"
+    worst = np.abs(np.asarray(W.sum(axis=1)).ravel()).max()
+    assert worst <= 1e-10 * scale * max(1, n ** 0.5), f"a row of W sums to {worst:g} (max |W| {scale:g})"
+    if res.M is not None:
+        M = res.M
+        assert abs(M - sp.diags(M.diagonal())).max() == 0 if M.nnz else True, "M is not diagonal"
+        assert (M.diagonal() > 0).all(), "M has a non-positive diagonal entry"
+
+
 _REL = 0.01
 TASK = Task(
     name="laplacian", title="Laplacians", result_type=LaplacianResult,
@@ -73,4 +87,5 @@ TASK = Task(
         Metric("POS", "true", "no negative off-diagonal weight", kind="bool"),
         Metric("operator_symmetric", "true", "the pointwise operator M^-1 W is a symmetric matrix", kind="bool"),
     ),
-    measure=_measure, check_result=_check, sections=("property_matrix",), order=10)
+    measure=_measure, check_result=_check, sections=("property_matrix",), order=10,
+    checks=(("rows_sum_to_zero", _rows_sum_to_zero),))

@@ -101,6 +101,15 @@ def view(inp, result) -> list:
             ("result", result.V, result.F, e_out, "distance of each result vertex to the input surface")]
 
 
+def _face_target_reached(method, V, F):
+    """Within 1% + 2 faces of the target, for a ratio and for an absolute count; no unreferenced vertex."""
+    for kw, target in (({"target_ratio": 0.5}, round(0.5 * len(F))), ({"target_ratio": 0.1}, round(0.1 * len(F))),
+                       ({"target_faces": 300}, 300)):
+        res = method(V, F, **kw)
+        assert abs(len(res.F) - target) <= 0.01 * target + 2, f"{kw}: {len(res.F)} faces for a target of {target}"
+        assert len(np.unique(res.F)) == len(res.V), "output has unreferenced vertices"
+
+
 _LEN = dict(unit="diag", rel=0.01, abs=1e-6)
 TASK = Task(
     name="simplification", title="Simplification", result_type=SimplificationResult,
@@ -123,4 +132,5 @@ TASK = Task(
                kind="json"),
     ),
     params=PARAMS, prepare=prepare, measure=measure, check_result=_check, output_mesh=output_mesh, view=view,
-    view_metric="hausdorff", axis_params=frozenset({"target_ratio", "target_faces"}), order=30)
+    view_metric="hausdorff", axis_params=frozenset({"target_ratio", "target_faces"}),
+    checks=(("face_target_reached", _face_target_reached),), order=30)

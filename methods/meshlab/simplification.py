@@ -15,30 +15,30 @@ from harness.core.geometry import compact
     task="simplification",
     library="pymeshlab",
     params={
-        "preserveboundary": Param("preserveboundary", False,
+        "preserve_boundary": Param("preserve_boundary", False,
                                   doc="keep open-boundary edges in place (MeshLab's boundary "
-                                      "penalty, weight boundaryweight)"),
-        "boundaryweight": Param("boundaryweight", 1.0, "float", low=0.0, high=1e6,
+                                      "penalty, weight boundary_weight)"),
+        "boundary_weight": Param("boundary_weight", 1.0, "float", low=0.0, high=1e6,
                                 doc="weight of the boundary-preserving quadrics"),
-        "optimalplacement": Param("optimalplacement", True,
+        "optimal_placement": Param("optimal_placement", True,
                                   doc="place the new vertex at the quadric minimiser "
                                       "(false: at one of the endpoints)"),
-        "qualitythr": Param("qualitythr", 0.3, "float", low=0.0, high=1.0,
+        "quality_threshold": Param("quality_threshold", 0.3, "float", low=0.0, high=1.0,
                             doc="penalise collapses creating triangles with quality "
                                 "(2 inradius/circumradius) below this"),
-        "planarquadric": Param("planarquadric", False,
+        "planar_quadric": Param("planar_quadric", False,
                                doc="add small planar quadrics per face to improve triangle "
                                    "shape on flat regions"),
-        "preservenormal": Param("preservenormal", False,
+        "preserve_normal": Param("preserve_normal", False,
                                 doc="forbid collapses that flip a face normal"),
-        "preservetopology": Param("preservetopology", False,
+        "preserve_topology": Param("preserve_topology", False,
                                   doc="forbid collapses that change the topology"),
     },
     requires=("pymeshlab",),
 )
-def qem(V, F, *, target_faces, preserveboundary=False, boundaryweight=1.0,
-        optimalplacement=True, qualitythr=0.3, planarquadric=False, preservenormal=False,
-        preservetopology=False):
+def qem(V, F, *, target_faces, preserve_boundary=False, boundary_weight=1.0,
+        optimal_placement=True, quality_threshold=0.3, planar_quadric=False, preserve_normal=False,
+        preserve_topology=False):
     """MeshLab quadric edge collapse decimation (Garland & Heckbert 1997, VCGLib's version).
 
     VCGLib keeps a heap of edge collapses ordered by quadric error (unweighted face-plane
@@ -50,9 +50,11 @@ def qem(V, F, *, target_faces, preserveboundary=False, boundaryweight=1.0,
     F : (m, 3) int64 array
     target_faces : int
         Passed as ``targetfacenum``.
-    preserveboundary, boundaryweight, optimalplacement, qualitythr, planarquadric,
-    preservenormal, preservetopology
-        The filter's parameters of the same names (MeshLab defaults).
+    preserve_boundary, boundary_weight, optimal_placement, quality_threshold, planar_quadric,
+    preserve_normal, preserve_topology
+        The filter's ``preserveboundary``, ``boundaryweight``, ``optimalplacement``,
+        ``qualitythr``, ``planarquadric``, ``preservenormal``, ``preservetopology`` (MeshLab
+        defaults), under the names the other adapters use.
 
     Returns
     -------
@@ -64,10 +66,10 @@ def qem(V, F, *, target_faces, preserveboundary=False, boundaryweight=1.0,
     ms = pymeshlab.MeshSet()
     ms.add_mesh(pymeshlab.Mesh(vertex_matrix=V, face_matrix=F.astype(np.int32)))
     ms.meshing_decimation_quadric_edge_collapse(
-        targetfacenum=int(target_faces), preserveboundary=bool(preserveboundary),
-        boundaryweight=float(boundaryweight), optimalplacement=bool(optimalplacement),
-        qualitythr=float(qualitythr), planarquadric=bool(planarquadric),
-        preservenormal=bool(preservenormal), preservetopology=bool(preservetopology),
+        targetfacenum=int(target_faces), preserveboundary=bool(preserve_boundary),
+        boundaryweight=float(boundary_weight), optimalplacement=bool(optimal_placement),
+        qualitythr=float(quality_threshold), planarquadric=bool(planar_quadric),
+        preservenormal=bool(preserve_normal), preservetopology=bool(preserve_topology),
         autoclean=True)
     m = ms.current_mesh()
     Vo, Fo = compact(m.vertex_matrix(), m.face_matrix())
