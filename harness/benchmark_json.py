@@ -21,17 +21,14 @@ import statistics
 from pathlib import Path
 
 from .results import RunFolder
-from .schema import scalar
+from .schema import number, scalar
 
 FORMAT_VERSION = "5.1.0"      # the pytest-benchmark JSON layout written here
 
 
 def _f(v):
-    try:
-        x = float(v)
-    except (TypeError, ValueError):
-        return None
-    return x if math.isfinite(x) else None
+    x = number(v)
+    return x if x is not None and math.isfinite(x) else None
 
 
 def stats_from_row(row: dict) -> dict | None:

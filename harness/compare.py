@@ -40,6 +40,8 @@ from pathlib import Path
 
 from .errors import ShootoutError
 from .results import RunFolder
+from .schema import fmt
+from .schema import number as _num
 
 TIME_FACTOR = 1.5
 TIME_FLOOR_S = 1e-3
@@ -92,15 +94,6 @@ SKIP = {"case_id", "task", "mesh", "noise_model", "noise_level", "seed", "method
 
 def _blank(v) -> bool:
     return v is None or (isinstance(v, float) and math.isnan(v)) or v == ""
-
-
-def _num(v):
-    if isinstance(v, bool):
-        return float(v)
-    try:
-        return float(v)
-    except (TypeError, ValueError):
-        return None
 
 
 def judge(metric: str, a, b, row_a=None, row_b=None, rule: Rule | None = None) -> str:
@@ -242,20 +235,7 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
 
 
 def _fmt(v) -> str:
-    if _blank(v):
-        return "—"
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, (int,)) and not isinstance(v, bool):
-        return str(v)
-    x = _num(v)
-    if x is None:
-        return str(v)
-    if x == 0:
-        return "0"
-    if 1e-3 <= abs(x) < 1e5:
-        return f"{x:.4g}"
-    return f"{x:.3e}"
+    return fmt(v, 4)
 
 
 def _change(a, b) -> str:

@@ -90,12 +90,7 @@ def case_id(task, mesh_spec, model, level, seed, fraction, method, params) -> st
 
 def _resolved(meth, params: dict) -> dict:
     """Declared defaults filled in, floats as floats: equal settings give equal case ids."""
-    out = {k: p.default for k, p in meth.params.items()}
-    out.update(params)
-    for k, p in meth.params.items():
-        if p.kind == "float" and _is_num(out[k]):
-            out[k] = float(out[k])
-    return out
+    return meth.with_defaults(params)
 
 
 def _identity(spec: dict) -> dict:

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .core.geometry import face_cross
 from .errors import InvalidMeshError
 from .mesh import Mesh, read_mesh, validate
 
@@ -199,7 +200,7 @@ def plane_delaunay(n_points: int = 300, seed: int = 0):
 
 
 def _orient_up(V, F):
-    n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])[:, 2]
+    n = face_cross(V, F)[:, 2]
     F = F.copy()
     F[n < 0] = F[n < 0][:, [0, 2, 1]]
     return F

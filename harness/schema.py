@@ -49,3 +49,33 @@ def cell(v) -> str | int | float:
     if isinstance(v, bool):
         return "true" if v else "false"
     return v
+
+
+def number(v) -> float | None:
+    """``v`` as a float (booleans as 0/1), or None when it is not a number."""
+    try:
+        return float(v)
+    except (TypeError, ValueError):
+        return None
+
+
+def fmt(v, digits: int = 3) -> str:
+    """The one number formatter of reports and listings: ``—`` for missing, ``true``/``false``,
+    integers as they are, ``digits`` significant digits in [1e-3, 1e5), scientific outside."""
+    v = scalar(v) if not isinstance(v, str) else v
+    if v is None or v == "":
+        return "—"
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int):
+        return str(v)
+    x = number(v)
+    if x is None:
+        return str(v)
+    if not math.isfinite(x):
+        return "—"
+    if x == 0:
+        return "0"
+    if 1e-3 <= abs(x) < 1e5:
+        return f"{x:.{digits}g}"
+    return f"{x:.{max(digits - 1, 1)}e}"

@@ -111,8 +111,15 @@ class Method:
         problems = self.param_problems(params)
         if problems:
             raise ValueError(f"{self.name}: " + "; ".join(problems))
+        return self.with_defaults(params)
+
+    def with_defaults(self, params: dict) -> dict:
+        """``params`` with the declared defaults filled in (no validation)."""
         full = {k: p.default for k, p in self.params.items()}
         full.update(params)
+        for k, p in self.params.items():       # floats as floats: equal settings, equal case ids
+            if p.kind == "float" and isinstance(full.get(k), (int, np.integer)) and not isinstance(full[k], bool):
+                full[k] = float(full[k])
         return full
 
     def __call__(self, V, F, **params):

@@ -9,24 +9,11 @@ from collections import defaultdict
 
 import numpy as np
 
+from ..schema import fmt  # noqa: F401  (the report's formatter is the project's)
+
 
 def esc(x) -> str:
     return html.escape("" if x is None else str(x))
-
-
-def fmt(v, digits=3) -> str:
-    if v is None or (isinstance(v, float) and not math.isfinite(v)):
-        return "—"
-    if isinstance(v, (bool, np.bool_)):
-        return "true" if v else "false"
-    if isinstance(v, (int, np.integer)):
-        return str(int(v))
-    v = float(v)
-    if v == 0:
-        return "0"
-    if 1e-3 <= abs(v) < 1e5:
-        return f"{v:.{digits}g}"
-    return f"{v:.{max(digits - 1, 1)}e}"
 
 
 def params_of(s) -> dict:
