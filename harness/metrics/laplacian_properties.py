@@ -29,8 +29,7 @@ and ``M`` diagonal (or None):
     ``min_eig >= -PSD_TOL``. How it is computed (no dense eigensolver):
 
     1. ``lam_max = max |eig(S)|`` by ARPACK Lanczos (``eigsh``, ``which='LM'``, tol 1e-6; fast,
-       extreme eigenvalue). Small Krylov spaces (``ncv=8``) are used throughout: on this
-       shared 2-core machine larger ones were slower (threaded BLAS contention).
+       extreme eigenvalue). Small Krylov spaces (``ncv=8``) are used throughout.
     2. ``A = S - sigma I`` with ``sigma = -PSD_TOL * lam_max`` is factorised by SuperLU with a
        symmetric fill-reducing ordering and diagonal pivoting (``SymmetricMode``,
        ``diag_pivot_thresh=0``), i.e. ``P A P^T = L D L^T``. By Sylvester's law of inertia the
@@ -41,13 +40,13 @@ and ``M`` diagonal (or None):
        eigenvalue is found with ``eigsh(which='SA')`` (Lanczos), falling back to LOBPCG.
     If the factorisation is not symmetric (SuperLU had to pivot off the diagonal), fails, or
     the iteration does not converge, the unmeasurable values are None (blank), never guessed.
-    Above ``EIG_MAX_N`` vertices (200k) the factorisation is not attempted: at 655k vertices
-    (1.3M faces) SuperLU ran 29 minutes and grew past 10 GB. There a cheap exact certificate
+    Above ``EIG_MAX_N`` vertices (200k) the factorisation is not attempted (its fill grows
+    too large: see benchmarks/bench_laplacian.py). There a cheap exact certificate
     is used instead: if ``S`` is diagonally dominant with a non-negative diagonal
     (``S_ii >= sum_j |S_ij|`` to rounding, e.g. any symmetric W with POS), Gershgorin gives
     ``psd`` True, and if moreover ``S 1 = 0`` (rows of S sum to zero) the constant vector is
     in its kernel, so ``min_eig`` is exactly 0. Otherwise both are None (not measured, never
-    guessed). On the bundled meshes (<= 43k vertices) the factorisation takes ~0.2-0.4 s.
+    guessed).
     Every Lanczos iteration starts from a seeded vector, so ``min_eig`` is reproducible.
 ``nnz``
     number of stored entries of ``W`` that are non-zero (explicit zeros not counted).

@@ -271,9 +271,6 @@ def _kernel(name: str):
 class CotanPattern:
     """Sparsity pattern of the cotangent Laplacian for one connectivity ``F`` (n vertices).
 
-    Measured at 1.3M faces (benchmarks/bench_laplacian.py, shared 2-core machine under load):
-    pattern + values ~0.45x libigl's cotmatrix + massmatrix time, values only ~0.15x.
-
     Build once (``CotanPattern(F, n)``), then `assemble` for any vertex positions with the
     same faces: only the numeric pass runs (the re-assembly benchmark). ``W`` has an entry
     for every mesh edge and every diagonal (explicit zeros where weights cancel, like

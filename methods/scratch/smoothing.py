@@ -1,7 +1,7 @@
 """Laplacian smoothing from scratch: explicit and implicit diffusion, Taubin, screened Poisson.
 
 All diffusion methods here run on one operator family, chosen by the ``weights`` parameter
-(issue 4), always written as ``L = M^-1 W`` with a *symmetric* ``W`` in libigl's sign
+always written as ``L = M^-1 W`` with a *symmetric* ``W`` in libigl's sign
 convention (off-diagonal weights positive, rows summing to zero) and a diagonal ``M``:
 
 ``uniform``
