@@ -5,20 +5,21 @@ output) understands the result: ``machine_info``, ``commit_info``, ``benchmarks`
 case with status ok: ``group`` = task/mesh/noise, ``name`` = method[params], ``params``,
 ``extra_info`` with the case's metrics, ``stats``), ``datetime`` and ``version``.
 
-The run records, per case, the median, minimum and maximum of ``repeats`` timed calls, not the
-individual times. So ``stats.min``/``max``/``median``/``rounds`` are exact; the statistics that
-need every sample are derived and marked in ``extra_info.stats_note``: ``mean`` is the mean of
-(min, median, max) — exact for up to 3 repeats, an estimate beyond —, ``stddev`` the sample
-standard deviation of those three values (0 for one repeat), ``q1``/``q3`` the midpoints
-min..median and median..max, ``total`` = mean x rounds; ``outliers`` are not known ("0;0").
+Every statistic is computed from the case's stored samples (the ``times`` column, seconds), as
+pytest-benchmark computes its own: mean, sample standard deviation, median, quartiles (numpy's
+linear interpolation), IQR, Tukey fences ``ld15iqr``/``hd15iqr`` (the most extreme samples within
+1.5 IQR of the quartiles), outlier counts (``mean +- stddev`` and Tukey) and ``total``. Rows of
+runs made before samples were stored (no ``times``) fall back to min/median/max, and
+``extra_info.stats_note`` says so.
 """
 from __future__ import annotations
 
 import json
 import math
 import platform
-import statistics
 from pathlib import Path
+
+import numpy as np
 
 from .results import RunFolder
 from .schema import number, scalar
@@ -31,23 +32,42 @@ def _f(v):
     return x if x is not None and math.isfinite(x) else None
 
 
+def _samples(row: dict) -> list[float] | None:
+    try:
+        t = json.loads(row.get("times") or "null")
+    except (TypeError, ValueError):
+        return None
+    if isinstance(t, list) and t and all(isinstance(x, (int, float)) and math.isfinite(x) for x in t):
+        return [float(x) for x in t]
+    return None
+
+
 def stats_from_row(row: dict) -> dict | None:
-    """pytest-benchmark ``stats`` from a row's median/min/max/repeats (see the module docstring)."""
+    """pytest-benchmark ``stats`` from a row's samples (see the module docstring)."""
     med, lo, hi = _f(row.get("time_s")), _f(row.get("time_min_s")), _f(row.get("time_max_s"))
     if med is None:
         return None
-    lo = med if lo is None else lo
-    hi = med if hi is None else hi
-    n = int(_f(row.get("repeats")) or 1)
-    sample = [med] if n == 1 else [lo, hi] if n == 2 else [lo, med, hi]
-    mean = statistics.fmean(sample)
-    stddev = statistics.stdev(sample) if len(sample) > 1 else 0.0
-    q1, q3 = (lo + med) / 2, (med + hi) / 2
+    t = _samples(row)
+    if t is None:                                       # an older run: min/median/max only
+        lo = med if lo is None else lo
+        hi = med if hi is None else hi
+        t = [lo, med, hi] if lo != hi else [med]
+    arr = np.asarray(t)
+    n = len(t)
+    mean = float(arr.mean())
+    stddev = float(arr.std(ddof=1)) if n > 1 else 0.0
+    q1, q3 = (float(x) for x in np.percentile(arr, [25, 75]))
     iqr = q3 - q1
-    return {"min": lo, "max": hi, "mean": mean, "stddev": stddev, "rounds": n, "median": med, "iqr": iqr,
-            "q1": q1, "q3": q3, "iqr_outliers": 0, "stddev_outliers": 0, "outliers": "0;0",
-            "ld15iqr": lo, "hd15iqr": hi, "ops": (1.0 / mean) if mean > 0 else 0.0, "total": mean * n,
-            "iterations": 1}
+    lo_f, hi_f = q1 - 1.5 * iqr, q3 + 1.5 * iqr
+    inside = arr[(arr >= lo_f) & (arr <= hi_f)]
+    sd_out = int(((arr < mean - stddev) | (arr > mean + stddev)).sum()) if n > 1 else 0
+    iqr_out = int(n - inside.size)
+    return {"min": float(arr.min()), "max": float(arr.max()), "mean": mean, "stddev": stddev, "rounds": n,
+            "median": float(np.median(arr)), "iqr": iqr, "q1": q1, "q3": q3, "iqr_outliers": iqr_out,
+            "stddev_outliers": sd_out, "outliers": f"{sd_out};{iqr_out}",
+            "ld15iqr": float(inside.min()) if inside.size else float(arr.min()),
+            "hd15iqr": float(inside.max()) if inside.size else float(arr.max()),
+            "ops": (1.0 / mean) if mean > 0 else 0.0, "total": float(arr.sum()), "iterations": 1}
 
 
 def _machine_info(meta: dict) -> dict:
@@ -91,15 +111,17 @@ def build(run_dir) -> dict:
             name = f"{rec['method']}[{pstr}]" if pstr else str(rec["method"])
             group = f"{task}/{rec.get('mesh')}/{noise}"
             extra = {k: scalar(v) for k, v in rec.items()
-                     if k not in ("params", "time_s", "time_min_s", "time_max_s", "min_angle_hist", "error")}
-            extra["stats_note"] = ("the run records median/min/max of the repeats only: min, max, median, rounds "
-                                   "are exact; mean, stddev, q1, q3 are derived (see harness/benchmark_json.py)")
+                     if k not in ("params", "time_s", "time_min_s", "time_max_s", "time_q1_s", "time_q3_s", "times",
+                                  "min_angle_hist", "error")}
+            if _samples(rec) is None:
+                extra["stats_note"] = ("this run stored no samples (older version): statistics are computed from "
+                                       "min, median and max only")
             benchmarks.append({
                 "group": group, "name": name, "fullname": f"{group}::{name}[seed={rec.get('seed')}]",
                 "params": {k: scalar(v) for k, v in params.items()}, "param": pstr or None,
                 "extra_info": extra,
                 "options": {"disable_gc": False, "timer": "perf_counter", "min_rounds": int(rec.get("repeats") or 1),
-                            "max_time": None, "min_time": None, "warmup": False},
+                            "max_time": None, "min_time": None, "warmup": True},
                 "stats": stats,
             })
     return {"machine_info": _machine_info(meta), "commit_info": commit_info(meta), "benchmarks": benchmarks,

@@ -18,10 +18,14 @@ each metric's ``better`` direction and ``rel``/``abs`` tolerance, recorded in ru
 * ``out_faces`` regresses when its miss of ``target_faces`` grows by more than
   ``max(2 faces, 1 % of the target)`` (the conformance tolerance);
 * a value that becomes blank (not measurable any more) regresses; one that appears improves;
-* time regresses only when all three hold: the candidate's median ``time_s`` exceeds
-  ``time_factor`` (1.5) x the baseline's, its *fastest* repeat is slower than the baseline's
-  *slowest* one (``time_min_s(B) > time_max_s(A)``: beyond both runs' own spread), and the
-  difference exceeds 1 ms (sub-millisecond timings are dominated by scheduler noise);
+* time is decided on the stored samples (``times``): it regresses when B is slower with
+  statistical significance *and* by a minimum effect: the one-sided Mann-Whitney U test of
+  B's samples against A's gives p < ``ALPHA`` (0.01), the median ratio B/A exceeds
+  ``time_factor`` (1.5), the lower end of its 95% bootstrap confidence interval exceeds 1,
+  and the medians differ by more than 1 ms. The ratio is printed with its interval. Cases whose
+  sample counts cannot reach significance (fewer than 5 samples a side) are counted as
+  inconclusive, never as regressions. Rows without samples (older runs) fall back to: median
+  over ``time_factor`` x A's, fastest B repeat slower than slowest A repeat, > 1 ms;
 * a case whose status was ok and is not any more regresses; a case of RUN_A missing in RUN_B
   regresses too (an interrupted or shrunken run must not pass CI); cases new in RUN_B are listed.
 
@@ -89,7 +93,8 @@ def rule_for(metric: str, task: str | None = None, rules: dict | None = None) ->
 
 
 SKIP = {"case_id", "task", "mesh", "noise_model", "noise_level", "seed", "method", "library", "params",
-        "status", "error", "time_s", "time_min_s", "time_max_s", "repeats", "min_angle_hist"}
+        "status", "error", "time_s", "time_min_s", "time_max_s", "time_q1_s", "time_q3_s", "time_cold_s", "times",
+        "method_mem_mb", "repeats", "min_angle_hist"}
 
 
 def _blank(v) -> bool:
@@ -143,7 +148,61 @@ def judge(metric: str, a, b, row_a=None, row_b=None, rule: Rule | None = None) -
     return "same"
 
 
+ALPHA = 0.01
+BOOTSTRAP = 2000
+
+
+def time_samples(row: dict) -> list[float] | None:
+    """The row's timed samples (seconds), or None when the run stored none."""
+    try:
+        t = json.loads(row.get("times") or "null")
+    except (TypeError, ValueError):
+        return None
+    if isinstance(t, list) and t and all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                                         and math.isfinite(x) and x >= 0 for x in t):
+        return [float(x) for x in t]
+    return None
+
+
+def time_effect(ra: dict, rb: dict) -> dict | None:
+    """Median ratio B/A with a seeded 95% bootstrap interval and one-sided Mann-Whitney p-values
+    (``p_slower``: B slower than A; ``p_faster``), or None without samples on both sides."""
+    a, b = time_samples(ra), time_samples(rb)
+    if a is None or b is None:
+        return None
+    import numpy as np
+    from scipy.stats import mannwhitneyu
+    A, B = np.asarray(a), np.asarray(b)
+    ma, mb = float(np.median(A)), float(np.median(B))
+    rng = np.random.default_rng(0)
+    ra_ = np.median(A[rng.integers(0, A.size, (BOOTSTRAP, A.size))], axis=1)
+    rb_ = np.median(B[rng.integers(0, B.size, (BOOTSTRAP, B.size))], axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratios = rb_ / ra_
+    lo, hi = (float(x) for x in np.nanpercentile(ratios, [2.5, 97.5]))
+    if A.size > 1 or B.size > 1:
+        p_slower = float(mannwhitneyu(B, A, alternative="greater").pvalue)
+        p_faster = float(mannwhitneyu(B, A, alternative="less").pvalue)
+    else:
+        p_slower = p_faster = 1.0
+    # the smallest one-sided p any outcome can give with these sample sizes is 1 / C(n, k) (exact test)
+    conclusive = math.comb(int(A.size + B.size), int(A.size)) > 1 / ALPHA
+    return {"ratio": mb / ma if ma > 0 else math.inf, "ci": (lo, hi), "p_slower": p_slower,
+            "p_faster": p_faster, "n": (A.size, B.size), "conclusive": conclusive, "diff": mb - ma}
+
+
 def judge_time(ra: dict, rb: dict, factor: float = TIME_FACTOR) -> str:
+    """'regression' | 'improvement' | 'inconclusive' | 'same' (see the module docstring)."""
+    eff = time_effect(ra, rb)
+    if eff is not None:
+        if not eff["conclusive"]:
+            return "inconclusive"
+        lo, hi = eff["ci"]
+        if eff["p_slower"] < ALPHA and eff["ratio"] > factor and lo > 1 and eff["diff"] > TIME_FLOOR_S:
+            return "regression"
+        if eff["p_faster"] < ALPHA and eff["ratio"] < 1 / factor and hi < 1 and -eff["diff"] > TIME_FLOOR_S:
+            return "improvement"
+        return "same"
     a, b = _num(ra.get("time_s")), _num(rb.get("time_s"))
     if a is None or b is None:
         return "same"
@@ -156,6 +215,17 @@ def judge_time(ra: dict, rb: dict, factor: float = TIME_FACTOR) -> str:
     if a > factor * b and a_min > b_max and a - b > TIME_FLOOR_S:
         return "improvement"
     return "same"
+
+
+def _time_note(ra: dict, rb: dict) -> str:
+    eff = time_effect(ra, rb)
+    if eff is None:
+        return (f"A {_fmt(ra.get('time_min_s'))}..{_fmt(ra.get('time_max_s'))}, "
+                f"B {_fmt(rb.get('time_min_s'))}..{_fmt(rb.get('time_max_s'))} (no samples stored)")
+    lo, hi = eff["ci"]
+    p = min(eff["p_slower"], eff["p_faster"])
+    return (f"B/A {eff['ratio']:.3g}x [95% CI {lo:.3g}, {hi:.3g}], Mann-Whitney p={p:.2g}, "
+            f"{eff['n'][0]} vs {eff['n'][1]} samples" + ("" if eff["conclusive"] else " (too few to decide)"))
 
 
 def _rows(run) -> dict[str, dict]:
@@ -205,9 +275,7 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
             a, b = _num(ra.get("time_s")), _num(rb.get("time_s"))
             if a is not None and b is not None and a != b:
                 changes.append({**base, "metric": "time_s", "a": a, "b": b,
-                                "verdict": "within tolerance" if v == "same" else v,
-                                "note": f"A {_fmt(ra.get('time_min_s'))}..{_fmt(ra.get('time_max_s'))}, "
-                                        f"B {_fmt(rb.get('time_min_s'))}..{_fmt(rb.get('time_max_s'))}"})
+                                "verdict": "within tolerance" if v == "same" else v, "note": _time_note(ra, rb)})
         if sa != "ok" or sb != "ok":
             continue
         for metric in ra:
@@ -247,7 +315,7 @@ def _change(a, b) -> str:
     return f"{(y - x) / abs(x) * 100:+.1f}%"
 
 
-ORDER = {"regression": 0, "improvement": 1, "changed": 2, "within tolerance": 3, "info": 4}
+ORDER = {"regression": 0, "improvement": 1, "changed": 2, "within tolerance": 3, "inconclusive": 4, "info": 5}
 
 
 def timing_notes(meta_a: dict, meta_b: dict, res: dict) -> list[str]:
@@ -262,10 +330,13 @@ def timing_notes(meta_a: dict, meta_b: dict, res: dict) -> list[str]:
     elif (wa or 1) > 1 and ma and (ma.get("cpu_count") or 0) <= (wa or 1):
         notes.append(f"{wa} workers on {ma.get('cpu_count')} cores: timings include contention "
                      "(run both with --workers 1 for timing-grade comparisons)")
-    reps = {r.get("repeats") for r in list(res["rows_a"].values()) + list(res["rows_b"].values())}
-    if 1 in reps:
-        notes.append("some cases ran with repeats: 1, so their min-max spread is unknown and only the "
-                     "1.5x factor (and 1 ms floor) guards against timing noise")
+    n_inc = sum(c["verdict"] == "inconclusive" for c in res["changes"])
+    if n_inc:
+        notes.append(f"{n_inc} case(s) have too few timed samples on one side to decide on time (inconclusive, "
+                     "not counted as regressions; raise repeats or time_budget)")
+    if any(time_samples(r) is None for r in list(res["rows_a"].values()) + list(res["rows_b"].values())
+           if r.get("status") == "ok"):
+        notes.append("some rows store no timed samples (older runs): their time is judged on median/min/max only")
     return notes
 
 
@@ -287,7 +358,7 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
     res = compare_rows(ra, rb, time_factor, rules)
     changes = _sorted(res["changes"])
     regress = [c for c in changes if c["verdict"] == "regression"]
-    shown = [c for c in changes if c["verdict"] not in ("within tolerance", "info")]
+    shown = [c for c in changes if c["verdict"] not in ("within tolerance", "info", "inconclusive")]
     quiet = sum(c["verdict"] == "within tolerance" for c in changes)
     n_info = sum(c["verdict"] == "info" for c in changes)
     print(f"compare A={run_a} (baseline) B={run_b}: {res['common']} cases in both, "
@@ -314,9 +385,10 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
             print(f"... {len(shown) - max_lines} more changes (see --html)", file=out)
     n_imp = sum(c["verdict"] == "improvement" for c in changes)
     print(f"{len(regress)} regression(s) in {len({c['case_id'] for c in regress})} case(s), {n_imp} improvement(s), "
-          f"{quiet} change(s) within tolerance, {n_info} informational (peak_rss_mb ...); tolerances: harness/compare.py (errors: worse by >1% and a small "
-          f"absolute amount; " + (f"time: >{time_factor:g}x and beyond both runs' min-max spread)" if time_factor
-                                  else "time not compared)"), file=out)
+          f"{quiet} change(s) within tolerance, {n_info} informational (peak_rss_mb ...); tolerances: each metric's "
+          f"declared rel/abs (errors: worse by >1% and a small absolute amount; " +
+          (f"time: Mann-Whitney p<{ALPHA:g}, median ratio >{time_factor:g}x and its 95% interval above 1)"
+           if time_factor else "time not compared)"), file=out)
     if res["only_b"]:
         print(f"new in B: {len(res['only_b'])} case(s), e.g. " + ", ".join(_label(rb[c]) for c in res["only_b"][:3]),
               file=out)

@@ -23,7 +23,7 @@ from .mesh import SUPPORTED
 from .noise import MODELS
 
 TOP_KEYS = {"name", "repeats", "save_meshes", "plugins", "seed", "meshes", "noise", "tasks",
-            "timeout", "report", "hausdorff_samples"}
+            "timeout", "report", "hausdorff_samples", "time_budget"}
 TASK_KEYS = {"methods", "params"}
 NOISE_KEYS = {"model", "levels", "seeds", "fraction"}
 
@@ -45,6 +45,8 @@ class Case:
     repeats: int = 1
     plugins: tuple = ()
     hausdorff_samples: int = 20000
+    time_budget: float = 0.25       # seconds of samples to aim for (timeit-like autorange)
+    threads: int = 0                # BLAS/OpenMP threads of the case process (0: no limit)
 
 
 @dataclass
@@ -180,6 +182,10 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
     timeout = raw.get("timeout")
     if timeout is not None and (not _is_num(timeout) or not math.isfinite(timeout) or timeout <= 0):
         P.append(f"timeout: expected a number of seconds > 0, got {timeout!r}")
+    budget = raw.get("time_budget", 0.25)
+    if not _is_num(budget) or not 0 <= budget <= 3600:
+        P.append(f"time_budget: expected seconds in [0, 3600], got {budget!r}")
+        budget = 0.25
     hs = raw.get("hausdorff_samples", 20000)
     if not _is_int(hs) or hs < 0:
         P.append(f"hausdorff_samples: expected an integer >= 0, got {hs!r}")
@@ -227,7 +233,7 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
                     for params in grid:
                         cid = case_id(task, ident, model, level, s, frac, mname, params)
                         cases.append(Case(cid, task, spec, key, model, level, s, frac, mname,
-                                          params, repeats, tuple(plugins), hs))
+                                          params, repeats, tuple(plugins), hs, float(budget)))
     seen = set()
     unique = [c for c in cases if not (c.case_id in seen or seen.add(c.case_id))]
     return Config(name=name, raw=raw, repeats=repeats, save_meshes=save, plugins=plugins,

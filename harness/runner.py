@@ -1,8 +1,24 @@
 """One case -> one row. `run_case` runs in a worker (any process, any machine); it knows nothing
 of sessions, executors or run folders.
 
-A row is a flat dict of the common columns (`harness.schema`) plus the task's columns. The timed
-call is the method alone (``repeats`` times; median, min, max); metrics are not timed.
+A row is a flat dict of the common columns (`harness.schema`) plus the task's columns.
+
+Timing protocol (the method call alone; metrics are not timed):
+
+1. the thread pools of this process (OpenBLAS, OpenMP, MKL through threadpoolctl) are limited to
+   ``case.threads`` (the session sets ``cores // workers``) so concurrent cases do not
+   oversubscribe the cores;
+2. cold call: the method runs once on the case's own input, untimed as a sample; its wall time
+   is ``time_cold_s`` (imports, JIT compilation or cache loads, library start-up: a cost of its
+   own, never mixed into the samples);
+3. samples: at least ``repeats`` calls, and more while the summed sample time is below
+   ``time_budget_s`` (at most ``MAX_SAMPLES``), like ``timeit``'s autorange; every sample is kept
+   (``times``, a JSON list, seconds) and summarised as median ``time_s``, quartiles
+   ``time_q1_s``/``time_q3_s``, ``time_min_s``/``time_max_s``; ``repeats`` is the number taken;
+4. memory: ``method_mem_mb`` is the peak resident memory of the first sampled call minus the
+   resident memory just before it (Linux: the kernel's high-water mark, reset through
+   ``/proc/self/clear_refs``; blank elsewhere); ``peak_rss_mb`` is the process's own peak
+   (interpreter, inputs and metrics included).
 """
 from __future__ import annotations
 
@@ -14,15 +30,53 @@ import time
 import traceback
 from pathlib import Path
 
+import numpy as np
+
 from . import tasks
 from .config import Case
 from .errors import ShootoutError
 from .tasks.base import CaseInput
 
 
+MAX_SAMPLES = 1000
+
+
 def peak_rss_mb() -> float:
     """Peak resident set size of this process so far, from the OS (getrusage), in MiB."""
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def _status_kib(field: str) -> int | None:
+    try:
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith(field + ":"):
+                    return int(line.split()[1])
+    except (OSError, ValueError, IndexError):
+        return None
+    return None
+
+
+def _reset_peak() -> bool:
+    """Reset the kernel's resident high-water mark (VmHWM) of this process (Linux)."""
+    try:
+        with open("/proc/self/clear_refs", "w") as fh:
+            fh.write("5")
+        return True
+    except OSError:
+        return False
+
+
+def limit_threads(n: int | None):
+    """Limit BLAS/OpenMP thread pools of this process to ``n`` (None or 0: leave them); returns the
+    threadpoolctl controller (keep it alive) and the limits as recorded in run.json."""
+    if not n:
+        return None
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:
+        return None
+    return threadpool_limits(limits=int(n))
 
 
 def _library(name: str):
@@ -43,6 +97,15 @@ def base_row(case: Case) -> dict:
             "params": json.dumps(case.params, sort_keys=True), "status": "error", "error": "",
             "time_s": None, "time_min_s": None, "time_max_s": None, "repeats": case.repeats,
             "peak_rss_mb": None}
+
+
+def timing_columns(times: list[float], cold: float | None) -> dict:
+    """The time columns of a row from its samples (seconds, kept to 9 significant digits)."""
+    times = [float(f"{t:.9g}") for t in times]
+    q1, q3 = (float(x) for x in np.percentile(times, [25, 75]))
+    return {"time_s": statistics.median(times), "time_min_s": min(times), "time_max_s": max(times),
+            "time_q1_s": q1, "time_q3_s": q3, "time_cold_s": cold, "repeats": len(times),
+            "times": json.dumps(times)}
 
 
 def prepare_input(case: Case) -> tuple[CaseInput, float | None]:
@@ -90,14 +153,25 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
         if why:
             row.update(status="unavailable", error=why)
             return row, extras
-        _warm_up(method, case.params)
-        times, result = [], None
-        for _ in range(case.repeats):
+        limits = limit_threads(case.threads)  # noqa: F841  (kept alive for the case)
+        t0 = time.perf_counter()
+        method(inp.V.copy(), inp.F.copy(), **case.params)          # cold call: same code path, own input
+        cold = time.perf_counter() - t0
+        times, result, spent = [], None, 0.0
+        while len(times) < case.repeats or (spent < case.time_budget and len(times) < MAX_SAMPLES):
             V_arg, F_arg = inp.V.copy(), inp.F.copy()   # a method that writes into its input spoils nothing
+            first = not times
+            if first:
+                rss0, reset = _status_kib("VmRSS"), _reset_peak()
             t0 = time.perf_counter()
             result = method(V_arg, F_arg, **case.params)
             times.append(time.perf_counter() - t0)
-        row.update(time_s=statistics.median(times), time_min_s=min(times), time_max_s=max(times))
+            spent += times[-1]
+            if first:
+                hwm = _status_kib("VmHWM")
+                if reset and rss0 is not None and hwm is not None:
+                    row["method_mem_mb"] = round(max(hwm - rss0, 0) / 1024.0, 2)
+        row.update(timing_columns(times, cold))
         row.update(task.measure(inp, result, full))
         if want_meshes and task.output_mesh is not None:
             V_out, F_out = task.output_mesh(inp, result)
@@ -116,18 +190,3 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
     finally:
         row["peak_rss_mb"] = round(peak_rss_mb(), 1)
     return row, extras
-
-
-def _warm_up(method, params: dict) -> None:
-    """One untimed call on a 320-face icosphere in this process, so imports, JIT cache loads
-    and library start-up are not timed (each case runs in a fresh process). Failures here are
-    ignored: the timed calls on the real mesh report them."""
-    from .datasets import icosphere
-    V, F = icosphere(2)
-    p = dict(params)
-    if p.get("target_faces") is not None:
-        p["target_faces"] = min(int(p["target_faces"]), 160)
-    try:
-        method(V, F, **p)
-    except Exception:  # noqa: BLE001 - see docstring
-        pass

@@ -2,6 +2,7 @@
 run.json, the 3D views and the report. ``harness.run`` and ``shootout run`` call `run`."""
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
 import os
@@ -50,7 +51,8 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
     workers = int(workers) if workers else (os.cpu_count() or 1)
     timeout = timeout if timeout is not None else cfg.timeout
     chash = config_hash(cfg)
-    cases = list(cfg.cases)
+    threads = 1 if executor == "dask" else max(1, (os.cpu_count() or 1) // workers)
+    cases = [dataclasses.replace(c, threads=threads) for c in cfg.cases]
     done: set[str] = set()
     if resume:
         prev = folder.read_run_json()
@@ -79,7 +81,11 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
             "scheduler": scheduler, "workers": workers, "timeout_s": timeout,
             "n_cases": len(cfg.cases), "resumed_ok_cases": len(done),
             "versions": package_versions(), "git_commit": git_commit(), "machine": machine_info(),
-            "solver": _solver_info(), "command": " ".join(sys.argv), "tasks": task_specs(cfg)}
+            "solver": _solver_info(), "command": " ".join(sys.argv), "tasks": task_specs(cfg),
+            "timing": {"threads_per_case": threads, "min_repeats": cfg.repeats,
+                       "time_budget_s": cfg.cases[0].time_budget if cfg.cases else None,
+                       "protocol": "one untimed cold call on the case's own input (time_cold_s), then samples "
+                                   "until both repeats and time_budget_s are reached; median and quartiles"}}
     if resume:
         meta["resumed_at"] = now_iso()
     if executor == "dask":       # the cluster's worker threads, not --workers

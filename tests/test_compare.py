@@ -5,6 +5,8 @@ from __future__ import annotations
 import csv
 import io
 import json
+
+import numpy as np
 import shutil
 import subprocess
 import sys
@@ -14,7 +16,7 @@ import pytest
 
 import harness
 from harness.cli import main as cli
-from harness.compare import compare_runs, judge, judge_time
+from harness.compare import compare_runs, judge, judge_time, time_effect
 
 SMALL = {
     "name": "tiny-compare",
@@ -134,11 +136,34 @@ def test_time_needs_factor_and_spread(run_a, tmp_path):
 
     def slow(rows):
         r = rows[0]
-        t = max(float(r["time_max_s"]) * 10, float(r["time_s"]) + 0.01)
-        r.update(time_s=str(t), time_min_s=str(t * 0.99), time_max_s=str(t * 1.01))
+        t = [x * 10 + 0.01 for x in json.loads(r["times"])]
+        r.update(times=json.dumps(t), time_s=str(sorted(t)[len(t) // 2]), time_min_s=str(min(t)), time_max_s=str(max(t)))
     edit(b / "smoothing.csv", slow)
     code, out = run_compare(run_a, b)
-    assert code == 1 and any(ln.startswith("REGRESSION") and "time_s" in ln for ln in out.splitlines())
+    line = next(ln for ln in out.splitlines() if ln.startswith("REGRESSION") and "time_s" in ln)
+    assert code == 1 and "Mann-Whitney" in line and "95% CI" in line
+
+
+def _row(times):
+    return {"times": json.dumps(times), "time_s": sorted(times)[len(times) // 2],
+            "time_min_s": min(times), "time_max_s": max(times)}
+
+
+def test_time_is_decided_on_the_samples():
+    rng = np.random.default_rng(1)
+    base = list(0.010 * (1 + 0.3 * rng.random(20)))
+    noisy_same = list(0.010 * (1 + 0.3 * rng.random(20)))
+    assert judge_time(_row(base), _row(noisy_same)) == "same"
+    assert judge_time(_row(base), _row([2 * t for t in noisy_same])) == "regression"
+    assert judge_time(_row(base), _row([0.5 * t for t in noisy_same])) == "improvement"
+    # significant but small: a 1.2x slowdown is below the minimum effect
+    assert judge_time(_row(base), _row([1.2 * t for t in noisy_same])) == "same"
+    # one slow outlier sample does not make a regression (the median and the rank test decide)
+    assert judge_time(_row(base), _row(noisy_same[:-1] + [1.0])) == "same"
+    # 2x slower but only 3 samples a side: too few to reach p < 0.01, so inconclusive, never a regression
+    assert judge_time(_row(base[:3]), _row([2 * t for t in base[:3]])) == "inconclusive"
+    eff = time_effect(_row(base), _row([2 * t for t in noisy_same]))
+    assert 1.6 < eff["ci"][0] < eff["ratio"] < eff["ci"][1] < 2.5 and eff["p_slower"] < 1e-6
 
 
 def test_rules():
@@ -177,7 +202,9 @@ def test_benchmark_json_layout(run_a):
                 "total", "iterations", "ld15iqr", "hd15iqr", "iqr_outliers", "stddev_outliers"} <= s.keys()
         r = rows[b["extra_info"]["case_id"]]
         assert s["median"] == float(r["time_s"]) and s["min"] == float(r["time_min_s"])
-        assert s["max"] == float(r["time_max_s"]) and s["rounds"] == 3
+        times = json.loads(r["times"])
+        assert s["max"] == float(r["time_max_s"]) and s["rounds"] == int(r["repeats"]) == len(times) >= 3
+        assert abs(s["mean"] - sum(times) / len(times)) <= 1e-12 * s["mean"] and "stats_note" not in b["extra_info"]
         assert s["min"] <= s["q1"] <= s["median"] <= s["q3"] <= s["max"] and s["min"] <= s["mean"] <= s["max"]
 
 
@@ -196,8 +223,8 @@ def test_time_can_be_left_out(run_a, tmp_path):
 
     def slow(rows):
         r = rows[0]
-        t = float(r["time_max_s"]) * 10 + 0.01
-        r.update(time_s=str(t), time_min_s=str(t), time_max_s=str(t))
+        t = [x * 10 + 0.01 for x in json.loads(r["times"])]
+        r.update(times=json.dumps(t), time_s=str(sorted(t)[len(t) // 2]), time_min_s=str(min(t)), time_max_s=str(max(t)))
     edit(b / "laplacian.csv", slow)
     assert run_compare(run_a, b)[0] == 1
     code, out = run_compare(run_a, b, time_factor=None)

@@ -268,7 +268,10 @@ def test_cli_end_to_end(tmp_path):
         df = pd.read_csv(out / f"{task}.csv")
         assert list(df.columns) == columns(task)
         assert len(df) == n and (df["status"] == "ok").all(), df[["method", "error"]]
-        assert (df["repeats"] == 2).all() and (df["time_min_s"] <= df["time_s"]).all()
+        assert (df["repeats"] >= 2).all() and (df["time_min_s"] <= df["time_s"]).all()
+        assert (df["time_q1_s"] <= df["time_s"]).all() and (df["time_s"] <= df["time_q3_s"]).all()
+        assert df["time_cold_s"].gt(0).all()
+        assert [len(json.loads(t)) for t in df["times"]] == df["repeats"].tolist()
         assert df["peak_rss_mb"].gt(0).all()
     lap = pd.read_csv(out / "laplacian.csv")
     plane = lap[lap["mesh"].str.startswith("plane_delaunay") & (lap["noise_model"] == "none")]

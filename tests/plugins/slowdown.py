@@ -1,0 +1,16 @@
+"""A method whose cost is set from outside, for the statistical compare tests.
+
+``slowdown.sleep`` returns its input after sleeping ``SLOWDOWN_MS`` milliseconds (default 4) times
+``$SLOWDOWN_FACTOR`` (default 1): a run with the factor at 2 is the same code made 2x slower.
+"""
+import os
+import time
+
+from methods import SmoothingResult, register
+
+
+@register("slowdown.sleep", task="smoothing", library="slowdown", params={"ms": 4.0})
+def sleep(V, F, *, ms=4.0):
+    """Identity smoothing after sleeping ``ms * $SLOWDOWN_FACTOR`` milliseconds."""
+    time.sleep(ms * float(os.environ.get("SLOWDOWN_FACTOR", "1")) / 1000.0)
+    return SmoothingResult(V=V.copy())

@@ -1,0 +1,66 @@
+"""The timing protocol: cold call kept apart, every sample stored, autorange, thread limits, method
+memory; and the statistical compare on two real runs (no false alarm, a 2x slowdown flagged)."""
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+
+import harness
+
+ROOT = Path(__file__).resolve().parents[1]
+
+CFG = {"name": "timing", "hausdorff_samples": 200, "plugins": ["tests.plugins.slowdown"],
+       "meshes": ["knight", "woody"], "noise": [{"model": "gaussian_normal", "levels": [0.2]}],
+       "time_budget": 0.15,
+       "tasks": {"smoothing": {"methods": ["slowdown.sleep", "scratch.explicit", "scratch.implicit",
+                                           "scratch.taubin"]},
+                 "laplacian": {"methods": ["scratch.cotan", "scratch.uniform"]}}}
+
+
+def _run(out, factor):
+    env = {**os.environ, "SLOWDOWN_FACTOR": str(factor), "PYTHONPATH": str(ROOT)}
+    cfg = Path(out).with_suffix(".yaml")
+    cfg.write_text(json.dumps(CFG))
+    r = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(out), "--quiet"],
+                       cwd=ROOT, env=env, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+
+
+def test_protocol_columns(tmp_path):
+    out = tmp_path / "run"
+    harness.run(CFG, out=out, quiet=True)
+    df = pd.read_csv(out / "smoothing.csv")
+    assert (df["status"] == "ok").all(), df[["method", "error"]]
+    for r in df.itertuples():
+        times = json.loads(r.times)
+        assert len(times) == r.repeats >= 1 and min(times) == r.time_min_s and max(times) == r.time_max_s
+        assert r.time_q1_s <= r.time_s <= r.time_q3_s and r.time_cold_s > 0
+        # autorange: keeps sampling until the budget is spent (or the sample cap)
+        assert sum(times) >= 0.15 or len(times) == 1000
+    sleep = df[df.method == "slowdown.sleep"]
+    assert (sleep["time_s"] > 0.004).all() and (sleep["repeats"] >= 20).all()
+    meta = json.loads((out / "run.json").read_text())
+    assert meta["timing"]["threads_per_case"] == max(1, (os.cpu_count() or 1) // meta["workers"])
+    mem = pd.read_csv(out / "laplacian.csv")["method_mem_mb"]
+    if Path("/proc/self/clear_refs").exists():
+        assert mem.notna().all() and (mem >= 0).all()
+
+
+def test_back_to_back_runs_compare_equal_and_a_2x_slowdown_is_flagged(tmp_path):
+    a, b, c = tmp_path / "a", tmp_path / "b", tmp_path / "c"
+    _run(a, 1)
+    _run(b, 1)
+    _run(c, 2)
+    same = subprocess.run([sys.executable, "-m", "harness.cli", "compare", str(a), str(b)], cwd=ROOT,
+                          capture_output=True, text=True, timeout=120)
+    assert same.returncode == 0, same.stdout
+    slow = subprocess.run([sys.executable, "-m", "harness.cli", "compare", str(a), str(c)], cwd=ROOT,
+                          capture_output=True, text=True, timeout=120)
+    assert slow.returncode == 1, slow.stdout
+    flagged = [ln for ln in slow.stdout.splitlines() if ln.startswith("REGRESSION")]
+    assert flagged and all("slowdown.sleep" in ln and "time_s" in ln for ln in flagged), slow.stdout
