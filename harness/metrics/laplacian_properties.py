@@ -24,9 +24,12 @@ and ``M`` diagonal (or None):
     arithmetic drops them) do not change the value.
     ``POS`` is "no such entry" (Wardetzky's w_ij >= 0).
 ``min_eig``
-    smallest eigenvalue of ``S = -(W + W^T) / 2`` divided by the largest eigenvalue magnitude
-    of ``S`` (dimensionless, so meshes and operators compare). ``psd`` is
-    ``min_eig >= -PSD_TOL``. How it is computed (no dense eigensolver):
+    for a symmetric W (SYM): smallest eigenvalue of ``S = -(W + W^T) / 2`` divided by the largest
+    eigenvalue magnitude of ``S`` (dimensionless, so meshes and operators compare), and ``psd``
+    is ``min_eig >= -PSD_TOL``. For a non-symmetric W, ``psd`` means that every eigenvalue of
+    ``-W`` has a non-negative real part (what keeps diffusion ``x' = W x`` stable), decided by an
+    exact certificate or left blank (see `_nonsymmetric_psd`): the symmetric part alone would
+    call a stable operator indefinite. How the symmetric case is computed (no dense eigensolver):
 
     1. ``lam_max = max |eig(S)|`` by ARPACK Lanczos (``eigsh``, ``which='LM'``, tol 1e-6; fast,
        extreme eigenvalue). Small Krylov spaces (``ncv=8``) are used throughout.
@@ -179,11 +182,75 @@ def laplacian_properties(W, M, V, F, planar: bool | None = None) -> dict:
     out["operator_symmetric"] = _operator_symmetric(W, M, rows, cols, vals)
 
     # ---- semi-definiteness
-    if n <= EIG_MAX_N:
-        out["min_eig"], out["psd"] = _min_eig(W)
+    if out["SYM"]:
+        out["min_eig"], out["psd"] = _min_eig(W) if n <= EIG_MAX_N else _gershgorin_certificate(W)
     else:
-        out["min_eig"], out["psd"] = _gershgorin_certificate(W)
+        out["min_eig"], out["psd"] = _nonsymmetric_psd(W, n)
     return out
+
+
+def _nonsymmetric_psd(W, n):
+    """(min_eig, psd) for a non-symmetric W: psd means every eigenvalue of -W has a non-negative
+    real part. Two exact certificates, else (None, None):
+
+    1. ``W = D^-1 S`` with D positive diagonal and S symmetric (e.g. row-normalised cotangent
+       weights): -W is similar to ``-D^-1/2 S D^-1/2``, so its eigenvalues are real and have the
+       inertia of -S; ``min_eig`` is then that of S (same sign, relative to S's scale).
+    2. -W has a non-negative diagonal and is row diagonally dominant (e.g. positive mean value
+       weights): by Gershgorin every eigenvalue has a non-negative real part; ``min_eig`` is 0
+       when the rows sum to zero (the constant vector), else None.
+    """
+    d = _symmetrizer(W, n)
+    if d is not None:
+        S = sp.diags(d) @ W
+        S = ((S + S.T) * 0.5).tocsr()
+        return _min_eig(S) if n <= EIG_MAX_N else _gershgorin_certificate(S)
+    A = (-W).tocsr()
+    diag = A.diagonal()
+    off = np.asarray(abs(A).sum(axis=1)).ravel() - np.abs(diag)
+    scale = float(np.abs(diag).max()) if diag.size else 0.0
+    if scale == 0.0:
+        return 0.0, True
+    tol = 1e-12 * scale
+    if np.all(diag >= -tol) and np.all(diag - off >= -tol * np.maximum(1.0, off / scale)):
+        rowsum = float(np.abs(np.asarray(A.sum(axis=1)).ravel()).max())
+        return (0.0 if rowsum <= 1e-10 * scale else None), True
+    return None, None
+
+
+def _symmetrizer(W, n):
+    """Positive ``d`` (n,) with ``diag(d) W`` symmetric to SYM_TOL, or None.
+
+    ``d_i W_ij = d_j W_ji`` on every stored pair fixes ``log d_j - log d_i = log(W_ij / W_ji)``:
+    solved by least squares on the pairs' graph and accepted only if ``diag(d) W`` is symmetric.
+    """
+    C = sp.coo_matrix(W)
+    off = C.row != C.col
+    i, j, v = C.row[off], C.col[off], C.data[off]
+    wmax = float(np.abs(v).max()) if v.size else 0.0
+    if wmax == 0.0:
+        return None
+    sig = np.abs(v) > ZERO_TOL * wmax
+    i, j, v = i[sig], j[sig], v[sig]
+    T = sp.csr_matrix((v, (j, i)), shape=(n, n))             # T[i, j] = W[j, i]
+    vt = np.asarray(T[i, j]).ravel()
+    if np.any(vt == 0) or np.any(np.sign(vt) != np.sign(v)):
+        return None                                           # W_ij and W_ji must share sign and support
+    up = i < j
+    i, j, r = i[up], j[up], np.log(v[up] / vt[up])
+    G = sp.csr_matrix((np.r_[-np.ones(i.size), np.ones(i.size)],
+                       (np.r_[np.arange(i.size), np.arange(i.size)], np.r_[i, j])), shape=(i.size, n))
+    G = sp.vstack([G, sp.csr_matrix((np.ones(1), ([0], [0])), shape=(1, n))]).tocsr()   # gauge: log d_0 = 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        x = sla.lsqr(G, np.r_[r, 0.0], atol=1e-14, btol=1e-14, iter_lim=20 * n)[0]
+    d = np.exp(x - x.max())
+    S = sp.diags(d) @ W
+    smax = float(abs(S).max())
+    D = S - S.T
+    if smax == 0 or (D.nnz and float(abs(D).max()) > SYM_TOL * smax):
+        return None
+    return d
 
 
 def _edge_keys(F: np.ndarray, n: int) -> np.ndarray:

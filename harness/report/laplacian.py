@@ -10,7 +10,8 @@ PROPS = [("SYM", "SYM", "sym_error", "max |W-Wᵀ| / max|W|"),
          ("LOC", "LOC", "loc_violations", "non-zeros between vertices sharing no edge"),
          ("LIN", "LIN", "lin_error", "max |W X| / (max|W| diag), planar meshes only"),
          ("POS", "POS", "neg_weights", "fraction of negative off-diagonal weights"),
-         ("PSD", "psd", "min_eig", "smallest eigenvalue of -(W+Wᵀ)/2, relative")]
+         ("PSD", "psd", "min_eig", "symmetric W: smallest eigenvalue of -W, relative; non-symmetric W: every "
+                                   "eigenvalue of -W has a non-negative real part (exact certificate, else blank)")]
 
 
 def property_matrix(df) -> list[dict]:
