@@ -43,6 +43,8 @@ def _parser() -> argparse.ArgumentParser:
     c.add_argument("--html", metavar="FILE", help="also write an HTML diff")
     c.add_argument("--time-factor", type=float, default=None, metavar="X",
                    help="a time regression needs B slower than X times A (default 1.5)")
+    c.add_argument("--absolute-time", action="store_true",
+                   help="judge raw times (default: relative to the whole run's drift, the median B/A over cases)")
     c.add_argument("--no-time", action="store_true",
                    help="compare metrics only (runs from different or loaded machines)")
     return p
@@ -127,7 +129,7 @@ def _cmd_compare(a) -> int:
     if a.time_factor is not None and a.time_factor <= 1:
         raise ShootoutError(f"--time-factor: expected a number > 1, got {a.time_factor}")
     factor = None if a.no_time else (a.time_factor or TIME_FACTOR)
-    return compare_runs(a.run_a, a.run_b, html_out=a.html, time_factor=factor)
+    return compare_runs(a.run_a, a.run_b, html_out=a.html, time_factor=factor, absolute_time=a.absolute_time)
 
 
 def main(argv=None) -> int:

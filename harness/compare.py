@@ -24,7 +24,9 @@ each metric's ``better`` direction and ``rel``/``abs`` tolerance, recorded in ru
   ``time_factor`` (1.5), the lower end of its 95% bootstrap confidence interval exceeds 1,
   and the medians differ by more than 1 ms. The ratio is printed with its interval. Cases whose
   sample counts cannot reach significance (fewer than 5 samples a side) are counted as
-  inconclusive, never as regressions. Rows without samples (older runs) fall back to: median
+  inconclusive, never as regressions. B's samples are first divided by the run's drift (the
+  median over all cases of the ratio of median times: a machine busier during one run slows
+  every case alike; ``--absolute-time`` turns this off). Rows without samples fall back to: median
   over ``time_factor`` x A's, fastest B repeat slower than slowest A repeat, > 1 ms;
 * a case whose status was ok and is not any more regresses; a case of RUN_A missing in RUN_B
   regresses too (an interrupted or shrunken run must not pass CI); cases new in RUN_B are listed.
@@ -164,15 +166,16 @@ def time_samples(row: dict) -> list[float] | None:
     return None
 
 
-def time_effect(ra: dict, rb: dict) -> dict | None:
+def time_effect(ra: dict, rb: dict, drift: float = 1.0) -> dict | None:
     """Median ratio B/A with a seeded 95% bootstrap interval and one-sided Mann-Whitney p-values
-    (``p_slower``: B slower than A; ``p_faster``), or None without samples on both sides."""
+    (``p_slower``: B slower than A; ``p_faster``), or None without samples on both sides.
+    B's samples are divided by ``drift`` first (the whole run's speed change, see `run_drift`)."""
     a, b = time_samples(ra), time_samples(rb)
     if a is None or b is None:
         return None
     import numpy as np
     from scipy.stats import mannwhitneyu
-    A, B = np.asarray(a), np.asarray(b)
+    A, B = np.asarray(a), np.asarray(b) / drift
     ma, mb = float(np.median(A)), float(np.median(B))
     rng = np.random.default_rng(0)
     ra_ = np.median(A[rng.integers(0, A.size, (BOOTSTRAP, A.size))], axis=1)
@@ -191,9 +194,25 @@ def time_effect(ra: dict, rb: dict) -> dict | None:
             "p_faster": p_faster, "n": (A.size, B.size), "conclusive": conclusive, "diff": mb - ma}
 
 
-def judge_time(ra: dict, rb: dict, factor: float = TIME_FACTOR) -> str:
+def run_drift(rows_a: dict, rows_b: dict) -> float:
+    """How much slower B ran overall: the median over cases (ok in both, with samples) of the
+    ratio of median times B/A; 1.0 with fewer than 5 such cases. A machine that is busier during
+    one run slows every case alike; a changed method moves away from this common factor."""
+    import numpy as np
+    r = []
+    for cid, ra in rows_a.items():
+        rb = rows_b.get(cid)
+        if rb is None or ra.get("status") != "ok" or rb.get("status") != "ok":
+            continue
+        a, b = time_samples(ra), time_samples(rb)
+        if a and b and np.median(a) > 0:
+            r.append(np.median(b) / np.median(a))
+    return float(np.median(r)) if len(r) >= 5 else 1.0
+
+
+def judge_time(ra: dict, rb: dict, factor: float = TIME_FACTOR, drift: float = 1.0) -> str:
     """'regression' | 'improvement' | 'inconclusive' | 'same' (see the module docstring)."""
-    eff = time_effect(ra, rb)
+    eff = time_effect(ra, rb, drift)
     if eff is not None:
         if not eff["conclusive"]:
             return "inconclusive"
@@ -217,14 +236,15 @@ def judge_time(ra: dict, rb: dict, factor: float = TIME_FACTOR) -> str:
     return "same"
 
 
-def _time_note(ra: dict, rb: dict) -> str:
-    eff = time_effect(ra, rb)
+def _time_note(ra: dict, rb: dict, drift: float = 1.0) -> str:
+    eff = time_effect(ra, rb, drift)
     if eff is None:
         return (f"A {_fmt(ra.get('time_min_s'))}..{_fmt(ra.get('time_max_s'))}, "
                 f"B {_fmt(rb.get('time_min_s'))}..{_fmt(rb.get('time_max_s'))} (no samples stored)")
     lo, hi = eff["ci"]
     p = min(eff["p_slower"], eff["p_faster"])
-    return (f"B/A {eff['ratio']:.3g}x [95% CI {lo:.3g}, {hi:.3g}], Mann-Whitney p={p:.2g}, "
+    rel = f" relative to the run drift {drift:.3g}x" if drift != 1.0 else ""
+    return (f"B/A {eff['ratio']:.3g}x{rel} [95% CI {lo:.3g}, {hi:.3g}], Mann-Whitney p={p:.2g}, "
             f"{eff['n'][0]} vs {eff['n'][1]} samples" + ("" if eff["conclusive"] else " (too few to decide)"))
 
 
@@ -255,12 +275,16 @@ def _label(r: dict) -> str:
     return f"{r.get('mesh')} {noise} {r.get('method')}[{ps}]"
 
 
-def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FACTOR, rules=None) -> dict:
+def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FACTOR, rules=None,
+                 absolute_time: bool = False) -> dict:
     """Every change between two runs' rows: ``{"changes": [...], "only_a": [...], "only_b": [...], ...}``.
 
     ``rules``: ``{task: {metric: Rule}}`` from the runs' task declarations (default: the known tasks).
+    Times are judged relative to the whole run's drift (`run_drift`) unless ``absolute_time``.
     """
     changes, input_changes = [], []
+    drift = run_drift(rows_a, rows_b)
+    used_drift = 1.0 if absolute_time else drift
     common = [c for c in rows_a if c in rows_b]
     for cid in common:
         ra, rb = rows_a[cid], rows_b[cid]
@@ -271,11 +295,12 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
             changes.append({**base, "metric": "status", "a": sa, "b": sb, "verdict": verdict,
                             "note": str(rb.get("error") or "")[:200]})
         if sa == "ok" and sb == "ok" and time_factor:
-            v = judge_time(ra, rb, time_factor)
+            v = judge_time(ra, rb, time_factor, used_drift)
             a, b = _num(ra.get("time_s")), _num(rb.get("time_s"))
             if a is not None and b is not None and a != b:
                 changes.append({**base, "metric": "time_s", "a": a, "b": b,
-                                "verdict": "within tolerance" if v == "same" else v, "note": _time_note(ra, rb)})
+                                "verdict": "within tolerance" if v == "same" else v,
+                                "note": _time_note(ra, rb, used_drift)})
         if sa != "ok" or sb != "ok":
             continue
         for metric in ra:
@@ -299,7 +324,7 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
         changes.append({"case_id": cid, "task": r["task"], "case": _label(r), "metric": "case", "a": r.get("status"),
                         "b": None, "verdict": "regression", "note": "missing in RUN_B"})
     return {"changes": changes, "input_changes": input_changes, "common": len(common), "only_a": only_a,
-            "only_b": only_b, "rows_a": rows_a, "rows_b": rows_b}
+            "only_b": only_b, "rows_a": rows_a, "rows_b": rows_b, "drift": drift, "absolute_time": absolute_time}
 
 
 def _fmt(v) -> str:
@@ -330,6 +355,15 @@ def timing_notes(meta_a: dict, meta_b: dict, res: dict) -> list[str]:
     elif (wa or 1) > 1 and ma and (ma.get("cpu_count") or 0) <= (wa or 1):
         notes.append(f"{wa} workers on {ma.get('cpu_count')} cores: timings include contention "
                      "(run both with --workers 1 for timing-grade comparisons)")
+    drift = res.get("drift", 1.0)
+    if abs(drift - 1.0) > 0.1:
+        how = ("judged without correcting for it (--absolute-time)" if res.get("absolute_time") else
+               "each case's time is judged relative to this common factor (--absolute-time to judge raw times)")
+        notes.append(f"B ran {drift:.2f}x A's time overall (median over cases): a busier or faster machine "
+                     f"slows or speeds every case alike; {how}")
+    la, lb = meta_a.get("load_average"), meta_b.get("load_average")
+    if la or lb:
+        notes.append(f"load average (1 min) at start/end: A {la}, B {lb}")
     n_inc = sum(c["verdict"] == "inconclusive" for c in res["changes"])
     if n_inc:
         notes.append(f"{n_inc} case(s) have too few timed samples on one side to decide on time (inconclusive, "
@@ -345,7 +379,7 @@ def _sorted(changes):
 
 
 def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_FACTOR, out=None,
-                 max_lines: int = 200) -> int:
+                 max_lines: int = 200, absolute_time: bool = False) -> int:
     """Print the changes from RUN_A (baseline) to RUN_B; write an HTML diff if asked; 1 on a regression.
 
     ``time_factor=None`` (or 0) leaves timings out (metrics only), e.g. for runs from different machines.
@@ -355,7 +389,7 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
     meta_a = RunFolder(run_a).read_run_json() or {}
     meta_b = RunFolder(run_b).read_run_json() or {}
     rules = {**rules_from_specs(meta_a.get("tasks")), **rules_from_specs(meta_b.get("tasks"))}
-    res = compare_rows(ra, rb, time_factor, rules)
+    res = compare_rows(ra, rb, time_factor, rules, absolute_time)
     changes = _sorted(res["changes"])
     regress = [c for c in changes if c["verdict"] == "regression"]
     shown = [c for c in changes if c["verdict"] not in ("within tolerance", "info", "inconclusive")]

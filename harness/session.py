@@ -35,6 +35,13 @@ def _solver_info() -> dict | None:
         return {"error": f"{type(exc).__name__}: {exc}"}
 
 
+def _load() -> float | None:
+    try:
+        return round(os.getloadavg()[0], 2)
+    except OSError:
+        return None
+
+
 def task_specs(cfg: Config) -> dict:
     """The declarations of the tasks this run uses (the report and compare read them)."""
     used = sorted({c.task for c in cfg.cases})
@@ -86,6 +93,7 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
                        "time_budget_s": cfg.cases[0].time_budget if cfg.cases else None,
                        "protocol": "one untimed cold call on the case's own input (time_cold_s), then samples "
                                    "until both repeats and time_budget_s are reached; median and quartiles"}}
+    meta["load_average"] = [_load()]
     if resume:
         meta["resumed_at"] = now_iso()
     if executor == "dask":       # the cluster's worker threads, not --workers
@@ -118,6 +126,7 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
         if bar is not None:
             bar.close()
         ex.close()
+        meta["load_average"] = meta["load_average"][:1] + [_load()]
         meta.update(finished=now_iso(), wall_s=round(time.perf_counter() - t0, 3),
                     status_counts=folder.status_counts(), status_counts_this_session=counts)
         folder.write_run_json(meta)
