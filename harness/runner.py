@@ -16,9 +16,12 @@ Timing protocol (the method call alone; metrics are not timed):
    (``times``, a JSON list, seconds) and summarised as median ``time_s``, quartiles
    ``time_q1_s``/``time_q3_s``, ``time_min_s``/``time_max_s``; ``repeats`` is the number taken;
 4. memory: ``method_mem_mb`` is the peak resident memory of the first sampled call minus the
-   resident memory just before it (Linux: the kernel's high-water mark, reset through
-   ``/proc/self/clear_refs``; blank elsewhere); ``peak_rss_mb`` is the process's own peak
-   (interpreter, inputs and metrics included).
+   resident memory just before it, in MiB (Linux: freed heap returned to the OS with glibc's
+   ``malloc_trim``, then the kernel's high-water mark reset through ``/proc/self/clear_refs``;
+   blank elsewhere). It counts pages the call touched beyond what was resident, so memory the
+   allocator kept mapped from the cold call and reused is not counted again (a lower bound of
+   the call's allocations). ``peak_rss_mb`` is the process's own peak (interpreter, inputs
+   and metrics included).
 """
 from __future__ import annotations
 
@@ -58,7 +61,14 @@ def _status_kib(field: str) -> int | None:
 
 
 def _reset_peak() -> bool:
-    """Reset the kernel's resident high-water mark (VmHWM) of this process (Linux)."""
+    """Return freed heap memory to the OS (glibc ``malloc_trim``, so pages the allocator kept from
+    earlier calls do not hide the method's own allocations), then reset the kernel's resident
+    high-water mark (VmHWM) of this process (Linux)."""
+    try:
+        import ctypes
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):
+        pass
     try:
         with open("/proc/self/clear_refs", "w") as fh:
             fh.write("5")
