@@ -10,3 +10,29 @@ def run(config_or_path, **overrides):
     """
     from .session import run as _run
     return _run(config_or_path, **overrides)
+
+
+def evaluate(V, F, V_clean, F_clean, **kwargs):
+    """The task's metrics of a result against a clean mesh (see `harness.evaluate.evaluate`)."""
+    from .scoring import evaluate as _evaluate
+    return _evaluate(V, F, V_clean, F_clean, **kwargs)
+
+
+def load_run(run_dir):
+    """All rows of a run folder as one tidy DataFrame (every task's CSV; ``params`` expanded into one
+    column per parameter, named as the parameter, or ``param_<name>`` where that name is taken)."""
+    import json
+
+    import pandas as pd
+
+    from .results import RunFolder
+    frames = RunFolder(run_dir).frames()
+    if not frames:
+        return pd.DataFrame()
+    df = pd.concat(list(frames.values()), ignore_index=True, sort=False)
+    params = [json.loads(p) if isinstance(p, str) and p else {} for p in df.get("params", [])]
+    keys = sorted({k for p in params for k in p})
+    for k in keys:
+        col = k if k not in df.columns else f"param_{k}"
+        df[col] = [p.get(k) for p in params]
+    return df

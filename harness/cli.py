@@ -19,6 +19,8 @@ class _Parser(argparse.ArgumentParser):
 
 def _parser() -> argparse.ArgumentParser:
     p = _Parser(prog="shootout", description="Compare discrete Laplacians, smoothing and simplification methods.")
+    from . import __version__
+    p.add_argument("--version", action="version", version=f"mesh-shootout {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
     r = sub.add_parser("run", help="run a config and write its run folder")
     r.add_argument("config")
@@ -32,11 +34,22 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--export-benchmark-json", metavar="FILE", help="also write timings in pytest-benchmark's JSON layout")
     m = sub.add_parser("methods", help="list registered methods")
     m.add_argument("--task", choices=tasks.names())
-    sub.add_parser("datasets", help="list bundled and procedural meshes")
+    m.add_argument("--json", action="store_true", help="machine-readable: one JSON list")
+    ds = sub.add_parser("datasets", help="list bundled and procedural meshes")
+    ds.add_argument("--json", action="store_true", help="machine-readable: one JSON list")
     rp = sub.add_parser("report", help="rebuild report.html from a run folder (reads files only, runs no code)")
     rp.add_argument("run_dir")
     vw = sub.add_parser("views", help="recompute a run folder's 3D views (runs the chosen methods again)")
     vw.add_argument("run_dir")
+    ev = sub.add_parser("eval", help="score result meshes made elsewhere; writes a run folder and its report")
+    ev.add_argument("results", nargs="+", metavar="RESULT", help="result mesh files (OBJ, OFF, PLY, STL)")
+    ev.add_argument("--clean", required=True, help="the clean (reference) mesh")
+    ev.add_argument("--noisy", help="the noisy input the results were made from (smoothing: input_* columns)")
+    ev.add_argument("--out", required=True, help="run folder to write")
+    ev.add_argument("--task", choices=["smoothing", "simplification"],
+                    help="default: smoothing when a result has the clean mesh's vertex count, else simplification")
+    ev.add_argument("--label", action="append", help="method label of each result, in order (default: file stem)")
+    ev.add_argument("--hausdorff-samples", type=int, default=20000, help="area samples per side (as in a config)")
     c = sub.add_parser("compare", help="compare two run folders; exit 1 on a regression")
     c.add_argument("run_a")
     c.add_argument("run_b")
@@ -80,19 +93,42 @@ def _cmd_run(a) -> int:
 def _cmd_methods(a) -> int:
     from .plugins import import_methods
     methods = import_methods()
+    if a.json:
+        import json
+        print(json.dumps([method_record(m) for m in methods.all_methods(a.task)], indent=1))
+        return 0
     for m in methods.all_methods(a.task):
         why = m.unavailable_reason()
         params = ", ".join(p.describe() for p in m.params.values()) or "-"
         state = "available" if why is None else f"unavailable ({why})"
-        print(f"{m.name:32s} {m.task:15s} {m.library:20s} {state}\n    params: {params}")
+        print(f"{m.name:32s} {m.task:15s} {m.library:20s} {state}")
+        if m.summary:
+            print(f"    {m.summary}")
+        if m.cite:
+            print(f"    cite: {m.cite}")
+        print(f"    params: {params}")
     from methods.registry import BROKEN
     for mod, why in BROKEN.items():
         print(f"warning: module {mod} failed to import, its methods are missing: {why}", file=sys.stderr)
     return 0
 
 
+def method_record(m) -> dict:
+    """JSON-ready description of a registered method."""
+    return {"name": m.name, "task": m.task, "library": m.library, "available": m.unavailable_reason() is None,
+            "unavailable_reason": m.unavailable_reason(), "summary": m.summary, "cite": m.cite,
+            "module": m.func.__module__,
+            "params": [{"name": p.name, "default": p.default, "kind": p.kind, "low": p.low, "high": p.high,
+                        "choices": list(p.choices) if p.choices else None, "doc": p.doc}
+                       for p in m.params.values()]}
+
+
 def _cmd_datasets(a) -> int:
     from .datasets import describe_all
+    if a.json:
+        import json
+        print(json.dumps(describe_all(), indent=1, default=str))
+        return 0
     print(f"{'name':24s} {'kind':18s} {'vertices':>9s} {'faces':>9s}  description")
     for r in describe_all():
         print(f"{r['name']:24s} {r['kind']:18s} {r['vertices']:9d} {r['faces']:9d}  {r['description']}")
@@ -121,6 +157,15 @@ def _cmd_views(a) -> int:
     return 0
 
 
+def _cmd_eval(a) -> int:
+    from .scoring import eval_files
+    frames = eval_files(a.clean, a.results, a.out, noisy=a.noisy, task=a.task, labels=a.label,
+                        hausdorff_samples=a.hausdorff_samples)
+    n = sum(len(df) for df in frames.values())
+    print(f"eval: {n} result(s) scored; report: {Path(a.out) / 'report.html'}")
+    return 0
+
+
 def _cmd_compare(a) -> int:
     from .compare import TIME_FACTOR, compare_runs
     for d in (a.run_a, a.run_b):
@@ -135,7 +180,8 @@ def _cmd_compare(a) -> int:
 def main(argv=None) -> int:
     args = _parser().parse_args(argv)
     handler = {"run": _cmd_run, "methods": _cmd_methods, "datasets": _cmd_datasets,
-               "report": _cmd_report, "views": _cmd_views, "compare": _cmd_compare}[args.command]
+               "report": _cmd_report, "views": _cmd_views, "eval": _cmd_eval,
+               "compare": _cmd_compare}[args.command]
     try:
         return handler(args)
     except ShootoutError as exc:

@@ -35,11 +35,71 @@ def _solver_info() -> dict | None:
         return {"error": f"{type(exc).__name__}: {exc}"}
 
 
+class _Lines:
+    """Progress for a non-terminal stderr (CI logs, ``| tee``): one line every ``every`` seconds."""
+
+    def __init__(self, total: int, initial: int, every: float = 5.0):
+        self.total, self.n, self.every = total, initial, every
+        self.t0 = self.last = time.perf_counter()
+        self.what = ""
+        if initial:
+            print(f"shootout: resuming, {initial} of {total} case(s) already done", file=sys.stderr, flush=True)
+
+    def set_postfix_str(self, what, refresh=False):
+        self.what = what
+
+    def update(self, k=1):
+        self.n += k
+        now = time.perf_counter()
+        if now - self.last >= self.every or self.n == self.total:
+            self.last = now
+            print(f"shootout: {self.n}/{self.total} cases, {now - self.t0:.0f} s (last: {self.what})",
+                  file=sys.stderr, flush=True)
+
+    def close(self):
+        pass
+
+
+def _progress(total: int, initial: int):
+    if sys.stderr.isatty():
+        from tqdm import tqdm
+        return tqdm(total=total, initial=initial, unit="case", dynamic_ncols=True)
+    return _Lines(total, initial)
+
+
 def _load() -> float | None:
     try:
         return round(os.getloadavg()[0], 2)
     except OSError:
         return None
+
+
+def method_sources(cfg: Config) -> dict:
+    """For every method of the run: the module that registered it and the installed distribution
+    (name, version) that supplied that module, so a plugin's version is on record."""
+    from importlib import metadata
+    from .plugins import import_methods
+    methods = import_methods()
+    try:
+        dists = metadata.packages_distributions()
+    except Exception:  # noqa: BLE001 - provenance must never fail a run
+        dists = {}
+    out = {}
+    for name in sorted({c.method for c in cfg.cases}):
+        try:
+            mod = methods.get(name).func.__module__
+        except KeyError:
+            continue
+        top = mod.split(".")[0]
+        dist = (dists.get(top) or [None])[0]
+        if top == "methods":
+            dist = "mesh-shootout"
+        try:
+            ver = metadata.version(dist) if dist else None
+        except metadata.PackageNotFoundError:
+            ver = None
+        out[name] = {"module": mod, "distribution": dist, "version": ver}
+    return out
 
 
 def task_specs(cfg: Config) -> dict:
@@ -89,6 +149,7 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
             "n_cases": len(cfg.cases), "resumed_ok_cases": len(done),
             "versions": package_versions(), "git_commit": git_commit(), "machine": machine_info(),
             "solver": _solver_info(), "command": " ".join(sys.argv), "tasks": task_specs(cfg),
+            "method_sources": method_sources(cfg),
             "timing": {"threads_per_case": threads, "min_repeats": cfg.repeats,
                        "time_budget_s": cfg.cases[0].time_budget if cfg.cases else None,
                        "protocol": "one untimed cold call on the case's own input (time_cold_s), then samples "
@@ -101,9 +162,7 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
     folder.write_run_json(meta)
     bar = None
     if not quiet:
-        from tqdm import tqdm
-        bar = tqdm(total=len(cfg.cases), initial=len(done), unit="case", dynamic_ncols=True,
-                   disable=not sys.stderr.isatty())
+        bar = _progress(len(cfg.cases), len(done))
     counts: dict[str, int] = {}
     t0 = time.perf_counter()
     try:
