@@ -205,6 +205,11 @@ def finish(out_dir, cfg: Config, timeout=None, export_benchmark_json=None) -> No
     except Exception as exc:  # noqa: BLE001
         print(f"shootout: warning: 3D views could not be computed ({type(exc).__name__}: {exc})", file=sys.stderr)
     try:
+        from .leaderboard import write as write_leaderboard
+        write_leaderboard(out_dir, folder.frames(), {t: s for t, s in task_specs(cfg).items()})
+    except Exception as exc:  # noqa: BLE001
+        print(f"shootout: warning: the leaderboard could not be written ({type(exc).__name__}: {exc})", file=sys.stderr)
+    try:
         build_report(out_dir)
     except Exception as exc:  # noqa: BLE001
         print(f"shootout: warning: report.html could not be built ({type(exc).__name__}: {exc}); "

@@ -23,6 +23,7 @@ from pathlib import Path
 
 
 from .. import tasks as _tasks
+from ..leaderboard import leaderboard, validity
 from ..results import RunFolder
 from ..schema import scalar as _clean
 from .common import esc as _esc
@@ -62,9 +63,10 @@ def _frame_payload(spec, df) -> dict:
     for s in df["params"]:
         p = params_of(s)
         target.append(p.get("target_ratio") if p.get("target_ratio") is not None else p.get("target_faces"))
-    cols += ["_variant", "_noise", "_hist", "_target"]
-    for r, v, n, h, t in zip(rows, variants, noise, hist, target):
-        r += [v, n, h, _clean(t) if not isinstance(t, str) else t]
+    invalid = validity(spec.get("name") or "", df).tolist() if "status" in df else [""] * len(rows)
+    cols += ["_variant", "_noise", "_hist", "_target", "_invalid"]
+    for r, v, n, h, t, bad in zip(rows, variants, noise, hist, target, invalid):
+        r += [v, n, h, _clean(t) if not isinstance(t, str) else t, bad or None]
     order = sorted(set(variants), key=natural_key)
     return {"columns": cols, "rows": rows, "variants": order, "spec": spec}
 
@@ -177,7 +179,19 @@ def collect(run_dir) -> dict:
     tasks = {t: _frame_payload(specs[t], frames[t]) for t in specs if t in frames}
     mat = property_matrix(frames["laplacian"]) if "laplacian" in frames else []
     return {"meta": meta, "frames": frames, "specs": specs, "tasks": tasks, "matrix": mat,
-            "views": folder.read_views()}
+            "views": folder.read_views(), "leaderboard": _leaderboard_payload(frames, specs)}
+
+
+def _leaderboard_payload(frames, specs) -> list[dict]:
+    lb = leaderboard(frames, specs)
+    out = []
+    for (task, metric), g in lb.groupby(["task", "metric"], sort=False):
+        r0 = g.iloc[0]
+        out.append({"task": task, "metric": metric, "better": r0.better, "cells": int(r0.cells), "k": int(r0.k),
+                    "p": _clean(r0.friedman_p), "cd": _clean(r0.critical_difference),
+                    "methods": [{"method": r.method, "mean_rank": float(r.mean_rank), "missing": int(r.missing_cells),
+                                 "invalid": int(r.invalid_cells)} for r in g.itertuples()]})
+    return out
 
 
 def _task_section(task, spec, frames) -> str:
@@ -204,18 +218,25 @@ def render(run_dir) -> str:
                   "or the views could not be computed); `shootout views RUN_DIR` computes them (it runs the "
                   "chosen methods again)"}]
     payload = {"name": meta.get("name") or Path(run_dir).name, "tasks": data["tasks"], "views": views,
-               "max_display_faces": MAX_DISPLAY_FACES}
+               "max_display_faces": MAX_DISPLAY_FACES, "leaderboard": data["leaderboard"]}
     blob = json.dumps(payload, allow_nan=False, separators=(",", ":"), default=_clean)
     blob = blob.replace("</", "<\\/").replace("<!--", "<\\!--")
     css = (HERE / "report.css").read_text()
     js = (HERE / "report.js").read_text()
     name = _esc(payload["name"])
     present = [t for t in order if t in frames]
-    nav = "".join(f"<a href='#task-{t}'>{_esc(t)}</a>" for t in order) + "<a href='#views'>3D views</a>"
+    nav = ("<a href='#leaderboard'>leaderboard</a>" + "".join(f"<a href='#task-{t}'>{_esc(t)}</a>" for t in order)
+           + "<a href='#views'>3D views</a>")
     built = datetime.now(timezone.utc).isoformat(timespec="seconds")
     body = [f"<header><h1>mesh-shootout report: {name}</h1><nav><a href='#overview'>run</a>{nav}</nav></header>",
             "<main>",
             _header_html(meta, frames, run_dir),
+            "<section id='leaderboard'><h2>Leaderboard across meshes</h2><p>Per task and ranking metric: the mean "
+            "rank of each method over all (mesh, noise, level[, target]) cells, the Friedman test and the Nemenyi "
+            "critical difference (Demšar 2006): methods joined by a bar do not differ significantly (α = 0.05). "
+            "Invalid results (diverged, worse than the noisy input, non-manifold or topology-changing) rank last in "
+            "their cell; cells with a missing result are left out. Also in leaderboard.csv, .md and .tex.</p>"
+            "<div id='leaderboard-body'></div></section>",
             *[_task_section(t, specs[t], frames) for t in order],
             "<section id='views'><h2>3D views</h2><p>Meshes side by side, coloured by the per-vertex quantity "
             "named under each (lengths are fractions of the bounding-box diagonal; the clean mesh is the grey "

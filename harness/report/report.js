@@ -362,6 +362,7 @@
     search.addEventListener('input', function () { state.q = search.value; render(); });
     sel.addEventListener('change', function () { state.status = sel.value; render(); });
     render();
+    RERENDER.push(render);
   }
 
   // ------------------------------------------------------------------ sections
@@ -403,6 +404,7 @@
       addPanel(panels, chart({w: 560, h: 300, xlabel: 'vertices', ylabel: 'time (s)', xlog: true, ylog: true, series: series}));
     }
     render();
+    RERENDER.push(render);
   }
 
   var SMOOTH_METRICS = [
@@ -442,7 +444,8 @@
       bt.innerHTML = '<tr><th>mesh</th><th>noise</th><th>most accurate</th><th>' + esc(key) + '</th><th>noisy input</th>' +
         '<th>time</th><th>Pareto front (fastest first): method, ' + esc(key) + ', time</th></tr>';
       var anyWorse = false;
-      groupBy(vis, panelsKey).forEach(function (rs) {
+      var nInvalid = vis.filter(function (r) { return r._invalid; }).length;
+      groupBy(vis.filter(validOrShown), panelsKey).forEach(function (rs) {
         var pts = aggregate(rs, key);
         var best = pts.reduce(function (a, b) { return b[1] < a[1] ? b : a; });
         var inp = inKey ? mean(rs.map(function (r) { return r[inKey]; }).filter(isNum)) : null;
@@ -456,6 +459,7 @@
       });
       plots.appendChild(el('h4', {text: 'Most accurate method per mesh and noise level'}));
       plots.appendChild(bt);
+      plots.appendChild(invalidNote(nInvalid));
       if (anyWorse) plots.appendChild(el('p', {'class': 'caption', html: 'Red: even the most accurate method left the mesh ' +
         'further from the clean one than the noisy input was (by ' + esc(key) + ').'}));
 
@@ -532,6 +536,7 @@
       return out;
     }
     render();
+    RERENDER.push(render);
   }
 
   function simplificationSection(d) {
@@ -556,7 +561,8 @@
       var bt = el('table', {'class': 'best'});
       bt.innerHTML = '<tr><th>mesh</th><th>noise</th><th>target</th><th>most accurate</th><th>' + esc(key) +
         '</th><th>faces</th><th>time</th><th>fastest</th><th>its ' + esc(key) + '</th><th>its time</th></tr>';
-      groupBy(vis, function (r) { return r.mesh + '|' + r._noise + '|' + r._target; }).forEach(function (rows) {
+      var nInvalid = vis.filter(function (r) { return r._invalid; }).length;
+      groupBy(vis.filter(validOrShown), function (r) { return r.mesh + '|' + r._noise + '|' + r._target; }).forEach(function (rows) {
         // one entry per method: mean metric and faces over seeds, median time
         var rs = [];
         groupBy(rows, function (r) { return r._variant; }).forEach(function (g, v) {
@@ -576,6 +582,7 @@
       });
       plots.appendChild(el('h4', {text: 'Most accurate and fastest method per mesh, noise level and target (mean over seeds)'}));
       plots.appendChild(bt);
+      plots.appendChild(invalidNote(nInvalid));
       var panels = panelGroup(plots, key + ' vs output face count, per mesh and noise level',
         'One line per method through its face targets (log–log; mean over seeds). Lower-left is better: fewer faces, ' +
         'closer to the input. Distances are fractions of the bounding-box diagonal.', mkLeg);
@@ -603,6 +610,7 @@
       histPlot(plots, {rows: ok, colors: d.colors}, hidden, 'Triangle quality of the results: min-angle histogram per method', mkLeg);
     }
     render();
+    RERENDER.push(render);
   }
 
   // ------------------------------------------------------------------ 3D views (canvas 2D painter's algorithm)
@@ -730,6 +738,81 @@
   }
 
 
+
+  // ------------------------------------------------------------------ validity and leaderboard
+  var RERENDER = [];
+  var showInvalid = false;
+  function validOrShown(r) { return showInvalid || !r._invalid; }
+  function invalidNote(n) {
+    if (!n) return el('span');
+    return el('p', {'class': 'caption', text: n + ' row(s) are not valid results (' +
+      'diverged, worse than the noisy input, non-manifold or topology-changing output) and are ' +
+      (showInvalid ? 'included in' : 'left out of') + ' the winners above; the checkbox at the top of the page toggles them.'});
+  }
+  function cdDiagram(g) {
+    // Demšar's critical-difference diagram: mean ranks on an axis, variants whose ranks differ by less than CD joined
+    var ms = g.methods.slice().sort(function (a, b) { return a.mean_rank - b.mean_rank; });
+    var k = Math.max(g.k, 2), W = 760, left = 170, right = W - 170, top = 46, rowH = 18;
+    var H = top + 24 + Math.ceil(ms.length / 2) * rowH + 30;
+    var x = function (r) { return left + (r - 1) / (k - 1) * (right - left); };
+    var svg = sv('svg', {width: W, height: H, 'class': 'chart cd', viewBox: '0 0 ' + W + ' ' + H});
+    svg.appendChild(sv('line', {x1: left, x2: right, y1: top, y2: top, stroke: '#333'}));
+    for (var t = 1; t <= k; t++) {
+      svg.appendChild(sv('line', {x1: x(t), x2: x(t), y1: top - 5, y2: top, stroke: '#333'}));
+      var tx = sv('text', {x: x(t), y: top - 8, 'text-anchor': 'middle', 'font-size': 11}); tx.textContent = t; svg.appendChild(tx);
+    }
+    if (isNum(g.cd)) {
+      svg.appendChild(sv('line', {x1: left, x2: left + g.cd / (k - 1) * (right - left), y1: 14, y2: 14, stroke: '#c00', 'stroke-width': 2}));
+      var ct = sv('text', {x: left, y: 10, 'font-size': 11}); ct.textContent = 'CD = ' + fmt(g.cd, 3) + ' (Nemenyi, α = 0.05)'; svg.appendChild(ct);
+    }
+    var half = Math.ceil(ms.length / 2);
+    ms.forEach(function (m, i) {
+      var onLeft = i < half, j = onLeft ? i : ms.length - 1 - i;
+      var y = top + 24 + j * rowH, xm = x(m.mean_rank), xe = onLeft ? left - 10 : right + 10;
+      svg.appendChild(sv('polyline', {points: xm + ',' + top + ' ' + xm + ',' + y + ' ' + xe + ',' + y, fill: 'none', stroke: '#555'}));
+      var lt = sv('text', {x: onLeft ? xe - 4 : xe + 4, y: y + 4, 'text-anchor': onLeft ? 'end' : 'start', 'font-size': 11});
+      lt.textContent = m.method + ' (' + fmt(m.mean_rank, 3) + ')' + (m.invalid ? ' ⚠' + m.invalid : '');
+      svg.appendChild(lt);
+    });
+    if (isNum(g.cd)) {                      // maximal groups not significantly different: thick bars
+      var yb = top + 8, start = 0;
+      for (var a = 0; a < ms.length; a++) {
+        var b = a;
+        while (b + 1 < ms.length && ms[b + 1].mean_rank - ms[a].mean_rank < g.cd) b++;
+        if (b > a && b >= start) {
+          svg.appendChild(sv('line', {x1: x(ms[a].mean_rank) - 3, x2: x(ms[b].mean_rank) + 3, y1: yb, y2: yb,
+            stroke: '#000', 'stroke-width': 3, 'class': 'clique'}));
+          yb += 5; start = b + 1;
+        }
+      }
+    }
+    plotsRendered++;
+    return svg;
+  }
+  function leaderboardSection() {
+    var host = document.getElementById('leaderboard-body');
+    var box = el('label', {}, [el('input', {type: 'checkbox', id: 'show-invalid'}), ' include invalid results in the winner tables']);
+    host.appendChild(box);
+    box.querySelector('input').addEventListener('change', function (e) {
+      showInvalid = e.target.checked;
+      RERENDER.forEach(function (f) { f(); });
+    });
+    var groups = D.leaderboard || [];
+    if (!groups.length) { host.appendChild(el('p', {'class': 'muted', text: 'No ranking: no task with two or more methods and a ranking metric.'})); return; }
+    groups.forEach(function (g) {
+      var card = el('div', {'class': 'lb'});
+      card.appendChild(el('h4', {text: g.task + ': ' + g.metric + ' (' + g.better + ' is better), ' + g.cells + ' cells, Friedman p = ' +
+        (isNum(g.p) ? fmt(g.p, 2) : '—')}));
+      if (g.methods.length >= 2) card.appendChild(cdDiagram(g));
+      var t = el('table', {'class': 'best'});
+      t.innerHTML = '<tr><th>method</th><th>mean rank</th><th>missing cells</th><th>invalid cells</th></tr>' +
+        g.methods.map(function (m) { return '<tr><td>' + esc(m.method) + '</td><td class="num">' + fmt(m.mean_rank, 3) +
+          '</td><td class="num">' + m.missing + '</td><td class="num">' + m.invalid + '</td></tr>'; }).join('');
+      card.appendChild(t);
+      host.appendChild(card);
+    });
+  }
+
   // A task without a dedicated renderer: built from its declared metric specs (run.json).
   function genericSection(task, d) {
     var host = document.getElementById('plots-' + task);
@@ -787,6 +870,7 @@
       });
     }
     render();
+    RERENDER.push(render);
   }
 
   // ------------------------------------------------------------------ main
@@ -800,6 +884,7 @@
     guard(task + ' table', document.getElementById('rows-' + task), function () { rowsTable(task, d); });
   });
   body.dataset.plotsRendered = String(plotsRendered);
+  guard('leaderboard', document.getElementById('leaderboard-body'), leaderboardSection);
   guard('3D views', document.getElementById('view-list'), viewsSection);
   body.dataset.plotsRendered = String(plotsRendered);
   body.dataset.ready = '1';

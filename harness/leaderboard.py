@@ -1,0 +1,170 @@
+"""Rankings across meshes: mean ranks, the Friedman test and the Nemenyi critical difference
+(Demšar 2006, "Statistical comparisons of classifiers over multiple data sets", JMLR 7).
+
+For each task and each ranking metric (``rank=True`` in the task's declaration), a *cell* is one
+(mesh, noise model, noise level) and, for tasks with axis parameters, one value of them (e.g.
+simplification's target). In each cell every method variant gets the mean of its metric over
+seeds, and the variants are ranked (1 = best, by the metric's declared direction; ties get the
+average rank). Rows that are not valid results (`validity`: diverged, ended worse than the noisy
+input, non-manifold or topology-changing output) rank last in their cell, tied, and are counted
+in ``invalid_cells``. Cells where a variant has no value (failed, timed out, not run) are left
+out of the test and counted in ``missing_cells``. With N complete cells and k variants:
+
+- Friedman: ``chi2_F = 12 N / (k (k+1)) [sum_j R_j^2 - k (k+1)^2 / 4]``, R_j the mean ranks,
+  p from chi-square with k - 1 degrees of freedom (Demšar eq. 1; valid for N and k not tiny).
+- Nemenyi: two variants differ significantly (alpha = 0.05) when their mean ranks differ by more
+  than ``CD = q_0.05 sqrt(k (k+1) / (6 N))``, ``q_0.05`` the studentized range quantile over
+  sqrt(2) (Demšar eq. 5).
+"""
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pandas as pd
+
+COLUMNS = ["task", "metric", "better", "method", "mean_rank", "cells", "missing_cells", "invalid_cells",
+           "friedman_chi2", "friedman_p", "critical_difference", "k"]
+
+
+def validity(task: str, df: pd.DataFrame) -> pd.Series:
+    """Why each row is not a valid result ('' when it is)."""
+    why = pd.Series([""] * len(df), index=df.index, dtype=object)
+    ok = df["status"] == "ok"
+    why[~ok] = "status " + df.loc[~ok, "status"].astype(str)
+    if task == "smoothing":
+        if "diverged" in df:
+            why[ok & (df["diverged"] == True)] = "diverged"  # noqa: E712
+        if {"dist_mean", "input_dist_mean"} <= set(df.columns):
+            worse = ok & (df["dist_mean"] > df["input_dist_mean"]) & (why == "")
+            why[worse] = "worse than the noisy input"
+    if task == "simplification":
+        if "manifold" in df:
+            why[ok & (df["manifold"] == False) & (why == "")] = "non-manifold output"  # noqa: E712
+        if "topology_changed" in df:
+            why[ok & (df["topology_changed"] == True) & (why == "")] = "topology changed"  # noqa: E712
+    return why
+
+
+def _variant(df: pd.DataFrame, axis: set) -> pd.Series:
+    """Method plus the parameters (other than axis parameters) that vary between its rows."""
+    ps = [json.loads(p) if isinstance(p, str) and p else {} for p in df["params"]]
+    out = []
+    varying: dict[str, set] = {}
+    for m, p in zip(df["method"], ps):
+        for k, v in p.items():
+            if k not in axis:
+                varying.setdefault(m, {}).setdefault(k, set()).add(json.dumps(v, sort_keys=True))
+    for m, p in zip(df["method"], ps):
+        keys = sorted(k for k, vals in varying.get(m, {}).items() if len(vals) > 1)
+        out.append(m + "".join(f" {k}={json.dumps(p.get(k))}" for k in keys))
+    return pd.Series(out, index=df.index)
+
+
+def cell_ranks(task: str, df: pd.DataFrame, metric: str, better: str, axis_params=()):
+    """(ranks DataFrame cells x variants, missing per variant, invalid per variant)."""
+    if metric not in df or not len(df):
+        return pd.DataFrame(), {}, {}
+    d = df.copy()
+    d["_variant"] = _variant(d, set(axis_params))
+    d["_invalid"] = (validity(task, d) != "") & (d["status"] == "ok")
+    ps = [json.loads(p) if isinstance(p, str) and p else {} for p in d["params"]]
+    text = lambda col: [("" if pd.isna(v) else str(v)) for v in d[col]] if col in d else [""] * len(d)  # noqa: E731
+    d["_cell"] = ["|".join(t) for t in zip(text("mesh"), text("noise_model"), text("noise_level"),
+                                           [json.dumps({k: p.get(k) for k in sorted(axis_params)}) for p in ps])]
+    val = pd.to_numeric(d[metric], errors="coerce")
+    d["_value"] = val.where(d["status"] == "ok")
+    g = d.groupby(["_cell", "_variant"])
+    vals = g["_value"].mean().unstack("_variant")
+    inval = g["_invalid"].any().unstack("_variant").reindex_like(vals).fillna(False).astype(bool)
+    missing = vals.isna() & ~inval
+    complete = vals[~missing.any(axis=1)]
+    inv = inval.loc[complete.index]
+    sign = -1.0 if better == "higher" else 1.0
+    score = (sign * complete).where(~inv, np.inf)
+    ranks = score.rank(axis=1, method="average")
+    return ranks, missing.sum().to_dict(), inv.sum().to_dict()
+
+
+def friedman_nemenyi(ranks: pd.DataFrame, alpha: float = 0.05) -> tuple[float | None, float | None, float | None]:
+    """(chi2_F, p, critical difference) of a cells x variants rank table (Demšar 2006)."""
+    from scipy import stats
+    N, k = ranks.shape
+    if N < 2 or k < 2:
+        return None, None, None
+    R = ranks.mean(axis=0).to_numpy()
+    chi2 = 12.0 * N / (k * (k + 1)) * (np.sum(R ** 2) - k * (k + 1) ** 2 / 4.0)
+    p = float(stats.chi2.sf(chi2, k - 1))
+    q = float(stats.studentized_range.ppf(1 - alpha, k, np.inf)) / math.sqrt(2.0)
+    cd = q * math.sqrt(k * (k + 1) / (6.0 * N))
+    return float(chi2), p, cd
+
+
+def leaderboard(frames: dict, specs: dict) -> pd.DataFrame:
+    """One row per (task, ranking metric, variant): see `COLUMNS` and the module docstring."""
+    rows = []
+    for task, df in frames.items():
+        spec = specs.get(task) or {}
+        axis = spec.get("axis_params") or ()
+        for m in spec.get("metrics", []):
+            if not m.get("rank") or m.get("better") not in ("lower", "higher"):
+                continue
+            ranks, missing, invalid = cell_ranks(task, df, m["name"], m["better"], axis)
+            if ranks.empty:
+                continue
+            chi2, p, cd = friedman_nemenyi(ranks)
+            for v, r in ranks.mean(axis=0).sort_values().items():
+                rows.append({"task": task, "metric": m["name"], "better": m["better"], "method": v,
+                             "mean_rank": float(r), "cells": int(len(ranks)), "missing_cells": int(missing.get(v, 0)),
+                             "invalid_cells": int(invalid.get(v, 0)), "friedman_chi2": chi2, "friedman_p": p,
+                             "critical_difference": cd, "k": int(ranks.shape[1])})
+    return pd.DataFrame(rows, columns=COLUMNS)
+
+
+def to_markdown(lb: pd.DataFrame) -> str:
+    out = []
+    for (task, metric), g in lb.groupby(["task", "metric"], sort=False):
+        r0 = g.iloc[0]
+        p = "—" if pd.isna(r0.friedman_p) else f"{r0.friedman_p:.2g}"
+        cd = "—" if pd.isna(r0.critical_difference) else f"{r0.critical_difference:.2f}"
+        out.append(f"### {task}: {metric} ({r0.better} is better)\n\n{int(r0.cells)} cells, Friedman p = {p}, "
+                   f"Nemenyi critical difference (alpha 0.05) = {cd}\n\n| method | mean rank | missing | invalid |\n"
+                   "|---|---:|---:|---:|")
+        out += [f"| {r.method} | {r.mean_rank:.2f} | {r.missing_cells} | {r.invalid_cells} |" for r in g.itertuples()]
+        out.append("")
+    return "\n".join(out)
+
+
+def _tex(s: str) -> str:
+    return "".join({"_": r"\_", "&": r"\&", "%": r"\%", "#": r"\#", "$": r"\$", "{": r"\{", "}": r"\}",
+                    "~": r"\textasciitilde{}", "^": r"\textasciicircum{}", "\\": r"\textbackslash{}"}.get(c, c)
+                   for c in str(s))
+
+
+def to_latex(lb: pd.DataFrame) -> str:
+    """booktabs tables, one per (task, metric)."""
+    out = ["% mesh-shootout leaderboard; needs \\usepackage{booktabs}"]
+    for (task, metric), g in lb.groupby(["task", "metric"], sort=False):
+        r0 = g.iloc[0]
+        p = "--" if pd.isna(r0.friedman_p) else f"{r0.friedman_p:.2g}"
+        cd = "--" if pd.isna(r0.critical_difference) else f"{r0.critical_difference:.2f}"
+        out += [r"\begin{table}[t]", r"\centering", r"\begin{tabular}{lrrr}", r"\toprule",
+                r"method & mean rank & missing & invalid \\", r"\midrule"]
+        out += [f"{_tex(r.method)} & {r.mean_rank:.2f} & {r.missing_cells} & {r.invalid_cells} \\\\"
+                for r in g.itertuples()]
+        out += [r"\bottomrule", r"\end{tabular}",
+                f"\\caption{{{_tex(task)}: mean rank by \\texttt{{{_tex(metric)}}} ({r0.better} is better) over "
+                f"{int(r0.cells)} cells; Friedman $p = {p}$, Nemenyi CD$_{{0.05}} = {cd}$.}}", r"\end{table}", ""]
+    return "\n".join(out)
+
+
+def write(run_dir, frames: dict, specs: dict) -> pd.DataFrame:
+    """``leaderboard.csv``, ``leaderboard.md`` and ``leaderboard.tex`` in the run folder."""
+    from pathlib import Path
+    lb = leaderboard(frames, specs)
+    d = Path(run_dir)
+    lb.to_csv(d / "leaderboard.csv", index=False)
+    (d / "leaderboard.md").write_text(to_markdown(lb))
+    (d / "leaderboard.tex").write_text(to_latex(lb))
+    return lb

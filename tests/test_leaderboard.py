@@ -1,0 +1,58 @@
+"""leaderboard.csv against ranks recomputed independently from the task CSV; Friedman/Nemenyi
+against Demšar's formulas and scipy; validity flags."""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy import stats
+
+from harness import leaderboard as L
+
+
+def test_leaderboard_mean_ranks_equal_an_independent_recomputation(tiny_run):
+    lb = pd.read_csv(tiny_run / "leaderboard.csv")
+    assert set(L.COLUMNS) <= set(lb.columns) and (tiny_run / "leaderboard.tex").is_file()
+    assert "\\toprule" in (tiny_run / "leaderboard.tex").read_text()
+    assert "| method | mean rank |" in (tiny_run / "leaderboard.md").read_text()
+    df = pd.read_csv(tiny_run / "smoothing.csv")
+    for metric in ("ev_mean", "dist_mean", "normal_error_deg"):
+        ranks: dict[str, list[float]] = {}
+        for _, cell in df.groupby(["mesh", "noise_model", df["noise_level"].fillna(-1)]):
+            variant = cell["method"] + " iterations=" + [str(json.loads(p)["iterations"]) for p in cell["params"]]
+            vals = cell.groupby(variant.values)[metric].mean()
+            invalid = cell.groupby(variant.values).apply(
+                lambda g: bool((g["diverged"] == True).any() or (g["dist_mean"] > g["input_dist_mean"]).any()))  # noqa: E712
+            score = np.where(invalid.reindex(vals.index).to_numpy(), np.inf, vals.to_numpy())
+            for v, r in zip(vals.index, stats.rankdata(score)):
+                ranks.setdefault(v, []).append(r)
+        got = lb[(lb.task == "smoothing") & (lb.metric == metric)].set_index("method")["mean_rank"]
+        want = pd.Series({v: np.mean(r) for v, r in ranks.items()})
+        pd.testing.assert_series_equal(got.sort_index(), want.sort_index(), check_names=False, rtol=1e-12)
+
+
+def test_friedman_and_nemenyi_match_demsar_and_scipy():
+    rng = np.random.default_rng(0)
+    X = rng.random((12, 4)) + np.array([0, 0.3, 0.5, 0.9])      # 12 cells, 4 methods
+    ranks = pd.DataFrame(X).rank(axis=1)
+    chi2, p, cd = L.friedman_nemenyi(ranks)
+    ref = stats.friedmanchisquare(*X.T)
+    assert chi2 == pytest.approx(ref.statistic, rel=1e-12) and p == pytest.approx(ref.pvalue, rel=1e-10)
+    assert cd == pytest.approx(2.569 * np.sqrt(4 * 5 / (6 * 12)), rel=1e-3)   # q_0.05 for k=4 (Demšar Table 5a)
+
+
+def test_invalid_rows_rank_last_and_missing_cells_are_stated():
+    rows = []
+    for mesh in ("a", "b", "c"):
+        for m, val in (("good", 0.1), ("bad", 0.01), ("gone", 0.05)):
+            st = "error" if (m == "gone" and mesh == "c") else "ok"
+            rows.append({"mesh": mesh, "noise_model": "none", "noise_level": None, "method": m, "params": "{}",
+                         "status": st, "dist_mean": val, "input_dist_mean": 0.05, "diverged": False, "ev_mean": val})
+    df = pd.DataFrame(rows)
+    spec = {"smoothing": {"metrics": [{"name": "ev_mean", "better": "lower", "rank": True}], "axis_params": []}}
+    lb = L.leaderboard({"smoothing": df}, spec).set_index("method")
+    # 'good' ends worse than the noisy input (0.1 > 0.05): invalid, ranked last although its number is not the largest
+    assert lb.loc["good", "invalid_cells"] == 2 and lb.loc["good", "mean_rank"] == 3.0
+    assert lb.loc["gone", "missing_cells"] == 1 and lb.loc["good", "cells"] == 2
