@@ -74,6 +74,13 @@
   }
 
   // ------------------------------------------------------------------ task data
+  // a variant's colour comes from its name (FNV-1a hash -> palette slot, then hue), so the same method
+  // has the same colour in every report whatever else the run contains
+  function colorOf(name) {
+    var h = 2166136261;
+    for (var i = 0; i < name.length; i++) { h ^= name.charCodeAt(i); h = Math.imul(h, 16777619) >>> 0; }
+    return 'hsl(' + (h % 360) + ',' + (55 + (h >>> 9) % 25) + '%,' + (38 + (h >>> 17) % 14) + '%)';
+  }
   function taskRows(task) {
     var T = D.tasks[task];
     if (!T) return null;
@@ -81,7 +88,7 @@
       var o = {}; T.columns.forEach(function (c, i) { o[c] = r[i]; }); return o;
     });
     var colors = {};
-    T.variants.forEach(function (v, i) { colors[v] = PALETTE[i % PALETTE.length]; });
+    T.variants.forEach(function (v) { colors[v] = colorOf(v); });
     return {T: T, rows: rows, colors: colors, variants: T.variants};
   }
 
@@ -256,7 +263,27 @@
     parent.appendChild(g);
     return panels;
   }
-  function addPanel(panels, svg) { var p = el('div', {'class': 'panel'}); p.appendChild(svg); panels.appendChild(p); }
+  function addPanel(panels, svg) {
+    var p = el('div', {'class': 'panel'});
+    p.appendChild(svg);
+    p.appendChild(svgDownload(svg));
+    panels.appendChild(p);
+  }
+  // every plot downloads as a standalone SVG file (made in the page: nothing is fetched)
+  function svgDownload(svg) {
+    var a = el('a', {'class': 'svgdl', href: '#', text: 'SVG', title: 'download this plot as SVG'});
+    a.addEventListener('click', function (e) {
+      e.preventDefault();
+      var clone = svg.cloneNode(true);
+      clone.setAttribute('xmlns', SVGNS);
+      var text = '<?xml version="1.0" encoding="UTF-8"?>\n' + new XMLSerializer().serializeToString(clone);
+      var url = URL.createObjectURL(new Blob([text], {type: 'image/svg+xml'}));
+      var d = el('a', {href: url, download: (svg.getAttribute('data-name') || 'plot') + '.svg'});
+      document.body.appendChild(d); d.click(); d.remove();
+      setTimeout(function () { URL.revokeObjectURL(url); }, 1000);
+    });
+    return a;
+  }
   function autoLog(vals) {
     var v = vals.filter(isNum);
     if (!v.length || Math.min.apply(null, v) <= 0) return false;
