@@ -23,7 +23,7 @@ from .mesh import SUPPORTED
 from .noise import MODELS
 
 TOP_KEYS = {"name", "repeats", "save_meshes", "plugins", "seed", "meshes", "noise", "tasks",
-            "timeout", "report", "hausdorff_samples", "time_budget"}
+            "timeout", "report", "hausdorff_samples", "time_budget", "tune"}
 TASK_KEYS = {"methods", "params"}
 NOISE_KEYS = {"model", "levels", "seeds", "fraction"}
 
@@ -61,6 +61,7 @@ class Config:
     cases: list = field(default_factory=list)
     report: dict = field(default_factory=dict)
     source: str = "<config>"
+    tune: object = None             # harness.tune.TuneSpec, or None
 
 
 def _close(word, options):
@@ -214,10 +215,28 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
     meshes = _check_meshes(raw.get("meshes"), base_dir, P)
     noises = _check_noise(raw.get("noise", [{"model": "none"}]), P)
     tasks = _check_tasks(raw.get("tasks"), P, skip_unknown=plugin_failed)
+    tune = None
+    if raw.get("tune") is not None:
+        from .tune import check_tune
+        tune = check_tune(raw["tune"], base_dir, P, tasks, lambda m: _check_meshes(m, base_dir, P))
 
     if P:
         raise ConfigError(label, P)
 
+    common = (seed, repeats, tuple(plugins), hs, float(budget))
+    unique = expand_cases(meshes, noises, tasks, *common)
+    if tune is not None:
+        tune.common = common
+        tune.noises = noises
+        tune.cases = expand_cases(tune.train, noises, tune.grid_tasks(), *common)
+    return Config(name=name, raw=raw, repeats=repeats, save_meshes=save, plugins=plugins,
+                  seed=seed, timeout=float(timeout) if timeout else None, cases=unique,
+                  report=report, source=label, tune=tune)
+
+
+def expand_cases(meshes: list, noises: list, tasks: dict, seed: int, repeats: int, plugins: tuple, hs: int,
+                 budget: float) -> list:
+    """Every (mesh, noise model, level, seed, task, method, params) case, duplicates removed."""
     cases = []
     labels = _unique_labels(meshes)
     for spec, key in zip(meshes, labels):
@@ -233,12 +252,9 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
                     for params in grid:
                         cid = case_id(task, ident, model, level, s, frac, mname, params)
                         cases.append(Case(cid, task, spec, key, model, level, s, frac, mname,
-                                          params, repeats, tuple(plugins), hs, float(budget)))
+                                          params, repeats, plugins, hs, budget))
     seen = set()
-    unique = [c for c in cases if not (c.case_id in seen or seen.add(c.case_id))]
-    return Config(name=name, raw=raw, repeats=repeats, save_meshes=save, plugins=plugins,
-                  seed=seed, timeout=float(timeout) if timeout else None, cases=unique,
-                  report=report, source=label)
+    return [c for c in cases if not (c.case_id in seen or seen.add(c.case_id))]
 
 
 def _check_meshes(meshes, base_dir: Path, P: list) -> list[dict]:

@@ -165,7 +165,16 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
         bar = _progress(len(cfg.cases), len(done))
     counts: dict[str, int] = {}
     t0 = time.perf_counter()
+    extra_cases: list = []
     try:
+        if cfg.tune is not None:
+            extra_cases = _tune(cfg, ex, out_dir, meta, threads, resume, quiet)
+            todo = [c for c in extra_cases if c.case_id not in done]
+            cases = cases + todo
+            meta["n_cases"] = len(cfg.cases) + len(extra_cases)
+            folder.write_run_json(meta)
+            if bar is not None:
+                bar.total = meta["n_cases"]
         for case, row, extras in ex.run(cases, want_meshes=cfg.save_meshes):
             folder.append(case.task, row)
             for fname, (V, F) in (extras.get("meshes") or {}).items():
@@ -189,18 +198,43 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
         meta.update(finished=now_iso(), wall_s=round(time.perf_counter() - t0, 3),
                     status_counts=folder.status_counts(), status_counts_this_session=counts)
         folder.write_run_json(meta)
-    finish(out_dir, cfg, timeout=timeout, export_benchmark_json=export_benchmark_json)
+    finish(out_dir, cfg, timeout=timeout, export_benchmark_json=export_benchmark_json, extra_cases=extra_cases)
     return folder.frames()
 
 
-def finish(out_dir, cfg: Config, timeout=None, export_benchmark_json=None) -> None:
+def _tune(cfg: Config, ex, out_dir: Path, meta: dict, threads: int, resume: bool, quiet: bool) -> list:
+    """Run the training cases of ``tune:`` into ``tune/``, choose each method's setting, and return
+    the tuned test cases (see `harness.tune`)."""
+    from .tune import choose, tuned_cases
+    tfolder = RunFolder(out_dir / "tune")
+    done = tfolder.keep_ok_rows() if resume else set()
+    if not resume:
+        tfolder.reset()
+    todo = [dataclasses.replace(c, threads=threads) for c in cfg.tune.cases if c.case_id not in done]
+    if not quiet:
+        print(f"shootout: tuning: {len(cfg.tune.cases)} training case(s) on {len(cfg.tune.train)} mesh(es)",
+              file=sys.stderr, flush=True)
+    for case, row, _ in ex.run(todo):
+        tfolder.append(case.task, row)
+    choice = choose(cfg.tune, tfolder.frames())
+    tuned = [dataclasses.replace(c, threads=threads) for c in tuned_cases(cfg, cfg.tune, choice)]
+    for m, ch in choice.items():
+        ch["test_case_ids"] = sorted(c.case_id for c in tuned if c.method == m)
+    from .datasets import spec_key
+    meta["tune"] = {"metric": cfg.tune.metric, "train_meshes": [spec_key(t) for t in cfg.tune.train],
+                    "budget": cfg.tune.budget, "seed": cfg.tune.seed, "methods": choice}
+    return tuned
+
+
+def finish(out_dir, cfg: Config, timeout=None, export_benchmark_json=None, extra_cases=()) -> None:
     """After the last row: the 3D views (views/), the report and the optional benchmark export.
     The rows are safe on disk; a failure here is a warning, never a lost run."""
     from .report import build_report
     from .views import compute_views
     folder = RunFolder(out_dir)
     try:
-        views = compute_views({c.case_id: c for c in cfg.cases}, folder.frames(), cfg.report, timeout=timeout)
+        views = compute_views({c.case_id: c for c in list(cfg.cases) + list(extra_cases)}, folder.frames(), cfg.report,
+                              timeout=timeout)
         folder.write_views(views)
     except Exception as exc:  # noqa: BLE001
         print(f"shootout: warning: 3D views could not be computed ({type(exc).__name__}: {exc})", file=sys.stderr)

@@ -127,6 +127,41 @@ def _errors_html(frames) -> str:
     return "".join(out)
 
 
+def _tune_html(meta, frames) -> str:
+    """Default vs tuned, per tuned method: the chosen setting, training scores and the test meshes' mean."""
+    tune = meta.get("tune")
+    if not isinstance(tune, dict) or not isinstance(tune.get("methods"), dict):
+        return ""
+    metric = str(tune.get("metric"))
+    body = []
+    for m, ch in tune["methods"].items():
+        df = frames.get(ch.get("task"))
+        tuned_ids = set(ch.get("test_case_ids") or [])
+        test_default = test_tuned = test_input = None
+        if df is not None and metric in df:
+            rows = df[(df["method"] == m) & (df["status"] == "ok")]
+            is_tuned = rows["case_id"].astype(str).isin(tuned_ids)
+            base, tuned = rows[~is_tuned], rows[is_tuned]
+            test_default = float(base[metric].mean()) if len(base) else None
+            test_tuned = float(tuned[metric].mean()) if len(tuned) else test_default
+            if f"input_{metric}" in rows and len(rows):
+                test_input = float(rows[f"input_{metric}"].mean())
+        chosen = ", ".join(f"{k}={v}" for k, v in (ch.get("chosen") or {}).items()) or "the defaults"
+        dtrain = "invalid or failed" if ch.get("default_train_score") is None else _fmt(ch["default_train_score"], 4)
+        body.append(f"<tr><td>{_esc(m)}</td><td>{_esc(chosen)}</td><td class='num'>{_esc(ch.get('candidates'))}</td>"
+                    f"<td class='num'>{_esc(dtrain)}</td><td class='num'>{_fmt(ch.get('train_score'), 4)}</td>"
+                    f"<td class='num'>{_fmt(test_default, 4)}</td><td class='num'>{_fmt(test_tuned, 4)}</td>"
+                    f"<td class='num'>{_fmt(test_input, 4)}</td></tr>")
+    better = next((c.get("better") for c in tune["methods"].values() if isinstance(c, dict)), "")
+    return (f"<h3>Tuning: default vs tuned (by {_esc(metric)}, {_esc(better)} is better)</h3>"
+            f"<p>Parameters searched on the training meshes ({_esc(', '.join(tune.get('train_meshes') or []))}), "
+            "then run on this report's (test) meshes. A setting with a failed or invalid training case (diverged, worse "
+            "than its noisy input) is never chosen. Rows of other methods are ranked on their defaults.</p>"
+            "<table class='best tune'><tr><th>method</th><th>chosen</th><th>settings tried</th><th>train, defaults</th>"
+            f"<th>train, chosen</th><th>test, defaults</th><th>test, tuned</th><th>test, noisy input</th></tr>"
+            f"{''.join(body)}</table>")
+
+
 def _header_html(meta, frames, run_dir) -> str:
     name = meta.get("name") or Path(run_dir).name
     mach = meta.get("machine") or {}
@@ -161,6 +196,7 @@ def _header_html(meta, frames, run_dir) -> str:
             f"<details class='config'><summary>config ({_esc(meta.get('config_source', 'run.json'))})</summary>"
             f"<pre>{_esc(cfg)}</pre></details>"
             f"<h3>Cases by status</h3>{_status_html(frames)}<h3>Errors, grouped by message</h3>{_errors_html(frames)}"
+            f"{_tune_html(meta, frames)}"
             "</section>")
 
 

@@ -1,0 +1,182 @@
+"""A fair tuning protocol: search each method's parameters on *training* meshes, then evaluate the
+chosen parameters on the run's own (*test*) meshes, beside the defaults.
+
+Config::
+
+    tune:
+      metric: dist_mean          # a metric of the methods' task (its declared direction decides)
+      train: [bunny, fandisk]    # mesh list, same syntax as meshes: (never the test meshes' role)
+      budget: 12                 # settings tried per method: the whole grid if it is smaller, else
+      seed: 0                    #   a seeded random sample of it (the defaults are always tried)
+      params:
+        scratch.implicit: {step: [0.01, 0.1, 1], iterations: [1, 3]}
+
+Selection: for each method, every candidate setting runs on every training (mesh, noise, level,
+seed) of the run's noise models; its score is the mean metric over those cases, and a candidate
+with a failed or invalid case (diverged, ended worse than its noisy input, non-manifold or
+topology-changing output) scores infinitely bad. The best score wins (ties: the earlier
+candidate, the defaults first). The tuned setting then runs on the test meshes as extra cases;
+``run.json`` records per method the chosen parameters, the training scores of the defaults and of
+the chosen setting, the number of candidates and the tuned case ids, and the report shows default
+vs tuned side by side. Training rows are kept in ``tune/`` inside the run folder.
+"""
+from __future__ import annotations
+
+import itertools
+import json
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+TUNE_KEYS = {"metric", "train", "budget", "seed", "params"}
+
+
+@dataclass
+class TuneSpec:
+    metric: str
+    train: list
+    budget: int
+    seed: int
+    params: dict                     # method -> {param: [values]}
+    configured: dict                 # method -> (task, [param dicts of the run's own grid])
+    cases: list = field(default_factory=list)
+    common: tuple = ()
+    noises: list = field(default_factory=list)
+
+    def candidates(self, method: str) -> list[dict]:
+        """Parameter overrides tried for ``method``: {} (the defaults) first, then the grid or a sample."""
+        ranges = self.params[method]
+        keys = sorted(ranges)
+        grid = [dict(zip(keys, combo)) for combo in itertools.product(*(ranges[k] for k in keys))]
+        if len(grid) > self.budget - 1:
+            rng = np.random.default_rng(self.seed)
+            pick = sorted(rng.choice(len(grid), size=max(self.budget - 1, 0), replace=False).tolist())
+            grid = [grid[i] for i in pick]
+        import methods
+        meth = methods.get(method)
+        base = self.configured[method][1][0] if self.configured[method][1] else {}
+        seen, out = set(), []
+        for g in [{}] + grid:                      # settings equal to the defaults are the defaults
+            key = json.dumps(meth.with_defaults({**base, **g}), sort_keys=True, default=str)
+            if key not in seen:
+                seen.add(key)
+                out.append(g)
+        return out
+
+    def grid_tasks(self) -> dict:
+        """``{task: [(method, [params, ...])]}`` of the training cases (candidates x configured grid)."""
+        import methods
+        out: dict = {}
+        for m in self.params:
+            task, base = self.configured[m]
+            meth = methods.get(m)
+            grid = [meth.with_defaults({**b, **c}) for c in self.candidates(m) for b in base]
+            out.setdefault(task, []).append((m, grid))
+        return out
+
+
+def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | None:
+    """Validate the ``tune:`` section (problems appended to ``P`` with their key paths)."""
+    import methods
+    if not isinstance(raw, dict):
+        P.append(f"tune: expected a mapping with {sorted(TUNE_KEYS)}, got {type(raw).__name__}")
+        return None
+    for k in raw:
+        if k not in TUNE_KEYS:
+            P.append(f"tune.{k}: unknown key; expected one of {sorted(TUNE_KEYS)}")
+    budget, seed = raw.get("budget", 20), raw.get("seed", 0)
+    if not isinstance(budget, int) or isinstance(budget, bool) or not 1 <= budget <= 1000:
+        P.append(f"tune.budget: expected an integer in [1, 1000], got {budget!r}")
+        budget = 20
+    if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
+        P.append(f"tune.seed: expected an integer >= 0, got {seed!r}")
+        seed = 0
+    train = check_meshes(raw.get("train"))
+    if raw.get("train") is None:
+        P.append("tune.train: expected a non-empty list of training meshes")
+    configured = {m: (t, [g for g in grid]) for t, entries in tasks.items() for m, grid in entries}
+    params = raw.get("params")
+    out_params: dict = {}
+    if not isinstance(params, dict) or not params:
+        P.append("tune.params: expected a mapping method -> {parameter: [values]}")
+        params = {}
+    metric = raw.get("metric")
+    for m, ranges in params.items():
+        at = f"tune.params.{m}"
+        if m not in configured:
+            P.append(f"{at}: {m} is not one of the run's methods (list it under tasks: too)")
+            continue
+        if not isinstance(ranges, dict) or not ranges:
+            P.append(f"{at}: expected a mapping parameter -> list of values")
+            continue
+        meth = methods.get(m)
+        ok = {}
+        for k, vals in ranges.items():
+            vals = vals if isinstance(vals, list) else [vals]
+            bad = [p for v in vals for p in meth.param_problems({k: v})]
+            if not vals or bad:
+                P.extend(f"{at}.{k}: {b}" for b in (bad or ["empty list of values"]))
+                continue
+            ok[k] = vals
+        out_params[m] = ok
+        from . import tasks as _tasks
+        spec = _tasks.get(configured[m][0])
+        mt = spec.metric(metric) if isinstance(metric, str) else None
+        if mt is None or mt.better not in ("lower", "higher"):
+            names = [x.name for x in spec.metrics if x.better in ("lower", "higher")]
+            P.append(f"tune.metric: expected a metric of {spec.name} with a direction ({', '.join(names)}), "
+                     f"got {metric!r}")
+    if P:
+        return None
+    return TuneSpec(metric=metric, train=train, budget=budget, seed=seed, params=out_params, configured=configured)
+
+
+def choose(tune: TuneSpec, frames: dict) -> dict:
+    """Per method: the chosen overrides and the training scores (see the module docstring)."""
+    from . import tasks
+    from .leaderboard import validity
+    out = {}
+    for m in tune.params:
+        task = tune.configured[m][0]
+        df = frames.get(task)
+        better = tasks.get(task).metric(tune.metric).better
+        sign = -1.0 if better == "higher" else 1.0
+        scores = []
+        for cand in tune.candidates(m):
+            if df is None:
+                scores.append(math.inf)
+                continue
+            rows = df[df["method"] == m]
+            ps = [json.loads(p) for p in rows["params"]]
+            want = {k: v for b in tune.configured[m][1][:1] for k, v in b.items() if k in tune.params[m]}
+            want.update(cand)
+            sel = rows[[all(p.get(k) == v for k, v in want.items()) for p in ps]]
+            bad = (validity(task, sel) != "").any() or sel.empty
+            val = sel[tune.metric].astype(float).mean() if not sel.empty else math.nan
+            scores.append(math.inf if bad or not math.isfinite(val) else sign * val)
+        best = int(np.argmin(scores)) if scores else 0
+        cands = tune.candidates(m)
+        out[m] = {"task": task, "chosen": cands[best], "candidates": len(cands),
+                  "train_score": None if math.isinf(scores[best]) else sign * scores[best],
+                  "default_train_score": None if math.isinf(scores[0]) else sign * scores[0],
+                  "metric": tune.metric, "better": better}
+    return out
+
+
+def tuned_cases(cfg, tune: TuneSpec, choice: dict) -> list:
+    """The test meshes' cases of every tuned method with its chosen setting (those whose setting
+    differs from the defaults)."""
+    import methods
+
+    from .config import expand_cases
+    raw_meshes = [c.mesh for c in cfg.cases]
+    meshes = list({json.dumps(m, sort_keys=True): m for m in raw_meshes}.values())
+    tasks_: dict = {}
+    for m, ch in choice.items():
+        if not ch["chosen"]:
+            continue
+        task, base = tune.configured[m]
+        meth = methods.get(m)
+        tasks_.setdefault(task, []).append((m, [meth.with_defaults({**b, **ch["chosen"]}) for b in base]))
+    return expand_cases(meshes, tune.noises, tasks_, *tune.common) if tasks_ else []
