@@ -3,6 +3,7 @@ regression), 2 bad config or arguments (one message, nothing written)."""
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -177,7 +178,19 @@ def _cmd_compare(a) -> int:
     return compare_runs(a.run_a, a.run_b, html_out=a.html, time_factor=factor, absolute_time=a.absolute_time)
 
 
+def threading_main() -> bool:
+    import threading
+    return threading.current_thread() is threading.main_thread()
+
+
+def _sigterm(signum, frame):
+    raise KeyboardInterrupt
+
+
 def main(argv=None) -> int:
+    import signal
+    if threading_main():
+        signal.signal(signal.SIGTERM, _sigterm)         # a terminated run stops like an interrupted one
     args = _parser().parse_args(argv)
     handler = {"run": _cmd_run, "methods": _cmd_methods, "datasets": _cmd_datasets,
                "report": _cmd_report, "views": _cmd_views, "eval": _cmd_eval,
@@ -190,6 +203,13 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("shootout: interrupted; rows finished so far are saved (use --resume)", file=sys.stderr)
         return 130
+    except BrokenPipeError:              # stdout closed early (`| head`): stop quietly, like other tools
+        try:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())
+        except (OSError, ValueError):
+            pass
+        return 0
 
 
 if __name__ == "__main__":

@@ -217,7 +217,8 @@ def _tune(cfg: Config, ex, out_dir: Path, meta: dict, threads: int, resume: bool
     for case, row, _ in ex.run(todo):
         tfolder.append(case.task, row)
     choice = choose(cfg.tune, tfolder.frames())
-    tuned = [dataclasses.replace(c, threads=threads) for c in tuned_cases(cfg, cfg.tune, choice)]
+    from .config import expand_cases
+    tuned = [dataclasses.replace(c, threads=threads) for c in tuned_cases(cfg, cfg.tune, choice, expand_cases)]
     for m, ch in choice.items():
         ch["test_case_ids"] = sorted(c.case_id for c in tuned if c.method == m)
     from .datasets import spec_key

@@ -164,12 +164,10 @@ def choose(tune: TuneSpec, frames: dict) -> dict:
     return out
 
 
-def tuned_cases(cfg, tune: TuneSpec, choice: dict) -> list:
+def tuned_cases(cfg, tune: TuneSpec, choice: dict, expand_cases) -> list:
     """The test meshes' cases of every tuned method with its chosen setting (those whose setting
-    differs from the defaults)."""
+    differs from the defaults); ``expand_cases`` is `harness.config.expand_cases`."""
     import methods
-
-    from .config import expand_cases
     raw_meshes = [c.mesh for c in cfg.cases]
     meshes = list({json.dumps(m, sort_keys=True): m for m in raw_meshes}.values())
     tasks_: dict = {}

@@ -3,13 +3,27 @@
 A segfault or abort in a C++ backend costs one row (status ``error``, the signal named) and a
 case past its timeout is killed (status ``timeout``). The child is forked from the driver, which
 has the method registry loaded and the meshes of the run cached.
+
+What a method may do, and what it costs:
+
+- crash, abort, hang or exhaust memory: one row (the signal named, or ``timeout``);
+- fork: only the case process's own result counts (a forked copy returning from the method
+  exits silently), and every process of the case is killed when the case ends, because each
+  case runs in its own session and process group (``os.setsid``), killed as a group;
+- signal its process group (``os.killpg(0, ...)``): reaches only its own case;
+- print: the case's stdout goes to /dev/null and its stderr to a temporary file whose last lines
+  are quoted in the row of a case that died;
+- SIGINT (Ctrl-C) is ignored by case processes and always reaches the driver: signals are blocked
+  while a case is forked and registered, so an interrupt cannot be lost inside the fork.
 """
 from __future__ import annotations
 
+import contextlib
 import multiprocessing as mp
 import os
 import select
 import signal
+import tempfile
 import threading
 import time
 
@@ -48,12 +62,68 @@ def _die_with_driver(conn, own_reader_fd) -> None:
     threading.Thread(target=watch, name="die-with-driver", daemon=True).start()
 
 
-def _child(conn, case, want_meshes, own_reader_fd=None, want_view=False):
-    _die_with_driver(conn, own_reader_fd)
+_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+@contextlib.contextmanager
+def signals_blocked():
+    """Hold SIGINT/SIGTERM while a case is forked and registered: an interrupt that arrives during
+    ``fork`` would otherwise be raised inside an at-fork hook, where Python ignores it."""
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, _SIGNALS)
     try:
-        conn.send(run_case(case, want_meshes=want_meshes, want_view=want_view))
+        yield
     finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+def _isolate(stderr_path: str | None) -> None:
+    """In the child: own session and process group, no SIGINT, output away from the driver's."""
+    try:
+        os.setsid()
+    except OSError:
+        pass
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, _SIGNALS)
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, 1)
+        os.close(devnull)
+        if stderr_path:
+            err = os.open(stderr_path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+            os.dup2(err, 2)
+            os.close(err)
+    except OSError:
+        pass
+
+
+def _child(conn, case, want_meshes, own_reader_fd=None, want_view=False, stderr_path=None):
+    _isolate(stderr_path)
+    _die_with_driver(conn, own_reader_fd)
+    pid = os.getpid()
+    try:
+        result = run_case(case, want_meshes=want_meshes, want_view=want_view)
+        if os.getpid() != pid:            # a copy the method forked: only the case process answers
+            os._exit(0)
+        conn.send(result)
+    finally:
+        if os.getpid() != pid:
+            os._exit(0)
         conn.close()
+
+
+def _tail(path: str | None, n: int = 3) -> str:
+    try:
+        with open(path, "rb") as fh:
+            fh.seek(max(0, os.path.getsize(path) - 4000))
+            lines = [ln.strip() for ln in fh.read().decode(errors="replace").splitlines() if ln.strip()]
+        return " | ".join(lines[-n:])[:600]
+    except (OSError, TypeError):
+        return ""
 
 
 def signal_name(code: int) -> str:
@@ -68,48 +138,105 @@ class _Job:
     """A case running in its own child process."""
 
     def __init__(self, case: Case, want_meshes: bool, want_view: bool = False):
+        """Start the case process. Call with `signals_blocked` held until the job is registered."""
         ctx = _context()
         self.case = case
         self.conn, send = ctx.Pipe(duplex=False)
+        fd, self.stderr_path = tempfile.mkstemp(prefix="shootout-case-", suffix=".err")
+        os.close(fd)
         own = self.conn.fileno() if ctx.get_start_method() == "fork" else None   # inherited copy
-        self.proc = ctx.Process(target=_child, args=(send, case, want_meshes, own, want_view), daemon=True)
+        self.proc = ctx.Process(target=_child, args=(send, case, want_meshes, own, want_view, self.stderr_path),
+                                daemon=True)
         self.t0 = time.perf_counter()
         self.proc.start()
         send.close()
 
-    def collect(self):
-        """``(row, meshes)`` once the pipe is readable (a result, or EOF when the child died)."""
+    @property
+    def sentinel(self):
+        return self.proc.sentinel
+
+    def ended(self) -> bool:
+        """The case process has exited (its exit status is known)."""
+        return self.proc.exitcode is not None
+
+    def _kill_group(self) -> None:
+        """Kill every process left in the case's process group (its own session)."""
+        pid = self.proc.pid
+        if pid:
+            try:
+                os.killpg(pid, signal.SIGKILL)
+            except (ProcessLookupError, PermissionError, OSError):
+                pass
+
+    def _cleanup(self) -> None:
+        self._kill_group()
         try:
-            result = self.conn.recv()
+            os.unlink(self.stderr_path)
+        except OSError:
+            pass
+
+    def collect(self):
+        """``(row, extras)`` once the pipe is readable or the process has ended (a result, or an
+        error row naming how the process died)."""
+        result = None
+        try:
+            # the process may have ended with its message still in flight: give the pipe a moment
+            if self.conn.poll(0) or self.conn.poll(2.0):
+                result = self.conn.recv()
         except (EOFError, OSError):
-            result = None
+            result = None                     # died without sending
+        except Exception as exc:  # noqa: BLE001 - an unpicklable or corrupted message is this case's error
+            result = ("garbled", exc)
         self.conn.close()
         self.proc.join(10)
         if self.proc.is_alive():
             self.proc.kill()
             self.proc.join()
-        if result is not None:
+        tail = _tail(self.stderr_path)
+        self._cleanup()
+        if isinstance(result, tuple) and len(result) == 2 and isinstance(result[0], dict):
             return result
         row = base_row(self.case)
         code = self.proc.exitcode
-        if code is not None and code < 0:
+        if isinstance(result, tuple) and result and result[0] == "garbled":
+            row["error"] = f"the case process sent a malformed result ({type(result[1]).__name__}: {result[1]})"
+        elif code is not None and code < 0:
             row["error"] = f"worker process died: {signal_name(code)} (the method crashed its process)"
         else:
             row["error"] = f"worker process exited with code {code} without a result"
+        if tail:
+            row["error"] += f"; last stderr: {tail}"
         return row, {}
 
     def kill_timeout(self, timeout: float):
         self.proc.kill()
         self.proc.join()
         self.conn.close()
+        self._cleanup()
         row = base_row(self.case)
         row.update(status="timeout", error=f"killed after {timeout:g} s (timeout)")
         return row, {}
 
+    def abort(self) -> None:
+        """Kill the case (driver interrupted)."""
+        self.proc.kill()
+        self.proc.join()
+        self._cleanup()
+
 
 def run_isolated(case: Case, timeout: float | None = None, want_meshes: bool = False, want_view: bool = False):
     """Run one case in a fresh child process; returns ``(row, extras)``, never raises."""
-    job = _Job(case, want_meshes, want_view)
-    if job.conn.poll(timeout):
-        return job.collect()
-    return job.kill_timeout(timeout)
+    from multiprocessing.connection import wait as mp_wait
+    with signals_blocked():
+        job = _Job(case, want_meshes, want_view)
+    try:
+        deadline = None if timeout is None else time.perf_counter() + timeout
+        while True:
+            left = None if deadline is None else deadline - time.perf_counter()
+            if left is not None and left <= 0:
+                return job.kill_timeout(timeout)
+            if mp_wait([job.conn, job.sentinel], 0.5 if left is None else min(0.5, left)) or job.ended():
+                return job.collect()
+    except BaseException:
+        job.abort()
+        raise

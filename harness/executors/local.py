@@ -12,7 +12,10 @@ import time
 from multiprocessing.connection import wait as mp_wait
 
 from ..runner import run_case
-from .isolation import _Job
+from .isolation import _Job, signals_blocked
+
+
+POLL_S = 0.5
 
 
 class SerialExecutor:
@@ -52,26 +55,29 @@ class LocalExecutor:
         try:
             while todo or running:
                 while todo and len(running) < self.workers:
-                    running.append(_Job(todo.pop(), want_meshes))
-                wait_s = None
+                    with signals_blocked():      # an interrupt is delivered after the job is registered
+                        running.append(_Job(todo[-1], want_meshes))
+                        todo.pop()
+                # a process the method forked may hold the pipe and the sentinel open after the case
+                # process died: poll the exit status too, at least every POLL_S
+                wait_s = POLL_S
                 if self.timeout is not None:
                     now = time.perf_counter()
-                    wait_s = max(0.0, min(j.t0 + self.timeout - now for j in running))
-                ready = mp_wait([j.conn for j in running], timeout=wait_s)
-                for job in [j for j in running if j.conn in ready]:
+                    wait_s = min(wait_s, max(0.0, min(j.t0 + self.timeout - now for j in running)))
+                ready = set(mp_wait([j.conn for j in running] + [j.sentinel for j in running], timeout=wait_s))
+                for job in [j for j in running if j.conn in ready or j.sentinel in ready or j.ended()]:
                     running.remove(job)
                     row, extras = job.collect()
                     yield job.case, row, extras
                 if self.timeout is not None:
                     now = time.perf_counter()
-                    for job in [j for j in running if now - j.t0 >= self.timeout and j.conn not in ready]:
+                    for job in [j for j in running if now - j.t0 >= self.timeout]:
                         running.remove(job)
                         row, extras = job.kill_timeout(self.timeout)
                         yield job.case, row, extras
         finally:
             for job in running:                # interrupted: leave no orphan behind
-                job.proc.kill()
-                job.proc.join()
+                job.abort()
 
     def close(self):
         pass

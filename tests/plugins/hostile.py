@@ -1,0 +1,79 @@
+"""Methods that attack the driver on purpose (hardening tests). Imported through
+``plugins: [tests.plugins.hostile]`` with the repository root on ``sys.path``."""
+import os
+import signal
+import sys
+import time
+
+import numpy as np
+
+from methods import SmoothingResult, register
+
+MARK = os.environ.get("HOSTILE_MARK_DIR", "/tmp")
+
+
+@register("hostile.fork_return", task="smoothing", library="hostile")
+def fork_return(V, F):
+    """Forks; parent and child both return a result."""
+    os.fork()
+    return SmoothingResult(V=V.copy())
+
+
+@register("hostile.orphan_segfault", task="smoothing", library="hostile")
+def orphan_segfault(V, F):
+    """Leaves a forked child sleeping (holding every inherited descriptor), then segfaults."""
+    pid = os.fork()
+    if pid == 0:
+        with open(os.path.join(MARK, f"orphan-{os.getpid()}.pid"), "w") as fh:
+            fh.write(str(os.getpid()))
+        time.sleep(120)
+        os._exit(0)
+    time.sleep(0.2)
+    import ctypes
+    import faulthandler
+    faulthandler.disable()
+    ctypes.string_at(0)
+    return SmoothingResult(V=V.copy())
+
+
+@register("hostile.killpg", task="smoothing", library="hostile")
+def killpg(V, F):
+    """Sends SIGTERM to its own process group."""
+    os.killpg(0, signal.SIGTERM)
+    time.sleep(1)
+    return SmoothingResult(V=V.copy())
+
+
+@register("hostile.chatty", task="smoothing", library="hostile")
+def chatty(V, F):
+    """Prints 50 MB to stdout and a line to stderr."""
+    line = "x" * 999 + "\n"
+    for _ in range(50_000):
+        sys.stdout.write(line)
+    sys.stdout.flush()
+    print("chatty: done", file=sys.stderr)
+    return SmoothingResult(V=V.copy())
+
+
+@register("hostile.complex", task="smoothing", library="hostile")
+def complex_result(V, F):
+    """Returns complex coordinates."""
+    return SmoothingResult(V=V.astype(np.complex128))
+
+
+@register("hostile.strings", task="smoothing", library="hostile")
+def string_result(V, F):
+    """Returns coordinates as strings."""
+    return SmoothingResult(V=V.astype(str))
+
+
+@register("hostile.bools", task="smoothing", library="hostile")
+def bool_result(V, F):
+    """Returns booleans."""
+    return SmoothingResult(V=V > 0)
+
+
+@register("hostile.lists", task="smoothing", library="hostile")
+def list_result(V, F):
+    """Returns a Python list."""
+    return SmoothingResult(V=V.tolist())
