@@ -199,7 +199,7 @@ def main(argv=None) -> int:
         return handler(args)
     except ShootoutError as exc:
         print(f"shootout: {exc}", file=sys.stderr)
-        return 2
+        return getattr(exc, "exit_code", 2)
     except KeyboardInterrupt:
         print("shootout: interrupted; rows finished so far are saved (use --resume)", file=sys.stderr)
         return 130

@@ -66,14 +66,16 @@ def _fan(polys: list[list[int]]) -> tuple[np.ndarray, int]:
 def _read_obj(text: str):
     verts, polys = [], []
     for ln, line in enumerate(text.splitlines(), 1):
-        if line.startswith("v "):
-            parts = line.split()
+        parts = line.split()                 # any whitespace separates tokens (spaces, tabs, indentation)
+        if not parts:
+            continue
+        if parts[0] == "v":
             if len(parts) < 4:
                 raise InvalidMeshError(f"line {ln}: vertex with fewer than 3 coordinates")
             verts.append(parts[1:4])
-        elif line.startswith("f "):
+        elif parts[0] == "f":
             idx = []
-            for tok in line.split()[1:]:
+            for tok in parts[1:]:
                 i = int(tok.split("/", 1)[0])
                 idx.append(i - 1 if i > 0 else len(verts) + i)
             polys.append(idx)
@@ -266,18 +268,23 @@ def read_mesh(path, name: str | None = None, repair: bool = True) -> Mesh:
                 notes.append("welded exactly coincident STL corners into shared vertices")
     except InvalidMeshError as exc:
         raise InvalidMeshError(f"{path.name}: {exc}") from None
-    except (ValueError, IndexError, KeyError, TypeError, UnicodeDecodeError, RuntimeError) as exc:
-        raise InvalidMeshError(f"{path.name}: unreadable ({type(exc).__name__}: {exc})") from None
+    except (ValueError, IndexError, KeyError, TypeError, UnicodeDecodeError, RuntimeError, OverflowError,
+            MemoryError) as exc:
+        raise InvalidMeshError(f"{path.name}: unreadable ({type(exc).__name__}: {str(exc)[:200]})") from None
     mesh = validate(V, F, name=name or path.stem, repair=repair)
     mesh.repairs[:0] = notes
     return mesh
 
 
-def write_obj(path, V: np.ndarray, F: np.ndarray) -> None:
-    """Write a triangle mesh as OBJ (1-based indices, 17 significant digits)."""
-    with open(path, "w") as fh:
-        fh.write("".join(f"v {x:.17g} {y:.17g} {z:.17g}\n" for x, y, z in V))
-        fh.write("".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in F))
+def write_obj(path_or_file, V: np.ndarray, F: np.ndarray) -> None:
+    """Write a triangle mesh as OBJ (1-based indices, 17 significant digits) to a path or an open
+    text file."""
+    if hasattr(path_or_file, "write"):
+        path_or_file.write("".join(f"v {x:.17g} {y:.17g} {z:.17g}\n" for x, y, z in V))
+        path_or_file.write("".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in F))
+        return
+    with open(path_or_file, "w") as fh:
+        write_obj(fh, V, F)
 
 
 # ----------------------------------------------------------------------------- validation

@@ -2,12 +2,22 @@
 
 Durability: each row is one ``write`` of a complete line to a file opened in append mode,
 followed by flush and fsync, so a SIGKILL at any moment leaves every CSV parseable (at most
-the rows in flight are lost; a torn last line, should the OS ever leave one, is dropped on
-resume). ``run.json`` is written to a temporary file and renamed over the old one.
+the rows in flight are lost; a torn last line is dropped when the file is read). Every other
+file (``run.json``, saved meshes, views) is written to a temporary file, fsynced and renamed
+over its name, so no reader ever sees half a file. Files get the user's umask, like any file
+the user creates.
+
+Ownership: a fresh run deletes only what a previous run in this folder wrote: its task CSVs
+(when its ``run.json`` says it is a run folder), its report and views, and the saved meshes
+listed in ``meshes/.written`` (one name per line, appended before each mesh is renamed into
+place). A user's own file is never deleted. One run at a time: `lock` takes an exclusive
+``flock`` on ``.shootout.lock`` (holding the owner's pid) for the whole run.
 """
 from __future__ import annotations
 
 import csv
+import errno
+import fcntl
 import io
 import json
 import os
@@ -17,7 +27,36 @@ from pathlib import Path
 import pandas as pd
 
 from . import tasks
+from .errors import ShootoutError
 from .schema import cell, columns, scalar, task_file
+
+MANIFEST = ".written"
+
+
+def _umask() -> int:
+    m = os.umask(0)
+    os.umask(m)
+    return m
+
+
+def atomic_write(path: Path, write) -> None:
+    """Write ``path`` through ``write(fh)`` on a temporary file in the same folder, fsync, chmod to the
+    umask's default and rename into place; the temporary file never survives a failure."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", newline="") as fh:
+            write(fh)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, path)
+    except BaseException:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise
 
 
 def format_row(task: str, row: dict) -> str:
@@ -41,19 +80,77 @@ class RunFolder:
         return self.path / "run.json"
 
     def read_run_json(self) -> dict | None:
+        """The run's metadata; None when missing or unreadable (see `run_json_state`)."""
         try:
-            return json.loads(self.run_json.read_text())
-        except (FileNotFoundError, json.JSONDecodeError):
+            data = json.loads(self.run_json.read_text())
+        except (OSError, ValueError):
             return None
+        return data if isinstance(data, dict) else None
+
+    def run_json_state(self) -> str:
+        """``missing``, ``ok`` or ``corrupt``."""
+        if not self.run_json.exists():
+            return "missing"
+        return "ok" if self.read_run_json() is not None else "corrupt"
 
     def write_run_json(self, data: dict) -> None:
         self.path.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=self.path, prefix=".run.json.", suffix=".tmp")
-        with os.fdopen(fd, "w") as fh:
-            json.dump(data, fh, indent=2, default=str)
+        atomic_write(self.run_json, lambda fh: json.dump(data, fh, indent=2, default=str))
+
+    # ------------------------------------------------------------------------- ownership
+
+    def lock(self):
+        """Take the folder's exclusive lock (held until the returned file is closed or the process
+        ends); `ShootoutError` naming the holder's pid when another run holds it."""
+        self.path.mkdir(parents=True, exist_ok=True)
+        fh = open(self.path / ".shootout.lock", "a+")
+        try:
+            fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            if exc.errno not in (errno.EAGAIN, errno.EACCES, errno.EWOULDBLOCK):
+                fh.close()
+                raise
+            fh.seek(0)
+            holder = fh.read().strip() or "unknown"
+            fh.close()
+            raise ShootoutError(f"{self.path}: another run is using this folder (pid {holder}); wait for it to "
+                                "finish or choose another --out") from None
+        fh.seek(0)
+        fh.truncate()
+        fh.write(str(os.getpid()))
+        fh.flush()
+        return fh
+
+    def foreign_files(self) -> list[str]:
+        """Task CSVs present without a readable run.json: files this project cannot prove it wrote."""
+        if self.run_json_state() == "ok":
+            return []
+        return [self.csv_path(t).name for t in tasks.names() if self.csv_path(t).exists()]
+
+    def save_mesh(self, name: str, write) -> Path:
+        """Write ``meshes/<name>`` atomically (``write(fh)``), listed in the manifest first."""
+        mdir = self.path / "meshes"
+        mdir.mkdir(parents=True, exist_ok=True)
+        name = Path(name).name
+        with open(mdir / MANIFEST, "a") as fh:
+            fh.write(name + "\n")
             fh.flush()
             os.fsync(fh.fileno())
-        os.replace(tmp, self.run_json)
+        atomic_write(mdir / name, write)
+        return mdir / name
+
+    def written_meshes(self) -> set[str]:
+        try:
+            return {ln.strip() for ln in (self.path / "meshes" / MANIFEST).read_text().splitlines() if ln.strip()}
+        except OSError:
+            return set()
+
+    def remove_temporaries(self) -> None:
+        """Leftover ``.*.tmp`` files of ours (a write interrupted by a full disk or a kill)."""
+        for d in (self.path, self.path / "meshes", self.path / "views"):
+            if d.is_dir():
+                for f in d.glob(".*.tmp"):
+                    f.unlink(missing_ok=True)
 
     def read_rows(self, task: str) -> list[dict]:
         """Complete rows of a task CSV as dicts of strings (a torn last line is dropped)."""
@@ -69,15 +166,23 @@ class RunFolder:
         return [r for r in rows if None not in r and len(r) == n]
 
     def reset(self) -> None:
-        """Remove the CSVs, run.json, report and saved meshes of a previous run (a fresh run)."""
-        for task in tasks.names():
-            self.csv_path(task).unlink(missing_ok=True)
-        for name in ("run.json", "report.html"):
-            (self.path / name).unlink(missing_ok=True)
+        """Remove what a previous run in this folder wrote (a fresh run); never a user's file."""
+        ours = self.run_json_state() == "ok"
+        if ours:
+            for task in tasks.names():
+                self.csv_path(task).unlink(missing_ok=True)
+            for name in ("report.html", "leaderboard.csv", "leaderboard.md", "leaderboard.tex"):
+                (self.path / name).unlink(missing_ok=True)
+            vdir = self.path / "views"
+            if vdir.is_dir():
+                for f in vdir.glob("*.json"):
+                    f.unlink()
         mdir = self.path / "meshes"
-        if mdir.is_dir():
-            for f in mdir.glob("*.obj"):
-                f.unlink()
+        for name in self.written_meshes():
+            (mdir / name).unlink(missing_ok=True)
+        (mdir / MANIFEST).unlink(missing_ok=True)
+        self.remove_temporaries()
+        self.run_json.unlink(missing_ok=True)
 
     def status_counts(self) -> dict:
         """Rows per status over all task CSVs."""
@@ -96,15 +201,28 @@ class RunFolder:
             rows = [r for r in rows if not (r["case_id"] in seen or seen.add(r["case_id"]))]
             done |= seen
             if self.csv_path(task).exists():
-                fd, tmp = tempfile.mkstemp(dir=self.path, prefix=f".{task}.", suffix=".tmp")
-                with os.fdopen(fd, "w", newline="") as fh:
+                def write(fh, rows=rows, task=task):
                     w = csv.DictWriter(fh, fieldnames=columns(task), lineterminator="\n")
                     w.writeheader()
                     w.writerows(rows)
-                    fh.flush()
-                    os.fsync(fh.fileno())
-                os.replace(tmp, self.csv_path(task))
+                atomic_write(self.csv_path(task), write)
         return done
+
+    def drop_rows(self, drop) -> None:
+        """Rewrite each task CSV without the rows for which ``drop(row)`` is true."""
+        for task in tasks.names():
+            if not self.csv_path(task).exists():
+                continue
+            rows = self.read_rows(task)
+            keep = [r for r in rows if not drop(r)]
+            if len(keep) == len(rows):
+                continue
+
+            def write(fh, keep=keep, task=task):
+                w = csv.DictWriter(fh, fieldnames=columns(task), lineterminator="\n")
+                w.writeheader()
+                w.writerows(keep)
+            atomic_write(self.csv_path(task), write)
 
     def append(self, task: str, row: dict) -> None:
         """Append one row as a single write, flushed and fsynced; header first if the file is new."""
@@ -115,7 +233,7 @@ class RunFolder:
             head = io.StringIO()
             csv.writer(head, lineterminator="\n").writerow(columns(task))
             data = head.getvalue() + data
-        fd = os.open(p, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+        fd = os.open(p, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o666)
         try:
             os.write(fd, data.encode())
             os.fsync(fd)
@@ -171,16 +289,42 @@ def load_csv(path) -> pd.DataFrame:
     Only an empty cell is missing (that is how rows are written): a mesh or file named
     ``nan``, ``NA`` or ``null`` keeps its name.
     """
-    df = pd.read_csv(path, dtype={"case_id": str, "error": str, "params": str},
+    text = _checked_csv_text(Path(path))
+    df = pd.read_csv(io.StringIO(text), dtype={"case_id": str, "error": str, "params": str},
                      keep_default_na=False, na_values=[""], true_values=["true"], false_values=["false"])
     if "error" in df:
         df["error"] = df["error"].fillna("")
     return df
 
 
+def _checked_csv_text(path: Path) -> str:
+    """The CSV's text without a torn last line; `ShootoutError` naming what is damaged otherwise
+    (not UTF-8 text, empty, or lines whose field count differs from the header's)."""
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ShootoutError(f"{path}: damaged CSV (byte {exc.start} is not UTF-8 text)") from None
+    except OSError as exc:
+        raise ShootoutError(f"{path}: cannot read ({exc.strerror})") from None
+    if "\x00" in text:
+        raise ShootoutError(f"{path}: damaged CSV (contains NUL bytes)")
+    lines = text.splitlines(keepends=True)
+    if lines and not lines[-1].endswith("\n"):
+        lines = lines[:-1]                       # a row cut short by a kill: not data
+    if not lines:
+        raise ShootoutError(f"{path}: empty CSV (no header)")
+    try:
+        rows = list(csv.reader(io.StringIO("".join(lines)), strict=True))
+    except csv.Error as exc:
+        raise ShootoutError(f"{path}: damaged CSV ({exc})") from None
+    n = len(rows[0])
+    bad = [i + 1 for i, r in enumerate(rows) if len(r) != n]
+    if bad:
+        raise ShootoutError(f"{path}: damaged CSV: line(s) {', '.join(map(str, bad[:5]))} do not have the "
+                            f"header's {n} fields")
+    return "".join(lines)
+
+
 def _atomic_json(path: Path, data) -> None:
-    """Write JSON to a temporary file in the same folder and rename it over ``path``."""
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    with os.fdopen(fd, "w") as fh:
-        json.dump(data, fh, separators=(",", ":"), allow_nan=False, default=scalar)
-    os.replace(tmp, path)
+    """Write JSON atomically (see `atomic_write`)."""
+    atomic_write(path, lambda fh: json.dump(data, fh, separators=(",", ":"), allow_nan=False, default=scalar))

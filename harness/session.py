@@ -3,6 +3,7 @@ run.json, the 3D views and the report. ``harness.run`` and ``shootout run`` call
 from __future__ import annotations
 
 import dataclasses
+import errno
 import hashlib
 import json
 import os
@@ -121,18 +122,107 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
     threads = 1 if executor == "dask" else max(1, (os.cpu_count() or 1) // workers)
     cases = [dataclasses.replace(c, threads=threads) for c in cfg.cases]
     done: set[str] = set()
+    _check_out(out_dir)
+    # before anything is written: an unreachable Dask scheduler is exit 2 with the folder untouched
+    ex = make_executor(executor, workers, timeout, scheduler)
+    try:
+        lock = folder.lock()              # one run per folder; held until this function returns
+    except BaseException:
+        ex.close()
+        raise
+    try:
+        return _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, executor, scheduler,
+                           resume, quiet, export_benchmark_json, ex)
+    except BaseException:
+        try:
+            ex.close()
+        except Exception:  # noqa: BLE001 - already closed
+            pass
+        raise
+    finally:
+        lock.close()
+
+
+class DiskFull(ShootoutError):
+    """The run folder's disk filled up (exit 1: not a config problem)."""
+
+    exit_code = 1
+
+
+def _mesh_ok(path: Path) -> bool:
+    """A saved OBJ that exists and parses."""
+    try:
+        from .mesh import read_mesh
+        read_mesh(path, repair=False)
+        return True
+    except Exception:  # noqa: BLE001
+        return False
+
+
+def _write_status_in_place(folder, status: str) -> None:
+    """Overwrite run.json's ``"status": "running"`` in place (same length padded), which needs no
+    new disk block, when a full disk refuses a new file."""
+    try:
+        with open(folder.run_json, "r+b") as fh:
+            data = fh.read()
+            old = b'"status": "running"'
+            i = data.find(old)
+            if i >= 0:
+                new = f'"status": "{status}"'.encode().ljust(len(old))
+                fh.seek(i)
+                fh.write(new[:len(old)])
+                fh.flush()
+                os.fsync(fh.fileno())
+    except OSError:
+        pass
+
+
+def _check_out(out_dir: Path) -> None:
+    """``--out`` must be a folder we can write, or creatable in one (exit 2 before anything is written)."""
+    if out_dir.exists() and not out_dir.is_dir():
+        raise ShootoutError(f"--out {out_dir}: exists and is not a folder")
+    p = out_dir.resolve()
+    while not p.exists():
+        p = p.parent
+    if not p.is_dir():
+        raise ShootoutError(f"--out {out_dir}: {p} is not a folder")
+    if not os.access(p, os.W_OK | os.X_OK):
+        raise ShootoutError(f"--out {out_dir}: {p} is not writable")
+    try:
+        st = os.statvfs(p)
+        if st.f_flag & os.ST_RDONLY:
+            raise ShootoutError(f"--out {out_dir}: {p} is on a read-only file system")
+    except (OSError, AttributeError):
+        pass
+
+
+def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, executor, scheduler, resume, quiet,
+                export_benchmark_json, ex):
+    done: set[str] = set()
+    state = folder.run_json_state()
     if resume:
         prev = folder.read_run_json()
-        if prev and prev.get("config_hash") not in (None, chash):
+        if state == "corrupt" or (state == "ok" and not prev.get("config_hash")):
+            raise ShootoutError(f"--resume: {folder.run_json} is damaged, so the rows in {out_dir} cannot be matched "
+                                "to this config; run without --resume (a fresh run) or use a new --out folder")
+        if state == "missing" and folder.foreign_files():
+            raise ShootoutError(f"--resume: {out_dir} has {', '.join(folder.foreign_files())} but no run.json; "
+                                "they cannot be matched to this config")
+        if prev and prev.get("config_hash") != chash:
             raise ShootoutError(
                 f"--resume: the config changed since the run in {out_dir} started "
                 "(cases, repeats or hausdorff_samples differ); run without --resume to start over, "
                 "or use a new --out folder")
-    # before anything is written: an unreachable Dask scheduler is exit 2 with the folder untouched
-    ex = make_executor(executor, workers, timeout, scheduler)
+    elif folder.foreign_files():
+        raise ShootoutError(f"--out {out_dir}: holds {', '.join(folder.foreign_files())} but no run.json of ours; "
+                            "these may be your files: choose another --out, or remove them")
     try:
         if resume:
             done = folder.keep_ok_rows()
+            if cfg.save_meshes:              # an ok row whose saved mesh is missing or torn runs again
+                done = {cid for cid in done if _mesh_ok(out_dir / "meshes" / f"{cid}.obj")}
+                folder.drop_rows(lambda r: r["case_id"] not in done)
+            folder.remove_temporaries()
             cases = [c for c in cases if c.case_id not in done]
         else:
             folder.reset()
@@ -176,12 +266,10 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
             if bar is not None:
                 bar.total = meta["n_cases"]
         for case, row, extras in ex.run(cases, want_meshes=cfg.save_meshes):
+            for fname, (V, F) in (extras.get("meshes") or {}).items():   # meshes first, then the row
+                if not (out_dir / "meshes" / fname).exists() or fname.startswith(case.case_id):
+                    folder.save_mesh(fname, lambda fh, V=V, F=F: write_obj(fh, V, F))
             folder.append(case.task, row)
-            for fname, (V, F) in (extras.get("meshes") or {}).items():
-                mdir = out_dir / "meshes"
-                mdir.mkdir(parents=True, exist_ok=True)
-                if not (mdir / fname).exists() or fname.startswith(case.case_id):
-                    write_obj(mdir / fname, V, F)
             counts[row["status"]] = counts.get(row["status"], 0) + 1
             if bar is not None:
                 bar.set_postfix_str(f"{case.method} on {case.mesh_key}", refresh=False)
@@ -190,6 +278,16 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
     except KeyboardInterrupt:
         meta["status"] = "interrupted"
         raise
+    except OSError as exc:
+        meta["status"] = "interrupted"
+        folder.remove_temporaries()
+        if exc.errno in (errno.ENOSPC, errno.EDQUOT):
+            raise DiskFull(f"{out_dir}: the disk is full ({exc.strerror}); the run is marked interrupted and "
+                           "nothing half-written was kept; free space, then continue with --resume") from None
+        raise
+    except BaseException:
+        meta["status"] = "interrupted"        # never 'finished' when something escaped the executor
+        raise
     finally:
         if bar is not None:
             bar.close()
@@ -197,7 +295,11 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
         meta["load_average"] = meta["load_average"][:1] + [_load()]
         meta.update(finished=now_iso(), wall_s=round(time.perf_counter() - t0, 3),
                     status_counts=folder.status_counts(), status_counts_this_session=counts)
-        folder.write_run_json(meta)
+        try:
+            folder.write_run_json(meta)
+        except OSError:                       # disk full: the status below is the best we can record
+            folder.remove_temporaries()
+            _write_status_in_place(folder, meta["status"])
     finish(out_dir, cfg, timeout=timeout, export_benchmark_json=export_benchmark_json, extra_cases=extra_cases)
     return folder.frames()
 
