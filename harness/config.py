@@ -17,7 +17,7 @@ from pathlib import Path
 
 import yaml
 
-from . import datasets
+from . import datasets, yaml_input
 from .errors import ConfigError, ShootoutError
 from .mesh import SUPPORTED
 from .noise import MODELS
@@ -25,6 +25,10 @@ from .noise import MODELS
 TOP_KEYS = {"name", "repeats", "save_meshes", "plugins", "seed", "meshes", "noise", "tasks",
             "timeout", "report", "hausdorff_samples", "time_budget", "tune"}
 TASK_KEYS = {"methods", "params"}
+REPORT_KEYS = {"views"}
+MAX_REPEATS = 1000               # minimum timed samples per case
+MAX_SAMPLES = 10_000_000         # Hausdorff area samples per side
+MAX_CASES = 100_000              # cases in one config (the grid is expanded in memory)
 NOISE_KEYS = {"model", "levels", "seeds", "fraction"}
 
 
@@ -110,14 +114,20 @@ def _identity(spec: dict) -> dict:
 def _unique_labels(meshes: list[dict]) -> list[str]:
     """``mesh`` column labels; file meshes with the same stem get their parent folder prepended
     (``d1-Noisy``), then an index, so no two different meshes share a label."""
+    from collections import Counter
     base = [datasets.spec_key(s) for s in meshes]
-    labels = [f"{Path(s['file']).parent.name}-{b}" if "file" in s and base.count(b) > 1 else b
+    nbase = Counter(base)
+    labels = [f"{Path(s['file']).parent.name}-{b}" if "file" in s and nbase[b] > 1 else b
               for s, b in zip(meshes, base)]
+    nlab = Counter(labels)
+    first: dict[str, int] = {}
     seen: dict[str, int] = {}
     for i, lab in enumerate(labels):
-        if labels.count(lab) > 1 and _identity(meshes[i]) != _identity(meshes[labels.index(lab)]):
-            seen[lab] = seen.get(lab, 0) + 1
-            labels[i] = f"{lab}-{seen[lab]}"
+        if nlab[lab] > 1:
+            j = first.setdefault(lab, i)
+            if j != i and _identity(meshes[i]) != _identity(meshes[j]):
+                seen[lab] = seen.get(lab, 0) + 1
+                labels[i] = f"{lab}-{seen[lab]}"
     return labels
 
 
@@ -139,7 +149,7 @@ def load_config(source, base_dir: Path | None = None) -> Config:
             raise ConfigError(label, [f"config file not found (or not a file): {source}"])
         base_dir = base_dir or source.parent
         try:
-            raw = yaml.safe_load(source.read_text())
+            raw = yaml_input.load(source.read_text())
         except (yaml.YAMLError, UnicodeDecodeError) as exc:
             raise ConfigError(label, [f"not valid YAML: {exc}".replace("\n", " ")]) from None
     else:
@@ -153,7 +163,7 @@ def load_config(source, base_dir: Path | None = None) -> Config:
         else:
             text = str(source)
         try:
-            raw = yaml.safe_load(text)
+            raw = yaml_input.load(text)
         except yaml.YAMLError as exc:
             raise ConfigError(label, [f"not valid YAML: {exc}".replace("\n", " ")]) from None
     if not isinstance(raw, dict):
@@ -170,50 +180,56 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
 
     name = raw.get("name", Path(label).stem if label != "<config>" else "run")
     if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,99}", name) or ".." in name:
-        P.append(f"name: expected letters, digits, '_', '-' or '.' (a folder name under results/), got {name!r}")
+        P.append(f"name: expected letters, digits, '_', '-' or '.' (a folder name under results/), got {yaml_input.short(name)}")
     repeats = raw.get("repeats", 1)
-    if not _is_int(repeats) or repeats < 1:
-        P.append(f"repeats: expected an integer >= 1, got {repeats!r}")
+    if not _is_int(repeats) or not 1 <= repeats <= MAX_REPEATS:
+        P.append(f"repeats: expected an integer in [1, {MAX_REPEATS}], got {yaml_input.short(repeats)}")
     save = raw.get("save_meshes", False)
     if not isinstance(save, bool):
-        P.append(f"save_meshes: expected true or false, got {save!r}")
+        P.append(f"save_meshes: expected true or false, got {yaml_input.short(save)}")
     seed = raw.get("seed", 0)
     if not _is_int(seed) or not 0 <= seed < 2 ** 32 - 1000:
-        P.append(f"seed: expected an integer in [0, 2**32 - 1000), got {seed!r}")
+        P.append(f"seed: expected an integer in [0, 2**32 - 1000), got {yaml_input.short(seed)}")
     timeout = raw.get("timeout")
     if timeout is not None and (not _is_num(timeout) or not math.isfinite(timeout) or timeout <= 0):
-        P.append(f"timeout: expected a number of seconds > 0, got {timeout!r}")
+        P.append(f"timeout: expected a number of seconds > 0, got {yaml_input.short(timeout)}")
     budget = raw.get("time_budget", 0.25)
     if not _is_num(budget) or not 0 <= budget <= 3600:
-        P.append(f"time_budget: expected seconds in [0, 3600], got {budget!r}")
+        P.append(f"time_budget: expected seconds in [0, 3600], got {yaml_input.short(budget)}")
         budget = 0.25
     hs = raw.get("hausdorff_samples", 20000)
-    if not _is_int(hs) or hs < 0:
-        P.append(f"hausdorff_samples: expected an integer >= 0, got {hs!r}")
+    if not _is_int(hs) or not 0 <= hs <= MAX_SAMPLES:
+        P.append(f"hausdorff_samples: expected an integer in [0, {MAX_SAMPLES:,}], got {yaml_input.short(hs)}")
     report = raw.get("report", {})
     if not isinstance(report, dict):
         P.append(f"report: expected a mapping, got {type(report).__name__}")
         report = {}
+    _unknown_keys(report, REPORT_KEYS, "report.", P)
+    views = report.get("views")
+    if views is not None and (not isinstance(views, list) or not all(isinstance(v, str) for v in views)
+                              or len(views) > 50):
+        P.append(f"report.views: expected a list of at most 50 case ids, got {yaml_input.short(views)}")
 
     plugins = raw.get("plugins")
     plugins = [] if plugins is None else plugins
     if not isinstance(plugins, list) or not all(isinstance(x, str) for x in plugins):
-        P.append(f"plugins: expected a list of module names, got {plugins!r}")
+        P.append(f"plugins: expected a list of module names, got {yaml_input.short(plugins)}")
         plugins = []
-    plugin_failed = False
+    meshes = _check_meshes(raw.get("meshes"), base_dir, P)
+    noises = _check_noise(raw.get("noise", [{"model": "none"}]), P)
+    early_problems = bool(P)                     # a config already rejected imports no plugin
+    plugin_failed = early_problems and bool(plugins)
     for d in (str(base_dir), str(Path.cwd())):   # a plugin package beside the config, or here
         if d not in sys.path:
             sys.path.append(d)
-    for i, mod in enumerate(plugins):
+    for i, mod in enumerate(plugins if not early_problems else []):
         try:
             methods.load_plugins([mod])
         except Exception as exc:       # any failure of a user's module is a config problem
             plugin_failed = True
-            P.append(f"plugins[{i}]: cannot import {mod!r} ({type(exc).__name__}: {exc})")
+            P.append(f"plugins[{i}]: cannot import {yaml_input.short(mod)} ({type(exc).__name__}: {exc})")
     methods.load_plugins([])
 
-    meshes = _check_meshes(raw.get("meshes"), base_dir, P)
-    noises = _check_noise(raw.get("noise", [{"model": "none"}]), P)
     tasks = _check_tasks(raw.get("tasks"), P, skip_unknown=plugin_failed)
     tune = None
     if raw.get("tune") is not None:
@@ -224,6 +240,10 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
         raise ConfigError(label, P)
 
     common = (seed, repeats, tuple(plugins), hs, float(budget))
+    n = _count_cases(meshes, noises, tasks)
+    if n > MAX_CASES:
+        raise ConfigError(label, [f"the grid expands to {n:,} cases, more than {MAX_CASES:,}: split the config or "
+                                  "narrow its parameter lists"])
     unique = expand_cases(meshes, noises, tasks, *common)
     if tune is not None:
         tune.common = common
@@ -232,6 +252,12 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
     return Config(name=name, raw=raw, repeats=repeats, save_meshes=save, plugins=plugins,
                   seed=seed, timeout=float(timeout) if timeout else None, cases=unique,
                   report=report, source=label, tune=tune)
+
+
+def _count_cases(meshes: list, noises: list, tasks: dict) -> int:
+    per_mesh = sum(len(n.get("levels") or [0.0]) * (1 if n["model"] == "none" else n.get("seeds", 1)) for n in noises)
+    per_noise = sum(len(grid) for entries in tasks.values() for _, grid in entries)
+    return len(meshes) * per_mesh * per_noise
 
 
 def expand_cases(meshes: list, noises: list, tasks: dict, seed: int, repeats: int, plugins: tuple, hs: int,
@@ -271,11 +297,11 @@ def _check_meshes(meshes, base_dir: Path, P: list) -> list[dict]:
                 out.append({"procedural": m, **datasets.PROCEDURAL[m]})
             else:
                 opts = datasets.bundled_names() + list(datasets.PROCEDURAL)
-                P.append(f"{at}: unknown mesh {m!r}{_close(m, opts)}; see `shootout datasets`")
+                P.append(f"{at}: unknown mesh {yaml_input.short(m)}{_close(m, opts)}; see `shootout datasets`")
         elif isinstance(m, dict) and "procedural" in m:
             kind = m["procedural"]
             if not isinstance(kind, str) or kind not in datasets.PROCEDURAL:
-                P.append(f"{at}.procedural: unknown procedural mesh {kind!r}{_close(kind, datasets.PROCEDURAL)}; "
+                P.append(f"{at}.procedural: unknown procedural mesh {yaml_input.short(kind)}{_close(kind, datasets.PROCEDURAL)}; "
                          f"expected one of {sorted(datasets.PROCEDURAL)}")
                 continue
             spec = {"procedural": kind}
@@ -289,7 +315,7 @@ def _check_meshes(meshes, base_dir: Path, P: list) -> list[dict]:
                 lo, hi = datasets.PROCEDURAL_BOUNDS[k]
                 want_int = _is_int(datasets.PROCEDURAL[kind][k])
                 if not (_is_int(v) if want_int else _is_num(v)) or not lo <= v <= hi:
-                    P.append(f"{at}.{k}: expected {'an integer' if want_int else 'a number'} in [{lo}, {hi}], got {v!r}")
+                    P.append(f"{at}.{k}: expected {'an integer' if want_int else 'a number'} in [{lo}, {hi}], got {yaml_input.short(v)}")
                     continue
                 spec[k] = v
             out.append({**{"procedural": kind}, **datasets.PROCEDURAL[kind], **spec})
@@ -303,7 +329,7 @@ def _check_meshes(meshes, base_dir: Path, P: list) -> list[dict]:
                     continue
                 f = m[k]
                 if not isinstance(f, str):
-                    P.append(f"{at}.{k}: expected a path string, got {f!r}")
+                    P.append(f"{at}.{k}: expected a path string, got {yaml_input.short(f)}")
                     continue
                 path = Path(f) if Path(f).is_absolute() else base_dir / f
                 if not path.is_file() and Path(f).is_file():
@@ -312,7 +338,7 @@ def _check_meshes(meshes, base_dir: Path, P: list) -> list[dict]:
                     P.append(f"{at}.{k}: file not found: {f} (relative paths are resolved against {base_dir})")
                     continue
                 if path.suffix.lower() not in SUPPORTED:
-                    P.append(f"{at}.{k}: unsupported extension {path.suffix!r} of {f}; expected one of {list(SUPPORTED)}")
+                    P.append(f"{at}.{k}: unsupported extension {yaml_input.short(path.suffix)} of {f}; expected one of {list(SUPPORTED)}")
                     continue
                 spec[k] = str(path.resolve())
             if "file" in spec and "clean" in spec:
@@ -324,7 +350,7 @@ def _check_meshes(meshes, base_dir: Path, P: list) -> list[dict]:
             if "file" in spec and ("clean" in spec or "clean" not in m):
                 out.append(spec)
         else:
-            P.append(f"{at}: expected a bundled name, {{procedural: ...}} or {{file: ...}}, got {m!r}")
+            P.append(f"{at}: expected a bundled name, {{procedural: ...}} or {{file: ...}}, got {yaml_input.short(m)}")
     return out
 
 
@@ -336,36 +362,36 @@ def _check_noise(noise, P: list) -> list[dict]:
     for i, n in enumerate(noise):
         at = f"noise[{i}]"
         if not isinstance(n, dict):
-            P.append(f"{at}: expected a mapping like {{model: gaussian_normal, levels: [0.1]}}, got {n!r}")
+            P.append(f"{at}: expected a mapping like {{model: gaussian_normal, levels: [0.1]}}, got {yaml_input.short(n)}")
             continue
         _unknown_keys(n, NOISE_KEYS, f"{at}.", P)
         model = n.get("model")
         if model not in MODELS:
-            P.append(f"{at}.model: expected one of {list(MODELS)}, got {model!r}{_close(model, MODELS)}")
+            P.append(f"{at}.model: expected one of {list(MODELS)}, got {yaml_input.short(model)}{_close(model, MODELS)}")
             continue
         entry = {"model": model}
         levels = n.get("levels")
         if model == "none":
             if levels not in (None, [], [0], [0.0]):
-                P.append(f"{at}.levels: model none takes no levels, got {levels!r}")
+                P.append(f"{at}.levels: model none takes no levels, got {yaml_input.short(levels)}")
             entry["levels"] = [0.0]
         else:
             if not isinstance(levels, list) or not levels:
-                P.append(f"{at}.levels: expected a non-empty list of numbers >= 0, got {levels!r}")
+                P.append(f"{at}.levels: expected a non-empty list of numbers >= 0, got {yaml_input.short(levels)}")
             else:
                 for j, lv in enumerate(levels):
                     if not _is_num(lv) or not 0 <= lv <= 100:
-                        P.append(f"{at}.levels[{j}]: expected a number in [0, 100] (x mean edge length), got {lv!r}")
+                        P.append(f"{at}.levels[{j}]: expected a number in [0, 100] (x mean edge length), got {yaml_input.short(lv)}")
                 entry["levels"] = levels
         seeds = n.get("seeds", 1)
         if not _is_int(seeds) or not 1 <= seeds <= 1000:
-            P.append(f"{at}.seeds: expected an integer in [1, 1000], got {seeds!r}")
+            P.append(f"{at}.seeds: expected an integer in [1, 1000], got {yaml_input.short(seeds)}")
         entry["seeds"] = seeds if _is_int(seeds) else 1
         frac = n.get("fraction", 1.0)
         if "fraction" in n and model != "impulsive":
             P.append(f"{at}.fraction: only the impulsive model takes a fraction")
         if not _is_num(frac) or not 0 < frac <= 1:
-            P.append(f"{at}.fraction: expected a number in (0, 1], got {frac!r}")
+            P.append(f"{at}.fraction: expected a number in (0, 1], got {yaml_input.short(frac)}")
         entry["fraction"] = frac
         out.append(entry)
     return out
@@ -386,13 +412,13 @@ def _check_tasks(tasks, P: list, skip_unknown: bool = False) -> dict:
             P.append(f"{at}: unknown task{_close(task, TASKS)}; expected one of {list(TASKS)}")
             continue
         if not isinstance(body, dict):
-            P.append(f"{at}: expected a mapping with 'methods' (and optional 'params'), got {body!r}")
+            P.append(f"{at}: expected a mapping with 'methods' (and optional 'params'), got {yaml_input.short(body)}")
             continue
         _unknown_keys(body, TASK_KEYS, f"{at}.", P)
         shared = body.get("params")
         shared = {} if shared is None else shared
         if not isinstance(shared, dict):
-            P.append(f"{at}.params: expected a mapping of parameter -> value or list, got {shared!r}")
+            P.append(f"{at}.params: expected a mapping of parameter -> value or list, got {yaml_input.short(shared)}")
             shared = {}
         mlist = body.get("methods")
         if not isinstance(mlist, list) or not mlist:
@@ -410,10 +436,10 @@ def _check_tasks(tasks, P: list, skip_unknown: bool = False) -> dict:
                 if extra:
                     P.append(f"{mat}: unknown key(s) {sorted(extra)}; expected 'name' and 'params'")
                 if not isinstance(own, dict):
-                    P.append(f"{mat}.params: expected a mapping, got {own!r}")
+                    P.append(f"{mat}.params: expected a mapping, got {yaml_input.short(own)}")
                     own = {}
             else:
-                P.append(f"{mat}: expected a method name or {{name: ..., params: ...}}, got {m!r}")
+                P.append(f"{mat}: expected a method name or {{name: ..., params: ...}}, got {yaml_input.short(m)}")
                 continue
             try:
                 meth = methods.get(mname)

@@ -211,7 +211,7 @@ def test_config_grid_expansion():
 
 
 @pytest.mark.parametrize("patch,needle", [
-    ({"repeats": 0}, "repeats: expected an integer >= 1"),
+    ({"repeats": 0}, "repeats: expected an integer in [1, 1000]"),
     ({"repeat": 3}, "repeat: unknown key (did you mean repeats"),
     ({"meshes": ["bunyy"]}, "meshes[0]: unknown mesh 'bunyy' (did you mean bunny"),
     ({"meshes": [{"procedural": "sphere", "subdivisions": "x"}]}, "meshes[0].subdivisions: expected an integer"),

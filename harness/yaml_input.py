@@ -1,0 +1,75 @@
+"""YAML from untrusted configs: safe types only, and no alias bomb.
+
+``yaml.safe_load`` builds shared nodes for aliases, but anything that walks the result (validation,
+JSON for run.json, an error message) expands them: a few hundred bytes of nested aliases expand to
+billions of nodes. `load` refuses a document with more than ``MAX_ALIASES`` alias uses or whose
+expanded size exceeds ``MAX_NODES`` nodes, before constructing anything.
+"""
+from __future__ import annotations
+
+import yaml
+
+MAX_ALIASES = 200
+MAX_NODES = 200_000
+
+
+class _Loader(yaml.SafeLoader):
+    def __init__(self, stream):
+        super().__init__(stream)
+        self._aliases = 0
+
+    def compose_node(self, parent, index):
+        if self.check_event(yaml.AliasEvent):
+            self._aliases += 1
+            if self._aliases > MAX_ALIASES:
+                raise yaml.YAMLError(f"more than {MAX_ALIASES} aliases (*name): refused")
+        return super().compose_node(parent, index)
+
+
+def _expanded_size(node, memo: dict, stack: set) -> int:
+    key = id(node)
+    if key in memo:
+        return memo[key]
+    if key in stack:
+        raise yaml.YAMLError("a recursive alias: refused")
+    stack.add(key)
+    if isinstance(node, yaml.SequenceNode):
+        n = 1 + sum(_expanded_size(v, memo, stack) for v in node.value)
+    elif isinstance(node, yaml.MappingNode):
+        n = 1 + sum(_expanded_size(k, memo, stack) + _expanded_size(v, memo, stack) for k, v in node.value)
+    else:
+        n = 1
+    stack.discard(key)
+    memo[key] = n
+    if n > MAX_NODES:
+        raise yaml.YAMLError(f"the document expands to more than {MAX_NODES:,} values (alias bomb?): refused")
+    return n
+
+
+def load(text: str):
+    """The document's data (safe types only); `yaml.YAMLError` for bombs and syntax errors."""
+    loader = _Loader(text)
+    try:
+        node = loader.get_single_node()
+        if node is None:
+            return None
+        _expanded_size(node, {}, set())
+        return loader.construct_document(node)
+    finally:
+        loader.dispose()
+
+
+def short(value, limit: int = 120) -> str:
+    """``repr(value)`` cut to ``limit`` characters, for messages about user input."""
+    try:
+        r = reprlib_repr(value)
+    except Exception:  # noqa: BLE001
+        r = f"<{type(value).__name__}>"
+    return r if len(r) <= limit else r[:limit - 3] + "..."
+
+
+def reprlib_repr(value) -> str:
+    import reprlib
+    rp = reprlib.Repr()
+    rp.maxlevel, rp.maxdict, rp.maxlist, rp.maxstring, rp.maxother = 3, 6, 6, 80, 80
+    return rp.repr(value)

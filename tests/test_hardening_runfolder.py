@@ -1,0 +1,231 @@
+"""No lost data, untrusted configs, safe readers: each test reproduces a failure of the previous
+version (user files deleted, double runs, torn meshes, disk full, alias bombs, unbounded grids,
+plugins imported by rejected configs, damaged run.json and CSVs, 0600 files, tab-separated OBJ)."""
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import stat
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from harness.mesh import read_mesh
+
+ROOT = Path(__file__).resolve().parents[1]
+SMALL = {"time_budget": 0, "hausdorff_samples": 100, "meshes": ["knight"],
+         "tasks": {"smoothing": {"methods": ["scratch.explicit", "scratch.taubin"]}}}
+
+
+def cli(args, cwd=ROOT, timeout=120, **env):
+    return subprocess.run([sys.executable, "-m", "harness.cli", *map(str, args)], cwd=cwd, capture_output=True,
+                          text=True, timeout=timeout, env={**os.environ, "PYTHONPATH": str(ROOT), **env})
+
+
+def write_cfg(path, cfg):
+    path.write_text(json.dumps(cfg))
+    return path
+
+
+def test_a_fresh_run_never_deletes_a_users_meshes(tmp_path):
+    (tmp_path / "meshes").mkdir()
+    shutil.copy(ROOT / "harness/data/meshes/woody.obj", tmp_path / "meshes" / "scan.obj")
+    (tmp_path / "meshes" / "notes.obj").write_text("v 0 0 0\n")
+    cfg = write_cfg(tmp_path / "c.yaml", {**SMALL, "meshes": [{"file": "meshes/scan.obj"}]})
+    for _ in range(2):                                   # a second fresh run into the same folder too
+        r = cli(["run", cfg, "--out", "."], cwd=tmp_path)
+        assert r.returncode == 0, r.stderr
+    assert (tmp_path / "meshes" / "scan.obj").stat().st_size > 0 and (tmp_path / "meshes" / "notes.obj").exists()
+
+
+def test_a_second_run_into_a_busy_folder_is_refused_naming_the_pid(tmp_path):
+    slow = {**SMALL, "plugins": ["tests.plugins.slowdown"],
+            "tasks": {"smoothing": {"methods": [{"name": "slowdown.sleep", "params": {"ms": 4000.0}}]}}}
+    cfg = write_cfg(tmp_path / "c.yaml", slow)
+    first = subprocess.Popen([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(tmp_path / "o")],
+                             cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)}, stdout=subprocess.DEVNULL,
+                             stderr=subprocess.DEVNULL)
+    try:
+        for _ in range(100):
+            if (tmp_path / "o" / "run.json").exists():
+                break
+            time.sleep(0.1)
+        for extra in ([], ["--resume"]):
+            r = cli(["run", cfg, "--out", tmp_path / "o", *extra])
+            assert r.returncode == 2 and f"pid {first.pid}" in r.stderr, r.stderr
+    finally:
+        first.wait(timeout=120)
+    df = pd.read_csv(tmp_path / "o" / "smoothing.csv")
+    assert len(df) == 1 and df["case_id"].is_unique
+
+
+def test_resume_repairs_a_torn_saved_mesh(tmp_path):
+    cfg = write_cfg(tmp_path / "c.yaml", {**SMALL, "save_meshes": True})
+    out = tmp_path / "o"
+    assert cli(["run", cfg, "--out", out]).returncode == 0
+    rows = pd.read_csv(out / "smoothing.csv")
+    victim = out / "meshes" / f"{rows['case_id'][0]}.obj"
+    victim.write_text("")                                # what a SIGKILL mid-write used to leave
+    r = cli(["run", cfg, "--out", out, "--resume"])
+    assert r.returncode == 0, r.stderr
+    assert len(read_mesh(victim, repair=False).F) > 0
+    assert len(pd.read_csv(out / "smoothing.csv")) == len(rows) and not list(out.rglob(".*.tmp"))
+
+
+@pytest.fixture
+def tiny_disk(tmp_path):
+    d = tmp_path / "disk"
+    d.mkdir()
+    r = subprocess.run(["mount", "-t", "tmpfs", "-o", "size=400k", "tmpfs", str(d)], capture_output=True)
+    if r.returncode != 0:
+        pytest.skip(f"cannot mount a small tmpfs here: {r.stderr.decode().strip()}")
+    yield d
+    subprocess.run(["umount", "-l", str(d)], capture_output=True)
+
+
+def test_disk_full_is_one_message_an_interrupted_run_and_resumable(tmp_path, tiny_disk):
+    cfg = write_cfg(tmp_path / "c.yaml", {**SMALL, "save_meshes": True, "meshes": ["bunny", "knight"]})
+    out = tiny_disk / "o"
+    r = cli(["run", cfg, "--out", out])
+    assert r.returncode == 1 and "disk is full" in r.stderr and "Traceback" not in r.stderr, r.stderr
+    meta = json.loads((out / "run.json").read_text())
+    assert meta["status"] == "interrupted"
+    assert not list(out.rglob(".*.tmp"))
+    for m in (out / "meshes").glob("*.obj"):             # whatever was kept is whole
+        assert len(read_mesh(m, repair=False).F) > 0
+    subprocess.run(["mount", "-o", "remount,size=20m", str(tiny_disk)], check=True)
+    r = cli(["run", cfg, "--out", out, "--resume"])
+    assert r.returncode == 0, r.stderr
+    assert json.loads((out / "run.json").read_text())["status"] == "finished"
+    assert len(pd.read_csv(out / "smoothing.csv")) == 4
+
+
+BOMB = "a: &a [x, x, x, x, x, x, x, x, x]\n" + "".join(
+    f"{c}: &{c} [*{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}]\n" for p, c in zip("abcdefgh", "bcdefghi"))
+
+
+@pytest.mark.parametrize("where", ["report", "meshes"])
+def test_a_yaml_alias_bomb_is_refused_quickly_with_a_short_message(tmp_path, where):
+    text = BOMB.replace("\n", "\n  ").strip()
+    body = (f"meshes: [knight]\ntasks: {{smoothing: {{methods: [scratch.explicit]}}}}\nreport:\n  {text}\n"
+            if where == "report" else f"tasks: {{smoothing: {{methods: [scratch.explicit]}}}}\nmeshes:\n  {text}\n")
+    cfg = tmp_path / "bomb.yaml"
+    cfg.write_text(body)
+    t0 = time.time()
+    r = cli(["run", cfg, "--out", tmp_path / "o"], timeout=60)
+    assert r.returncode == 2 and time.time() - t0 < 30
+    assert len(r.stderr) < 2000 and "refused" in r.stderr, r.stderr[:500]
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("patch, needle", [
+    ({"repeats": 10**9}, "repeats"), ({"hausdorff_samples": 10**12}, "hausdorff_samples"),
+    ({"tasks": {"smoothing": {"methods": [{"name": "scratch.explicit",
+                                           "params": {"iterations": list(range(1000)),
+                                                      "step": [0.1 * i for i in range(1, 1001)]}}]}}},
+     "expands to 1,000,000 cases"),
+    ({"report": {"colour": "red"}}, "report.colour"),
+])
+def test_documented_bounds(tmp_path, patch, needle):
+    cfg = write_cfg(tmp_path / "c.yaml", {**SMALL, **patch})
+    r = cli(["run", cfg, "--out", tmp_path / "o"])
+    assert r.returncode == 2 and needle in r.stderr, r.stderr
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_long_mesh_list_validates_in_seconds():
+    from harness.config import load_config
+    from harness.errors import ConfigError
+    t0 = time.time()
+    with pytest.raises(ConfigError, match="expands to 1,250,000 cases"):
+        load_config({"meshes": ["knight"] * 1_250_000, "tasks": {"laplacian": {"methods": ["scratch.uniform"]}}})
+    assert time.time() - t0 < 20
+
+
+def test_a_rejected_config_imports_no_plugin(tmp_path):
+    (tmp_path / "spy_plugin.py").write_text(f"open({str(tmp_path / 'imported')!r}, 'w').write('yes')\n")
+    cfg = write_cfg(tmp_path / "c.yaml", {**SMALL, "plugins": ["spy_plugin"], "meshes": ["no_such_mesh"]})
+    r = cli(["run", cfg, "--out", tmp_path / "o"], cwd=tmp_path)
+    assert r.returncode == 2 and "no_such_mesh" in r.stderr
+    assert not (tmp_path / "imported").exists()
+
+
+def test_resume_refuses_a_damaged_run_json(tmp_path):
+    cfg = write_cfg(tmp_path / "c.yaml", SMALL)
+    out = tmp_path / "o"
+    assert cli(["run", cfg, "--out", out]).returncode == 0
+    (out / "run.json").write_text('{"name": "x", "conf')
+    before = (out / "smoothing.csv").read_bytes()
+    r = cli(["run", cfg, "--out", out, "--resume"])
+    assert r.returncode == 2 and "damaged" in r.stderr and "Traceback" not in r.stderr
+    assert (out / "smoothing.csv").read_bytes() == before
+
+
+def test_out_on_a_file_or_a_read_only_place_and_a_huge_face_index(tmp_path, tiny_disk):
+    cfg = write_cfg(tmp_path / "c.yaml", SMALL)
+    (tmp_path / "afile").write_text("x")
+    r = cli(["run", cfg, "--out", tmp_path / "afile"])
+    assert r.returncode == 2 and "not a folder" in r.stderr and "Traceback" not in r.stderr
+    subprocess.run(["mount", "-o", "remount,ro", str(tiny_disk)], check=True)
+    r = cli(["run", cfg, "--out", tiny_disk / "o"])
+    assert r.returncode == 2 and ("read-only" in r.stderr or "not writable" in r.stderr) and "Traceback" not in r.stderr
+    clean = tmp_path / "clean.obj"
+    clean.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    noisy = tmp_path / "noisy.obj"
+    noisy.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 99999999999999999999999\n")
+    cfg = write_cfg(tmp_path / "p.yaml", {**SMALL, "meshes": [{"file": str(noisy), "clean": str(clean)}]})
+    r = cli(["run", cfg, "--out", tmp_path / "o2"])
+    assert r.returncode == 2 and "noisy.obj" in r.stderr and "Traceback" not in r.stderr
+
+
+@pytest.mark.parametrize("damage", ["ragged", "quote", "binary", "empty", "torn"])
+def test_damaged_csvs_are_a_message_not_a_traceback_or_a_false_regression(tmp_path, damage):
+    cfg = write_cfg(tmp_path / "c.yaml", SMALL)
+    a, b = tmp_path / "a", tmp_path / "b"
+    assert cli(["run", cfg, "--out", a]).returncode == 0
+    shutil.copytree(a, b)
+    p = b / "smoothing.csv"
+    text = p.read_text()
+    if damage == "ragged":
+        p.write_text(text + "x,y,z\n")
+    elif damage == "quote":
+        p.write_text(text + '"unclosed,1,2\n')
+    elif damage == "binary":
+        p.write_bytes(p.read_bytes() + b"\x00\xff\xfe junk\n")
+    elif damage == "empty":
+        p.write_text("")
+    else:                                             # a torn last line: half of a real row
+        last = text.splitlines()[-1]
+        p.write_text(text + last[: len(last) // 2])
+    r = cli(["compare", a, b])
+    assert "Traceback" not in r.stderr
+    if damage == "torn":
+        assert r.returncode == 0, r.stdout + r.stderr        # dropped, never compared as data
+    else:
+        assert r.returncode == 2 and "smoothing.csv" in r.stderr, r.stderr
+    r = cli(["report", b])
+    assert "Traceback" not in r.stderr and r.returncode in (0, 2)
+
+
+def test_files_follow_the_umask(tmp_path):
+    cfg = write_cfg(tmp_path / "c.yaml", SMALL)
+    out = tmp_path / "o"
+    old = os.umask(0o022)
+    try:
+        assert cli(["run", cfg, "--out", out]).returncode == 0
+        assert cli(["run", cfg, "--out", out, "--resume"]).returncode == 0
+    finally:
+        os.umask(old)
+    for name in ("run.json", "smoothing.csv", "report.html"):
+        assert stat.S_IMODE((out / name).stat().st_mode) == 0o644, name
+
+
+def test_obj_faces_separated_by_tabs_or_indented(tmp_path):
+    p = tmp_path / "t.obj"
+    p.write_text("v 0 0 0\n\tv 1 0 0\nv\t0 1 0\n  v 1 1 0\n  f 1 2 3\nf\t2\t4\t3\n")
+    assert read_mesh(p).F.shape == (2, 3)
