@@ -21,3 +21,10 @@ class InvalidMeshError(ShootoutError, ValueError):
 
 class MethodFailed(ShootoutError):
     """A method raised, crashed its process, or returned malformed output."""
+
+
+class RunInterrupted(ShootoutError):
+    """The run cannot go on (e.g. the Dask scheduler was lost): it is marked interrupted and can be
+    continued with ``--resume``. Exit 1."""
+
+    exit_code = 1

@@ -252,6 +252,10 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
     folder.write_run_json(meta)
     bar = None
     if not quiet:
+        n_todo = len(cases) + (len(cfg.tune.cases) if cfg.tune is not None else 0)
+        print(f"shootout: {meta['n_cases']} case(s), {n_todo} to run on {meta['workers']} worker(s)"
+              + (f" (a large run: {n_todo:,} cases; --timeout bounds each one)" if n_todo > 1000 else ""),
+              file=sys.stderr, flush=True)
         bar = _progress(len(cfg.cases), len(done))
     counts: dict[str, int] = {}
     t0 = time.perf_counter()

@@ -8,6 +8,7 @@
 - daemonic workers (Dask's default) fall back to a subprocess per case with the same outcome;
 - an unreachable scheduler is exit 2 with a message and nothing written.
 """
+import json
 import logging
 import os
 import shutil
@@ -200,3 +201,60 @@ def test_unreachable_scheduler_is_exit_2(tmp_path):
     assert r.returncode == 2
     assert "cannot connect to a Dask scheduler" in r.stderr and "Traceback" not in r.stderr
     assert not (tmp_path / "out").exists()
+
+
+def _scheduler(tmp_path):
+    port_file = tmp_path / "sched.json"
+    proc = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",
+                             "--port", "0", "--scheduler-file", str(port_file), "--no-dashboard"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    for _ in range(200):
+        if port_file.exists() and port_file.stat().st_size:
+            break
+        time.sleep(0.1)
+    return proc, json.loads(port_file.read_text())["address"]
+
+
+def test_a_scheduler_without_workers_is_said_and_given_up_on(tmp_path):
+    proc, addr = _scheduler(tmp_path)
+    try:
+        cfg = tmp_path / "c.yaml"
+        cfg.write_text("meshes: [knight]\ntime_budget: 0\ntasks: {laplacian: {methods: [scratch.uniform]}}\n")
+        env = dict(os.environ, MESH_SHOOTOUT_DASK_WAIT="3")
+        r = subprocess.run([str(SHOOTOUT), "run", str(cfg), "--out", str(tmp_path / "out"), "--executor", "dask",
+                            "--scheduler", addr], capture_output=True, text=True, env=env, timeout=120)
+        assert r.returncode == 1, r.stderr
+        assert "has no workers; waiting" in r.stderr and "no worker for 3 s" in r.stderr
+        assert json.loads((tmp_path / "out" / "run.json").read_text())["status"] == "interrupted"
+    finally:
+        proc.kill()
+
+
+def test_a_lost_scheduler_interrupts_the_run_instead_of_failing_its_cases(tmp_path):
+    proc, addr = _scheduler(tmp_path)
+    worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", addr, "--nthreads", "1",
+                               "--no-dashboard"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                              env=dict(os.environ, PYTHONPATH=str(ROOT), DASK_DISTRIBUTED__WORKER__DAEMON="False"))
+    try:
+        cfg = tmp_path / "c.yaml"
+        cfg.write_text(json.dumps({"meshes": ["knight"], "time_budget": 0, "plugins": ["tests.plugins.slowdown"],
+                                   "noise": [{"model": "gaussian_normal", "levels": [0.1], "seeds": 6}],
+                                   "tasks": {"smoothing": {"methods": [{"name": "slowdown.sleep",
+                                                                        "params": {"ms": 1500.0}}]}}}))
+        run = subprocess.Popen([str(SHOOTOUT), "run", str(cfg), "--out", str(tmp_path / "out"), "--executor", "dask",
+                                "--scheduler", addr], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               env=dict(os.environ, PYTHONPATH=str(ROOT)))
+        for _ in range(300):
+            if (tmp_path / "out" / "smoothing.csv").exists():
+                break
+            time.sleep(0.1)
+        proc.kill()                                   # the scheduler dies mid-run
+        _, err = run.communicate(timeout=120)
+        assert run.returncode == 1 and "lost the Dask scheduler" in err and "--resume" in err, err
+        meta = json.loads((tmp_path / "out" / "run.json").read_text())
+        assert meta["status"] == "interrupted"
+        rows = pd.read_csv(tmp_path / "out" / "smoothing.csv")
+        assert (rows["status"] == "ok").all() and len(rows) < 6      # no false error rows
+    finally:
+        proc.kill()
+        worker.kill()

@@ -43,7 +43,7 @@ import uuid
 from pathlib import Path
 
 from ..config import Case
-from ..errors import ShootoutError
+from ..errors import RunInterrupted, ShootoutError
 from ..runner import base_row
 from .isolation import signal_name
 
@@ -105,9 +105,37 @@ class DaskExecutor:
         """Worker threads currently in the cluster (the number of cases that run at once)."""
         return sum(w.get("nthreads", 1) for w in self.client.scheduler_info()["workers"].values())
 
+    def _scheduler_alive(self) -> bool:
+        try:
+            self.client.sync(self.client.scheduler.identity, callback_timeout=5)
+            return True
+        except Exception:  # noqa: BLE001 - any failure to reach it
+            return False
+
+    def _wait_for_workers(self) -> None:
+        """Say so while the cluster has no worker; give up after ``$MESH_SHOOTOUT_DASK_WAIT`` s (120)."""
+        import sys
+        import time
+        limit = float(os.environ.get("MESH_SHOOTOUT_DASK_WAIT", "120"))
+        t0 = time.perf_counter()
+        last = t0 - 10.0
+        while self.n_workers() == 0:
+            now = time.perf_counter()
+            if now - t0 >= limit:
+                raise RunInterrupted(f"the Dask scheduler {self.scheduler} has had no worker for {limit:.0f} s; "
+                                     "start workers with `dask worker ADDRESS` and run again with --resume")
+            if now - last >= 5:
+                print(f"shootout: the Dask scheduler has no workers; waiting ({now - t0:.0f} s of {limit:.0f})",
+                      file=sys.stderr, flush=True)
+                last = now
+            time.sleep(0.5)
+
     def run(self, cases, want_meshes: bool = False):
         from distributed import as_completed
         cases = list(cases)
+        if not cases:
+            return
+        self._wait_for_workers()
         shipped, data = ship_files(cases)
         blobs = {h: self.client.scatter(b, hash=False) for h, b in data.items()}   # once per file
         futures = {}
@@ -122,7 +150,10 @@ class DaskExecutor:
             case = futures.pop(fut)
             try:
                 row, extras = fut.result()
-            except Exception as exc:  # KilledWorker, CancelledError, a lost scheduler: one error row
+            except Exception as exc:  # KilledWorker, CancelledError: one error row; a lost scheduler: stop
+                if type(exc).__name__ != "KilledWorker" and not self._scheduler_alive():
+                    raise RunInterrupted(f"lost the Dask scheduler {self.scheduler} ({type(exc).__name__}); the rows "
+                                         "finished so far are saved: continue with --resume") from None
                 row, extras = base_row(case), {}
                 name = type(exc).__name__
                 what = ("the Dask worker running this case died" if name == "KilledWorker"
