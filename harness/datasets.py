@@ -45,11 +45,12 @@ PROCEDURAL = {
     "torus": {"R": 1.0, "r": 0.4, "resolution": 48},
     "plane_delaunay": {"n_points": 300, "seed": 0},
     "plane_nondelaunay": {"n_points": 300, "seed": 0, "flip_fraction": 0.3},
+    "cylinder": {"radius": 1.0, "height": 2.0, "resolution": 32},
 }
 PROCEDURAL_BOUNDS = {
     "subdivisions": (0, 9), "radius": (1e-9, 1e9), "R": (1e-9, 1e9), "r": (1e-9, 1e9),
     "resolution": (3, 4096), "n_points": (4, 2_000_000), "seed": (0, 2**32 - 1),
-    "flip_fraction": (0.0, 1.0),
+    "flip_fraction": (0.0, 1.0), "height": (1e-9, 1e9),
 }
 
 
@@ -77,6 +78,7 @@ class Source:
     clean: Mesh
     noisy_V: np.ndarray | None = None
     pair_level: float | None = None
+    shape: dict | None = None     # procedural meshes: {"procedural": kind, **all parameters}
 
 
 def spec_key(spec: dict) -> str:
@@ -118,7 +120,7 @@ def _load_cached(frozen) -> Source:
         kind = spec.pop("procedural")
         params = {**PROCEDURAL[kind], **spec}
         V, F = GENERATORS[kind](**params)
-        return Source(key, validate(V, F, name=key))
+        return Source(key, validate(V, F, name=key), shape={"procedural": kind, **params})
     if "clean" in spec:
         return _pair(key, Path(spec["file"]), Path(spec["clean"]), None)
     return Source(key, read_mesh(spec["file"]))
@@ -250,8 +252,34 @@ def plane_nondelaunay(n_points: int = 300, seed: int = 0, flip_fraction: float =
     return V, _orient_up(V, F)
 
 
+def cylinder(radius: float = 1.0, height: float = 2.0, resolution: int = 32):
+    """Open cylinder ``x^2 + y^2 = radius^2``, ``0 <= z <= height`` (two boundary circles).
+
+    ``resolution`` vertices per ring; rings spaced so triangles are close to equilateral
+    (alternate rings rotated by half a step). Every vertex lies exactly on the cylinder.
+    K = 0, H = 1 / (2 radius) (outward normals), geodesics are straight lines once unrolled.
+    """
+    n = int(resolution)
+    step = 2 * np.pi * radius / n
+    rings = max(1, int(round(height / (step * np.sqrt(3) / 2))))
+    j, i = np.meshgrid(np.arange(rings + 1), np.arange(n), indexing="ij")
+    theta = (i + 0.5 * (j % 2)) * 2 * np.pi / n
+    V = np.stack([radius * np.cos(theta), radius * np.sin(theta), j * height / rings], -1).reshape(-1, 3)
+    j, i = np.meshgrid(np.arange(rings), np.arange(n), indexing="ij")
+    a = j * n + i
+    b = j * n + (i + 1) % n
+    c = (j + 1) * n + i
+    d = (j + 1) * n + (i + 1) % n
+    even = (j % 2 == 0)
+    # even rows: the ring above is shifted +half a step, so split quads along b-c; odd rows along a-d
+    T1 = np.where(even[..., None], np.stack([a, b, c], -1), np.stack([a, b, d], -1))
+    T2 = np.where(even[..., None], np.stack([b, d, c], -1), np.stack([a, d, c], -1))
+    F = np.concatenate([T1.reshape(-1, 3), T2.reshape(-1, 3)]).astype(np.int64)
+    return V, F
+
+
 GENERATORS = {"sphere": icosphere, "torus": torus, "plane_delaunay": plane_delaunay,
-              "plane_nondelaunay": plane_nondelaunay}
+              "plane_nondelaunay": plane_nondelaunay, "cylinder": cylinder}
 
 
 def describe_all() -> list[dict]:

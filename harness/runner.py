@@ -129,7 +129,7 @@ def prepare_input(case: Case) -> tuple[CaseInput, float | None]:
         return CaseInput(clean, src.noisy_V, clean.F, clean.diagonal(), settings), src.pair_level
     V_in = apply_noise(clean.V, clean.F, case.noise_model, case.noise_level, case.seed,
                        mesh_key=case.mesh_key, fraction=case.fraction)
-    return CaseInput(clean, V_in, clean.F, clean.diagonal(), settings), None
+    return CaseInput(clean, V_in, clean.F, clean.diagonal(), settings, shape=src.shape), None
 
 
 def input_mesh_name(case: Case) -> str:

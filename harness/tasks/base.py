@@ -55,7 +55,10 @@ class CaseInput:
     ``clean``: the reference `harness.mesh.Mesh`; ``V``: the input positions (clean plus noise,
     or the given noisy file); ``F``: the faces (``clean.F``); ``diag``: the clean mesh's
     bounding-box diagonal; ``settings``: case-level measurement settings (e.g.
-    ``hausdorff_samples``); ``cache``: per-input facts a task may memoise (topology, ...).
+    ``hausdorff_samples``); ``cache``: per-input facts a task may memoise (topology, ...);
+    ``shape``: for a procedural mesh the exact surface it samples, ``{"procedural": kind,
+    **parameters}`` (e.g. ``{"procedural": "sphere", "subdivisions": 3, "radius": 1.0}``), so a
+    task can compute analytic ground truth from the positions; None for files and pairs.
     """
 
     clean: Any
@@ -64,6 +67,7 @@ class CaseInput:
     diag: float
     settings: dict = field(default_factory=dict)
     cache: dict = field(default_factory=dict)
+    shape: dict | None = None
 
 
 @dataclass(frozen=True)
