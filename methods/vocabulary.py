@@ -15,3 +15,19 @@ def solver_param() -> Param:
 def preserve_boundary_param(doc: str = "keep boundary vertices and edges in place") -> Param:
     """``preserve_boundary``: whether boundary vertices may move or be removed."""
     return Param("preserve_boundary", False, "bool", doc=doc)
+
+
+BOUNDARY_RULES = ("free", "fixed", "curve")
+
+
+def boundary_rule_param() -> Param:
+    """``boundary``: how a smoothing operator treats boundary vertices (open meshes).
+
+    ``free``: boundary rows of the operator as built from the mesh (one-sided neighbourhoods);
+    ``fixed``: boundary vertices do not move; ``curve``: boundary vertices move along the
+    boundary curve only, averaging themselves with their boundary-edge neighbours (the rule of
+    VCGLib/MeshLab's Laplacian and Taubin filters).
+    """
+    return Param("boundary", "free", choices=BOUNDARY_RULES,
+                 doc="boundary vertices: free (mesh operator rows), fixed (do not move), curve "
+                     "(average with boundary-edge neighbours only, as MeshLab)")

@@ -17,11 +17,14 @@ uniform sums count each neighbour twice and cotangent sums give ``cot a + cot b`
     ``W``. This equals ``scratch.explicit(step=1, self_weight=0.5)``. Boundary vertices
     (``boundary: true``) average themselves twice with their boundary neighbours only:
     ``x' = (2 x + sum_{boundary nbrs} x_j) / (n_b + 2)``, uniform weights even in cotangent
-    mode. ``iterations`` -> ``stepsmoothnum``.
+    mode (``scratch.explicit`` with ``boundary: curve``). ``iterations`` -> ``stepsmoothnum``.
 ``meshlab.taubin`` (``apply_coord_taubin_smoothing``, ``VertexCoordTaubin``)
     ``x += lambda (mean_{N(i)} x_j - x)`` then the same with ``mu``, per iteration; boundary
-    vertices use ``(x + sum_b x_j)/(1 + n_b)`` as their "mean". On a closed mesh this is
-    ``scratch.taubin`` with uniform weights. ``iterations`` -> ``stepsmoothnum``.
+    vertices use ``(x + sum_b x_j)/(1 + n_b)`` as their "mean". This is ``scratch.taubin``
+    with uniform weights and ``boundary: curve`` (on a closed mesh any boundary rule).
+    ``iterations`` -> ``stepsmoothnum``. VCG holds ``lambda`` and ``mu`` in single precision:
+    the result is that of ``float32(lambda)``, ``float32(mu)`` (``-0.53`` becomes
+    ``-0.52999997``, a difference of ~1e-10 of the diagonal per iteration).
 ``meshlab.hc`` (``apply_coord_hc_laplacian_smoothing``, Vollmer et al. 1999, beta 0.5)
     no parameters; the filter runs one HC pass, called ``iterations`` times.
 ``meshlab.two_steps`` (``apply_coord_two_steps_smoothing``)

@@ -36,9 +36,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from methods import Param, SmoothingResult, register
-from harness.core.geometry import boundary_vertices, mean_edge_length
+from harness.core.geometry import boundary_vertices, edge_face_counts, mean_edge_length
 from harness.core.solvers import backward_euler
-from methods.vocabulary import solver_param
+from methods.vocabulary import boundary_rule_param, solver_param
 from methods.scratch.operators import cotan_weights, uniform_weights, voronoi_areas
 
 WEIGHTS = ("uniform", "cotan", "cotan_area")
@@ -96,6 +96,51 @@ def time_step(V: np.ndarray, F: np.ndarray, step: float, weights: str) -> float:
     return float(step)
 
 
+def curve_rows(F: np.ndarray, n: int) -> tuple[np.ndarray, sp.csr_matrix, np.ndarray]:
+    """The boundary-curve rule: ``(mask, Wb, mb)`` for the boundary vertices.
+
+    For a vertex ``i`` on ``n_b`` boundary edges (edges with one face) ``Wb[i, j] = 1/2`` per
+    boundary-edge neighbour ``j``, ``Wb[i, i] = -n_b / 2`` and ``mb[i] = (1 + n_b) / 2``: the
+    vertex is counted once in its own boundary average, with the weight a boundary edge gets
+    (half an interior edge's, since weights count incident faces), so
+    ``(Wb x)_i / mb_i = (x_i + sum_b x_j) / (1 + n_b) - x_i``. This is VCGLib's
+    ``AccumulateLaplacianInfo`` boundary reset: MeshLab's Taubin step is
+    ``x += lambda (Wb x / mb)`` there, and its classic Laplacian
+    ``x' = (2 x + sum_b x_j) / (n_b + 2)`` is ``x + mb / (mb + 1/2) (Wb x / mb)``, the
+    ``self_weight = 0.5`` update. Rows of non-boundary vertices are zero (mb 1).
+    """
+    E, counts = edge_face_counts(F)
+    B = E[counts == 1]
+    mask = np.zeros(n, bool)
+    mask[B.ravel()] = True
+    A = sp.coo_matrix((np.full(2 * len(B), 0.5), (np.r_[B[:, 0], B[:, 1]], np.r_[B[:, 1], B[:, 0]])),
+                      shape=(n, n)).tocsr()
+    nb2 = np.asarray(A.sum(axis=1)).ravel()
+    Wb = (A - sp.diags(nb2)).tocsr()
+    mb = np.where(mask, 0.5 + nb2, 1.0)
+    return mask, Wb, mb
+
+
+def apply_boundary_rule(W: sp.csr_matrix, m: np.ndarray, F: np.ndarray, rule: str,
+                        unit: float = 1.0) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray | None]:
+    """``(W, m, fixed)`` with the boundary rule applied (`methods.vocabulary.boundary_rule_param`).
+
+    ``curve`` replaces the boundary rows of ``W`` and entries of ``m`` by `curve_rows`, the mass
+    multiplied by ``unit`` (``lbar^2`` for area-weighted operators, so ``h / m`` keeps its
+    scale); ``fixed`` returns the boundary mask as ``fixed`` (their steps are zeroed by the
+    caller); ``free`` changes nothing.
+    """
+    n = W.shape[0]
+    if rule == "fixed":
+        return W, m, boundary_vertices(F, n)
+    if rule == "curve":
+        mask, Wb, mb = curve_rows(F, n)
+        keep = sp.diags((~mask).astype(np.float64))
+        W = (keep @ W + sp.diags(mask.astype(np.float64)) @ Wb).tocsr()
+        m = np.where(mask, mb * unit, m)
+    return W, m, None
+
+
 def _finite(X: np.ndarray) -> bool:
     return bool(np.isfinite(X).all())
 
@@ -108,13 +153,12 @@ def _finite(X: np.ndarray) -> bool:
                   "self_weight": Param("self_weight", 0.0, "float", low=0.0,
                                        doc="weight of the vertex itself in the neighbour "
                                            "average, in units of M (MeshLab's Laplacian: 0.5)"),
-                  "fix_boundary": Param("fix_boundary", False, "bool",
-                                        doc="keep boundary vertices in place"),
+                  "boundary": boundary_rule_param(),
                   "reassemble": Param("reassemble", False, "bool",
                                       doc="rebuild the operator from the current positions "
                                           "every step (MeshLab's cotangent Laplacian does)")})
 def explicit(V, F, *, weights="uniform", step=0.25, iterations=10, self_weight=0.0,
-             fix_boundary=False, reassemble=False):
+             boundary="free", reassemble=False):
     """Explicit (forward Euler) Laplacian smoothing ``X <- X + h L X``.
 
     Parameters
@@ -135,8 +179,11 @@ def explicit(V, F, *, weights="uniform", step=0.25, iterations=10, self_weight=0
         ``step = 1`` the update is ``x' = (s x + sum_j W_ij x_j) / (s + m_i)``: the vertex
         itself joins the weighted average with weight ``s``. 0 (default) is the plain
         Laplacian step; MeshLab's classic Laplacian is ``step 1, self_weight 0.5``.
-    fix_boundary : bool
-        Boundary vertices (on an edge with one incident face) do not move.
+    boundary : {"free", "fixed", "curve"}
+        Boundary vertices (on an edge with one incident face): rows of the operator as built
+        (``free``), not moved (``fixed``), or moved along the boundary curve (``curve``, see
+        `curve_rows`; with ``step 1, self_weight 0.5`` this is MeshLab's classic Laplacian with
+        ``boundary: true``).
     reassemble : bool
         Rebuild ``W`` and ``M`` from the current positions before every step (no effect for
         uniform weights). ``h`` stays the one of the input.
@@ -155,10 +202,11 @@ def explicit(V, F, *, weights="uniform", step=0.25, iterations=10, self_weight=0
     vertex moves to the mean of its neighbours (the vertex itself not averaged in).
     """
     h = time_step(V, F, step, weights)
-    fixed = boundary_vertices(F, V.shape[0]) if fix_boundary else None
+    unit = time_step(V, F, 1.0, weights)
 
     def operator(P):
         W, m = smoothing_operator(P, F, weights)
+        W, m, fixed = apply_boundary_rule(W, m, F, boundary, unit)
         scale = h / (m + float(self_weight))
         if fixed is not None:
             scale = np.where(fixed, 0.0, scale)
@@ -233,8 +281,7 @@ def implicit(V, F, *, weights="cotan_area", step=1.0, iterations=1, reassemble=F
                   "iterations": Param("iterations", 10, "int", low=0, high=100000,
                                       doc="number of (lambda, mu) step pairs"),
                   "weights": Param("weights", "uniform", choices=WEIGHTS, doc=_WEIGHTS_DOC),
-                  "fix_boundary": Param("fix_boundary", False, "bool",
-                                        doc="keep boundary vertices in place")})
+                  "boundary": boundary_rule_param()})
 def taubin(V, F, **params):
     """Taubin's lambda|mu smoothing: ``X <- X + lambda L X`` then ``X <- X + mu L X``.
 
@@ -253,8 +300,9 @@ def taubin(V, F, **params):
     weights : {"uniform", "cotan", "cotan_area"}
         Operator (module docstring), built once from the input. For cotan_area the factors are
         multiplied by ``lbar^2`` like ``step``.
-    fix_boundary : bool
-        Boundary vertices do not move.
+    boundary : {"free", "fixed", "curve"}
+        Boundary vertices: operator rows as built (``free``), not moved (``fixed``), or moved
+        along the boundary curve (``curve``, `curve_rows`).
 
     Returns
     -------
@@ -264,17 +312,20 @@ def taubin(V, F, **params):
     -----
     Taubin, "A signal processing approach to fair surface design", SIGGRAPH 1995. With
     uniform weights ``(L X)_i = mean of neighbours - x_i``; MeshLab's
-    ``apply_coord_taubin_smoothing`` computes the same steps on closed meshes, PyGEL3D's
-    ``taubin_smooth`` is this with ``lambda 0.5, mu -0.52`` on any mesh.
+    ``apply_coord_taubin_smoothing`` computes the same steps (``boundary: curve`` on open
+    meshes), PyGEL3D's ``taubin_smooth`` is this with ``lambda 0.5, mu -0.52`` and ``boundary:
+    free`` on any mesh.
     """
     lam = float(params.get("lambda", 0.5))
     mu = float(params.get("mu", -0.53))
     iterations = int(params.get("iterations", 10))
     weights = params.get("weights", "uniform")
+    unit = time_step(V, F, 1.0, weights)
     W, m = smoothing_operator(V, F, weights)
-    scale = time_step(V, F, 1.0, weights) / m
-    if params.get("fix_boundary", False):
-        scale = np.where(boundary_vertices(F, V.shape[0]), 0.0, scale)
+    W, m, fixed = apply_boundary_rule(W, m, F, params.get("boundary", "free"), unit)
+    scale = unit / m
+    if fixed is not None:
+        scale = np.where(fixed, 0.0, scale)
     L = (sp.diags(scale) @ W).tocsr()
     X = V.copy()
     with np.errstate(over="ignore", invalid="ignore"):
