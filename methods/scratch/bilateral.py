@@ -7,14 +7,19 @@ import scipy.sparse as sp
 from methods import Param, SmoothingResult, register
 
 
-def face_neighbour_pairs(F: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Pairs ``(i, j)`` of faces sharing at least one vertex, ``i == j`` included (CSR order)."""
+def face_neighbour_pairs(F: np.ndarray, n: int, neighbourhood: str = "vertex"
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """Ordered pairs ``(i, j)``, ``i != j``, of faces sharing a vertex (``vertex``) or an edge
+    (``edge``), sorted by ``i`` then ``j``. The centre face is not its own neighbour."""
     m = F.shape[0]
     FV = sp.csr_matrix((np.ones(3 * m), (np.repeat(np.arange(m), 3), F.ravel())), shape=(m, n))
-    FF = (FV @ FV.T).tocsr()
-    FF.sort_indices()
-    rows = np.repeat(np.arange(m), np.diff(FF.indptr))
-    return rows, FF.indices.astype(np.int64)
+    FF = (FV @ FV.T).tocoo()
+    keep = FF.row != FF.col
+    if neighbourhood == "edge":
+        keep &= FF.data >= 2                 # two shared vertices = a shared edge
+    I, J = FF.row[keep].astype(np.int64), FF.col[keep].astype(np.int64)
+    order = np.lexsort((J, I))
+    return I[order], J[order]
 
 
 def face_geometry(X: np.ndarray, F: np.ndarray):
@@ -40,11 +45,13 @@ def mean_adjacent_centroid_distance(C: np.ndarray, F: np.ndarray) -> float:
     return float(np.linalg.norm(C[a] - C[b], axis=1).mean())
 
 
-def sun_vertex_update(X: np.ndarray, F: np.ndarray, N: np.ndarray, iterations: int) -> np.ndarray:
+def sun_vertex_update(X: np.ndarray, F: np.ndarray, N: np.ndarray, iterations: int,
+                      fixed: np.ndarray | None = None) -> np.ndarray:
     """Sun et al. 2007: ``x_i += 1/|F_i| sum_{f in F_i} n_f (n_f . (c_f - x_i))``, repeated.
 
     ``N`` are the target (filtered) face normals, kept fixed; centroids ``c_f`` are
-    recomputed from the current positions each iteration.
+    recomputed from the current positions each iteration (Jacobi: all vertices move from the
+    same positions). Vertices in the boolean mask ``fixed`` do not move.
     """
     n = X.shape[0]
     count = np.bincount(F.ravel(), minlength=n).astype(np.float64)
@@ -56,43 +63,59 @@ def sun_vertex_update(X: np.ndarray, F: np.ndarray, N: np.ndarray, iterations: i
         d = np.repeat(C, 3, axis=0) - X[vid]                 # c_f - x_i per corner
         move = corner_n * np.einsum("ij,ij->i", corner_n, d)[:, None]
         delta = np.stack([np.bincount(vid, weights=move[:, k], minlength=n) for k in range(3)], 1)
+        if fixed is not None:
+            delta[fixed] = 0.0
         X = X + delta / count[:, None]
     return X
 
 
 @register("scratch.bilateral", task="smoothing", library="scratch",
+          cite="Zheng, Fu, Au, Tai, Bilateral normal filtering for mesh denoising, IEEE TVCG 17(10), 2011",
           params={"sigma_r": Param("sigma_r", 0.35, "float", low=1e-6, high=10.0,
-                                   doc="range (normal difference) Gaussian width"),
+                                   doc="range (normal difference) Gaussian width (Zheng et al.'s sigma_s)"),
                   "sigma_s": Param("sigma_s", 1.0, "float", low=1e-6, high=100.0,
                                    doc="spatial Gaussian width in units of the mean "
-                                       "adjacent-centroid distance"),
-                  "normal_iterations": Param("normal_iterations", 10, "int", low=0, high=1000,
+                                       "centroid distance of edge-adjacent faces (sigma_c)"),
+                  "normal_iterations": Param("normal_iterations", 20, "int", low=0, high=1000,
                                              doc="normal filtering passes per iteration"),
                   "vertex_iterations": Param("vertex_iterations", 10, "int", low=0, high=1000,
                                              doc="Sun et al. vertex updates per iteration"),
-                  "iterations": Param("iterations", 2, "int", low=0, high=1000,
-                                      doc="outer iterations (filter normals, then fit)")})
-def bilateral(V, F, *, sigma_r=0.35, sigma_s=1.0, normal_iterations=10, vertex_iterations=10,
-              iterations=2):
+                  "iterations": Param("iterations", 1, "int", low=0, high=1000,
+                                      doc="outer iterations (filter normals, then fit); the "
+                                          "paper's local scheme is 1"),
+                  "neighbourhood": Param("neighbourhood", "vertex", choices=("vertex", "edge"),
+                                         doc="faces sharing a vertex (default) or an edge with the centre face"),
+                  "boundary": Param("boundary", "fixed", choices=("fixed", "free"),
+                                    doc="boundary vertices kept in place (the reference code) or moved")})
+def bilateral(V, F, *, sigma_r=0.35, sigma_s=1.0, normal_iterations=20, vertex_iterations=10,
+              iterations=1, neighbourhood="vertex", boundary="fixed"):
     """Bilateral normal filtering (Zheng, Fu, Au, Tai, "Bilateral normal filtering for mesh
-    denoising", IEEE TVCG 2011), local iterative scheme, vectorized.
+    denoising", IEEE TVCG 2011), local iterative scheme, as in the authors' reference code
+    (the ``BilateralNormalFilteringForMeshDenoising`` local scheme distributed with Zhang et
+    al. 2015's GuidedDenoising), vectorized.
 
     Parameters
     ----------
     V : (n, 3) float64
     F : (m, 3) int64
     sigma_r : float
-        Range kernel width on ``|n_i - n_j|`` (unit normals, so dimensionless; Zheng et al.
-        use 0.2-0.6: smaller keeps sharper features).
+        Range kernel width on ``|n_i - n_j|`` (unit normals, so dimensionless; the paper's
+        ``sigma_s``, 0.2-0.6: smaller keeps sharper features; reference default 0.35).
     sigma_s : float
-        Spatial kernel width as a multiple of the mean distance between centroids of
-        edge-adjacent faces (Zheng et al.'s default choice for ``sigma_c``).
+        Spatial kernel width as a multiple of ``sigma_c``, the mean distance between
+        centroids of edge-adjacent faces (reference default 1).
     normal_iterations : int
-        Normal filtering passes per outer iteration.
+        Normal filtering passes (reference default 20).
     vertex_iterations : int
-        Vertex position updates per outer iteration.
+        Vertex position updates after the normals are filtered (reference default 10).
     iterations : int
-        Outer iterations; each recomputes normals, areas and centroids from the current mesh.
+        Outer iterations; each recomputes normals, areas, centroids and ``sigma_c`` from the
+        current mesh. 1 is the paper's scheme; more repeat it.
+    neighbourhood : {"vertex", "edge"}
+        ``N(i)``: faces sharing a vertex with face ``i`` (reference default) or an edge.
+    boundary : {"fixed", "free"}
+        Boundary vertices (on an edge with one face) keep their position during the vertex
+        update (reference behaviour) or move like the others.
 
     Returns
     -------
@@ -100,19 +123,22 @@ def bilateral(V, F, *, sigma_r=0.35, sigma_s=1.0, normal_iterations=10, vertex_i
 
     Notes
     -----
-    Normal filter on the faces ``j`` sharing a vertex with face ``i`` (``i`` included)::
+    Normal filter over ``N(i)``, which does not contain ``i`` itself (Jacobi iteration, areas
+    ``A`` and centroids ``c`` of the input of the outer iteration)::
 
-        n_i <- normalize( sum_j A_j W_s(|c_i - c_j|) W_r(|n_i - n_j|) n_j ),
-        W_s(x) = exp(-x^2 / (2 sigma_s^2)),  W_r(x) = exp(-x^2 / (2 sigma_r^2)),
+        n_i <- normalize( sum_{j in N(i)} A_j W_s(|c_i - c_j|) W_r(|n_i - n_j|) n_j ),
+        W_s(x) = exp(-x^2 / (2 (sigma_s sigma_c)^2)),  W_r(x) = exp(-x^2 / (2 sigma_r^2)).
 
-    with areas ``A`` and centroids ``c`` fixed within an outer iteration. Vertices are then
-    moved to agree with the filtered normals by the iterative scheme of Sun, Rosin, Martin,
-    Langbein ("Fast and effective feature-preserving mesh denoising", IEEE TVCG 2007):
+    A face whose weights all vanish (no neighbour) keeps its normal. Vertices are then moved
+    to agree with the filtered normals by the iterative scheme of Sun, Rosin, Martin, Langbein
+    ("Fast and effective feature-preserving mesh denoising", IEEE TVCG 2007):
     ``x_i += 1/|F_i| sum_{f in F_i} n_f (n_f . (c_f - x_i))``.
     """
+    from harness.core.geometry import boundary_vertices
     X = V.copy()
     n = V.shape[0]
-    I, J = face_neighbour_pairs(F, n)
+    I, J = face_neighbour_pairs(F, n, neighbourhood)
+    fixed = boundary_vertices(F, n) if boundary == "fixed" else None
     m = F.shape[0]
     for _ in range(iterations):
         N, A, C = face_geometry(X, F)
@@ -121,10 +147,9 @@ def bilateral(V, F, *, sigma_r=0.35, sigma_s=1.0, normal_iterations=10, vertex_i
         Nf = N
         for _ in range(normal_iterations):
             wr = np.exp(-np.sum((Nf[I] - Nf[J]) ** 2, axis=1) / (2.0 * sigma_r * sigma_r))
-            w = ws * wr
-            S = sp.csr_matrix((w, (I, J)), shape=(m, m))
+            S = sp.csr_matrix((ws * wr, (I, J)), shape=(m, m))
             acc = S @ Nf
             nrm = np.linalg.norm(acc, axis=1, keepdims=True)
             Nf = np.divide(acc, nrm, out=Nf.copy(), where=nrm > 0)
-        X = sun_vertex_update(X, F, Nf, vertex_iterations)
+        X = sun_vertex_update(X, F, Nf, vertex_iterations, fixed)
     return SmoothingResult(V=X)
