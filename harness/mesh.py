@@ -287,6 +287,35 @@ def write_obj(path_or_file, V: np.ndarray, F: np.ndarray) -> None:
         write_obj(fh, V, F)
 
 
+def write_ply(path_or_file, V: np.ndarray, F: np.ndarray, quality: np.ndarray | None = None,
+              comment: str = "") -> None:
+    """Write an ASCII PLY (17 significant digits) to a path or an open text file.
+
+    ``quality`` (n,) becomes the per-vertex ``quality`` property (double), which MeshLab,
+    PyMeshLab (``vertex_scalar_array``) and polyscope read as the vertex scalar; ``comment``
+    (one line) says what it holds.
+    """
+    if not hasattr(path_or_file, "write"):
+        with open(path_or_file, "w") as fh:
+            write_ply(fh, V, F, quality, comment)
+        return
+    fh = path_or_file
+    head = ["ply", "format ascii 1.0"]
+    if comment:
+        head.append("comment " + " ".join(str(comment).split()))
+    head += [f"element vertex {len(V)}", "property double x", "property double y", "property double z"]
+    if quality is not None:
+        head.append("property double quality")
+    head += [f"element face {len(F)}", "property list uchar int vertex_indices", "end_header"]
+    fh.write("\n".join(head) + "\n")
+    if quality is None:
+        fh.write("".join(f"{x:.17g} {y:.17g} {z:.17g}\n" for x, y, z in V))
+    else:
+        fh.write("".join(f"{x:.17g} {y:.17g} {z:.17g} {q:.17g}\n"
+                         for (x, y, z), q in zip(V.tolist(), np.asarray(quality, np.float64).tolist())))
+    fh.write("".join(f"3 {a} {b} {c}\n" for a, b, c in np.asarray(F).tolist()))
+
+
 # ----------------------------------------------------------------------------- validation
 
 def validate(V, F, name: str = "", repair: bool = True) -> Mesh:

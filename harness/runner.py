@@ -134,14 +134,32 @@ def prepare_input(case: Case) -> tuple[CaseInput, float | None]:
 
 def input_mesh_name(case: Case) -> str:
     lvl = "pair" if math.isnan(case.noise_level) else f"{case.noise_level:g}"
-    return f"{case.mesh_key}-{case.noise_model}-{lvl}-{case.seed}-input.obj"
+    return f"{case.mesh_key}-{case.noise_model}-{lvl}-{case.seed}-input.ply"
+
+
+QUALITY = "quality = unsigned distance of each vertex to the clean surface (mesh units)"
+
+
+def saved_meshes(case: Case, task, inp: CaseInput, result) -> dict:
+    """The meshes ``save_meshes`` writes: ``{file name: (V, F, quality, comment)}``.
+
+    The input and the task's output mesh, each with a per-vertex quality: by default the
+    distance of each vertex to the clean surface (`QUALITY`); a task's ``output_mesh`` may
+    return ``(V, F, quality, comment)`` to store its own per-vertex value instead.
+    """
+    from .metrics.surface_distance import point_surface_distance
+    out = task.output_mesh(inp, result)
+    if len(out) == 2:
+        out = (*out, point_surface_distance(out[0], inp.clean.V, inp.clean.F), QUALITY)
+    return {input_mesh_name(case): (inp.V, inp.F, point_surface_distance(inp.V, inp.clean.V, inp.clean.F), QUALITY),
+            f"{case.case_id}.ply": out}
 
 
 def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> tuple[dict, dict]:
     """Run one case and measure it; never raises (failures become an error row).
 
-    Returns ``(row, extras)``. ``extras["meshes"]`` maps file names to ``(V, F)`` for the driver to
-    write (the input and the result, when ``want_meshes`` and the task has an output mesh);
+    Returns ``(row, extras)``. ``extras["meshes"]`` maps file names to ``(V, F, quality, comment)``
+    for the driver to write (`saved_meshes`, when ``want_meshes`` and the task has an output mesh);
     ``extras["view"]`` holds the task's view meshes (``want_view``).
     """
     row = base_row(case)
@@ -184,8 +202,7 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
         row.update(timing_columns(times, cold))
         row.update(task.measure(inp, result, full))
         if want_meshes and task.output_mesh is not None:
-            V_out, F_out = task.output_mesh(inp, result)
-            extras["meshes"] = {input_mesh_name(case): (inp.V, inp.F), f"{case.case_id}.obj": (V_out, F_out)}
+            extras["meshes"] = saved_meshes(case, task, inp, result)
         if want_view and task.view is not None:
             extras["view"] = task.view(inp, result)
         row["status"] = "ok"

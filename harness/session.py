@@ -15,7 +15,7 @@ from . import tasks
 from .config import Config, load_config
 from .errors import ShootoutError
 from .executors import make_executor
-from .mesh import write_obj
+from .mesh import write_ply
 from .provenance import git_commit, machine_info, now_iso, package_versions
 from .results import RunFolder
 
@@ -220,7 +220,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         if resume:
             done = folder.keep_ok_rows()
             if cfg.save_meshes:              # an ok row whose saved mesh is missing or torn runs again
-                done = {cid for cid in done if _mesh_ok(out_dir / "meshes" / f"{cid}.obj")}
+                done = {cid for cid in done if _mesh_ok(out_dir / "meshes" / f"{cid}.ply")}
                 folder.drop_rows(lambda r: r["case_id"] not in done)
             folder.remove_temporaries()
             cases = [c for c in cases if c.case_id not in done]
@@ -270,9 +270,9 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
             if bar is not None:
                 bar.total = meta["n_cases"]
         for case, row, extras in ex.run(cases, want_meshes=cfg.save_meshes):
-            for fname, (V, F) in (extras.get("meshes") or {}).items():   # meshes first, then the row
+            for fname, (V, F, q, what) in (extras.get("meshes") or {}).items():   # meshes first, then the row
                 if not (out_dir / "meshes" / fname).exists() or fname.startswith(case.case_id):
-                    folder.save_mesh(fname, lambda fh, V=V, F=F: write_obj(fh, V, F))
+                    folder.save_mesh(fname, lambda fh, V=V, F=F, q=q, w=what: write_ply(fh, V, F, q, w))
             folder.append(case.task, row)
             counts[row["status"]] = counts.get(row["status"], 0) + 1
             if bar is not None:

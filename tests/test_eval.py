@@ -29,7 +29,7 @@ def run_with_meshes(tmp_path_factory):
 @pytest.mark.parametrize("task", ["smoothing", "simplification"])
 def test_eval_gives_exactly_the_numbers_of_a_run(run_with_meshes, tmp_path, task):
     rows = pd.read_csv(run_with_meshes / f"{task}.csv")
-    files = [run_with_meshes / "meshes" / f"{cid}.obj" for cid in rows["case_id"]]
+    files = [run_with_meshes / "meshes" / f"{cid}.ply" for cid in rows["case_id"]]
     noisy = ["--noisy", str(PAIR / "Noisy.obj")]
     out = tmp_path / "eval"
     labels = sum((["--label", m] for m in rows["method"]), [])

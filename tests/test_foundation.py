@@ -282,7 +282,7 @@ def test_cli_end_to_end(tmp_path):
     meta = json.loads((out / "run.json").read_text())
     assert meta["status"] == "finished" and meta["versions"]["libigl"] and meta["n_cases"] == 24
     assert (out / "report.html").stat().st_size > 1000
-    assert len(list((out / "meshes").glob("*.obj"))) == 12 + 4   # results + distinct inputs
+    assert len(list((out / "meshes").glob("*.ply"))) == 12 + 4   # results + distinct inputs
     # the methods and datasets commands list
     r = subprocess.run([sys.executable, "-m", "harness.cli", "methods"], capture_output=True, text=True)
     assert r.returncode == 0 and "scratch.cotan" in r.stdout and "fast_simplification.qem" in r.stdout

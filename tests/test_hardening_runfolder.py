@@ -69,7 +69,7 @@ def test_resume_repairs_a_torn_saved_mesh(tmp_path):
     out = tmp_path / "o"
     assert cli(["run", cfg, "--out", out]).returncode == 0
     rows = pd.read_csv(out / "smoothing.csv")
-    victim = out / "meshes" / f"{rows['case_id'][0]}.obj"
+    victim = out / "meshes" / f"{rows['case_id'][0]}.ply"
     victim.write_text("")                                # what a SIGKILL mid-write used to leave
     r = cli(["run", cfg, "--out", out, "--resume"])
     assert r.returncode == 0, r.stderr
@@ -96,7 +96,7 @@ def test_disk_full_is_one_message_an_interrupted_run_and_resumable(tmp_path, tin
     meta = json.loads((out / "run.json").read_text())
     assert meta["status"] == "interrupted"
     assert not list(out.rglob(".*.tmp"))
-    for m in (out / "meshes").glob("*.obj"):             # whatever was kept is whole
+    for m in (out / "meshes").glob("*.ply"):             # whatever was kept is whole
         assert len(read_mesh(m, repair=False).F) > 0
     subprocess.run(["mount", "-o", "remount,size=20m", str(tiny_disk)], check=True)
     r = cli(["run", cfg, "--out", out, "--resume"])
