@@ -106,6 +106,8 @@ def _identity(spec: dict) -> dict:
     for k, v in spec.items():
         if k in ("file", "clean"):
             out[k + "_sha1"] = hashlib.sha1(Path(v).read_bytes()).hexdigest()
+        elif k == "name":
+            continue                      # a label only: renaming a mesh keeps its case ids
         else:
             out[k] = v
     return out
@@ -320,10 +322,25 @@ def _check_meshes(meshes, base_dir: Path, P: list) -> list[dict]:
                 spec[k] = v
             out.append({**{"procedural": kind}, **datasets.PROCEDURAL[kind], **spec})
         elif isinstance(m, dict) and "file" in m:
-            extra = set(m) - {"file", "clean"}
+            extra = set(m) - {"file", "clean", "name", "level"}
             if extra:
-                P.append(f"{at}: unknown key(s) {sorted(extra)}; a file mesh takes 'file' and optional 'clean'")
+                P.append(f"{at}: unknown key(s) {sorted(extra)}; a file mesh takes 'file' and optional "
+                         "'clean', 'name', 'level'")
             spec = {}
+            if "name" in m:
+                nm = m["name"]
+                if not isinstance(nm, str) or not re.fullmatch(r"[A-Za-z0-9_.\-]{1,80}", nm):
+                    P.append(f"{at}.name: expected 1-80 letters, digits, '_', '-' or '.', got {yaml_input.short(nm)}")
+                else:
+                    spec["name"] = nm
+            if "level" in m:
+                lv = m["level"]
+                if "clean" not in m:
+                    P.append(f"{at}.level: the noise level of a given pair needs 'clean' (the noise-free mesh)")
+                elif not _is_num(lv) or not 0 <= lv <= 1e6:
+                    P.append(f"{at}.level: expected a number >= 0 (sigma / mean edge length), got {yaml_input.short(lv)}")
+                else:
+                    spec["level"] = float(lv)
             for k in ("file", "clean"):
                 if k not in m:
                     continue

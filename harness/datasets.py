@@ -2,7 +2,8 @@
 
 A mesh spec is a dict, the normalised form of a config entry:
 ``{"bundled": "bunny"}``, ``{"procedural": "sphere", "subdivisions": 4}``,
-``{"file": "scan.obj"}`` or ``{"file": "noisy.obj", "clean": "clean.obj"}``.
+``{"file": "scan.obj"}`` or ``{"file": "noisy.obj", "clean": "clean.obj"}`` (optional ``name``: the
+label in the ``mesh`` column; ``level``: the known noise level of a given pair).
 `load(spec)` returns a `Source`: the clean `Mesh` and, for ready noisy/clean pairs, the noisy
 vertex positions (same count and order; no synthetic noise is added to a pair).
 """
@@ -83,6 +84,8 @@ class Source:
 
 def spec_key(spec: dict) -> str:
     """Readable label of a spec for the ``mesh`` column (stable across runs)."""
+    if "name" in spec:
+        return spec["name"]
     if "bundled" in spec:
         return spec["bundled"]
     if "procedural" in spec:
@@ -122,7 +125,7 @@ def _load_cached(frozen) -> Source:
         V, F = GENERATORS[kind](**params)
         return Source(key, validate(V, F, name=key), shape={"procedural": kind, **params})
     if "clean" in spec:
-        return _pair(key, Path(spec["file"]), Path(spec["clean"]), None)
+        return _pair(key, Path(spec["file"]), Path(spec["clean"]), spec.get("level"))
     return Source(key, read_mesh(spec["file"]))
 
 

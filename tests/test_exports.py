@@ -50,3 +50,26 @@ def test_ply_quality_is_the_distance_to_the_clean_surface_in_pymeshlab(saved):
         assert np.allclose(q, ours, rtol=1e-6, atol=1e-9 * diag)
     text = files[0].read_text()
     assert "comment quality = unsigned distance of each vertex to the clean surface" in text
+
+
+def test_file_meshes_take_a_name_and_a_known_level(tmp_path):
+    """A given pair with ``name`` and ``level``: the rows carry that label and noise level; the
+    name is a label only (same case ids as without it); bad values are listed with their key."""
+    import pandas as pd
+    from harness.config import load_config
+    from harness.errors import ConfigError
+    src = __import__("harness.datasets", fromlist=["DATA_DIR"]).DATA_DIR / "denoise" / "Fandisk0.3"
+    base = {"name": "named", "repeats": 1, "tasks": {"smoothing": {"methods": ["scratch.taubin"]}}}
+    pair = {"file": str(src / "Noisy.obj"), "clean": str(src / "Original.obj")}
+    cfg = {**base, "meshes": [{**pair, "name": "fandisk-zhang", "level": 0.3}]}
+    run(cfg, out=tmp_path / "r", quiet=True)
+    rows = pd.read_csv(tmp_path / "r" / "smoothing.csv")
+    assert rows["mesh"].tolist() == ["fandisk-zhang"] and rows["noise_level"].tolist() == [0.3]
+    ids = lambda c: [x.case_id for x in load_config(c).cases]                      # noqa: E731
+    assert ids({**base, "meshes": [{**pair, "name": "other", "level": 0.3}]}) == ids(cfg)
+    with pytest.raises(ConfigError) as e:
+        load_config({**base, "meshes": [{"file": pair["file"], "level": 0.3},
+                                        {**pair, "name": "a b", "level": -1}]})
+    msg = str(e.value)
+    assert "meshes[0].level: the noise level of a given pair needs 'clean'" in msg
+    assert "meshes[1].name:" in msg and "meshes[1].level:" in msg
