@@ -229,16 +229,21 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
     except BaseException:
         ex.close()
         raise
-    started = now_iso()
+    started = session_started = now_iso()
+    command = " ".join(sys.argv)
     prev_meta = folder.read_run_json() if resume else None
+    prev_sessions: list = []
     if prev_meta and prev_meta.get("started"):
         started = prev_meta["started"]
+        command = prev_meta.get("command") or command
+        prev_sessions = prev_meta.get("sessions") or [
+            {k: prev_meta.get(k) for k in ("started", "finished", "wall_s", "command", "status")}]
     meta = {"name": cfg.name, "config_source": cfg.source, "config": cfg.raw, "config_hash": chash,
             "started": started, "finished": None, "status": "running", "executor": executor,
             "scheduler": scheduler, "workers": workers, "timeout_s": timeout,
             "n_cases": len(cfg.cases), "resumed_ok_cases": len(done),
             "versions": package_versions(), "git_commit": git_commit(), "machine": machine_info(),
-            "solver": _solver_info(), "command": " ".join(sys.argv), "tasks": task_specs(cfg),
+            "solver": _solver_info(), "command": command, "tasks": task_specs(cfg),
             "method_sources": method_sources(cfg),
             "timing": {"threads_per_case": threads, "min_repeats": cfg.repeats,
                        "time_budget_s": cfg.cases[0].time_budget if cfg.cases else None,
@@ -253,6 +258,9 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
     bar = None
     if not quiet:
         n_todo = len(cases) + (len(cfg.tune.cases) if cfg.tune is not None else 0)
+        if resume:
+            print(f"shootout: resuming {out_dir}: {len(done)} finished case(s) kept, {n_todo} to run",
+                  file=sys.stderr, flush=True)
         print(f"shootout: {meta['n_cases']} case(s), {n_todo} to run on {meta['workers']} worker(s)"
               + (f" (a large run: {n_todo:,} cases; --timeout bounds each one)" if n_todo > 1000 else ""),
               file=sys.stderr, flush=True)
@@ -297,8 +305,13 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
             bar.close()
         ex.close()
         meta["load_average"] = meta["load_average"][:1] + [_load()]
-        meta.update(finished=now_iso(), wall_s=round(time.perf_counter() - t0, 3),
-                    status_counts=folder.status_counts(), status_counts_this_session=counts)
+        wall = round(time.perf_counter() - t0, 3)
+        session = {"started": session_started, "finished": now_iso(), "wall_s": wall,
+                   "command": " ".join(sys.argv), "status": meta["status"], "resumed_ok_cases": len(done),
+                   "status_counts": counts, "load_average": meta["load_average"]}
+        meta.update(finished=session["finished"], status_counts=folder.status_counts(),
+                    status_counts_this_session=counts, sessions=prev_sessions + [session],
+                    wall_s=round(wall + sum(x.get("wall_s") or 0 for x in prev_sessions), 3))
         try:
             folder.write_run_json(meta)
         except OSError:                       # disk full: the status below is the best we can record

@@ -183,3 +183,27 @@ def test_case_processes_die_with_a_killed_driver(tmp_path):
     finally:
         for pid in _alive(kids):                   # never leave them behind, even when failing
             os.kill(pid, signal.SIGKILL)
+
+
+def test_resume_keeps_the_first_session_and_says_what_it_skipped(tmp_path):
+    """A resumed run keeps the original start and command in run.json, lists every session
+    (start, end, wall time, command, status), sums the wall time, and says how many finished
+    cases it kept."""
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text(yaml.safe_dump({"name": "two", "repeats": 1, "meshes": ["knight"],
+                                   "tasks": {"laplacian": {"methods": ["scratch.cotan", "scratch.uniform"]}}}))
+    out = tmp_path / "r"
+    run = lambda *extra: subprocess.run([str(SHOOTOUT), "run", str(cfg), "--out", str(out), *extra],  # noqa: E731
+                                        capture_output=True, text=True, env=env_with_root(), timeout=300)
+    assert run().returncode == 0
+    first = RunFolder(out).read_run_json()
+    r = run("--resume", "--workers", "1")
+    assert r.returncode == 0, r.stderr
+    assert f"resuming {out}: 2 finished case(s) kept, 0 to run" in r.stderr
+    meta = RunFolder(out).read_run_json()
+    assert meta["started"] == first["started"] and meta["command"] == first["command"]
+    assert "--resume" not in meta["command"]
+    s = meta["sessions"]
+    assert len(s) == 2 and s[0]["started"] == first["started"] and "--resume" in s[1]["command"]
+    assert s[1]["resumed_ok_cases"] == 2 and s[1]["status"] == "finished"
+    assert abs(meta["wall_s"] - (s[0]["wall_s"] + s[1]["wall_s"])) < 1e-6
