@@ -133,6 +133,8 @@ def _cmd_datasets(a) -> int:
     print(f"{'name':24s} {'kind':18s} {'vertices':>9s} {'faces':>9s}  description")
     for r in describe_all():
         print(f"{r['name']:24s} {r['kind']:18s} {r['vertices']:9d} {r['faces']:9d}  {r['description']}")
+        if r["kind"] == "procedural":
+            print(f"{'':24s} parameters (defaults; counts above are for them): {r['file'].strip('()')}")
     return 0
 
 

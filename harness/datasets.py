@@ -298,7 +298,10 @@ def describe_all() -> list[dict]:
                      "faces": m.n_faces, "description": desc})
     for name, defaults in PROCEDURAL.items():
         m = load({"procedural": name}).clean
-        args = ", ".join(f"{k}={v}" for k, v in defaults.items())
+        args = ", ".join(f"{k}={v}" + (f" [{PROCEDURAL_BOUNDS[k][0]:g}, {PROCEDURAL_BOUNDS[k][1]:g}]"
+                                        if k in PROCEDURAL_BOUNDS else "") for k, v in defaults.items())
         rows.append({"name": name, "kind": "procedural", "file": f"({args})", "vertices": m.n_vertices,
-                     "faces": m.n_faces, "description": GENERATORS[name].__doc__.strip().splitlines()[0]})
+                     "faces": m.n_faces, "description": GENERATORS[name].__doc__.strip().splitlines()[0],
+                     "parameters": {k: {"default": v, "bounds": list(PROCEDURAL_BOUNDS.get(k, (None, None)))}
+                                    for k, v in defaults.items()}})
     return rows
