@@ -5,8 +5,9 @@ For each task and each ranking metric (``rank=True`` in the task's declaration),
 (mesh, noise model, noise level) and, for tasks with axis parameters, one value of them (e.g.
 simplification's target). In each cell every method variant gets the mean of its metric over
 seeds, and the variants are ranked (1 = best, by the metric's declared direction; ties get the
-average rank). Rows that are not valid results (`validity`: diverged, ended worse than the noisy
-input, non-manifold or topology-changing output) rank last in their cell, tied, and are counted
+average rank). Rows that are not valid results (`validity`: the task's declared ``invalid_when``
+rules, e.g. diverged, ended worse than the noisy input, non-manifold or topology-changing
+output) rank last in their cell, tied, and are counted
 in ``invalid_cells``. Cells where a variant has no value (failed, timed out, not run) are left
 out of the test and counted in ``missing_cells``. With N complete cells and k variants:
 
@@ -28,22 +29,41 @@ COLUMNS = ["task", "metric", "better", "method", "mean_rank", "cells", "missing_
            "friedman_chi2", "friedman_p", "critical_difference", "k"]
 
 
-def validity(task: str, df: pd.DataFrame) -> pd.Series:
-    """Why each row is not a valid result ('' when it is)."""
+def _truthy(v):
+    if isinstance(v, str):
+        return {"true": True, "false": False}.get(v.strip().lower(), v)
+    return v
+
+
+def validity(spec: dict, df: pd.DataFrame) -> pd.Series:
+    """Why each row is not a valid result ('' when it is): status not ok, or the first of the
+    task's declared ``invalid_when`` rules (`harness.tasks.base.Invalid`) that matches."""
     why = pd.Series([""] * len(df), index=df.index, dtype=object)
+    if "status" not in df:
+        return why
     ok = df["status"] == "ok"
     why[~ok] = "status " + df.loc[~ok, "status"].astype(str)
-    if task == "smoothing":
-        if "diverged" in df:
-            why[ok & (df["diverged"] == True)] = "diverged"  # noqa: E712
-        if {"dist_mean", "input_dist_mean"} <= set(df.columns):
-            worse = ok & (df["dist_mean"] > df["input_dist_mean"]) & (why == "")
-            why[worse] = "worse than the noisy input"
-    if task == "simplification":
-        if "manifold" in df:
-            why[ok & (df["manifold"] == False) & (why == "")] = "non-manifold output"  # noqa: E712
-        if "topology_changed" in df:
-            why[ok & (df["topology_changed"] == True) & (why == "")] = "topology changed"  # noqa: E712
+    rules = (spec or {}).get("invalid_when")
+    if rules is None:                        # a run folder written before tasks declared their rules
+        from . import tasks
+        try:
+            rules = tasks.get((spec or {}).get("name") or "").spec()["invalid_when"]
+        except KeyError:
+            rules = []
+    for rule in rules:
+        col = rule.get("column")
+        if col not in df:
+            continue
+        if rule.get("than"):
+            if rule["than"] not in df:
+                continue
+            a, b = pd.to_numeric(df[col], errors="coerce"), pd.to_numeric(df[rule["than"]], errors="coerce")
+            hit = (a > b).fillna(False)
+        elif rule.get("op") == ">":
+            hit = (pd.to_numeric(df[col], errors="coerce") > float(rule["value"])).fillna(False)
+        else:
+            hit = df[col].map(_truthy).map(lambda v, want=rule.get("value"): v == want and not pd.isna(v))
+        why[ok & hit.astype(bool) & (why == "")] = rule.get("why") or col
     return why
 
 
@@ -62,13 +82,13 @@ def _variant(df: pd.DataFrame, axis: set) -> pd.Series:
     return pd.Series(out, index=df.index)
 
 
-def cell_ranks(task: str, df: pd.DataFrame, metric: str, better: str, axis_params=()):
+def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_params=()):
     """(ranks DataFrame cells x variants, missing per variant, invalid per variant)."""
     if metric not in df or not len(df):
         return pd.DataFrame(), {}, {}
     d = df.copy()
     d["_variant"] = _variant(d, set(axis_params))
-    d["_invalid"] = (validity(task, d) != "") & (d["status"] == "ok")
+    d["_invalid"] = (validity(spec, d) != "") & (d["status"] == "ok")
     ps = [json.loads(p) if isinstance(p, str) and p else {} for p in d["params"]]
     text = lambda col: [("" if pd.isna(v) else str(v)) for v in d[col]] if col in d else [""] * len(d)  # noqa: E731
     d["_cell"] = ["|".join(t) for t in zip(text("mesh"), text("noise_model"), text("noise_level"),
@@ -110,7 +130,7 @@ def leaderboard(frames: dict, specs: dict) -> pd.DataFrame:
         for m in spec.get("metrics", []):
             if not m.get("rank") or m.get("better") not in ("lower", "higher"):
                 continue
-            ranks, missing, invalid = cell_ranks(task, df, m["name"], m["better"], axis)
+            ranks, missing, invalid = cell_ranks(spec, df, m["name"], m["better"], axis)
             if ranks.empty:
                 continue
             chi2, p, cd = friedman_nemenyi(ranks)

@@ -152,7 +152,7 @@ def choose(tune: TuneSpec, frames: dict) -> dict:
             want = {k: v for b in tune.configured[m][1][:1] for k, v in b.items() if k in tune.params[m]}
             want.update(cand)
             sel = rows[[all(p.get(k) == v for k, v in want.items()) for p in ps]]
-            bad = (validity(task, sel) != "").any() or sel.empty
+            bad = (validity(tasks.get(task).spec(), sel) != "").any() or sel.empty
             val = sel[tune.metric].astype(float).mean() if not sel.empty else math.nan
             scores.append(math.inf if bad or not math.isfinite(val) else sign * val)
         best = int(np.argmin(scores)) if scores else 0

@@ -51,8 +51,22 @@ def test_invalid_rows_rank_last_and_missing_cells_are_stated():
             rows.append({"mesh": mesh, "noise_model": "none", "noise_level": None, "method": m, "params": "{}",
                          "status": st, "dist_mean": val, "input_dist_mean": 0.05, "diverged": False, "ev_mean": val})
     df = pd.DataFrame(rows)
-    spec = {"smoothing": {"metrics": [{"name": "ev_mean", "better": "lower", "rank": True}], "axis_params": []}}
+    from harness.tasks import get
+    spec = {"smoothing": {"metrics": [{"name": "ev_mean", "better": "lower", "rank": True}], "axis_params": [],
+                          "invalid_when": get("smoothing").spec()["invalid_when"]}}
     lb = L.leaderboard({"smoothing": df}, spec).set_index("method")
     # 'good' ends worse than the noisy input (0.1 > 0.05): invalid, ranked last although its number is not the largest
     assert lb.loc["good", "invalid_cells"] == 2 and lb.loc["good", "mean_rank"] == 3.0
     assert lb.loc["gone", "missing_cells"] == 1 and lb.loc["good", "cells"] == 2
+
+
+def test_validity_rules_are_the_tasks_declarations():
+    """Each declared rule flags exactly its rows, with its reason; blank values never match; a
+    spec without rules (an old run folder) falls back to the known task's."""
+    df = pd.DataFrame({"status": ["ok", "ok", "ok", "error", "ok"], "manifold": [True, False, None, False, "False"],
+                       "topology_changed": [False, True, True, False, "false"]})
+    from harness.tasks import get
+    why = L.validity(get("simplification").spec(), df).tolist()
+    assert why == ["", "non-manifold output", "topology changed", "status error", "non-manifold output"]
+    assert L.validity({"name": "simplification"}, df).tolist() == why
+    assert L.validity({"name": "nope", "invalid_when": []}, df).tolist() == ["", "", "", "status error", ""]

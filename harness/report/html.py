@@ -63,7 +63,7 @@ def _frame_payload(spec, df) -> dict:
     for s in df["params"]:
         p = params_of(s)
         target.append(p.get("target_ratio") if p.get("target_ratio") is not None else p.get("target_faces"))
-    invalid = validity(spec.get("name") or "", df).tolist() if "status" in df else [""] * len(rows)
+    invalid = validity(spec, df).tolist() if "status" in df else [""] * len(rows)
     cols += ["_variant", "_noise", "_hist", "_target", "_invalid"]
     for r, v, n, h, t, bad in zip(rows, variants, noise, hist, target, invalid):
         r += [v, n, h, _clean(t) if not isinstance(t, str) else t, bad or None]

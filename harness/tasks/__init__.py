@@ -5,7 +5,7 @@ from __future__ import annotations
 import importlib
 import pkgutil
 
-from .base import CaseInput, Metric, Task
+from .base import CaseInput, Invalid, Metric, Task
 
 _TASKS: dict[str, Task] = {}
 
@@ -41,4 +41,4 @@ def get(name: str) -> Task:
     return tasks[name]
 
 
-__all__ = ["CaseInput", "Metric", "Task", "all_tasks", "get", "names"]
+__all__ = ["CaseInput", "Invalid", "Metric", "Task", "all_tasks", "get", "names"]

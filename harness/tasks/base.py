@@ -48,6 +48,22 @@ class Metric:
                 "rel": self.rel, "abs": self.abs, "kind": self.kind, "rank": self.rank}
 
 
+@dataclass(frozen=True)
+class Invalid:
+    """A row is not a valid result when ``column`` ``op`` (``==`` or ``>``) ``value``, or, with
+    ``than``, when ``column > row[than]`` (e.g. an error above the input's own error); ``why``
+    is what the report and leaderboard say. Blank values never match."""
+
+    column: str
+    op: str
+    why: str
+    value: Any = None
+    than: str | None = None
+
+    def spec(self) -> dict:
+        return {"column": self.column, "op": self.op, "value": self.value, "than": self.than, "why": self.why}
+
+
 @dataclass
 class CaseInput:
     """What a method is run on and measured against.
@@ -90,6 +106,7 @@ class Task:
     sections: tuple = ()
     order: int = 100            # position in the report and listings
     checks: tuple = ()          # (name, fn(method, V, F)) conformance checks of this task's methods
+    invalid_when: tuple = ()    # `Invalid` rules: rows that are not valid results (ranked last, never "best")
 
     @property
     def columns(self) -> list[str]:
@@ -114,7 +131,7 @@ class Task:
         return {"name": self.name, "title": self.title, "intro": self.intro,
                 "metrics": [m.spec() for m in self.metrics], "view_metric": self.view_metric,
                 "axis_params": sorted(self.axis_params), "sections": list(self.sections),
-                "params": sorted(self.params)}
+                "params": sorted(self.params), "invalid_when": [r.spec() for r in self.invalid_when]}
 
 
 def float_array(name: str, what: str, X, shape: tuple) -> np.ndarray:

@@ -12,7 +12,7 @@ from ..errors import MethodFailed
 from ..metrics.hausdorff import hausdorff
 from ..metrics.surface_distance import point_surface_distance
 from ..metrics.triangle_quality import triangle_quality
-from .base import Metric, Task, float_array
+from .base import Invalid, Metric, Task, float_array
 
 
 @dataclass
@@ -133,4 +133,6 @@ TASK = Task(
     ),
     params=PARAMS, prepare=prepare, measure=measure, check_result=_check, output_mesh=output_mesh, view=view,
     view_metric="hausdorff", axis_params=frozenset({"target_ratio", "target_faces"}),
-    checks=(("face_target_reached", _face_target_reached),), order=30)
+    checks=(("face_target_reached", _face_target_reached),), order=30,
+    invalid_when=(Invalid("manifold", "==", "non-manifold output", value=False),
+                  Invalid("topology_changed", "==", "topology changed", value=True)))

@@ -14,7 +14,7 @@ from ..metrics.normal_error import normal_error
 from ..metrics.surface_distance import point_surface_distance, surface_distance
 from ..metrics.triangle_quality import triangle_quality
 from ..metrics.vertex_error import vertex_error
-from .base import Metric, Task, float_array
+from .base import Invalid, Metric, Task, float_array
 
 
 @dataclass
@@ -129,4 +129,6 @@ TASK = Task(
         Metric("min_angle_hist", "info", "histogram of the smallest angle per face (12 bins of 5 degrees over [0, 60])",
                kind="json"),
     ),
-    measure=measure, check_result=_check, output_mesh=output_mesh, view=view, view_metric="dist_mean", order=20)
+    measure=measure, check_result=_check, output_mesh=output_mesh, view=view, view_metric="dist_mean", order=20,
+    invalid_when=(Invalid("diverged", "==", "diverged", value=True),
+                  Invalid("dist_mean", ">", "worse than the noisy input", than="input_dist_mean")))
