@@ -244,7 +244,7 @@ def check_ok_row(task: str, row, closed: bool) -> list[str]:
         need(["out_faces"], 0)
         flag(["manifold", "topology_changed"])
         if _finite(row, "out_faces") and row["out_faces"] > 0:
-            need(["hausdorff", "dist_mean"], 0)
+            need(["hausdorff", "surface_dist_mean"], 0)
             need(["genus_change", "boundary_loops_change"])
             need(["min_angle"], 0, 60 + 1e-9)
             need(["obtuse_fraction"], 0, 1)

@@ -72,7 +72,7 @@ def test_hausdorff_planes():
     F = np.array([[0, 1, 2], [0, 2, 3]])
     h = hausdorff(V, F, V + [0, 0, 0.3], F, n_samples=1000)
     assert h["hausdorff"] == pytest.approx(0.3, abs=1e-12)
-    assert h["dist_mean"] == pytest.approx(0.3, abs=1e-12)
+    assert h["surface_dist_mean"] == pytest.approx(0.3, abs=1e-12) and h["surface_dist_mean_se"] < 1e-12
 
 
 def test_normal_error_zero_and_flipped():

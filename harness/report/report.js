@@ -574,7 +574,7 @@
     var leg = el('div'), plots = el('div');
     host.appendChild(controls); host.appendChild(leg); host.appendChild(plots);
     controls.appendChild(el('label', {}, ['accuracy metric ', selectEl([['hausdorff', 'hausdorff — symmetric Hausdorff to the input'],
-      ['dist_mean', 'dist_mean — mean distance to the input']], state.metric, function (v) { state.metric = v; render(); })]));
+      ['surface_dist_mean', 'surface_dist_mean — mean surface distance to the input']], state.metric, function (v) { state.metric = v; render(); })]));
     var mf = meshFilter(d.rows, state, function () { render(); });
     if (mf) controls.appendChild(mf);
     function render() {

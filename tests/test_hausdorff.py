@@ -1,0 +1,89 @@
+"""The certified Hausdorff distance: closed forms, an independent C++ implementation (Sacht &
+Jacobson 2024, cascading upper bounds, PyPI ``cascading-upper-bounds``), dense sampling, exact
+reconstructions and budgets."""
+import numpy as np
+import pytest
+
+import methods
+from harness import datasets
+from harness.core.geometry import sample_surface
+from harness.metrics.hausdorff import _Surface, hausdorff, one_sided
+
+
+def test_plane_and_displaced_copy_bracket_the_offset():
+    V, F = datasets.plane_delaunay(2000, 1)
+    h = hausdorff(V, F, V + [0, 0, 0.0123], F)
+    assert h["hausdorff"] <= 0.0123 + 1e-15 <= h["hausdorff_upper"] + 2e-15
+    assert h["hausdorff_gap"] <= 1e-3 and h["hausdorff_certified"]
+
+
+@pytest.mark.parametrize("s", [1, 2])
+def test_inscribed_icosphere(s):
+    """An icosphere inscribed in the unit sphere is at Hausdorff distance ``1 - min_f d(O, f)``
+    (the face plane nearest the centre) from it, both ways. The sphere is a 7-times subdivided
+    icosphere, itself within ``e = 1.8e-5`` of the sphere, so the certified bracket must meet
+    ``[exact - e, exact + e]``."""
+    A, FA = datasets.icosphere(s)
+    S, FS = datasets.icosphere(7)
+
+    def gap_to_sphere(V, F):
+        n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+        n /= np.linalg.norm(n, axis=1, keepdims=True)
+        return 1 - np.abs(np.einsum("ij,ij->i", n, V[F[:, 0]])).min()
+
+    exact, e = gap_to_sphere(A, FA), gap_to_sphere(S, FS)
+    h = hausdorff(A, FA, S, FS, n_samples=0)
+    assert h["hausdorff_certified"] and h["hausdorff_gap"] <= 1e-3
+    assert h["hausdorff"] <= exact + e and h["hausdorff_upper"] >= exact - e
+
+
+@pytest.fixture(scope="module")
+def simplified():
+    clean = datasets.load("bunny").clean
+    return {m: (methods.get(m)(clean.V, clean.F, target_ratio=0.1), clean) for m in ("meshlab.qem", "scratch.qem")}
+
+
+@pytest.mark.parametrize("method", ["meshlab.qem", "scratch.qem"])
+def test_brackets_agree_with_cascading_upper_bounds(simplified, method):
+    """Each one-sided bracket overlaps the one of the independent C++ implementation (both are
+    certified, so the true value lies in both) and is at most 1e-3 wide (relative)."""
+    import cascading_upper_bounds as cub
+    r, clean = simplified[method]
+    h = hausdorff(r.V, r.F, clean.V, clean.F)
+    A = (np.ascontiguousarray(r.V), np.ascontiguousarray(r.F, dtype=np.int32))
+    B = (np.ascontiguousarray(clean.V), np.ascontiguousarray(clean.F, dtype=np.int32))
+    for (X, Y) in ((A, B), (B, A)):
+        lo, hi = cub.pompeiu_hausdorff(X[0], X[1], Y[0], Y[1], tol=1e-7)[:2]
+        ours = one_sided(X[0], X[1].astype(np.int64), _Surface(*Y))
+        assert ours["certified"] and ours["upper"] <= ours["lower"] * (1 + 1e-3) + 1e-15
+        assert ours["lower"] <= hi * (1 + 1e-12) and lo <= ours["upper"] * (1 + 1e-12), (ours, lo, hi)
+    assert h["hausdorff"] == pytest.approx(max(h["hausdorff_ab"], h["hausdorff_ba"]))
+
+
+@pytest.mark.parametrize("method", ["meshlab.qem", "scratch.qem"])
+def test_dense_sampling_never_exceeds_the_upper_bound(simplified, method):
+    """200k random points plus the vertices per side: their largest distance is a lower bound,
+    so it can never exceed the certified upper bound; on these meshes it also falls short of the
+    certified value (sampling misses the maximum)."""
+    r, clean = simplified[method]
+    h = hausdorff(r.V, r.F, clean.V, clean.F, n_samples=0)
+    SA, SB = _Surface(r.V, r.F), _Surface(clean.V, clean.F)
+    PA = np.concatenate([r.V, sample_surface(r.V, r.F, 200_000, 3)])
+    PB = np.concatenate([clean.V, sample_surface(clean.V, clean.F, 200_000, 4)])
+    sampled = max(SB.query(PA)[0].max(), SA.query(PB)[0].max())
+    assert sampled <= h["hausdorff_upper"] * (1 + 1e-12)
+    assert sampled <= h["hausdorff"] * (1 + 1e-3)
+
+
+def test_exact_reconstruction_and_budget():
+    """A mesh against itself is 0 with gap 0 (the absolute tolerance); a budget too small to
+    certify leaves a valid, wider bracket and says so."""
+    clean = datasets.load("knight").clean
+    h = hausdorff(clean.V, clean.F, clean.V, clean.F)
+    assert h["hausdorff"] <= 1e-15 * clean.diagonal() and h["hausdorff_upper"] <= 1e-12 * clean.diagonal()
+    assert h["hausdorff_gap"] == 0 and h["hausdorff_certified"]
+    r = methods.get("scratch.qem")(clean.V, clean.F, target_ratio=0.05)
+    full = hausdorff(r.V, r.F, clean.V, clean.F, n_samples=0)
+    cut = hausdorff(r.V, r.F, clean.V, clean.F, n_samples=0, max_points=50)
+    assert not cut["hausdorff_certified"] and cut["hausdorff_gap"] > 1e-3
+    assert cut["hausdorff"] <= full["hausdorff_upper"] and cut["hausdorff_upper"] >= full["hausdorff"]
