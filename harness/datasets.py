@@ -47,11 +47,15 @@ PROCEDURAL = {
     "plane_delaunay": {"n_points": 300, "seed": 0},
     "plane_nondelaunay": {"n_points": 300, "seed": 0, "flip_fraction": 0.3},
     "cylinder": {"radius": 1.0, "height": 2.0, "resolution": 32},
+    "ellipsoid": {"rx": 1.0, "ry": 0.75, "rz": 0.5, "subdivisions": 4},
+    "saddle": {"a": 0.5, "n_points": 2000, "seed": 0},
+    "sphere_random": {"n_points": 2000, "seed": 0, "radius": 1.0},
 }
 PROCEDURAL_BOUNDS = {
     "subdivisions": (0, 9), "radius": (1e-9, 1e9), "R": (1e-9, 1e9), "r": (1e-9, 1e9),
     "resolution": (3, 4096), "n_points": (4, 2_000_000), "seed": (0, 2**32 - 1),
-    "flip_fraction": (0.0, 1.0), "height": (1e-9, 1e9),
+    "flip_fraction": (0.0, 1.0), "height": (1e-9, 1e9), "a": (-1e6, 1e6), "rx": (1e-9, 1e9), "ry": (1e-9, 1e9),
+    "rz": (1e-9, 1e9),
 }
 
 
@@ -281,8 +285,44 @@ def cylinder(radius: float = 1.0, height: float = 2.0, resolution: int = 32):
     return V, F
 
 
+def ellipsoid(rx: float = 1.0, ry: float = 0.75, rz: float = 0.5, subdivisions: int = 4):
+    """Ellipsoid with semi-axes rx, ry, rz: an icosphere scaled per axis (vertices exactly on it).
+
+    ``x^2/rx^2 + y^2/ry^2 + z^2/rz^2 = 1``; the triangulation is the icosphere's, stretched.
+    """
+    V, F = icosphere(subdivisions, 1.0)
+    return V * np.array([rx, ry, rz], dtype=np.float64), F
+
+
+def saddle(a: float = 0.5, n_points: int = 2000, seed: int = 0):
+    """Open saddle height field ``z = a (x^2 - y^2)`` over ``[-1/2, 1/2]^2`` (irregular).
+
+    The Delaunay triangulation of `plane_delaunay`'s seeded points, normals up (+z side).
+    """
+    V, F = plane_delaunay(n_points, seed)
+    x, y = V[:, 0] - 0.5, V[:, 1] - 0.5
+    return np.column_stack([x, y, a * (x * x - y * y)]), F
+
+
+def sphere_random(n_points: int = 2000, seed: int = 0, radius: float = 1.0):
+    """Irregular sphere: the convex hull of seeded uniform random points on the sphere.
+
+    ``n_points`` points of the sphere of ``radius`` (every vertex exactly on it), faces outward.
+    """
+    from scipy.spatial import ConvexHull
+    rng = np.random.default_rng(int(seed))
+    P = rng.normal(size=(max(4, int(n_points)), 3))
+    P /= np.linalg.norm(P, axis=1, keepdims=True)
+    F = ConvexHull(P).simplices.astype(np.int64)
+    C = P[F].mean(axis=1)
+    flip = np.einsum("ij,ij->i", face_cross(P, F), C) < 0
+    F[flip] = F[flip][:, [0, 2, 1]]
+    return P * radius, F
+
+
 GENERATORS = {"sphere": icosphere, "torus": torus, "plane_delaunay": plane_delaunay,
-              "plane_nondelaunay": plane_nondelaunay, "cylinder": cylinder}
+              "plane_nondelaunay": plane_nondelaunay, "cylinder": cylinder, "ellipsoid": ellipsoid,
+              "saddle": saddle, "sphere_random": sphere_random}
 
 
 def describe_all() -> list[dict]:

@@ -1,0 +1,134 @@
+"""Discrete curvature estimators (task ``curvature``; conventions in `harness.tasks.curvature`).
+
+- ``scratch.angle_defect``: Gaussian curvature as the angle defect over a vertex area
+  (Meyer, Desbrun, Schroeder & Barr 2003, "Discrete differential-geometry operators for
+  triangulated 2-manifolds"): ``K_i = (2 pi - sum_j theta_ij) / A_i`` at interior vertices and
+  ``(pi - sum_j theta_ij) / A_i`` at boundary vertices (the angle defect of a boundary vertex is
+  measured against a straight boundary). Summed with the same areas it satisfies the discrete
+  Gauss-Bonnet theorem exactly on closed meshes: ``sum_i K_i A_i = 2 pi chi``.
+- ``scratch.cotan_mean``: mean curvature from the cotan Laplacian of the positions,
+  ``H n = -1/2 M^-1 W x`` (Meyer et al. 2003; ``W`` in libigl's sign convention, ``M`` the
+  vertex areas), signed by the area-weighted vertex normal: ``H_i = -1/2 (M^-1 W x)_i . n_i``.
+- ``scratch.quadric_fit``: principal curvatures from a least-squares quadric
+  ``h(u, v) = a u^2 + b u v + c v^2 + d u + e v`` over the k-ring, in the tangent frame of the
+  vertex normal; the shape operator ``-[[2a, b], [b, 2c]]`` (sign: H > 0 on a sphere with
+  outward normals) gives ``k1 >= k2``, ``K = k1 k2``, ``H = (k1 + k2) / 2``. Vectorized over
+  vertices with padded neighbourhoods (Goldfeather & Interrante 2004 discuss this family of fits).
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from harness.core.geometry import boundary_vertices, corner_angles, vertex_normals
+from methods import CurvatureResult, Param, register
+from methods.scratch.operators import barycentric_areas, cotan_weights, voronoi_areas
+
+_AREA = Param("area", "voronoi", choices=("voronoi", "barycentric"),
+              doc="vertex area: mixed Voronoi (Meyer et al. 2003) or barycentric (one third of the incident faces)")
+
+
+def _areas(V, F, kind):
+    return voronoi_areas(V, F) if kind == "voronoi" else barycentric_areas(V, F)
+
+
+@register("scratch.angle_defect", task="curvature", library="scratch", params={"area": _AREA},
+          cite="Meyer, Desbrun, Schroeder, Barr, Discrete differential-geometry operators for triangulated "
+               "2-manifolds, VisMath 2002/2003")
+def angle_defect(V, F, *, area="voronoi"):
+    """Gaussian curvature ``K_i = (2 pi - sum theta) / A_i`` (``pi - sum theta`` on the boundary).
+
+    Returns ``CurvatureResult(K, area)``; ``K * area`` are the integrated angle defects.
+    """
+    n = V.shape[0]
+    theta = np.radians(corner_angles(V, F))
+    total = np.bincount(F.ravel(), weights=theta.ravel(), minlength=n)
+    full = np.where(boundary_vertices(F, n), np.pi, 2 * np.pi)
+    A = _areas(V, F, area)
+    A = np.where(A > 0, A, 1.0)
+    return CurvatureResult(K=(full - total) / A, area=A)
+
+
+@register("scratch.cotan_mean", task="curvature", library="scratch", params={"area": _AREA},
+          cite="Meyer, Desbrun, Schroeder, Barr 2003 (mean curvature normal from the cotan Laplacian)")
+def cotan_mean(V, F, *, area="voronoi"):
+    """Signed mean curvature ``H_i = -1/2 (M^-1 W x)_i . n_i`` (module docstring).
+
+    Boundary vertices get the same formula; their one-sided neighbourhoods make it unreliable
+    there (the task reports boundary errors separately).
+    """
+    W = cotan_weights(V, F)
+    A = _areas(V, F, area)
+    A = np.where(A > 0, A, 1.0)
+    Hn = -0.5 * (W @ V) / A[:, None]
+    return CurvatureResult(H=np.einsum("ij,ij->i", Hn, vertex_normals(V, F)), area=A)
+
+
+def _neighbourhood(F: np.ndarray, n: int, rings: int) -> tuple[np.ndarray, np.ndarray]:
+    """Padded k-ring neighbour indices (n, w) and validity mask, the vertex itself excluded."""
+    A = sp.csr_matrix((np.ones(6 * len(F)), (np.r_[F[:, 0], F[:, 1], F[:, 2], F[:, 1], F[:, 2], F[:, 0]],
+                                              np.r_[F[:, 1], F[:, 2], F[:, 0], F[:, 0], F[:, 1], F[:, 2]])),
+                      shape=(n, n))
+    A.data[:] = 1.0
+    R = A.copy()
+    for _ in range(rings - 1):
+        R = R + R @ A
+        R.data[:] = 1.0
+    R = R.tolil()
+    R.setdiag(0)
+    R = R.tocsr()
+    R.eliminate_zeros()
+    counts = np.diff(R.indptr)
+    w = int(counts.max()) if n else 0
+    cols = np.arange(w)
+    mask = cols[None, :] < counts[:, None]
+    idx = np.zeros((n, w), np.int64)
+    idx[mask] = R.indices
+    return idx, mask
+
+
+@register("scratch.quadric_fit", task="curvature", library="scratch",
+          params={"rings": Param("rings", 2, "int", low=1, high=5, doc="neighbourhood: k-ring of each vertex")},
+          cite="Goldfeather & Interrante, A novel cubic-order algorithm for approximating principal direction "
+               "vectors, ACM TOG 2004 (quadric-fit baseline)")
+def quadric_fit(V, F, *, rings=2):
+    """Principal curvatures from a local quadric fit over the ``rings``-ring (module docstring).
+
+    Vertices with fewer than 5 neighbours (too few for the fit) get the fit of their 2-ring
+    widened until it has them; isolated vertices get 0.
+    """
+    n = V.shape[0]
+    N = vertex_normals(V, F)
+    idx, mask = _neighbourhood(F, n, int(rings))
+    few = mask.sum(1) < 5
+    if few.any():                                   # widen the ring where the fit is underdetermined
+        idx2, mask2 = _neighbourhood(F, n, int(rings) + 1)
+        w = max(idx.shape[1], idx2.shape[1])
+        pad = lambda a, fill: np.pad(a, ((0, 0), (0, w - a.shape[1])), constant_values=fill)  # noqa: E731
+        idx, mask, idx2, mask2 = pad(idx, 0), pad(mask, False), pad(idx2, 0), pad(mask2, False)
+        idx[few], mask[few] = idx2[few], mask2[few]
+    # tangent frame (t1, t2, N) per vertex
+    ref = np.where(np.abs(N[:, [0]]) < 0.9, np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]]))
+    t1 = np.cross(N, ref)
+    t1 /= np.maximum(np.linalg.norm(t1, axis=1, keepdims=True), 1e-300)
+    t2 = np.cross(N, t1)
+    D = V[idx] - V[:, None, :]                                  # (n, w, 3)
+    u = np.einsum("nwk,nk->nw", D, t1)
+    v = np.einsum("nwk,nk->nw", D, t2)
+    h = np.einsum("nwk,nk->nw", D, N)
+    X = np.stack([u * u, u * v, v * v, u, v], -1) * mask[..., None]   # (n, w, 5), padded rows zero
+    scale = np.maximum(np.sqrt((u * u + v * v) * mask).max(axis=1), 1e-300)
+    S = np.array([2.0, 2.0, 2.0, 1.0, 1.0])                          # column scaling for conditioning
+    Xs = X / (scale[:, None, None] ** S)
+    AtA = np.einsum("nwi,nwj->nij", Xs, Xs) + 1e-12 * np.eye(5)
+    Atb = np.einsum("nwi,nw->ni", Xs, h * mask)
+    coef = np.linalg.solve(AtA, Atb[..., None])[..., 0] / scale[:, None] ** S
+    a, b, c = coef[:, 0], coef[:, 1], coef[:, 2]
+    # shape operator in the (t1, t2) frame; for h = a u^2 + ... the normal curvatures are 2a, 2c
+    # towards +N, i.e. -2a, -2c in the task's sign (H > 0 on a sphere with outward normals)
+    Hm = -(a + c)
+    disc = np.sqrt(np.maximum((a - c) ** 2 + b * b, 0.0))
+    k1, k2 = Hm + disc, Hm - disc
+    ok = mask.sum(1) >= 5
+    k1, k2 = np.where(ok, k1, 0.0), np.where(ok, k2, 0.0)
+    return CurvatureResult(K=k1 * k2, H=(k1 + k2) / 2, k1=k1, k2=k2)
