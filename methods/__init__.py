@@ -6,6 +6,7 @@ Result types are declared by the tasks (`harness.tasks`) and re-exported here.
 """
 from harness.errors import MethodFailed
 from harness.tasks.curvature import CurvatureResult
+from harness.tasks.geodesics import GeodesicResult
 from harness.tasks.laplacian import LaplacianResult
 from harness.tasks.simplification import SimplificationResult
 from harness.tasks.smoothing import SmoothingResult
@@ -13,5 +14,5 @@ from harness.tasks.smoothing import SmoothingResult
 from .base import Method, Param, check_arrays
 from .registry import all_methods, available, get, load_plugins, register
 
-__all__ = ["CurvatureResult", "LaplacianResult", "SmoothingResult", "SimplificationResult", "Method", "Param", "MethodFailed",
+__all__ = ["CurvatureResult", "GeodesicResult", "LaplacianResult", "SmoothingResult", "SimplificationResult", "Method", "Param", "MethodFailed",
            "check_arrays", "register", "get", "available", "all_methods", "load_plugins"]

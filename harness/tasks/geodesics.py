@@ -1,0 +1,190 @@
+"""Task ``geodesics``: geodesic distance from source vertices, against the exact distance.
+
+A method returns ``D`` (k, n): the distance (input length units) from each of the k source
+vertices to every vertex. Sources are the task's shared parameters: ``sources`` vertices chosen
+with ``source_seed`` (`source_vertices`; the same for every method on a mesh).
+
+Reference (``reference_exact``): on procedural meshes the analytic geodesic distance of the
+surface the mesh samples (sphere: great-circle ``r arccos(x . s / r^2)``; planes (the unit
+square, convex): Euclidean; open cylinder: ``sqrt((r dtheta)^2 + dz^2)`` unrolled), ``False``;
+otherwise the exact polyhedral distance on the mesh (libigl ``exact_geodesic``, the
+Mitchell-Mount-Papadimitriou algorithm of Surazhsky et al. 2005), ``True``.
+
+Columns: ``rel_error_mean`` / ``rel_error_max`` = mean / max over sources and vertices of
+``|D - D*| / D*`` over vertices farther than ``EXCLUDE = 3`` mean edge lengths from the source
+(near the source relative errors of every method blow up and say nothing); ``abs_error_mean`` the
+mean ``|D - D*|`` over all vertices as a fraction of the diagonal; ``gradient_error`` the
+area-weighted mean over faces (outside the excluded disc) of ``| |grad D| - 1 |`` (an exact
+distance has unit gradient almost everywhere); ``symmetry_error`` (two or more sources) the max
+over source pairs of ``|D_a(b) - D_b(a)| / D*(a, b)``; ``precompute_s`` and ``per_source_s``
+as the method reports them (factorizations once, then the per-source work; blank when the
+method does not split its time).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..core.params import Param
+from ..errors import MethodFailed
+from .base import Metric, Task, float_array
+
+EXCLUDE = 3.0
+
+PARAMS = {
+    "sources": Param("sources", 1, "int", low=1, high=64, doc="number of source vertices (seeded choice)"),
+    "source_seed": Param("source_seed", 0, "int", low=0, high=2**31 - 1, doc="seed of the source choice"),
+}
+
+
+@dataclass
+class GeodesicResult:
+    """``D`` (k, n) float64: distance from source ``i`` (row) to every vertex, input units.
+    ``precompute_s`` / ``per_source_s``: the method's own split of its time (optional)."""
+
+    D: np.ndarray
+    precompute_s: float | None = None
+    per_source_s: float | None = None
+
+
+def source_vertices(n: int, count: int, seed: int) -> np.ndarray:
+    """The ``count`` source vertices of a mesh with ``n`` vertices: a seeded choice without
+    replacement (`numpy.random.default_rng(seed)`), sorted."""
+    rng = np.random.default_rng(int(seed))
+    return np.sort(rng.choice(int(n), size=min(int(count), int(n)), replace=False)).astype(np.int64)
+
+
+def prepare(params: dict, V, F) -> dict:
+    """The adapter receives ``sources`` as an int64 array of vertex indices."""
+    p = dict(params)
+    p["sources"] = source_vertices(len(V), p.pop("sources"), p.pop("source_seed"))
+    return p
+
+
+def _check(result: GeodesicResult, V, F):
+    D = np.asarray(result.D)
+    if D.ndim == 1:
+        D = D[None, :]
+    result.D = float_array("", "D", D, (-1, V.shape[0]))
+    if not np.isfinite(result.D).all():
+        raise MethodFailed(f"returned D with {int((~np.isfinite(result.D)).sum())} non-finite value(s)")
+    return result
+
+
+# ----------------------------------------------------------------------------- reference
+
+def analytic(shape: dict | None, P: np.ndarray, s: np.ndarray) -> np.ndarray | None:
+    """Exact geodesic distance (n,) on the surface ``shape`` from point ``s`` to points ``P``."""
+    if not shape:
+        return None
+    kind = shape.get("procedural")
+    if kind in ("sphere", "sphere_random"):
+        r = float(shape.get("radius", 1.0))
+        return r * np.arccos(np.clip(P @ s / (r * r), -1.0, 1.0))
+    if kind in ("plane_delaunay", "plane_nondelaunay"):
+        return np.linalg.norm(P - s, axis=1)
+    if kind == "cylinder":
+        r = float(shape["radius"])
+        dth = np.angle(np.exp(1j * (np.arctan2(P[:, 1], P[:, 0]) - np.arctan2(s[1], s[0]))))
+        return np.hypot(r * dth, P[:, 2] - s[2])
+    return None
+
+
+def exact_polyhedral(V: np.ndarray, F: np.ndarray, s: int) -> np.ndarray:
+    """Exact polyhedral geodesic distance from vertex ``s`` (libigl ``exact_geodesic``)."""
+    import igl
+    return np.asarray(igl.exact_geodesic(V, F, VS=np.array([s], np.int64), VT=np.arange(len(V), dtype=np.int64)),
+                      dtype=np.float64)
+
+
+def reference(inp, sources: np.ndarray) -> tuple[np.ndarray, bool]:
+    """(D* (k, n), exact?) for the case's input, memoised per input."""
+    key = ("geodesic_reference", tuple(int(s) for s in sources))
+    if key not in inp.cache:
+        V, F = inp.V, inp.F
+        noisy = inp.V is not inp.clean.V and not np.array_equal(inp.V, inp.clean.V)
+        rows = [None if noisy else analytic(inp.shape, V, V[s]) for s in sources]
+        if all(r is not None for r in rows):
+            inp.cache[key] = (np.stack(rows), False)
+        else:
+            inp.cache[key] = (np.stack([exact_polyhedral(V, F, int(s)) for s in sources]), True)
+    return inp.cache[key]
+
+
+def measure(inp, result, params) -> dict:
+    from ..core.geometry import double_areas, mean_edge_length
+    V, F = inp.V, inp.F
+    src = source_vertices(len(V), params["sources"], params["source_seed"])
+    D = result.D
+    if D.shape[0] != len(src):
+        raise MethodFailed(f"returned {D.shape[0]} distance rows for {len(src)} source(s)")
+    ref, exact = reference(inp, src)
+    h = mean_edge_length(V, F)
+    far = ref > EXCLUDE * h
+    rel = np.abs(D - ref)[far] / ref[far]
+    row = {"reference_exact": exact, "precompute_s": result.precompute_s, "per_source_s": result.per_source_s,
+           "rel_error_mean": float(rel.mean()) if rel.size else None,
+           "rel_error_max": float(rel.max()) if rel.size else None,
+           "abs_error_mean": float(np.abs(D - ref).mean() / inp.diag)}
+    # |grad D| per face from the edge differences and the Gram matrix of the face's edges
+    e1, e2 = V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]
+    g11, g12, g22 = (e1 * e1).sum(1), (e1 * e2).sum(1), (e2 * e2).sum(1)
+    det = g11 * g22 - g12 * g12
+    A = double_areas(V, F) / 2
+    errs = []
+    for k in range(len(src)):
+        d = D[k]
+        du1, du2 = d[F[:, 1]] - d[F[:, 0]], d[F[:, 2]] - d[F[:, 0]]
+        ok = (det > 0) & (ref[k][F].min(axis=1) > EXCLUDE * h)
+        g = np.sqrt(np.maximum((g22 * du1 ** 2 - 2 * g12 * du1 * du2 + g11 * du2 ** 2)[ok] / det[ok], 0.0))
+        if ok.any():
+            errs.append(float((A[ok] * np.abs(g - 1)).sum() / A[ok].sum()))
+    row["gradient_error"] = float(np.mean(errs)) if errs else None
+    if len(src) >= 2:
+        a, b = np.triu_indices(len(src), 1)
+        dab, dba, dref = D[a, src[b]], D[b, src[a]], ref[a, src[b]]
+        keep = dref > 0
+        row["symmetry_error"] = float((np.abs(dab - dba)[keep] / dref[keep]).max()) if keep.any() else None
+    return row
+
+
+def view(inp, result) -> list:
+    """The input coloured by the distance from the first source."""
+    return [("distance", inp.V, inp.F, result.D[0], "geodesic distance from the first source")]
+
+
+def output_mesh(inp, result):
+    return inp.V, inp.F, result.D[0], "quality = geodesic distance from the first source (input units)"
+
+
+def _zero_at_source(method, V, F):
+    """Distance 0 at each source, positive elsewhere, one row per source."""
+    r = method(V, F, sources=2)
+    src = source_vertices(len(V), 2, 0)
+    assert r.D.shape == (2, len(V)), f"D has shape {r.D.shape}, expected (2, {len(V)})"
+    scale = r.D.max()
+    assert scale > 0, "all distances are zero"
+    assert np.abs(r.D[np.arange(2), src]).max() <= 1e-6 * scale, "distance at a source is not 0"
+    assert np.median(r.D) > 0, "distances are not positive"
+
+
+_E = dict(rel=0.01, abs=1e-9)
+TASK = Task(
+    name="geodesics", title="Geodesic distance", result_type=GeodesicResult,
+    intro="Geodesic distance from source vertices against the analytic distance (procedural surfaces) or the exact "
+          "polyhedral distance (libigl exact_geodesic) elsewhere; relative errors exclude 3 mean edge lengths "
+          "around each source.",
+    metrics=(
+        Metric("reference_exact", "info", "reference: exact polyhedral distance (true) or the analytic surface distance "
+               "(false)", kind="bool"),
+        Metric("rel_error_mean", "lower", "mean |D - D*| / D* (outside 3 mean edge lengths of the source)", rank=True, **_E),
+        Metric("rel_error_max", "lower", "max |D - D*| / D* (outside 3 mean edge lengths of the source)", **_E),
+        Metric("abs_error_mean", "lower", "mean |D - D*| over all vertices", unit="diag", **_E),
+        Metric("gradient_error", "lower", "area-weighted mean | |grad D| - 1 | over faces away from the source", **_E),
+        Metric("symmetry_error", "lower", "max over source pairs |D_a(b) - D_b(a)| / D*(a, b)", **_E),
+        Metric("precompute_s", "info", "the method's precomputation time (its own split)", unit="s"),
+        Metric("per_source_s", "info", "the method's time per source after precomputation (its own split)", unit="s"),
+    ),
+    params=PARAMS, prepare=prepare, measure=measure, check_result=_check, view=view, view_metric="rel_error_mean",
+    output_mesh=output_mesh, order=50, checks=(("zero_at_source", _zero_at_source),))
