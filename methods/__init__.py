@@ -10,9 +10,10 @@ from harness.tasks.geodesics import GeodesicResult
 from harness.tasks.laplacian import LaplacianResult
 from harness.tasks.simplification import SimplificationResult
 from harness.tasks.smoothing import SmoothingResult
+from harness.tasks.spectrum import SpectrumResult
 
 from .base import Method, Param, check_arrays
 from .registry import all_methods, available, get, load_plugins, register
 
-__all__ = ["CurvatureResult", "GeodesicResult", "LaplacianResult", "SmoothingResult", "SimplificationResult", "Method", "Param", "MethodFailed",
+__all__ = ["CurvatureResult", "GeodesicResult", "LaplacianResult", "SmoothingResult", "SpectrumResult", "SimplificationResult", "Method", "Param", "MethodFailed",
            "check_arrays", "register", "get", "available", "all_methods", "load_plugins"]

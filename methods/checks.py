@@ -64,9 +64,10 @@ def _output_and_determinism(m: Method):
 
 
 def _arrays(res) -> list[np.ndarray]:
+    """The numeric fields of a result, except measured times (fields named ``*_s``)."""
     out = []
-    for v in vars(res).values():
-        if v is None:
+    for k, v in vars(res).items():
+        if v is None or k.endswith("_s"):
             continue
         if hasattr(v, "toarray"):
             v = v.toarray() if v.shape[0] < 3000 else v.data
