@@ -82,10 +82,10 @@ def _variant(df: pd.DataFrame, axis: set) -> pd.Series:
     return pd.Series(out, index=df.index)
 
 
-def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_params=()):
-    """(ranks DataFrame cells x variants, missing per variant, invalid per variant)."""
-    if metric not in df or not len(df):
-        return pd.DataFrame(), {}, {}
+def cell_values(spec: dict, df: pd.DataFrame, metric: str, axis_params=()):
+    """(values, invalid): cells x variants tables of the metric's mean over seeds (ok rows) and of
+    whether a variant's result in the cell is invalid. Cell labels are ``mesh|noise model|noise
+    level|axis parameters (JSON)``."""
     d = df.copy()
     d["_variant"] = _variant(d, set(axis_params))
     d["_invalid"] = (validity(spec, d) != "") & (d["status"] == "ok")
@@ -98,6 +98,14 @@ def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_para
     g = d.groupby(["_cell", "_variant"])
     vals = g["_value"].mean().unstack("_variant")
     inval = g["_invalid"].any().unstack("_variant").reindex_like(vals).fillna(False).astype(bool)
+    return vals, inval
+
+
+def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_params=()):
+    """(ranks DataFrame cells x variants, missing per variant, invalid per variant)."""
+    if metric not in df or not len(df):
+        return pd.DataFrame(), {}, {}
+    vals, inval = cell_values(spec, df, metric, axis_params)
     missing = vals.isna() & ~inval
     complete = vals[~missing.any(axis=1)]
     inv = inval.loc[complete.index]
@@ -105,6 +113,63 @@ def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_para
     score = (sign * complete).where(~inv, np.inf)
     ranks = score.rank(axis=1, method="average")
     return ranks, missing.sum().to_dict(), inv.sum().to_dict()
+
+
+WINNER_COLUMNS = ["task", "metric", "better", "mesh", "noise_model", "noise_level", "setting", "best", "value",
+                  "runner_up", "runner_up_value", "variants", "invalid_excluded"]
+
+
+def winners(frames: dict, specs: dict) -> pd.DataFrame:
+    """Per task, ranking metric and cell: the best valid variant and the runner-up (invalid
+    results are excluded and counted in ``invalid_excluded``)."""
+    rows = []
+    for task, df in frames.items():
+        spec = specs.get(task) or {}
+        axis = spec.get("axis_params") or ()
+        for m in spec.get("metrics", []):
+            if not m.get("rank") or m.get("better") not in ("lower", "higher") or m["name"] not in df or not len(df):
+                continue
+            vals, inval = cell_values(spec, df, m["name"], axis)
+            for cell, v in vals.iterrows():
+                ok = v[~inval.loc[cell] & v.notna()]
+                if ok.empty:
+                    continue
+                order = ok.sort_values(ascending=m["better"] == "lower")
+                mesh, noise, level, setting = cell.split("|", 3)
+                rows.append({"task": task, "metric": m["name"], "better": m["better"], "mesh": mesh,
+                             "noise_model": noise, "noise_level": level, "setting": "" if setting == "{}" else setting,
+                             "best": order.index[0], "value": float(order.iloc[0]),
+                             "runner_up": order.index[1] if len(order) > 1 else "",
+                             "runner_up_value": float(order.iloc[1]) if len(order) > 1 else None,
+                             "variants": int(v.notna().sum()), "invalid_excluded": int(inval.loc[cell].sum())})
+    return pd.DataFrame(rows, columns=WINNER_COLUMNS)
+
+
+def winners_markdown(w: pd.DataFrame) -> str:
+    out = []
+    for (task, metric), g in w.groupby(["task", "metric"], sort=False):
+        out.append(f"### {task}: best by {metric} ({g.iloc[0].better} is better)\n\n"
+                   "| mesh | noise | setting | best | value | runner-up | value | invalid excluded |\n"
+                   "|---|---|---|---|---:|---|---:|---:|")
+        out += [f"| {r.mesh} | {r.noise_model} {r.noise_level} | {r.setting} | {r.best} | {r.value:.4g} | {r.runner_up} | "
+                f"{'' if pd.isna(r.runner_up_value) else format(r.runner_up_value, '.4g')} | {r.invalid_excluded} |"
+                for r in g.itertuples()]
+        out.append("")
+    return "\n".join(out)
+
+
+def winners_latex(w: pd.DataFrame) -> str:
+    out = ["% mesh-shootout winners per cell; needs \\usepackage{booktabs}"]
+    for (task, metric), g in w.groupby(["task", "metric"], sort=False):
+        out += [r"\begin{table}[t]", r"\centering", r"\begin{tabular}{llllrlr}", r"\toprule",
+                r"mesh & noise & setting & best & value & runner-up & value \\", r"\midrule"]
+        out += [f"{_tex(r.mesh)} & {_tex(r.noise_model)} {_tex(r.noise_level)} & {_tex(r.setting)} & {_tex(r.best)} & "
+                f"{r.value:.4g} & {_tex(r.runner_up)} & "
+                f"{'' if pd.isna(r.runner_up_value) else format(r.runner_up_value, '.4g')} \\\\" for r in g.itertuples()]
+        out += [r"\bottomrule", r"\end{tabular}",
+                f"\\caption{{{_tex(task)}: best valid method per cell by \\texttt{{{_tex(metric)}}} ({g.iloc[0].better} is "
+                f"better); invalid results excluded.}}", r"\end{table}", ""]
+    return "\n".join(out)
 
 
 def friedman_nemenyi(ranks: pd.DataFrame, alpha: float = 0.05) -> tuple[float | None, float | None, float | None]:
@@ -180,11 +245,15 @@ def to_latex(lb: pd.DataFrame) -> str:
 
 
 def write(run_dir, frames: dict, specs: dict) -> pd.DataFrame:
-    """``leaderboard.csv``, ``leaderboard.md`` and ``leaderboard.tex`` in the run folder."""
+    """``leaderboard.csv|md|tex`` and ``winners.csv|md|tex`` in the run folder."""
     from pathlib import Path
     lb = leaderboard(frames, specs)
     d = Path(run_dir)
     lb.to_csv(d / "leaderboard.csv", index=False)
     (d / "leaderboard.md").write_text(to_markdown(lb))
     (d / "leaderboard.tex").write_text(to_latex(lb))
+    w = winners(frames, specs)
+    w.to_csv(d / "winners.csv", index=False)
+    (d / "winners.md").write_text(winners_markdown(w))
+    (d / "winners.tex").write_text(winners_latex(w))
     return lb
