@@ -4,7 +4,6 @@ from __future__ import annotations
 import numpy as np
 import scipy.linalg as sla_dense
 import scipy.sparse as sp
-import scipy.sparse.linalg as sla
 
 from methods import Param, SmoothingResult, register
 from methods.scratch.smoothing import WEIGHTS, _WEIGHTS_DOC, smoothing_operator
@@ -17,26 +16,17 @@ def lowest_eigenpairs(W: sp.spmatrix, m: np.ndarray, k: int, solver: str = "auto
     """The ``k`` smallest eigenpairs of ``-W phi = lambda M phi``, ``M = diag(m)``.
 
     Returns ``(lam, Phi)`` with ``Phi`` (n, k) M-orthonormal (``Phi^T M Phi = I``) and ``lam``
-    ascending. Sparse path: ARPACK (``eigsh``) in shift-invert mode around a small negative
-    shift ``sigma`` (``-W - sigma M`` is then positive definite even though ``W`` has the
-    constant vector in its kernel), the shifted matrix factored once with
-    ``harness.core.solvers``; the start vector is fixed so results are deterministic.
+    ascending. Sparse path: `methods.scratch.spectrum.smallest_eigenpairs` (ARPACK shift-invert
+    with the shifted matrix factored once by ``harness.core.solvers``; fixed start vector, so
+    results are deterministic).
     """
     n = W.shape[0]
     k = int(min(k, n))
     if n <= _DENSE_MAX or k >= n - 1:
         lam, Phi = sla_dense.eigh(-W.toarray(), np.diag(m), subset_by_index=[0, k - 1])
         return lam, Phi
-    from harness.core.solvers import factorize
-    scale = float(np.median(-W.diagonal() / m))          # typical eigenvalue magnitude
-    sigma = -1e-3 * scale
-    M = sp.diags(m).tocsc()
-    fac = factorize((-W - sigma * M).tocsr(), solver)
-    OPinv = sla.LinearOperator((n, n), matvec=fac.solve, dtype=np.float64)
-    v0 = np.random.default_rng(0).standard_normal(n)
-    lam, Phi = sla.eigsh(-W.tocsc(), k=k, M=M, sigma=sigma, which="LM", OPinv=OPinv, v0=v0)
-    order = np.argsort(lam)
-    return lam[order], Phi[:, order]
+    from methods.scratch.spectrum import smallest_eigenpairs
+    return smallest_eigenpairs(W.tocsr(), sp.diags(m).tocsr(), k, "shift_invert", solver)
 
 
 @register("scratch.spectral", task="smoothing", library="scratch",
