@@ -171,7 +171,8 @@ class RunFolder:
         if ours:
             for task in tasks.names():
                 self.csv_path(task).unlink(missing_ok=True)
-            for name in ("report.html", "leaderboard.csv", "leaderboard.md", "leaderboard.tex"):
+            for name in ("report.html", "leaderboard.csv", "leaderboard.md", "leaderboard.tex", "winners.csv",
+                         "winners.md", "winners.tex"):
                 (self.path / name).unlink(missing_ok=True)
             vdir = self.path / "views"
             if vdir.is_dir():
