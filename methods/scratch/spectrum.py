@@ -11,12 +11,6 @@ smallest eigenpairs of ``-W x = lambda M x``:
 - ``shift_invert``: ARPACK (``scipy.sparse.linalg.eigsh``) in shift-invert mode at
   ``sigma = -1e-8 * s`` (``s`` the median of ``-W_ii / M_ii``, so ``-W - sigma M`` is SPD),
   with ``OPinv`` our prefactored SPD solve (`harness.core.solvers.factorize`);
-- ``lobpcg``: LOBPCG (Knyazev 2001) preconditioned by a smoothed-aggregation algebraic multigrid
-  hierarchy of ``-W - sigma M`` (pyamg), seeded random start, a block of ``k`` plus a quarter
-  more vectors (a multiplet cut at ``k`` converges poorly otherwise), residual tolerance 1e-7,
-  at most 500 iterations (a relative residual above 1e-4 is an error). Without an inertia check
-  it can converge to eigenpairs that are not the k smallest (members of a multiplet skipped: seen
-  at k = 30 on a 642-vertex icosphere); the eigenvalue error columns show it;
 - ``dense``: LAPACK's symmetric-definite ``eigh`` on dense matrices (reference; n <= 6000).
 
 Eigenvectors are returned M-orthonormal, eigenvalues ascending.
@@ -32,7 +26,6 @@ from methods.scratch import operators as op
 from methods.vocabulary import solver_param
 
 DENSE_MAX = 6000
-LOBPCG_TOL = 1e-7          # residual norm tolerance of each pair (LOBPCG's own, scale-dependent)
 
 
 def fem_mass(V: np.ndarray, F: np.ndarray) -> sp.csr_matrix:
@@ -73,7 +66,7 @@ def inversion_shift(W, M) -> float:
 
 def smallest_eigenpairs(W, M, k: int, solver: str = "shift_invert", linear_solver: str = "auto", seed: int = 0):
     """(values ascending (k,), M-orthonormal vectors (n, k)) of ``-W x = lambda M x``."""
-    from scipy.sparse.linalg import LinearOperator, eigsh, lobpcg
+    from scipy.sparse.linalg import LinearOperator, eigsh
     n = W.shape[0]
     k = int(min(k, n - 1 if solver != "dense" else n))
     A = (-W).tocsr()
@@ -88,31 +81,8 @@ def smallest_eigenpairs(W, M, k: int, solver: str = "shift_invert", linear_solve
         OPinv = LinearOperator((n, n), matvec=fac.solve, dtype=np.float64)
         lam, X = eigsh(A, k=k, M=M, sigma=sigma, which="LM", OPinv=OPinv,
                        v0=np.random.default_rng(seed).standard_normal(n))
-    elif solver == "lobpcg":
-        import pyamg
-        As = (A - sigma * M).tocsr()                   # SPD; eigenvalues shifted by -sigma
-        ml = pyamg.smoothed_aggregation_solver(As)
-        extra = min(max(4, k // 4), n - k - 1)         # a wider block separates cut multiplets
-        import warnings
-        for attempt in range(3):                       # LOBPCG can lose rank on a random start
-            X0 = np.linalg.qr(np.random.default_rng(seed + attempt).standard_normal((n, k + extra)))[0]
-            try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
-                    lam, X = lobpcg(As, X0, B=M, M=ml.aspreconditioner(), largest=False, tol=LOBPCG_TOL, maxiter=500)
-                break
-            except (ValueError, np.linalg.LinAlgError):
-                if attempt == 2:
-                    raise
-        lam = np.asarray(lam) + sigma
-        order = np.argsort(lam)[:k]
-        lam, X = lam[order], np.asarray(X)[:, order]
-        R = A @ X - (M @ X) * lam[None, :]
-        res = np.linalg.norm(R, axis=0) / np.maximum(np.linalg.norm(M @ X, axis=0) * np.maximum(np.abs(lam), 1.0), 1e-300)
-        if res.max() > 1e-4:
-            raise ValueError(f"LOBPCG did not converge: relative residual {res.max():.2g} after 500 iterations")
     else:
-        raise ValueError(f"unknown solver {solver!r}; expected shift_invert, lobpcg or dense")
+        raise ValueError(f"unknown solver {solver!r}; expected shift_invert or dense")
     order = np.argsort(lam)
     lam, X = np.asarray(lam)[order], np.asarray(X)[:, order]
     X = X / np.sqrt(np.maximum(np.einsum("ij,ij->j", X, M @ X), 1e-300))
@@ -120,13 +90,12 @@ def smallest_eigenpairs(W, M, k: int, solver: str = "shift_invert", linear_solve
 
 
 @register("scratch.spectrum", task="spectrum", library="scratch",
-          cite="Vallet & Levy, Spectral geometry processing with manifold harmonics, 2008 (shift-invert); "
-               "Knyazev 2001 (LOBPCG)",
+          cite="Vallet & Levy, Spectral geometry processing with manifold harmonics, 2008 (shift-invert)",
           params={"operator": Param("operator", "cotan", choices=("cotan", "intrinsic_delaunay", "tufted", "uniform"),
                                     doc="the stiffness W (module docstring)"),
                   "mass": Param("mass", "voronoi", choices=("voronoi", "barycentric", "fem"),
                                 doc="lumped mixed Voronoi, lumped barycentric, or the consistent FEM mass"),
-                  "solver": Param("solver", "shift_invert", choices=("shift_invert", "lobpcg", "dense"),
+                  "solver": Param("solver", "shift_invert", choices=("shift_invert", "dense"),
                                   doc="eigensolver (module docstring)"),
                   "linear_solver": solver_param()})
 def spectrum(V, F, *, k=20, operator="cotan", mass="voronoi", solver="shift_invert", linear_solver="auto"):
