@@ -56,7 +56,7 @@ SOLVERS = ("cholmod", "pypardiso", "scipy", "qdldl", "cholespy")
 # OS SuiteSparse (Debian 5.12, its BLAS) measured 4x slower than PARDISO at 1.3M faces.
 AUTO_SMALL = ("qdldl", "scipy")
 AUTO_LARGE = ("pypardiso", "cholespy", "cholmod", "scipy")
-AUTO_SMALL_MAX_N = 50_000
+AUTO_SMALL_MAX_N = 5_000
 AUTO_ORDER = AUTO_LARGE
 _MODULES = {"cholmod": "sksparse.cholmod", "pypardiso": "pypardiso", "scipy": "scipy",
             "qdldl": "qdldl", "cholespy": "cholespy"}
