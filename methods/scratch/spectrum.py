@@ -11,7 +11,9 @@ smallest eigenpairs of ``-W x = lambda M x``:
 - ``shift_invert``: ARPACK (``scipy.sparse.linalg.eigsh``) in shift-invert mode at
   ``sigma = -1e-8 * s`` (``s`` the median of ``-W_ii / M_ii``, so ``-W - sigma M`` is SPD),
   with ``OPinv`` our prefactored SPD solve (`harness.core.solvers.factorize`; ``auto`` prefers
-  the backends with the cheapest repeated solves, `many_solves_solver`);
+  the backends with the cheapest repeated solves, `many_solves_solver`); ``k + max(8, k/20)``
+  pairs are computed and the smallest ``k`` kept, as ARPACK can miss members of an exactly
+  degenerate multiplet (the sphere's) cut at ``k``;
 - ``dense``: LAPACK's symmetric-definite ``eigh`` on dense matrices (reference; n <= 6000).
 
 Eigenvectors are returned M-orthonormal, eigenvalues ascending.
@@ -92,8 +94,11 @@ def smallest_eigenpairs(W, M, k: int, solver: str = "shift_invert", linear_solve
     elif solver == "shift_invert":
         fac = factorize((A - sigma * M).tocsr(), many_solves_solver() if linear_solver == "auto" else linear_solver)
         OPinv = LinearOperator((n, n), matvec=fac.solve, dtype=np.float64)
-        lam, X = eigsh(A, k=k, M=M, sigma=sigma, which="LM", OPinv=OPinv,
+        extra = min(max(8, k // 20), n - 1 - k)       # ARPACK can miss members of a multiplet cut at k:
+        lam, X = eigsh(A, k=k + extra, M=M, sigma=sigma, which="LM", OPinv=OPinv,   # ask for more, keep k
                        v0=np.random.default_rng(seed).standard_normal(n))
+        order = np.argsort(lam)[:k]
+        lam, X = lam[order], X[:, order]
     else:
         raise ValueError(f"unknown solver {solver!r}; expected shift_invert or dense")
     order = np.argsort(lam)
