@@ -50,6 +50,7 @@ class LocalExecutor:
     def run(self, cases, want_meshes=False):
         todo = list(cases)
         _warm_mesh_cache(todo)
+        _preload_tasks(todo)
         todo.reverse()
         running: list[_Job] = []
         try:
@@ -84,6 +85,19 @@ class LocalExecutor:
 
     def describe(self) -> dict:
         return {"executor": self.name, "workers": getattr(self, "workers", 1)}
+
+
+def _preload_tasks(cases) -> None:
+    """Run each task's ``preload`` (compiled measuring code) once in the driver, so forked case
+    processes inherit it instead of loading it again (best effort: harness code, never a method's)."""
+    from .. import tasks
+    for name in sorted({c.task for c in cases}):
+        try:
+            fn = tasks.get(name).preload
+            if fn is not None:
+                fn()
+        except Exception:  # noqa: BLE001 - a failure here shows again, as the cases' rows
+            pass
 
 
 def _warm_mesh_cache(cases) -> None:

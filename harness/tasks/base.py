@@ -107,6 +107,7 @@ class Task:
     order: int = 100            # position in the report and listings
     checks: tuple = ()          # (name, fn(method, V, F)) conformance checks of this task's methods
     invalid_when: tuple = ()    # `Invalid` rules: rows that are not valid results (ranked last, never "best")
+    preload: Callable[[], None] | None = None   # warm compiled measuring code in the driver before forking
 
     @property
     def columns(self) -> list[str]:
