@@ -74,8 +74,14 @@ def _cmd_run(a) -> int:
         raise ShootoutError("--executor dask needs --scheduler tcp://HOST:PORT")
     if a.timeout is not None and not a.timeout < float("inf"):
         raise ShootoutError(f"--timeout: expected a finite number of seconds, got {a.timeout}")
+    from .session import _results_config, run
+    if _results_config(Path(a.config)) is not None:          # results: score files made elsewhere
+        frames = run(Path(a.config), out=a.out)
+        n = sum(len(df) for df in frames.values())
+        out = Path(a.out) if a.out else Path("results") / (_results_config(Path(a.config))[0].get("name") or "eval")
+        print(f"eval: {n} result(s) scored; report: {out / 'report.html'}")
+        return 0
     cfg = load_config(Path(a.config))
-    from .session import run
     frames = run(cfg, out=a.out, workers=a.workers, executor=a.executor, scheduler=a.scheduler,
                  resume=a.resume, timeout=a.timeout, quiet=a.quiet,
                  export_benchmark_json=a.export_benchmark_json)

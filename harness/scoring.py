@@ -66,30 +66,42 @@ def _label(path: Path, labels, i) -> str:
 def eval_files(clean, results, out, noisy=None, task: str | None = None, labels=None,
                hausdorff_samples: int = 20000) -> dict:
     """Score result files against ``clean`` (and ``noisy``); write a run folder at ``out``."""
-    from . import datasets
-    from .report import build_report
-    clean, results = Path(clean), [Path(r) for r in results]
+    results = [Path(r) for r in results]
     if labels and len(labels) != len(results):
         raise ShootoutError(f"--label: {len(labels)} label(s) for {len(results)} result file(s)")
-    for p in [clean] + results + ([Path(noisy)] if noisy else []):
-        if not p.is_file():
-            raise ShootoutError(f"{p}: no such file")
-    if noisy:
-        src = datasets.load({"file": str(Path(noisy).resolve()), "clean": str(clean.resolve())})
-        cmesh, V_in = src.clean, src.noisy_V
-    else:
-        cmesh, V_in = read_mesh(clean), None
-    n_raw = len(read_mesh(clean, repair=False).V)          # the clean file's own vertex count
+    entries = [{"file": r, "clean": Path(clean), "noisy": Path(noisy) if noisy else None, "task": task,
+                "label": _label(r, labels, i)} for i, r in enumerate(results)]
+    return eval_entries(entries, out, hausdorff_samples,
+                        {"eval": {"clean": str(clean), "noisy": noisy and str(noisy), "results": [str(r) for r in results]}})
+
+
+def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, config: dict | None = None) -> dict:
+    """Score each ``{file, clean, noisy, task, label}`` entry (paths; ``noisy``, ``task`` optional)
+    and write one run folder at ``out`` with its report."""
+    from . import datasets
+    from .report import build_report
+    for e in entries:
+        for p in [e["file"], e["clean"]] + ([e["noisy"]] if e.get("noisy") else []):
+            if not Path(p).is_file():
+                raise ShootoutError(f"{p}: no such file")
     rows_by_task: dict[str, list] = {}
-    for i, rp in enumerate(results):
+    cleans: dict = {}
+    for i, e in enumerate(entries):
+        clean, noisy, rp = Path(e["clean"]), e.get("noisy"), Path(e["file"])
+        key = (str(clean), str(noisy))
+        if key not in cleans:
+            if noisy:
+                src = datasets.load({"file": str(Path(noisy).resolve()), "clean": str(clean.resolve())})
+                cleans[key] = (src.clean, src.noisy_V, len(read_mesh(clean, repair=False).V))
+            else:
+                cleans[key] = (read_mesh(clean), None, len(read_mesh(clean, repair=False).V))
+        cmesh, V_in, n_raw = cleans[key]
         r = read_mesh(rp, repair=False)
-        t = task or ("smoothing" if len(r.V) in (cmesh.n_vertices, n_raw) else "simplification")
-        V = r.V
-        if t == "smoothing":
-            V = _in_clean_order(r, cmesh, n_raw, rp)
+        t = e.get("task") or ("smoothing" if len(r.V) in (cmesh.n_vertices, n_raw) else "simplification")
+        V = _in_clean_order(r, cmesh, n_raw, rp) if t == "smoothing" else r.V
         row = {"case_id": f"eval{i:04d}", "task": t, "mesh": cmesh.name, "n_vertices": cmesh.n_vertices,
                "n_faces": cmesh.n_faces, "noise_model": "given" if noisy else "none", "noise_level": None,
-               "seed": None, "method": _label(rp, labels, i), "library": "external",
+               "seed": None, "method": e.get("label") or rp.stem, "library": "external",
                "params": json.dumps({"file": str(rp)}), "status": "ok",
                "error": ("input repaired: " + "; ".join(cmesh.repairs)) if cmesh.repairs else ""}
         row.update(evaluate(V, r.F, cmesh.V, cmesh.F, task=t, V_noisy=V_in, hausdorff_samples=hausdorff_samples))
@@ -101,14 +113,63 @@ def eval_files(clean, results, out, noisy=None, task: str | None = None, labels=
         for row in rows:
             folder.append(t, row)
     folder.write_run_json({
-        "name": Path(out).name, "kind": "eval", "config": {"eval": {"clean": str(clean), "noisy": noisy and str(noisy),
-                                                                    "results": [str(r) for r in results]}},
+        "name": Path(out).name, "kind": "eval", "config": config or {},
         "started": now_iso(), "finished": now_iso(), "status": "finished", "executor": "eval", "workers": 1,
-        "n_cases": len(results), "versions": package_versions(), "git_commit": git_commit(),
+        "n_cases": len(entries), "versions": package_versions(), "git_commit": git_commit(),
         "machine": machine_info(), "command": " ".join(sys.argv),
         "tasks": {t: tasks.get(t).spec() for t in rows_by_task}})
     build_report(out)
     return folder.frames()
+
+
+RESULTS_KEYS = {"file", "clean", "noisy", "label", "task"}
+
+
+def results_config(raw: dict, base_dir: Path) -> tuple[list[dict], int]:
+    """Validate a ``results:`` config (``name``, ``hausdorff_samples``, ``results: [{file, clean,
+    noisy, label, task}]``): the entries with resolved paths, or `ConfigError` listing every
+    problem with its key path."""
+    from .errors import ConfigError
+    P = []
+    for k in sorted(set(raw) - {"name", "results", "hausdorff_samples"}):
+        P.append(f"{k}: unknown key in a results config; expected name, results, hausdorff_samples")
+    hs = raw.get("hausdorff_samples", 20000)
+    if not isinstance(hs, int) or isinstance(hs, bool) or not 0 <= hs <= 10_000_000:
+        P.append(f"hausdorff_samples: expected an integer in [0, 10,000,000], got {hs!r}"[:200])
+    res = raw.get("results")
+    entries = []
+    if not isinstance(res, list) or not res:
+        P.append("results: expected a non-empty list of {file: ..., clean: ..., label: ...}")
+        res = []
+    for i, e in enumerate(res):
+        at = f"results[{i}]"
+        if not isinstance(e, dict):
+            P.append(f"{at}: expected a mapping with file and clean")
+            continue
+        for k in sorted(set(e) - RESULTS_KEYS):
+            P.append(f"{at}.{k}: unknown key; expected one of {sorted(RESULTS_KEYS)}")
+        entry = {"label": e.get("label"), "task": e.get("task"), "noisy": None}
+        for k in ("file", "clean", "noisy"):
+            if k not in e:
+                if k != "noisy":
+                    P.append(f"{at}.{k}: missing")
+                continue
+            v = e[k]
+            path = Path(v) if isinstance(v, str) else None
+            if path is not None and not path.is_absolute():
+                path = base_dir / path
+            if path is None or not path.is_file():
+                P.append(f"{at}.{k}: file not found: {v!r}"[:300])
+                continue
+            entry[k] = path
+        if entry["task"] not in (None, "smoothing", "simplification"):
+            P.append(f"{at}.task: expected smoothing or simplification, got {entry['task']!r}"[:200])
+        if entry["label"] is not None and not isinstance(entry["label"], str):
+            P.append(f"{at}.label: expected a string")
+        entries.append(entry)
+    if P:
+        raise ConfigError("<config>", P)
+    return entries, hs
 
 
 def _in_clean_order(r: Mesh, cmesh: Mesh, n_raw: int, path: Path) -> np.ndarray:

@@ -113,6 +113,13 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
         timeout=None, quiet=True, export_benchmark_json=None):
     """Run a config (a `Config`, a path, YAML text or a dict) end to end; returns
     ``{task: DataFrame}`` of the rows in the run folder."""
+    raw = _results_config(config_or_path)
+    if raw is not None:                  # a results: config scores files made elsewhere (shootout eval)
+        from .scoring import eval_entries, results_config
+        entries, hs = results_config(raw[0], raw[1])
+        out_dir = Path(out) if out else Path("results") / str(raw[0].get("name") or "eval")
+        _check_out(out_dir)
+        return eval_entries(entries, out_dir, hs, raw[0])
     cfg: Config = config_or_path if isinstance(config_or_path, Config) else load_config(config_or_path)
     out_dir = Path(out) if out else Path("results") / cfg.name
     folder = RunFolder(out_dir)
@@ -141,6 +148,25 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
         raise
     finally:
         lock.close()
+
+
+def _results_config(source):
+    """``(raw, base_dir)`` when ``source`` is a config with a top-level ``results:`` key, else None."""
+    if isinstance(source, Config):
+        return None
+    try:
+        if isinstance(source, dict):
+            raw, base = source, Path.cwd()
+        else:
+            from . import yaml_input
+            p = Path(str(source))
+            if "\n" not in str(source) and p.suffix in (".yaml", ".yml", ".json") and p.is_file():
+                raw, base = yaml_input.load(p.read_text()), p.resolve().parent
+            else:
+                raw, base = yaml_input.load(str(source)), Path.cwd()
+    except Exception:  # noqa: BLE001 - load_config reports what is wrong with it
+        return None
+    return (raw, base) if isinstance(raw, dict) and "results" in raw and "tasks" not in raw else None
 
 
 class DiskFull(ShootoutError):

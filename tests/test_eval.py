@@ -54,3 +54,24 @@ def test_evaluate_from_python_and_errors(tmp_path):
     code = cli(["eval", str(tmp_path / "small.obj"), "--clean", str(PAIR / "Original.obj"), "--out",
                 str(tmp_path / "o"), "--task", "smoothing"])
     assert code == 2
+
+
+def test_a_results_config_gives_the_same_numbers(run_with_meshes, tmp_path):
+    """``shootout run`` on a config with ``results:`` scores files like ``shootout eval`` (the same
+    numbers as the run that made them); a bad entry is exit 2 naming every problem, nothing written."""
+    import yaml
+    rows = pd.read_csv(run_with_meshes / "smoothing.csv")
+    cfg = {"name": "scored", "hausdorff_samples": 2000,
+           "results": [{"file": str(run_with_meshes / "meshes" / f"{cid}.ply"), "clean": str(PAIR / "Original.obj"),
+                        "noisy": str(PAIR / "Noisy.obj"), "label": m, "task": "smoothing"}
+                       for cid, m in zip(rows["case_id"], rows["method"])]}
+    path = tmp_path / "scored.yaml"
+    path.write_text(yaml.safe_dump(cfg))
+    assert cli(["run", str(path), "--out", str(tmp_path / "out")]) == 0
+    ev = pd.read_csv(tmp_path / "out" / "smoothing.csv")
+    metrics = list(tasks.get("smoothing").columns)
+    pd.testing.assert_frame_equal(ev.set_index("method")[metrics], rows.set_index("method")[metrics], check_exact=True)
+    bad = {"results": [{"file": "nope.ply", "clean": str(PAIR / "Original.obj"), "colour": 1}], "tasks_x": 1}
+    path.write_text(yaml.safe_dump(bad))
+    assert cli(["run", str(path), "--out", str(tmp_path / "bad")]) == 2
+    assert not (tmp_path / "bad").exists()
