@@ -11,7 +11,8 @@ from harness.mesh import topology
 from harness.tasks.curvature import analytic
 
 ALL = ["scratch.angle_defect", "scratch.cotan_mean", "scratch.quadric_fit",
-       "libigl.gaussian_curvature", "libigl.principal_curvature"]
+       "libigl.gaussian_curvature", "libigl.principal_curvature", "meshlab.discrete_curvature",
+       "meshlab.principal_curvature"]
 
 
 def load(shape):
@@ -48,7 +49,10 @@ def test_gauss_bonnet(shape, name):
 
 # area-weighted relative L2 error bounds per method on a subdivision-4 sphere and a 96-torus
 BOUNDS = {"scratch.angle_defect": 0.02, "scratch.cotan_mean": 0.02, "scratch.quadric_fit": 0.05,
-          "libigl.gaussian_curvature": 0.02, "libigl.principal_curvature": 0.25}
+          "libigl.gaussian_curvature": 0.02, "libigl.principal_curvature": 0.25,
+          "meshlab.discrete_curvature": 0.02, "meshlab.principal_curvature": 0.05}
+# MeshLab keeps vertex quality in single precision: orientation flips agree to float32 rounding
+FLIP_TOL = {"meshlab.discrete_curvature": 1e-3, "meshlab.principal_curvature": 1e-4}
 
 
 @pytest.mark.parametrize("name", ALL)
@@ -69,12 +73,13 @@ def test_signs_and_normalisation_on_sphere_and_torus(name):
             rel = np.sqrt((A * (x - truth[q]) ** 2).sum() / (A * truth[q] ** 2).sum())
             assert rel <= BOUNDS[name], (shape["procedural"], q, rel)
         flipped = methods.get(name)(V, F[:, ::-1].copy())
+        tol = FLIP_TOL.get(name, 1e-9)
         if r.H is not None:
-            assert np.allclose(flipped.H, -r.H, atol=1e-9 * np.abs(r.H).max())
+            assert np.allclose(flipped.H, -r.H, rtol=0, atol=tol * np.abs(r.H).max())
         if r.K is not None:
-            assert np.allclose(flipped.K, r.K, atol=1e-9 * np.abs(r.K).max())
+            assert np.allclose(flipped.K, r.K, rtol=0, atol=tol * np.abs(r.K).max())
         if r.k1 is not None:
-            assert np.allclose(flipped.k1, -r.k2, atol=1e-9 * np.abs(r.k1).max())
+            assert np.allclose(flipped.k1, -r.k2, rtol=0, atol=tol * np.abs(r.k1).max())
 
 
 def test_cylinder_and_saddle_truths_are_matched_by_fine_estimates():
@@ -98,7 +103,7 @@ def test_the_task_runs_through_the_pipeline(tmp_path):
          "noise": [{"model": "none"}],
          "tasks": {"curvature": {"methods": ALL}}}, out=tmp_path, quiet=True)
     df = pd.read_csv(tmp_path / "curvature.csv")
-    assert len(df) == 15 and (df["status"] == "ok").sum() >= 14, df[["method", "mesh", "error"]]
+    assert len(df) == 21 and (df["status"] == "ok").sum() >= 20, df[["method", "mesh", "error"]]
     sphere = df[df["mesh"].str.startswith("sphere")].set_index("method")
     assert sphere.loc["scratch.angle_defect", "K_rel_l2"] < 0.05 and np.isnan(sphere.loc["scratch.angle_defect", "H_rel_l2"])
     assert sphere.loc["scratch.angle_defect", "gauss_bonnet_error"] < 1e-10
