@@ -39,7 +39,8 @@ from methods import Param, SmoothingResult, register
 from harness.core.geometry import boundary_vertices, edge_face_counts, mean_edge_length
 from harness.core.solvers import backward_euler
 from methods.vocabulary import boundary_rule_param, solver_param
-from methods.scratch.operators import cotan_weights, uniform_weights, voronoi_areas
+from methods.scratch.laplacians import FAST_MIN_FACES
+from methods.scratch.operators import cotan_laplacian, cotan_weights, uniform_weights, voronoi_areas
 
 WEIGHTS = ("uniform", "cotan", "cotan_area")
 
@@ -80,8 +81,12 @@ def smoothing_operator(V: np.ndarray, F: np.ndarray, weights: str = "cotan_area"
             absW.setdiag(0)
             m = np.where(bad, np.asarray(absW.sum(axis=1)).ravel(), m)
     elif weights == "cotan_area":
-        W = cotan_weights(V, F)
-        m = voronoi_areas(V, F)
+        if F.shape[0] >= FAST_MIN_FACES and 6 * F.shape[0] + n < 2**31 - 1:   # one compiled pass, W and M
+            W, M = cotan_laplacian(V, F, "voronoi")
+            m = M.diagonal()
+        else:
+            W = cotan_weights(V, F)
+            m = voronoi_areas(V, F)
     else:
         raise ValueError(f"unknown weights {weights!r}; expected one of {WEIGHTS}")
     m = np.asarray(m, dtype=np.float64)
