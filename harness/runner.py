@@ -160,10 +160,12 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
 
     Returns ``(row, extras)``. ``extras["meshes"]`` maps file names to ``(V, F, quality, comment)``
     for the driver to write (`saved_meshes`, when ``want_meshes`` and the task has an output mesh);
-    ``extras["view"]`` holds the task's view meshes (``want_view``).
+    ``extras["view"]`` holds the task's view meshes (``want_view``); ``extras["case_wall_s"]`` the
+    wall time of this call (loading, noise, cold call, samples, measuring).
     """
     row = base_row(case)
     extras: dict = {}
+    t_case = time.perf_counter()
     try:
         from .plugins import import_methods
         methods = import_methods()
@@ -216,4 +218,5 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
         row.update(status="error", error=f"{type(exc).__name__}: {exc}{where}"[:2000])
     finally:
         row["peak_rss_mb"] = round(peak_rss_mb(), 1)
+        extras["case_wall_s"] = time.perf_counter() - t_case
     return row, extras

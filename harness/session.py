@@ -150,6 +150,18 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
         lock.close()
 
 
+def _fixed_cost(row: dict, extras: dict) -> float | None:
+    """Seconds of an ok case spent outside the method: its wall time minus samples and cold call."""
+    wall = extras.get("case_wall_s")
+    if wall is None or row.get("status") != "ok":
+        return None
+    try:
+        samples = sum(json.loads(row.get("times") or "[]"))
+    except (TypeError, ValueError):
+        return None
+    return max(0.0, wall - samples - float(row.get("time_cold_s") or 0.0))
+
+
 def _results_config(source):
     """``(raw, base_dir)`` when ``source`` is a config with a top-level ``results:`` key, else None."""
     if isinstance(source, Config):
@@ -292,6 +304,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
               file=sys.stderr, flush=True)
         bar = _progress(len(cfg.cases), len(done))
     counts: dict[str, int] = {}
+    overhead: list[float] = []
     t0 = time.perf_counter()
     extra_cases: list = []
     try:
@@ -309,6 +322,9 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
                     folder.save_mesh(fname, lambda fh, V=V, F=F, q=q, w=what: write_ply(fh, V, F, q, w))
             folder.append(case.task, row)
             counts[row["status"]] = counts.get(row["status"], 0) + 1
+            fixed = _fixed_cost(row, extras)
+            if fixed is not None:
+                overhead.append(fixed)
             if bar is not None:
                 bar.set_postfix_str(f"{case.method} on {case.mesh_key}", refresh=False)
                 bar.update(1)
@@ -335,6 +351,11 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         session = {"started": session_started, "finished": now_iso(), "wall_s": wall,
                    "command": " ".join(sys.argv), "status": meta["status"], "resumed_ok_cases": len(done),
                    "status_counts": counts, "load_average": meta["load_average"]}
+        if overhead:
+            meta["fixed_cost_per_case_s"] = {
+                "mean": round(sum(overhead) / len(overhead), 4), "max": round(max(overhead), 4), "cases": len(overhead),
+                "definition": "wall time of the case call in its process minus its timed samples and cold call "
+                              "(imports, mesh loading, noise, measuring; not the fork itself); ok cases of this session"}
         meta.update(finished=session["finished"], status_counts=folder.status_counts(),
                     status_counts_this_session=counts, sessions=prev_sessions + [session],
                     wall_s=round(wall + sum(x.get("wall_s") or 0 for x in prev_sessions), 3))

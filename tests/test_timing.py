@@ -46,6 +46,9 @@ def test_protocol_columns(tmp_path):
     assert (sleep["time_s"] > 0.004).all() and (sleep["repeats"] >= 20).all()
     meta = json.loads((out / "run.json").read_text())
     assert meta["timing"]["threads_per_case"] == max(1, (os.cpu_count() or 1) // meta["workers"])
+    fixed = meta["fixed_cost_per_case_s"]             # outside the method: loading, noise, measuring
+    assert fixed["cases"] == sum(len(pd.read_csv(p)) for p in out.glob("*.csv") if p.stem in ("smoothing", "laplacian"))
+    assert 0 <= fixed["mean"] <= fixed["max"] < 30
     mem = pd.read_csv(out / "laplacian.csv")["method_mem_mb"]
     if Path("/proc/self/clear_refs").exists():
         assert mem.notna().all() and (mem >= 0).all()
