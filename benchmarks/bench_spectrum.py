@@ -28,7 +28,6 @@ def main(argv=None) -> int:
     ap.add_argument("--k", type=int, default=200)
     ap.add_argument("--pairs", type=int, default=3)
     a = ap.parse_args(argv)
-    import scipy.sparse as sp
     from scipy.sparse.linalg import eigsh
 
     from harness import datasets
