@@ -23,7 +23,7 @@ from .mesh import SUPPORTED
 from .noise import MODELS
 
 TOP_KEYS = {"name", "repeats", "save_meshes", "plugins", "seed", "meshes", "noise", "tasks",
-            "timeout", "report", "hausdorff_samples", "time_budget", "tune"}
+            "timeout", "report", "hausdorff_samples", "hausdorff_eps", "time_budget", "tune"}
 TASK_KEYS = {"methods", "params"}
 REPORT_KEYS = {"views"}
 MAX_REPEATS = 1000               # minimum timed samples per case
@@ -51,6 +51,7 @@ class Case:
     hausdorff_samples: int = 20000
     time_budget: float = 0.25       # seconds of samples to aim for (timeit-like autorange)
     threads: int = 0                # BLAS/OpenMP threads of the case process (0: no limit)
+    hausdorff_eps: float = 1e-3     # relative gap the certified Hausdorff distance aims for
 
 
 @dataclass
@@ -202,6 +203,10 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
     hs = raw.get("hausdorff_samples", 20000)
     if not _is_int(hs) or not 0 <= hs <= MAX_SAMPLES:
         P.append(f"hausdorff_samples: expected an integer in [0, {MAX_SAMPLES:,}], got {yaml_input.short(hs)}")
+    eps = raw.get("hausdorff_eps", 1e-3)
+    if not _is_num(eps) or not 1e-9 <= eps <= 1:
+        P.append(f"hausdorff_eps: expected a relative gap in [1e-9, 1], got {yaml_input.short(eps)}")
+        eps = 1e-3
     report = raw.get("report", {})
     if not isinstance(report, dict):
         P.append(f"report: expected a mapping, got {type(report).__name__}")
@@ -241,7 +246,7 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
     if P:
         raise ConfigError(label, P)
 
-    common = (seed, repeats, tuple(plugins), hs, float(budget))
+    common = (seed, repeats, tuple(plugins), hs, float(budget), float(eps))
     n = _count_cases(meshes, noises, tasks)
     if n > MAX_CASES:
         raise ConfigError(label, [f"the grid expands to {n:,} cases, more than {MAX_CASES:,}: split the config or "
@@ -263,7 +268,7 @@ def _count_cases(meshes: list, noises: list, tasks: dict) -> int:
 
 
 def expand_cases(meshes: list, noises: list, tasks: dict, seed: int, repeats: int, plugins: tuple, hs: int,
-                 budget: float) -> list:
+                 budget: float, eps: float = 1e-3) -> list:
     """Every (mesh, noise model, level, seed, task, method, params) case, duplicates removed."""
     cases = []
     labels = _unique_labels(meshes)
@@ -280,7 +285,7 @@ def expand_cases(meshes: list, noises: list, tasks: dict, seed: int, repeats: in
                     for params in grid:
                         cid = case_id(task, ident, model, level, s, frac, mname, params)
                         cases.append(Case(cid, task, spec, key, model, level, s, frac, mname,
-                                          params, repeats, plugins, hs, budget))
+                                          params, repeats, plugins, hs, budget, hausdorff_eps=eps))
     seen = set()
     return [c for c in cases if not (c.case_id in seen or seen.add(c.case_id))]
 

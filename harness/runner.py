@@ -124,7 +124,7 @@ def prepare_input(case: Case) -> tuple[CaseInput, float | None]:
     from .noise import apply_noise
     src = datasets.load(case.mesh)
     clean = src.clean
-    settings = {"hausdorff_samples": case.hausdorff_samples}
+    settings = {"hausdorff_samples": case.hausdorff_samples, "hausdorff_eps": case.hausdorff_eps}
     if src.noisy_V is not None:
         return CaseInput(clean, src.noisy_V, clean.F, clean.diagonal(), settings), src.pair_level
     V_in = apply_noise(clean.V, clean.F, case.noise_model, case.noise_level, case.seed,

@@ -21,10 +21,12 @@ from .results import RunFolder
 
 
 def config_hash(cfg: Config) -> str:
-    """sha1 of what the rows depend on (case ids, repeats, Hausdorff samples), so a resume
+    """sha1 of what the rows depend on (case ids, repeats, Hausdorff samples and gap), so a resume
     with a changed config is detected."""
     hs = cfg.cases[0].hausdorff_samples if cfg.cases else None
-    blob = json.dumps([sorted(c.case_id for c in cfg.cases), cfg.repeats, hs]).encode()
+    eps = cfg.cases[0].hausdorff_eps if cfg.cases else 1e-3
+    key = [sorted(c.case_id for c in cfg.cases), cfg.repeats, hs] + ([eps] if eps != 1e-3 else [])
+    blob = json.dumps(key).encode()
     return hashlib.sha1(blob).hexdigest()[:16]
 
 
@@ -249,7 +251,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         if prev and prev.get("config_hash") != chash:
             raise ShootoutError(
                 f"--resume: the config changed since the run in {out_dir} started "
-                "(cases, repeats or hausdorff_samples differ); run without --resume to start over, "
+                "(cases, repeats, hausdorff_samples or hausdorff_eps differ); run without --resume to start over, "
                 "or use a new --out folder")
     elif folder.foreign_files():
         raise ShootoutError(f"--out {out_dir}: holds {', '.join(folder.foreign_files())} but no run.json of ours; "

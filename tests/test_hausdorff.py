@@ -87,3 +87,25 @@ def test_exact_reconstruction_and_budget():
     cut = hausdorff(r.V, r.F, clean.V, clean.F, n_samples=0, max_points=50)
     assert not cut["hausdorff_certified"] and cut["hausdorff_gap"] > 1e-3
     assert cut["hausdorff"] <= full["hausdorff_upper"] and cut["hausdorff_upper"] >= full["hausdorff"]
+
+
+def test_hausdorff_eps_reaches_the_case_and_is_validated(tmp_path):
+    """The top-level ``hausdorff_eps`` sets the gap a simplification row is certified to; a bad
+    value is a config error naming the key."""
+    import pandas as pd
+
+    import harness
+    from harness.errors import ConfigError
+    cfg = {"name": "eps", "time_budget": 0, "hausdorff_samples": 0, "save_meshes": False, "meshes": ["bunny"],
+           "tasks": {"simplification": {"methods": ["meshlab.qem"], "params": {"target_ratio": [0.1]}}}}
+    gaps = {}
+    for eps in (0.3, 1e-6):
+        harness.run({**cfg, "hausdorff_eps": eps}, out=tmp_path / str(eps), quiet=True, workers=1)
+        row = pd.read_csv(tmp_path / str(eps) / "simplification.csv").iloc[0]
+        assert row["status"] == "ok"
+        gaps[eps] = row["hausdorff_gap"]
+    assert gaps[0.3] <= 0.3 and gaps[1e-6] <= 1e-6 < gaps[0.3]
+    for bad in (0, -1, 2, "x"):
+        with pytest.raises(ConfigError, match="hausdorff_eps"):
+            harness.run({**cfg, "hausdorff_eps": bad}, out=tmp_path / "bad", quiet=True)
+    assert not (tmp_path / "bad").exists()
