@@ -39,6 +39,9 @@ def _operators(V, F, laplacian: str, mass: str):
     if laplacian == "intrinsic_delaunay":
         from methods.scratch.intrinsic_delaunay import intrinsic_delaunay_triangulation
         l, F, _ = intrinsic_delaunay_triangulation(V, F)
+    elif laplacian == "tufted":
+        from methods.scratch.tufted import tufted_triangulation
+        l, F, _ = tufted_triangulation(V, F, mollify_factor=1e-5)
     else:
         l = edge_lengths(V, F)
     C, dbl = cotangents_from_lengths(l)
@@ -81,7 +84,7 @@ class HeatSolver:
         self.l, self.F, W, m, self.C, _ = _operators(V, F, laplacian, mass)
         t = float(t_factor) * mean_edge_length(V, F) ** 2
         Q = (sp.diags(m) - t * W).tocsr()
-        bnd = boundary_vertices(F, n)
+        bnd = boundary_vertices(F, n) if laplacian != "tufted" else np.zeros(n, bool)   # the cover is closed
         use_n = boundary in ("neumann", "average") or not bnd.any()
         use_d = boundary in ("dirichlet", "average") and bnd.any()
         self.neumann = factorize(Q, solver) if use_n else None
@@ -115,8 +118,9 @@ class HeatSolver:
           cite="Crane, Weischedel, Wardetzky, Geodesics in heat, ACM TOG 32(5), 2013",
           params={"t_factor": Param("t_factor", 1.0, "float", low=1e-4, high=1e4,
                                     doc="heat time t = t_factor * (mean edge length)^2 (the paper's m)"),
-                  "laplacian": Param("laplacian", "cotan", choices=("cotan", "intrinsic_delaunay"),
-                                     doc="operators on the mesh or on its intrinsic Delaunay triangulation"),
+                  "laplacian": Param("laplacian", "cotan", choices=("cotan", "intrinsic_delaunay", "tufted"),
+                                     doc="operators on the mesh, on its intrinsic Delaunay triangulation, or on "
+                                         "the intrinsic Delaunay triangulation of its tufted cover"),
                   "mass": Param("mass", "voronoi", choices=("voronoi", "barycentric"),
                                 doc="vertex mass of the heat step (libigl uses voronoi)"),
                   "boundary": Param("boundary", "average", choices=("average", "neumann", "dirichlet"),

@@ -257,3 +257,34 @@ def intrinsic_delaunay(V, F, *, mass="voronoi"):
     from methods.scratch.intrinsic_delaunay import intrinsic_delaunay_cotmatrix, intrinsic_mass
     W, l_int, F_int = intrinsic_delaunay_cotmatrix(V, F)
     return LaplacianResult(W=W, M=intrinsic_mass(l_int, F_int, V.shape[0], mass))
+
+
+@register("scratch.tufted", task="laplacian", library="scratch",
+          cite="Sharp & Crane, A Laplacian for nonmanifold triangle meshes, SGP 2020",
+          params={"mass": Param("mass", "barycentric", choices=("barycentric", "voronoi"),
+                                doc="lumped mass from the cover's intrinsic triangulation"),
+                  "mollify_factor": Param("mollify_factor", 1e-5, low=0.0, high=1.0,
+                                          doc="intrinsic mollification: edge lengths grow by the least "
+                                              "amount giving every triangle inequality a margin of this "
+                                              "factor times the mean edge length (0 on valid meshes)")})
+def tufted(V, F, *, mass="barycentric", mollify_factor=1e-5):
+    """Tufted-cover intrinsic Delaunay Laplacian (own implementation, `methods.scratch.tufted`).
+
+    Returns
+    -------
+    LaplacianResult
+        ``W`` with non-negative off-diagonal weights on any input (manifold or not), rows
+        summing to zero; with ``mass: barycentric`` ``(-W, M)`` equals
+        ``robust_laplacian.mesh_laplacian(V, F, mollify_factor)`` (to ~1e-12 relative on the
+        bundled meshes; on meshes with cocircular quads, e.g. fandisk, the Delaunay
+        triangulation is not unique and the two masses may differ where the flip order does).
+
+    Notes
+    -----
+    Each face is doubled, sides are glued around every edge in angular order, and the closed
+    cover is flipped to intrinsic Delaunay; weights and masses are halved. POS, SYM, LIN and PSD
+    hold; LOC does not. Unreferenced vertices get zero rows.
+    """
+    from methods.scratch.tufted import tufted_laplacian
+    W, M = tufted_laplacian(V, F, mass, float(mollify_factor))
+    return LaplacianResult(W=W, M=M)

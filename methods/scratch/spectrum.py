@@ -2,9 +2,9 @@
 
 Operators (``W``, libigl's sign): ``cotan`` (cotangent weights), ``intrinsic_delaunay`` (cotangent
 weights of the intrinsic Delaunay triangulation, with its own areas for the mass), ``tufted``
-(robust-laplacian's tufted-cover intrinsic Delaunay Laplacian and its lumped mass, Sharp & Crane
-2020), ``uniform`` (graph Laplacian ``A - D``, with the chosen mass). Masses: ``voronoi``
-(mixed Voronoi, lumped), ``barycentric`` (lumped), ``fem`` (the consistent linear-FEM mass:
+(our tufted-cover intrinsic Delaunay Laplacian, `methods.scratch.tufted`, Sharp & Crane 2020,
+with the cover's own areas for the mass; barycentric equals robust-laplacian's), ``uniform``
+(graph Laplacian ``A - D``, with the chosen mass). Masses: ``voronoi`` (mixed Voronoi, lumped), ``barycentric`` (lumped), ``fem`` (the consistent linear-FEM mass:
 ``M_ij = sum_f A_f (1 + delta_ij) / 12`` over the faces containing both). Solvers for the k
 smallest eigenpairs of ``-W x = lambda M x``:
 
@@ -46,9 +46,10 @@ def operator_and_mass(V, F, operator: str, mass: str) -> tuple[sp.csr_matrix, sp
     """``(W, M)`` for the chosen operator and mass (module docstring)."""
     n = len(V)
     if operator == "tufted":
-        import robust_laplacian
-        L, Mt = robust_laplacian.mesh_laplacian(np.ascontiguousarray(V), np.ascontiguousarray(F))
-        return (-sp.csr_matrix(L)).tocsr(), sp.csr_matrix(Mt)
+        from methods.scratch.tufted import tufted_laplacian
+        if mass == "fem":
+            raise ValueError("mass fem is defined on the input triangulation; use voronoi or barycentric with tufted")
+        return tufted_laplacian(V, F, mass)
     if operator == "intrinsic_delaunay":
         from methods.scratch.intrinsic_delaunay import intrinsic_delaunay_cotmatrix, intrinsic_mass
         W, l, Fi = intrinsic_delaunay_cotmatrix(V, F)
