@@ -68,18 +68,22 @@ def _decimate(V, F, err, limit):
 
 
 def pack(meshes: list) -> dict:
-    """JSON payload of ``[(label, V, F, values or None, what), ...]``: positions quantised to 16
-    bits in a common box, faces as uint32, values to 8 bits on one colour scale per quantity
-    (meshes showing the same ``what`` share it: 99th percentile of their values)."""
+    """JSON payload of ``[(label, V, F, values or None, what[, options]), ...]``: positions
+    quantised to 16 bits in a common box, faces as uint32, values to 8 bits on one colour scale per
+    quantity (meshes showing the same ``what`` share it: 99th percentile of their values, or their
+    maximum when ``options`` has ``isolines: n``, which also draws ``n`` evenly spaced level lines
+    of the values, e.g. of a distance field)."""
+    meshes = [tuple(m) + ({},) * (6 - len(m)) for m in meshes]
     allV = np.vstack([np.asarray(m[1], dtype=np.float64) for m in meshes])
     lo = allV.min(0)
     span = float((allV.max(0) - lo).max()) or 1.0
     scale: dict[str, float] = {}
-    for _, _, _, err, what in meshes:
+    for _, _, _, err, what, opt in meshes:
         if err is not None and len(err):
-            scale[what] = max(scale.get(what, 0.0), float(np.percentile(err, 99)))
+            top = float(np.max(err)) if opt.get("isolines") else float(np.percentile(err, 99))
+            scale[what] = max(scale.get(what, 0.0), top)
     out = []
-    for label, V, F, err, what in meshes:
+    for label, V, F, err, what, opt in meshes:
         V, F, err, note = _decimate(np.asarray(V, dtype=np.float64), np.asarray(F, dtype=np.int64), err,
                                     MAX_DISPLAY_FACES)
         q = np.clip(np.round((V - lo) / span * 65535.0), 0, 65535).astype("<u2")
@@ -90,6 +94,8 @@ def pack(meshes: list) -> dict:
             qe = np.clip(np.round(err / emax * 255.0), 0, 255) if emax > 0 else np.zeros(len(err))
             m.update(e=_b64(qe.astype(np.uint8)), emean=float(np.mean(err)), emaxv=float(np.max(err)),
                      escale=float(emax))
+            if opt.get("isolines"):
+                m["isolines"] = int(opt["isolines"])
         out.append(m)
     shared = len(scale) == 1
     note = ("one colour scale for every coloured mesh (99th percentile of all)" if shared else

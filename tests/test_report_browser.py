@@ -167,6 +167,7 @@ def check_report_in_browser(report: Path, screenshot: Path | None = None, timeou
                     cdLabels: Array.from(document.querySelectorAll('#leaderboard svg.cd text')).map(function (t) { return t.textContent; }),
                     jserrors: document.querySelectorAll('.jserror').length,
                     smoothingSvgs: document.querySelectorAll('#plots-smoothing svg.chart').length,
+                    groupTitles: [...document.querySelectorAll('.plotgroup h4')].map(h => h.textContent),
                     height: document.documentElement.scrollHeight};
         })()""")
         if interact:
@@ -260,3 +261,22 @@ def test_report_opens_offline_without_errors(tiny_report, tmp_path):
     assert s["metric_switch"] == s["smoothingSvgs"] > 0     # re-rendered, same plots, new metric
     png = shot.read_bytes()
     assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 20_000
+
+
+def test_generic_section_plots_parameter_sweeps_and_level_lines(tmp_path):
+    """A task without a dedicated renderer (geodesics) gets its metric against every swept numeric
+    parameter (the heat time factor) and a 3D view of the distance with level lines."""
+    import json
+
+    import harness
+    cfg = {"name": "sweep", "repeats": 1, "time_budget": 0, "meshes": [{"procedural": "sphere", "subdivisions": 2}],
+           "tasks": {"geodesics": {"params": {"sources": 2}, "methods": [
+               {"name": "scratch.heat", "params": {"t_factor": [0.5, 1, 4], "laplacian": ["cotan", "tufted"]}}]}}}
+    harness.run(cfg, out=tmp_path, quiet=True, workers=1)
+    views = [json.loads(p.read_text()) for p in sorted((tmp_path / "views").glob("0*.json"))]
+    assert views and all(v["meshes"][0].get("isolines") == 12 for v in views)
+    s = check_report_in_browser(tmp_path / "report.html", interact=False)
+    assert s["console_errors"] == [] and s["exceptions"] == [] and s["jserrors"] == 0
+    assert s["view3d"] == "ready" and s["painted"] == s["canvases"] > 0
+    cdp_titles = s.get("groupTitles") or []
+    assert any("vs t_factor" in t for t in cdp_titles), cdp_titles

@@ -655,7 +655,8 @@
   function unpack(m, lo, span) {
     var q = decode(m.V, Uint16Array), V = new Float32Array(q.length);
     for (var i = 0; i < q.length; i++) V[i] = lo[i % 3] + q[i] / 65535 * span;
-    return {V: V, F: decode(m.F, Uint32Array), e: m.e ? decode(m.e, Uint8Array) : null, nv: m.nv, nf: m.nf};
+    return {V: V, F: decode(m.F, Uint32Array), e: m.e ? decode(m.e, Uint8Array) : null, nv: m.nv, nf: m.nf,
+      iso: m.e && m.isolines > 0 ? m.isolines : 0};
   }
   function drawMesh(canvas, mesh, cam, center, radius) {
     var ctx = canvas.getContext('2d'), w = canvas.width, h = canvas.height;
@@ -688,7 +689,26 @@
       ctx.beginPath();
       ctx.moveTo(hw + s * X[a], hh - s * Y[a]); ctx.lineTo(hw + s * X[b], hh - s * Y[b]); ctx.lineTo(hw + s * X[c], hh - s * Y[c]);
       ctx.closePath(); ctx.fill(); ctx.stroke();
+      if (mesh.iso) isoSegments(ctx, mesh.iso, [a, b, c], e, function (i) { return [hw + s * X[i], hh - s * Y[i]]; });
     }
+  }
+  // level lines of the per-vertex values across one face (drawn in the face's depth order)
+  function isoSegments(ctx, n, tri, e, proj) {
+    var step = 255 / n, lo = Math.min(e[tri[0]], e[tri[1]], e[tri[2]]), hi = Math.max(e[tri[0]], e[tri[1]], e[tri[2]]);
+    ctx.save(); ctx.strokeStyle = 'rgba(20,20,30,0.85)'; ctx.lineWidth = 1.1;
+    for (var k = Math.ceil(lo / step - 0.5); (k + 0.5) * step < hi; k++) {
+      var lv = (k + 0.5) * step, pts = [];
+      if (lv <= lo) continue;
+      for (var j = 0; j < 3; j++) {
+        var p = tri[j], q = tri[(j + 1) % 3], ep = e[p], eq = e[q];
+        if ((ep < lv) !== (eq < lv)) {
+          var t = (lv - ep) / (eq - ep), P = proj(p), Q = proj(q);
+          pts.push([P[0] + t * (Q[0] - P[0]), P[1] + t * (Q[1] - P[1])]);
+        }
+      }
+      if (pts.length === 2) { ctx.beginPath(); ctx.moveTo(pts[0][0], pts[0][1]); ctx.lineTo(pts[1][0], pts[1][1]); ctx.stroke(); }
+    }
+    ctx.restore();
   }
   function viewCard(v) {
     var card = el('div', {'class': 'view', 'data-case': v.case_id});
@@ -895,9 +915,51 @@
         });
         addPanel(panels, chart({title: title, xlabel: 'time (s)', ylabel: key, xlog: true, ylog: false, series: series}));
       });
+      sweepPanels(plots, vis, key);
     }
     render();
     RERENDER.push(render);
+  }
+
+  // the metric against every numeric parameter that some method sweeps over >= 3 values (e.g. the
+  // heat method's time factor): one line per method and its other parameters, mean over seeds
+  function sweepPanels(plots, vis, key) {
+    var P = vis.map(function (r) { try { return JSON.parse(r.params) || {}; } catch (e) { return {}; } });
+    var names = uniq([].concat.apply([], P.map(function (p) { return Object.keys(p); }))).sort();
+    names.forEach(function (pn) {
+      var pts = [];
+      vis.forEach(function (r, i) {
+        var x = P[i][pn];
+        if (!isNum(x)) return;
+        var rest = Object.assign({}, P[i]); delete rest[pn];
+        var other = paramText(JSON.stringify(rest));
+        pts.push({r: r, x: x, series: r.method + (other ? ' ' + other : '')});
+      });
+      var lines = groupBy(pts, function (p) { return p.r.mesh + '|' + p.r._noise + '|' + p.series; });
+      if (!Array.from(lines.values()).some(function (g) { return uniq(g.map(function (p) { return p.x; })).length >= 3; })) return;
+      var positive = pts.every(function (p) { return p.x > 0; });
+      var panels = panelGroup(plots, key + ' vs ' + pn + ', per mesh',
+        'One line per method and its other parameters; mean over seeds.', function () {
+          var box = el('div', {'class': 'legend'});
+          uniq(pts.map(function (p) { return p.series; })).sort().forEach(function (name) {
+            box.appendChild(el('span', {style: 'cursor:default'}, [el('i', {style: 'background:' + colorOf(name)}), name]));
+          });
+          return box;
+        });
+      groupBy(pts, function (p) { return p.r.mesh + ' · ' + p.r._noise; }).forEach(function (g, title) {
+        var series = [];
+        groupBy(g, function (p) { return p.series; }).forEach(function (sp, name) {
+          var byX = groupBy(sp, function (p) { return p.x; });
+          var xs = Array.from(byX.keys()).sort(function (a, b) { return a - b; });
+          if (xs.length < 2) return;
+          series.push({name: name, color: colorOf(name), line: true, r: 3, pts: xs.map(function (x) {
+            var y = mean(byX.get(x).map(function (p) { return p.r[key]; }));
+            return [x, y, name + '\n' + title + '\n' + pn + ' ' + fmt(x) + ', ' + key + ' ' + fmt(y)];
+          })});
+        });
+        if (series.length) addPanel(panels, chart({title: title, xlabel: pn, ylabel: key, xlog: positive, ylog: false, series: series}));
+      });
+    });
   }
 
   // ------------------------------------------------------------------ main

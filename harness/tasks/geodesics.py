@@ -120,6 +120,7 @@ def measure(inp, result, params) -> dict:
     if D.shape[0] != len(src):
         raise MethodFailed(f"returned {D.shape[0]} distance rows for {len(src)} source(s)")
     ref, exact = reference(inp, src)
+    inp.cache["geodesic_last_reference"] = ref[0]          # for this case's view (built right after)
     h = mean_edge_length(V, F)
     far = ref > EXCLUDE * h
     rel = np.abs(D - ref)[far] / ref[far]
@@ -150,8 +151,14 @@ def measure(inp, result, params) -> dict:
 
 
 def view(inp, result) -> list:
-    """The input coloured by the distance from the first source."""
-    return [("distance", inp.V, inp.F, result.D[0], "geodesic distance from the first source")]
+    """The input coloured by the distance from the first source, with 12 level lines, and by its
+    absolute error against the reference."""
+    D = result.D[0] / inp.diag
+    out = [("distance", inp.V, inp.F, D, "geodesic distance from the first source, 12 level lines", {"isolines": 12})]
+    ref = inp.cache.get("geodesic_last_reference")
+    if ref is not None and ref.shape == D.shape:
+        out.append(("error", inp.V, inp.F, np.abs(D - ref / inp.diag), "|distance - reference|"))
+    return out
 
 
 def output_mesh(inp, result):
