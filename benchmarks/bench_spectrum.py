@@ -1,13 +1,20 @@
 """Benchmark: the k smallest Laplace-Beltrami eigenpairs on the bundled armadillo (86,482 faces),
-our ARPACK shift-invert route (the one `scratch.spectral` and `scratch.spectrum` use: the shifted
-matrix factored by `harness.core.solvers`) against plain ``scipy.sparse.linalg.eigsh`` in
-shift-invert mode with scipy's own SuperLU, same operator (cotan W, Voronoi M), same shift.
+cotan W with the Voronoi mass, and spectral smoothing built on them. Routes:
+
+- ``bands``: our band-by-band shift-invert (`methods.scratch.bands`, what ``auto`` picks for
+  k > 100): 50-pair ARPACK runs at successive shifts, QDLDL factorizations, inertia-certified;
+- ``arpack``: one ARPACK shift-invert run for all k (+ max(8, k/20)) pairs with our SPD
+  factorization as ``OPinv`` (the route before bands);
+- ``plain``: ``scipy.sparse.linalg.eigsh`` in shift-invert mode with scipy's own SuperLU, same
+  operator and shift (what a user would write);
+- ``spectral``: the whole ``scratch.spectral`` smoothing call (operator, eigenpairs, projection),
+  and ``spectral_old`` the same call with one ARPACK run.
 
 Run:  .venv/bin/python benchmarks/bench_spectrum.py [--k 200] [--pairs 3]
 
-The two routes alternate (A B A B ...) in one process after a warm-up on a small mesh; the
-median, min and max of the per-pair ratio A/B are printed with the load average, and the
-eigenvalues of the two routes are compared.
+The routes alternate in one process after a warm-up on a small mesh; per round the ratios are
+formed and their median, min and max printed with the load average; the eigenvalues of the
+routes are compared.
 """
 from __future__ import annotations
 
@@ -28,34 +35,62 @@ def main(argv=None) -> int:
     ap.add_argument("--k", type=int, default=200)
     ap.add_argument("--pairs", type=int, default=3)
     a = ap.parse_args(argv)
+    import scipy.sparse as sp
     from scipy.sparse.linalg import eigsh
 
     from harness import datasets
+    from methods.scratch.smoothing import smoothing_operator
     from methods.scratch.spectrum import inversion_shift, operator_and_mass, smallest_eigenpairs
-
-    def ours(W, M, k):
-        return smallest_eigenpairs(W, M, k, "shift_invert")[0]
 
     def plain(W, M, k):
         lam = eigsh((-W).tocsc(), k=k, M=M.tocsc(), sigma=inversion_shift(W, M), which="LM",
                     v0=np.random.default_rng(0).standard_normal(W.shape[0]))[0]
         return np.sort(lam)
 
+    def spectral(V, F, k, solver):
+        W, m = smoothing_operator(V, F, "cotan_area")
+        _, Phi = smallest_eigenpairs(W.tocsr(), sp.diags(m).tocsr(), k, solver)
+        return Phi @ (Phi.T @ (m[:, None] * V))
+
+    routes = {
+        "bands": lambda W, M, V, F, k: smallest_eigenpairs(W, M, k, "bands")[0],
+        "arpack": lambda W, M, V, F, k: smallest_eigenpairs(W, M, k, "shift_invert")[0],
+        "plain": lambda W, M, V, F, k: plain(W, M, k),
+        "spectral": lambda W, M, V, F, k: spectral(V, F, k, "auto"),
+        "spectral_old": lambda W, M, V, F, k: spectral(V, F, k, "shift_invert"),
+    }
     Vs, Fs = datasets.icosphere(3)
-    W, M = operator_and_mass(Vs, Fs, "cotan", "voronoi")
-    ours(W, M, 10), plain(W, M, 10)
+    Ws, Ms = operator_and_mass(Vs, Fs, "cotan", "voronoi")
+    for f in routes.values():
+        f(Ws, Ms, Vs, Fs, 120)
     m = datasets.load("armadillo").clean
     W, M = operator_and_mass(m.V, m.F, "cotan", "voronoi")
-    ta, tb = [], []
+    T = {r: [] for r in routes}
+    out = {}
+    load0 = os.getloadavg()
     for _ in range(a.pairs):
-        t = time.perf_counter(); la = ours(W, M, a.k); ta.append(time.perf_counter() - t)
-        t = time.perf_counter(); lb = plain(W, M, a.k); tb.append(time.perf_counter() - t)
-    r = [x / y for x, y in zip(ta, tb)]
-    print(f"armadillo {len(m.F):,} faces, k = {a.k}, {a.pairs} pairs, load average {os.getloadavg()}")
-    print(f"  ours (ARPACK + our factorization): median {statistics.median(ta):.2f} s")
-    print(f"  plain eigsh + SuperLU:             median {statistics.median(tb):.2f} s")
-    print(f"  ratio ours/plain: min {min(r):.2f}  median {statistics.median(r):.2f}  max {max(r):.2f}")
-    print(f"  max relative eigenvalue difference {np.abs(la - lb).max() / lb.max():.1e}")
+        for name, f in routes.items():
+            t = time.perf_counter()
+            out[name] = f(W, M, m.V, m.F, a.k)
+            T[name].append(time.perf_counter() - t)
+    print(f"armadillo {len(m.F):,} faces, k = {a.k}, {a.pairs} rounds, load average {load0} -> {os.getloadavg()}")
+    for name in routes:
+        print(f"  {name:13s} median {statistics.median(T[name]):6.2f} s")
+
+    def ratio(x, y, label):
+        r = [p / q for p, q in zip(T[x], T[y])]
+        print(f"  {label:44s} min {min(r):.2f}  median {statistics.median(r):.2f}  max {max(r):.2f}")
+
+    ratio("bands", "plain", "bands / plain eigsh + SuperLU")
+    ratio("arpack", "plain", "one ARPACK run (ours) / plain")
+    ratio("bands", "arpack", "bands / one ARPACK run")
+    fastest = min(("bands", "arpack", "plain"), key=lambda r: statistics.median(T[r]))
+    ratio("spectral", fastest, f"scratch.spectral / fastest route ({fastest})")
+    ratio("spectral", "spectral_old", "scratch.spectral / its one-ARPACK-run version")
+    for x, y in (("bands", "plain"), ("arpack", "plain")):
+        print(f"  max relative eigenvalue difference {x} vs {y}: {np.abs(out[x] - out[y]).max() / out[y].max():.1e}")
+    print(f"  smoothed coordinates, bands vs one run: max difference "
+          f"{np.abs(out['spectral'] - out['spectral_old']).max() / np.ptp(m.V, axis=0).max():.1e} of the box")
     return 0
 
 

@@ -16,9 +16,9 @@ def lowest_eigenpairs(W: sp.spmatrix, m: np.ndarray, k: int, solver: str = "auto
     """The ``k`` smallest eigenpairs of ``-W phi = lambda M phi``, ``M = diag(m)``.
 
     Returns ``(lam, Phi)`` with ``Phi`` (n, k) M-orthonormal (``Phi^T M Phi = I``) and ``lam``
-    ascending. Sparse path: `methods.scratch.spectrum.smallest_eigenpairs` (ARPACK shift-invert
-    with the shifted matrix factored once by ``harness.core.solvers``; fixed start vector, so
-    results are deterministic).
+    ascending. Sparse path: `methods.scratch.spectrum.smallest_eigenpairs` with its automatic
+    solver (one ARPACK shift-invert run for k <= 100, band-by-band shift-invert with an inertia
+    check above; fixed start vectors, so results are deterministic).
     """
     n = W.shape[0]
     k = int(min(k, n))
@@ -26,7 +26,7 @@ def lowest_eigenpairs(W: sp.spmatrix, m: np.ndarray, k: int, solver: str = "auto
         lam, Phi = sla_dense.eigh(-W.toarray(), np.diag(m), subset_by_index=[0, k - 1])
         return lam, Phi
     from methods.scratch.spectrum import smallest_eigenpairs
-    return smallest_eigenpairs(W.tocsr(), sp.diags(m).tocsr(), k, "shift_invert", solver)
+    return smallest_eigenpairs(W.tocsr(), sp.diags(m).tocsr(), k, "auto", solver)
 
 
 @register("scratch.spectral", task="smoothing", library="scratch",
@@ -55,8 +55,8 @@ def spectral(V, F, *, k=100, weights="cotan_area"):
     Manifold harmonics (Vallet & Levy 2008; Taubin 1995 Sec. 3): the generalized problem
     ``W phi = -lambda M phi`` has M-orthonormal eigenvectors ("frequencies" ``sqrt(lambda)``);
     projecting the coordinates onto the first ``k`` of them in the ``M`` inner product is an
-    ideal low-pass filter. Cost: one sparse factorization plus ARPACK iterations, growing
-    with ``k``.
+    ideal low-pass filter. Cost: one sparse factorization plus ARPACK iterations for small
+    ``k``; for larger ``k`` one factorization and one 50-pair ARPACK run per band, linear in ``k``.
     """
     W, m = smoothing_operator(V, F, weights)
     _, Phi = lowest_eigenpairs(W, m, k)

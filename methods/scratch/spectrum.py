@@ -14,6 +14,11 @@ smallest eigenpairs of ``-W x = lambda M x``:
   the backends with the cheapest repeated solves, `many_solves_solver`); ``k + max(8, k/20)``
   pairs are computed and the smallest ``k`` kept, as ARPACK can miss members of an exactly
   degenerate multiplet (the sphere's) cut at ``k``;
+- ``bands``: band-by-band shift-invert (Vallet & Levy 2008; `methods.scratch.bands`): ARPACK
+  runs of 50 pairs at successive shifts through the spectrum, each shifted indefinite matrix
+  factored by QDLDL, completeness certified by Sylvester inertia (the count of negative pivots);
+  falls back to ``shift_invert`` when a band cannot be certified;
+- ``auto``: ``bands`` for k > 100, else ``shift_invert``;
 - ``dense``: LAPACK's symmetric-definite ``eigh`` on dense matrices (reference; n <= 6000).
 
 Eigenvectors are returned M-orthonormal, eigenvalues ascending.
@@ -29,6 +34,8 @@ from methods.scratch import operators as op
 from methods.vocabulary import solver_param
 
 DENSE_MAX = 6000
+BAND = 50            # eigenpairs per band of the band-by-band solver
+BANDS_FROM = 100     # ``auto`` uses bands above this k, one ARPACK run up to it
 
 
 def fem_mass(V: np.ndarray, F: np.ndarray) -> sp.csr_matrix:
@@ -80,7 +87,7 @@ def inversion_shift(W, M) -> float:
     return -1e-8 * float(np.median(d[d > 0])) if (d > 0).any() else -1e-8
 
 
-def smallest_eigenpairs(W, M, k: int, solver: str = "shift_invert", linear_solver: str = "auto", seed: int = 0):
+def smallest_eigenpairs(W, M, k: int, solver: str = "auto", linear_solver: str = "auto", seed: int = 0):
     """(values ascending (k,), M-orthonormal vectors (n, k)) of ``-W x = lambda M x``."""
     from scipy.sparse.linalg import LinearOperator, eigsh
     n = W.shape[0]
@@ -92,7 +99,13 @@ def smallest_eigenpairs(W, M, k: int, solver: str = "shift_invert", linear_solve
             raise ValueError(f"dense eigensolver refused for n = {n} > {DENSE_MAX} vertices")
         from scipy.linalg import eigh
         lam, X = eigh(A.toarray(), M.toarray(), subset_by_index=[0, k - 1])
-    elif solver == "shift_invert":
+    elif solver == "bands" or (solver == "auto" and k > BANDS_FROM):
+        from methods.scratch.bands import BandFailure, band_eigenpairs
+        try:
+            lam, X = band_eigenpairs(A, M, k, sigma, band=BAND, seed=seed)
+        except (BandFailure, ImportError):
+            return smallest_eigenpairs(W, M, k, "shift_invert", linear_solver, seed)
+    elif solver in ("shift_invert", "auto"):
         fac = factorize((A - sigma * M).tocsr(), many_solves_solver() if linear_solver == "auto" else linear_solver)
         OPinv = LinearOperator((n, n), matvec=fac.solve, dtype=np.float64)
         extra = min(max(8, k // 20), n - 1 - k)       # ARPACK can miss members of a multiplet cut at k:
@@ -101,7 +114,7 @@ def smallest_eigenpairs(W, M, k: int, solver: str = "shift_invert", linear_solve
         order = np.argsort(lam)[:k]
         lam, X = lam[order], X[:, order]
     else:
-        raise ValueError(f"unknown solver {solver!r}; expected shift_invert or dense")
+        raise ValueError(f"unknown solver {solver!r}; expected auto, shift_invert, bands or dense")
     order = np.argsort(lam)
     lam, X = np.asarray(lam)[order], np.asarray(X)[:, order]
     X = X / np.sqrt(np.maximum(np.einsum("ij,ij->j", X, M @ X), 1e-300))
@@ -114,10 +127,10 @@ def smallest_eigenpairs(W, M, k: int, solver: str = "shift_invert", linear_solve
                                     doc="the stiffness W (module docstring)"),
                   "mass": Param("mass", "voronoi", choices=("voronoi", "barycentric", "fem"),
                                 doc="lumped mixed Voronoi, lumped barycentric, or the consistent FEM mass"),
-                  "solver": Param("solver", "shift_invert", choices=("shift_invert", "dense"),
+                  "solver": Param("solver", "auto", choices=("auto", "shift_invert", "bands", "dense"),
                                   doc="eigensolver (module docstring)"),
                   "linear_solver": solver_param()})
-def spectrum(V, F, *, k=20, operator="cotan", mass="voronoi", solver="shift_invert", linear_solver="auto"):
+def spectrum(V, F, *, k=20, operator="cotan", mass="voronoi", solver="auto", linear_solver="auto"):
     """The k smallest eigenpairs of the chosen operator and mass (module docstring)."""
     W, M = operator_and_mass(V, F, operator, mass)
     lam, X = smallest_eigenpairs(W, M, k, solver, linear_solver)
