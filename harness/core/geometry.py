@@ -14,6 +14,8 @@ import numpy as np
 
 # ----------------------------------------------------------------------------- edges
 
+COMPILED_EDGES_FROM = 20_000     # faces; below, numpy's key sort (no numba import)
+
 
 def _half_edges(F: np.ndarray) -> np.ndarray:
     """(3m, 2) vertex pairs of the half-edges (edge opposite corner 2, 0, 1 of each face)."""
@@ -34,12 +36,22 @@ def edge_face_counts(F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     number of faces using each (e,)."""
     if len(F) == 0:
         return np.zeros((0, 2), np.int64), np.zeros(0, np.int64)
+    if len(F) >= COMPILED_EDGES_FROM:
+        from ._edges_kernel import edges_and_counts
+        F = np.ascontiguousarray(F, dtype=np.int64)
+        return edges_and_counts(F, int(F.max()) + 1)
     keys, n = edge_keys(F)
     keys = np.sort(keys)
     start = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]])
     counts = np.diff(np.r_[start, keys.size])
     u = keys[start]
     return np.stack([u // n, u % n], axis=1), counts
+
+
+def warm() -> None:
+    """Load (or compile) the compiled edge extraction once, e.g. in a driver before it forks."""
+    from ._edges_kernel import edges_and_counts
+    edges_and_counts(np.array([[0, 1, 2]], dtype=np.int64), 3)
 
 
 def unique_edges(F: np.ndarray) -> np.ndarray:

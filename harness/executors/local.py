@@ -91,6 +91,11 @@ def _preload_tasks(cases) -> None:
     """Run each task's ``preload`` (compiled measuring code) once in the driver, so forked case
     processes inherit it instead of loading it again (best effort: harness code, never a method's)."""
     from .. import tasks
+    from ..core import geometry
+    try:
+        geometry.warm()
+    except Exception:  # noqa: BLE001 - the numpy path below the threshold still works
+        pass
     for name in sorted({c.task for c in cases}):
         try:
             fn = tasks.get(name).preload
