@@ -376,14 +376,14 @@ def nonmanifold_vertices(F: np.ndarray, n: int) -> np.ndarray:
     # each corner touches the two edges (v, nxt) and (v, prv); corners sharing (v, x) are one fan
     keys = np.concatenate([corner_v * n + nxt, corner_v * n + prv])
     corners = np.concatenate([c, c])
-    _, inv = np.unique(keys, return_inverse=True)
-    order = np.argsort(inv, kind="stable")
-    g, cs = inv[order], corners[order]
+    order = np.argsort(keys)                       # equal keys end up adjacent
+    g, cs = keys[order], corners[order]
     same = g[1:] == g[:-1]
     a, b = cs[:-1][same], cs[1:][same]
     G = sp.coo_matrix((np.ones(len(a)), (a, b)), shape=(3 * m, 3 * m))
     _, comp = connected_components(G, directed=False)
-    pairs = np.unique(corner_v * (3 * m) + comp)
+    pairs = np.sort(corner_v * (3 * m) + comp)
+    pairs = pairs[np.r_[True, pairs[1:] != pairs[:-1]]]
     fans = np.bincount(pairs // (3 * m), minlength=n)
     return np.flatnonzero(fans > 1)
 
@@ -400,17 +400,17 @@ def topology(V: np.ndarray, F: np.ndarray) -> dict:
     """
     n = len(V)
     edges, counts = edge_face_counts(F)
-    used = np.unique(F)
+    used = np.flatnonzero(np.bincount(np.asarray(F).ravel(), minlength=n)) if len(F) else np.zeros(0, np.int64)
     bnd = edges[counts == 1]
     if len(bnd):
         Gb = sp.coo_matrix((np.ones(len(bnd)), (bnd[:, 0], bnd[:, 1])), shape=(n, n))
         nb, lab = connected_components(Gb, directed=False)
-        loops = len(np.unique(lab[np.unique(bnd)]))
+        loops = int(np.count_nonzero(np.bincount(lab[bnd.ravel()], minlength=nb)))
     else:
         loops = 0
     Ge = sp.coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n, n))
     _, lab = connected_components(Ge, directed=False)
-    comps = len(np.unique(lab[used]))
+    comps = int(np.count_nonzero(np.bincount(lab[used], minlength=int(lab.max()) + 1))) if len(used) else 0
     chi = len(used) - len(edges) + len(F)
     nm_edges = int((counts > 2).sum())
     nm_verts = len(nonmanifold_vertices(F, n))

@@ -32,27 +32,11 @@ import time
 import numpy as np
 
 from ..core.geometry import sample_surface
+from .surface_distance import Surface
 from ._hausdorff_kernel import centroid_bounds, corner_bounds
 
 
-class _Surface:
-    """A triangle mesh with an AABB tree for exact point-to-surface queries."""
-
-    def __init__(self, V: np.ndarray, F: np.ndarray):
-        import igl
-        self.V = np.ascontiguousarray(V, dtype=np.float64)
-        self.F = np.ascontiguousarray(F, dtype=np.int64)
-        self.tree = igl.AABB()
-        self.tree.init(self.V, self.F)
-        self.count = 0
-
-    def query(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Distances (k,) and closest face indices (k,) of points (k, 3)."""
-        if len(P) == 0:
-            return np.zeros(0), np.zeros(0, np.int64)
-        self.count += len(P)
-        d2, i, _ = self.tree.squared_distance(self.V, self.F, np.ascontiguousarray(P, dtype=np.float64))
-        return np.sqrt(np.maximum(np.asarray(d2).ravel(), 0.0)), np.asarray(i, dtype=np.int64).ravel()
+_Surface = Surface           # the AABB-backed surface (harness.metrics.surface_distance)
 
 
 def one_sided(VX: np.ndarray, FX: np.ndarray, Y: _Surface, eps: float = 1e-3, atol: float = 0.0,
@@ -122,7 +106,8 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: _Surface, eps: float = 1e-3, at
 
 
 def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_points: int = 1_000_000,
-              max_seconds: float = 30.0, n_samples: int = 20000, seed: int = 0) -> dict:
+              max_seconds: float = 30.0, n_samples: int = 20000, seed: int = 0,
+              surface_b: Surface | None = None) -> dict:
     """Certified symmetric Hausdorff distance and sampled mean surface distances.
 
     ``hausdorff``: the largest distance found (a lower bound), with ``hausdorff_upper`` the
@@ -133,6 +118,9 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
     budget (``max_points`` distance queries per direction, ``max_seconds`` in all) ran out.
     ``hausdorff_ab``/``_ba``: the one-sided lower bounds (A to B, B to A).
 
+    ``surface_b``: a prebuilt `Surface` of (VB, FB) to reuse (e.g. the clean mesh's, shared by
+    every metric of a case).
+
     ``surface_dist_mean``: the symmetric mean surface distance, the average of the two one-sided
     area-weighted means ``mean_{p in A} d(p, B)`` and ``mean_{p in B} d(p, A)``, each estimated
     from ``n_samples`` area-uniform random points (seeded; no vertices mixed in), with
@@ -142,7 +130,7 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
     if atol is None:
         atol = 1e-12 * max(float(np.linalg.norm(np.ptp(VA, axis=0))), float(np.linalg.norm(np.ptp(VB, axis=0))))
     deadline = time.perf_counter() + max_seconds
-    SA, SB = _Surface(VA, FA), _Surface(VB, FB)
+    SA, SB = Surface(VA, FA), (surface_b if surface_b is not None else Surface(VB, FB))
     out = {}
     seed_ab = seed_ba = 0.0
     if n_samples:

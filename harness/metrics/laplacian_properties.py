@@ -33,9 +33,9 @@ and ``M`` diagonal (or None):
 
     1. ``lam_max = max |eig(S)|`` by ARPACK Lanczos (``eigsh``, ``which='LM'``, tol 1e-6; fast,
        extreme eigenvalue). Small Krylov spaces (``ncv=8``) are used throughout.
-    2. ``A = S - sigma I`` with ``sigma = -PSD_TOL * lam_max`` is factorised by SuperLU with a
-       symmetric fill-reducing ordering and diagonal pivoting (``SymmetricMode``,
-       ``diag_pivot_thresh=0``), i.e. ``P A P^T = L D L^T``. By Sylvester's law of inertia the
+    2. ``A = S - sigma I`` with ``sigma = -PSD_TOL * lam_max`` is factorised as
+       ``P A P^T = L D L^T`` without pivoting (QDLDL, AMD ordering; SuperLU in ``SymmetricMode``
+       with ``diag_pivot_thresh=0`` if QDLDL is missing). By Sylvester's law of inertia the
        number of negative pivots is the number of eigenvalues of ``S`` below ``sigma``, so
        ``psd`` is exact up to rounding of the factorisation, not an iterative guess.
     3. If no pivot is negative, the smallest eigenvalue is the one nearest ``sigma``:
@@ -325,6 +325,30 @@ def _v0(n):
     return np.random.default_rng(0).standard_normal(n)
 
 
+def _ldlt(A):
+    """``(solve, pivots)`` of ``P A P^T = L D L^T`` without pivoting (QDLDL with an AMD ordering;
+    SuperLU in symmetric mode with diagonal pivots where QDLDL is missing), or None when a pivot
+    is exactly zero or SuperLU left the diagonal."""
+    try:
+        import qdldl
+    except ImportError:
+        qdldl = None
+    if qdldl is not None:
+        try:
+            f = qdldl.Solver(sp.csc_matrix(A))
+        except (ValueError, RuntimeError):
+            return None
+        D = f.factors()[1]
+        return (None if (D == 0).any() else (f.solve, D))
+    try:
+        lu = sla.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+    except RuntimeError:
+        return None
+    if not np.array_equal(lu.perm_r, lu.perm_c):
+        return None
+    return lu.solve, lu.U.diagonal()
+
+
 def _min_eig(W):
     """(min_eig relative, psd) of S = -(W + W^T)/2; None where not measurable."""
     n = W.shape[0]
@@ -348,14 +372,10 @@ def _min_eig(W):
         return 0.0, True
     sigma = -PSD_TOL * lam_max
     A = (S - sigma * sp.identity(n, format="csc")).tocsc()
-    try:
-        lu = sla.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                      options={"SymmetricMode": True})
-    except RuntimeError:  # exactly singular pivot: inertia unknown
+    factored = _ldlt(A)
+    if factored is None:            # singular pivot or a non-symmetric pivot order: inertia unknown
         return None, None
-    if not np.array_equal(lu.perm_r, lu.perm_c):
-        return None, None
-    piv = lu.U.diagonal()
+    solve, piv = factored
     if not np.isfinite(piv).all():
         return None, None
     n_below = int(np.count_nonzero(piv < 0))
@@ -364,7 +384,7 @@ def _min_eig(W):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             if psd:
-                op = sla.LinearOperator(A.shape, matvec=lu.solve, dtype=np.float64)
+                op = sla.LinearOperator(A.shape, matvec=solve, dtype=np.float64)
                 ev = sla.eigsh(S, k=1, sigma=sigma, OPinv=op, which="LM", ncv=min(n - 1, 8), v0=_v0(n),
                                return_eigenvectors=False, tol=1e-10, maxiter=1000)
             else:

@@ -4,23 +4,49 @@ import numpy as np
 from ..core.geometry import double_areas
 
 
-def point_surface_distance(P: np.ndarray, V: np.ndarray, F: np.ndarray) -> np.ndarray:
-    """Unsigned distance (k,) from each point of ``P`` (k, 3) to the triangle mesh (V, F)."""
-    import igl
-    d2, _, _ = igl.point_mesh_squared_distance(np.ascontiguousarray(P, dtype=np.float64),
-                                               np.ascontiguousarray(V, dtype=np.float64),
-                                               np.ascontiguousarray(F, dtype=np.int64))
-    return np.sqrt(np.maximum(np.asarray(d2).ravel(), 0.0))
+class Surface:
+    """A triangle mesh with an AABB tree (libigl) for exact point-to-surface queries; build it
+    once per surface and query it many times."""
+
+    def __init__(self, V: np.ndarray, F: np.ndarray):
+        import igl
+        self.V = np.ascontiguousarray(V, dtype=np.float64)
+        self.F = np.ascontiguousarray(F, dtype=np.int64)
+        self.tree = igl.AABB()
+        self.tree.init(self.V, self.F)
+        self.count = 0
+
+    def query(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Distances (k,) and closest face indices (k,) of points (k, 3)."""
+        if len(P) == 0:
+            return np.zeros(0), np.zeros(0, np.int64)
+        self.count += len(P)
+        d2, i, _ = self.tree.squared_distance(self.V, self.F, np.ascontiguousarray(P, dtype=np.float64))
+        return np.sqrt(np.maximum(np.asarray(d2).ravel(), 0.0)), np.asarray(i, dtype=np.int64).ravel()
 
 
-def surface_distance(V: np.ndarray, F: np.ndarray, V_clean: np.ndarray, F_clean: np.ndarray) -> dict:
+def cached_surface(cache: dict, key: str, V: np.ndarray, F: np.ndarray) -> Surface:
+    """The `Surface` of (V, F) memoised in ``cache`` under ``key`` (e.g. a case input's cache)."""
+    if key not in cache:
+        cache[key] = Surface(V, F)
+    return cache[key]
+
+
+def point_surface_distance(P: np.ndarray, V: np.ndarray, F: np.ndarray, surface: Surface | None = None) -> np.ndarray:
+    """Unsigned distance (k,) from each point of ``P`` (k, 3) to the triangle mesh (V, F)
+    (``surface``: its prebuilt `Surface`, if any)."""
+    return (surface or Surface(V, F)).query(P)[0]
+
+
+def surface_distance(V: np.ndarray, F: np.ndarray, V_clean: np.ndarray, F_clean: np.ndarray,
+                     surface: Surface | None = None) -> dict:
     """Distances of the result's vertices to the clean surface.
 
     ``dist_mean`` = mean_i d(v_i, S_clean). ``ev_sun`` (Sun et al. 2007) =
     sqrt( sum_i A_i d(v_i, S_clean)^2 / sum_i A_i ), A_i the barycentric area of vertex i on
     the result mesh (one third of its incident faces' areas).
     """
-    d = point_surface_distance(V, V_clean, F_clean)
+    d = point_surface_distance(V, V_clean, F_clean, surface)
     dbl = double_areas(V, F)
     A = np.bincount(F.ravel(), weights=np.repeat(dbl / 6.0, 3), minlength=len(V))
     tot = A.sum()

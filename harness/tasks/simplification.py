@@ -10,7 +10,7 @@ import numpy as np
 from ..core.params import Param
 from ..errors import MethodFailed
 from ..metrics.hausdorff import hausdorff, warm as _warm_hausdorff
-from ..metrics.surface_distance import point_surface_distance
+from ..metrics.surface_distance import cached_surface, point_surface_distance
 from ..metrics.triangle_quality import triangle_quality
 from .base import Invalid, Metric, Task, float_array
 
@@ -76,8 +76,9 @@ def measure(inp, result, params) -> dict:
     target = target_face_count(inp.F.shape[0], params.get("target_ratio"), params.get("target_faces"))
     topo_in = _topology_in(inp)
     row = {"target_faces": int(target), "out_faces": int(len(F_out))}
+    S_in = cached_surface(inp.cache, "input_surface", inp.V, inp.F)
     hd = hausdorff(V_out, F_out, inp.V, inp.F, eps=inp.settings.get("hausdorff_eps", 1e-3),
-                   n_samples=inp.settings.get("hausdorff_samples", 20000))
+                   n_samples=inp.settings.get("hausdorff_samples", 20000), surface_b=S_in)
     topo = topology(V_out, F_out)
     row.update({"hausdorff": hd["hausdorff"] / diag, "hausdorff_gap": hd["hausdorff_gap"],
                 "hausdorff_upper": hd["hausdorff_upper"] / diag,
@@ -100,7 +101,8 @@ def view(inp, result) -> list:
     """Meshes of the 3D view: the input coloured by its distance to the result and the result by
     its distance to the input (the two directions of the Hausdorff distance)."""
     e_in = point_surface_distance(inp.V, result.V, result.F) / inp.diag
-    e_out = point_surface_distance(result.V, inp.V, inp.F) / inp.diag
+    S_in = cached_surface(inp.cache, "input_surface", inp.V, inp.F)
+    e_out = point_surface_distance(result.V, inp.V, inp.F, S_in) / inp.diag
     return [("clean", inp.clean.V, inp.F, None, "reference mesh"),
             ("input", inp.V, inp.F, e_in, "distance of each input vertex to the simplified surface"),
             ("result", result.V, result.F, e_out, "distance of each result vertex to the input surface")]

@@ -11,7 +11,7 @@ from ..core.geometry import area, volume, zero_area_faces
 from ..errors import MethodFailed
 from ..metrics.hausdorff import hausdorff, warm as _warm_hausdorff
 from ..metrics.normal_error import normal_error
-from ..metrics.surface_distance import point_surface_distance, surface_distance
+from ..metrics.surface_distance import cached_surface, point_surface_distance, surface_distance
 from ..metrics.triangle_quality import triangle_quality
 from ..metrics.vertex_error import vertex_error
 from .base import Invalid, Metric, Task, float_array
@@ -45,12 +45,17 @@ def _closed(inp) -> bool:
     return inp.cache["closed"]
 
 
+def _clean_surface(inp):
+    """The clean mesh's AABB surface, built once per input and shared by every distance metric."""
+    return cached_surface(inp.cache, "clean_surface", inp.clean.V, inp.F)
+
+
 def _input_metrics(inp) -> dict:
     if "input_metrics" not in inp.cache:
         V_clean, F, diag = inp.clean.V, inp.F, inp.diag
         inp.cache["input_metrics"] = {
             "input_ev_mean": vertex_error(inp.V, V_clean)["ev_mean"] / diag,
-            "input_dist_mean": surface_distance(inp.V, F, V_clean, F)["dist_mean"] / diag,
+            "input_dist_mean": surface_distance(inp.V, F, V_clean, F, _clean_surface(inp))["dist_mean"] / diag,
             "input_normal_error_deg": normal_error(inp.V, V_clean, F)["normal_error_deg"]}
     return dict(inp.cache["input_metrics"])
 
@@ -70,8 +75,9 @@ def measure(inp, result, params) -> dict:
     if row["diverged"]:
         return row
     ve = vertex_error(V_out, V_clean)
-    sd = surface_distance(V_out, F, V_clean, F)
-    hd = hausdorff(V_out, F, V_clean, F, eps=inp.settings.get("hausdorff_eps", 1e-3), n_samples=0)
+    S = _clean_surface(inp)
+    sd = surface_distance(V_out, F, V_clean, F, S)
+    hd = hausdorff(V_out, F, V_clean, F, eps=inp.settings.get("hausdorff_eps", 1e-3), n_samples=0, surface_b=S)
     row.update({"ev_mean": ve["ev_mean"] / diag, "ev_rms": ve["ev_rms"] / diag,
                 "dist_mean": sd["dist_mean"] / diag, "ev_sun": sd["ev_sun"] / diag,
                 "hausdorff": hd["hausdorff"] / diag, "hausdorff_gap": hd["hausdorff_gap"],
@@ -92,8 +98,9 @@ def output_mesh(inp, result):
 
 def view(inp, result) -> list:
     """Meshes of the 3D view: coloured by the distance of each vertex to the clean surface."""
-    e_in = point_surface_distance(inp.V, inp.clean.V, inp.F) / inp.diag
-    e_out = point_surface_distance(result.V, inp.clean.V, inp.F) / inp.diag
+    S = _clean_surface(inp)
+    e_in = point_surface_distance(inp.V, inp.clean.V, inp.F, S) / inp.diag
+    e_out = point_surface_distance(result.V, inp.clean.V, inp.F, S) / inp.diag
     what = "distance of each vertex to the clean surface"
     return [("clean", inp.clean.V, inp.F, None, "reference mesh"),
             ("noisy input", inp.V, inp.F, e_in, what), ("result", result.V, inp.F, e_out, what)]
