@@ -62,7 +62,7 @@ def accumulate_quadrics(cols, n: np.ndarray, d: np.ndarray, w: np.ndarray,
 
 
 def setup(V: np.ndarray, F: np.ndarray, boundary_weight: float):
-    """Vectorised set-up: vertex quadrics, unique edges and boundary flags.
+    """Set-up: vertex quadrics (compiled, one pass over the faces), unique edges and boundary flags.
 
     Returns ``Q`` (n, 10), ``E`` (e, 2) unique edges, ``bnd`` (n,) boundary vertices.
     Boundary edges (one incident face) get a penalty quadric: the plane through the edge
@@ -70,23 +70,19 @@ def setup(V: np.ndarray, F: np.ndarray, boundary_weight: float):
     ``boundary_weight * |v_b - v_a|^2`` (an area, like the face quadrics), added to both ends.
     It keeps the boundary from drifting or shrinking.
     """
+    from harness.core.geometry import edge_face_counts
+    from methods.scratch.qem_setup_kernel import vertex_quadrics
     n = V.shape[0]
-    fn, fd, fw = face_quadrics(V, F)
-    Q = accumulate_quadrics((F[:, 0], F[:, 1], F[:, 2]), fn, fd, fw, n)
-
-    # half-edges (f, k): F[f, k] -> F[f, k+1]; undirected key lo * n + hi
-    a = F.ravel()
-    b = F[:, [1, 2, 0]].ravel()
-    key = np.minimum(a, b) * n + np.maximum(a, b)
-    sk = np.sort(key)
-    first = np.ones(sk.size, dtype=bool)
-    first[1:] = sk[1:] != sk[:-1]
-    ukey = sk[first]
-    E = np.stack([ukey // n, ukey % n], axis=1)
-    cnt = np.diff(np.append(np.flatnonzero(first), sk.size))
-    bkey = ukey[cnt == 1]
+    Q = vertex_quadrics(np.ascontiguousarray(V), np.ascontiguousarray(F), n)
+    E, cnt = edge_face_counts(F)                     # unique edges, lexicographic
     bnd = np.zeros(n, dtype=np.bool_)
-    if bkey.size:
+    bE = E[cnt == 1]
+    if len(bE):
+        # half-edges (f, k): F[f, k] -> F[f, k+1]; undirected key lo * n + hi
+        a = F.ravel()
+        b = F[:, [1, 2, 0]].ravel()
+        key = np.minimum(a, b) * n + np.maximum(a, b)
+        bkey = bE[:, 0] * n + bE[:, 1]
         pos = np.minimum(np.searchsorted(bkey, key), bkey.size - 1)
         hb = bkey[pos] == key                        # half-edges on the boundary
         ha, hbv = a[hb], b[hb]
@@ -129,12 +125,12 @@ def spatial_order(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray,
     ext = float((V.max(axis=0) - lo).max()) or 1.0
     g = np.minimum(((V - lo) / ext * (1 << 20)).astype(np.int64), (1 << 21) - 1)
     code = _spread3(g[:, 0]) | (_spread3(g[:, 1]) << np.uint64(1)) | (_spread3(g[:, 2]) << np.uint64(2))
+    from methods.scratch.qem_setup_kernel import faces_by_min_vertex
     perm = np.argsort(code, kind="stable")
     rank = np.empty_like(perm)
     rank[perm] = np.arange(perm.size)
-    F2 = rank[F]
-    F2 = F2[np.argsort(F2.min(axis=1), kind="stable")]
-    return V[perm], np.ascontiguousarray(F2), perm
+    F2 = faces_by_min_vertex(np.ascontiguousarray(rank[F]), len(V))
+    return V[perm], F2, perm
 
 
 @register(
