@@ -132,3 +132,22 @@ def test_heat_kernel_signature_on_the_sphere_and_between_solvers():
     ha = heat_kernel_signature(a.values, a.vectors, t)
     hb = heat_kernel_signature(b.values, b.vectors / np.sqrt(np.einsum("ij,ij->j", b.vectors, b.M @ b.vectors)), t)
     assert np.abs(ha - hb).max() <= 1e-8 * np.abs(hb).max()
+
+
+def test_unit_square_neumann_spectrum_and_flip_invariance(tmp_path):
+    """Planes are the unit square: eigenvalues against pi^2 (a^2 + b^2) (Neumann). Flipping 30%
+    of the edges changes the cotan spectrum but not the intrinsic Delaunay one, which recovers
+    the Delaunay triangulation of the same points (equal to 1e-9)."""
+    run({"name": "sq", "repeats": 1, "time_budget": 0, "noise": [{"model": "none"}],
+         "meshes": [{"procedural": "plane_delaunay", "n_points": 800},
+                    {"procedural": "plane_nondelaunay", "n_points": 800, "flip_fraction": 0.3}],
+         "tasks": {"spectrum": {"params": {"k": 20}, "methods": [
+             {"name": "scratch.spectrum", "params": {"operator": ["cotan", "intrinsic_delaunay"]}}]}}},
+        out=tmp_path, quiet=True, workers=1)
+    df = pd.read_csv(tmp_path / "spectrum.csv")
+    assert (df["status"] == "ok").all() and (df["eig_rel_error_max"] < 0.1).all(), df["eig_rel_error_max"]
+    assert df["hks_rel_error"].isna().all()                   # the HKS reference is the sphere's
+    idt = df[df["params"].str.contains("intrinsic_delaunay")].set_index("mesh")["eig_rel_error_max"]
+    cot = df[df["params"].str.contains('"cotan"')].set_index("mesh")["eig_rel_error_max"]
+    assert abs(idt.iloc[0] - idt.iloc[1]) <= 1e-9 * idt.iloc[0]
+    assert abs(cot.iloc[0] - cot.iloc[1]) > 1e-6 * cot.iloc[0]
