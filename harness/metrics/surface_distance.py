@@ -5,21 +5,45 @@ from ..core.geometry import double_areas
 
 
 class Surface:
-    """A triangle mesh with an AABB tree (libigl) for exact point-to-surface queries; build it
+    """A triangle mesh with an AABB tree (libigl) for exact point-to-surface queries and our
+    compiled hierarchy for the certified Hausdorff distance (each built on first use); build it
     once per surface and query it many times."""
 
     def __init__(self, V: np.ndarray, F: np.ndarray):
-        import igl
         self.V = np.ascontiguousarray(V, dtype=np.float64)
         self.F = np.ascontiguousarray(F, dtype=np.int64)
-        self.tree = igl.AABB()
-        self.tree.init(self.V, self.F)
+        self.tree = None                 # libigl's AABB, built on the first `query`
+        self._bvh = None
         self.count = 0
+
+    def bvh(self) -> tuple:
+        """Our compiled hierarchy over the same triangles (`harness.metrics._bvh_kernel`), built
+        on first use: ``(V', F', order, lo, hi, left, right, start, end)`` where ``F'`` holds the
+        triangles in leaf order (``order`` is then the identity) and ``V'`` the vertices in order
+        of first use, so a query reads contiguous memory. Face indices it reports refer to
+        ``F'``; distances are those to the same surface."""
+        if self._bvh is None:
+            from ._bvh_kernel import build
+            order = np.arange(len(self.F), dtype=np.int64)
+            C = self.V[self.F].mean(axis=1) if len(self.F) else np.zeros((0, 3))
+            nodes = build(self.V, self.F, np.ascontiguousarray(C), order)
+            Fo = self.F[order]
+            first = np.unique(Fo.ravel(), return_index=True)[1] if len(Fo) else np.zeros(0, np.int64)
+            used = Fo.ravel()[np.sort(first)]
+            remap = np.zeros(len(self.V), np.int64)
+            remap[used] = np.arange(len(used))
+            self._bvh = (np.ascontiguousarray(self.V[used]), np.ascontiguousarray(remap[Fo]),
+                         np.arange(len(Fo), dtype=np.int64), *nodes)
+        return self._bvh
 
     def query(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Distances (k,) and closest face indices (k,) of points (k, 3)."""
         if len(P) == 0:
             return np.zeros(0), np.zeros(0, np.int64)
+        if self.tree is None:
+            import igl
+            self.tree = igl.AABB()
+            self.tree.init(self.V, self.F)
         self.count += len(P)
         d2, i, _ = self.tree.squared_distance(self.V, self.F, np.ascontiguousarray(P, dtype=np.float64))
         return np.sqrt(np.maximum(np.asarray(d2).ravel(), 0.0)), np.asarray(i, dtype=np.int64).ravel()

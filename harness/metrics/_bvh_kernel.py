@@ -1,0 +1,472 @@
+"""Compiled exact point-to-triangle-mesh distance (a bounding-volume hierarchy) and the
+depth-first branch and bound of the certified Hausdorff distance (`harness.metrics.hausdorff`).
+
+BVH: triangles sorted along a Morton curve of their centroids, split in halves top-down down to
+leaves of at most ``LEAF`` triangles; each node keeps the axis-aligned box of its triangles.
+A query starts from a hint triangle's distance (the closest triangle of a nearby point), visits
+nodes nearest box first and prunes any box farther than the best distance so far; the distance
+to a triangle is the exact closest-point distance (Ericson, Real-Time Collision Detection,
+5.1.5). Squared distances throughout; results are exact up to rounding.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+LEAF = 4
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _tri_dist2(px, py, pz, V, a, b, c):
+    """Squared distance from p to the closed triangle (V[a], V[b], V[c])."""
+    ax, ay, az = V[a, 0], V[a, 1], V[a, 2]
+    abx, aby, abz = V[b, 0] - ax, V[b, 1] - ay, V[b, 2] - az
+    acx, acy, acz = V[c, 0] - ax, V[c, 1] - ay, V[c, 2] - az
+    nx, ny, nz = aby * acz - abz * acy, abz * acx - abx * acz, abx * acy - aby * acx
+    if nx * nx + ny * ny + nz * nz == 0.0:           # degenerate triangle: nearest of its edges
+        return min(_seg2(px, py, pz, V, a, b), _seg2(px, py, pz, V, b, c), _seg2(px, py, pz, V, c, a))
+    apx, apy, apz = px - ax, py - ay, pz - az
+    d1 = abx * apx + aby * apy + abz * apz
+    d2 = acx * apx + acy * apy + acz * apz
+    if d1 <= 0.0 and d2 <= 0.0:
+        qx, qy, qz = ax, ay, az
+    else:
+        bpx, bpy, bpz = px - V[b, 0], py - V[b, 1], pz - V[b, 2]
+        d3 = abx * bpx + aby * bpy + abz * bpz
+        d4 = acx * bpx + acy * bpy + acz * bpz
+        if d3 >= 0.0 and d4 <= d3:
+            qx, qy, qz = V[b, 0], V[b, 1], V[b, 2]
+        else:
+            vc = d1 * d4 - d3 * d2
+            if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
+                t = d1 / (d1 - d3)
+                qx, qy, qz = ax + t * abx, ay + t * aby, az + t * abz
+            else:
+                cpx, cpy, cpz = px - V[c, 0], py - V[c, 1], pz - V[c, 2]
+                d5 = abx * cpx + aby * cpy + abz * cpz
+                d6 = acx * cpx + acy * cpy + acz * cpz
+                if d6 >= 0.0 and d5 <= d6:
+                    qx, qy, qz = V[c, 0], V[c, 1], V[c, 2]
+                else:
+                    vb = d5 * d2 - d1 * d6
+                    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
+                        t = d2 / (d2 - d6)
+                        qx, qy, qz = ax + t * acx, ay + t * acy, az + t * acz
+                    else:
+                        va = d3 * d6 - d5 * d4
+                        if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
+                            t = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+                            qx = V[b, 0] + t * (V[c, 0] - V[b, 0])
+                            qy = V[b, 1] + t * (V[c, 1] - V[b, 1])
+                            qz = V[b, 2] + t * (V[c, 2] - V[b, 2])
+                        else:
+                            den = va + vb + vc
+                            v = vb / den
+                            w = vc / den
+                            qx, qy, qz = ax + abx * v + acx * w, ay + aby * v + acy * w, az + abz * v + acz * w
+    dx, dy, dz = px - qx, py - qy, pz - qz
+    return dx * dx + dy * dy + dz * dz
+
+
+@njit(cache=True, inline="always")
+def _seg2(px, py, pz, V, a, b):
+    ux, uy, uz = V[b, 0] - V[a, 0], V[b, 1] - V[a, 1], V[b, 2] - V[a, 2]
+    den = ux * ux + uy * uy + uz * uz
+    t = 0.0
+    if den > 0.0:
+        t = min(max(((px - V[a, 0]) * ux + (py - V[a, 1]) * uy + (pz - V[a, 2]) * uz) / den, 0.0), 1.0)
+    dx, dy, dz = px - V[a, 0] - t * ux, py - V[a, 1] - t * uy, pz - V[a, 2] - t * uz
+    return dx * dx + dy * dy + dz * dz
+
+
+@njit(cache=True)
+def _select(order, C, ax, lo, hi, k):
+    """Rearrange ``order[lo:hi+1]`` so that ``order[k]`` has the k-th smallest ``C[., ax]``, with
+    no larger key before it and no smaller one after it (quickselect, middle pivot)."""
+    while lo < hi:
+        pivot = C[order[(lo + hi) // 2], ax]
+        i, j = lo, hi
+        while i <= j:
+            while C[order[i], ax] < pivot:
+                i += 1
+            while C[order[j], ax] > pivot:
+                j -= 1
+            if i <= j:
+                order[i], order[j] = order[j], order[i]
+                i += 1
+                j -= 1
+        if k <= j:
+            hi = j
+        elif k >= i:
+            lo = i
+        else:
+            return
+
+
+@njit(cache=True)
+def build(V, F, C, order):
+    """Nodes of the BVH over the triangles (centroids ``C``), splitting each node at the median
+    centroid along its longest axis; ``order`` (a permutation of the faces) is rearranged in
+    place. Returns ``lo``, ``hi`` (N, 3) boxes, ``left``/``right`` children (-1 at a leaf) and
+    ``start``/``end`` ranges of ``order`` at the leaves. Node 0 is the root."""
+    m = order.size
+    cap = 2 * m + 1                      # leaves hold >= 1 triangle: at most 2m - 1 nodes
+    lo = np.empty((cap, 3))
+    hi = np.empty((cap, 3))
+    left = np.full(cap, -1, np.int64)
+    right = np.full(cap, -1, np.int64)
+    start = np.zeros(cap, np.int64)
+    end = np.zeros(cap, np.int64)
+    stack = np.empty(128, np.int64)
+    n = 1
+    start[0], end[0] = 0, m
+    top = 0
+    stack[0] = 0
+    top = 1
+    while top > 0:
+        top -= 1
+        k = stack[top]
+        for d in range(3):
+            lo[k, d] = np.inf
+            hi[k, d] = -np.inf
+        for i in range(start[k], end[k]):
+            f = order[i]
+            for j in range(3):
+                v = F[f, j]
+                for d in range(3):
+                    x = V[v, d]
+                    if x < lo[k, d]:
+                        lo[k, d] = x
+                    if x > hi[k, d]:
+                        hi[k, d] = x
+        if end[k] - start[k] > LEAF:
+            # split at the median centroid along the longest axis of the centroids' box
+            s0, e0 = start[k], end[k]
+            cl = np.full(3, np.inf)
+            ch = np.full(3, -np.inf)
+            for i in range(s0, e0):
+                for d in range(3):
+                    x = C[order[i], d]
+                    cl[d] = min(cl[d], x)
+                    ch[d] = max(ch[d], x)
+            ax = 0
+            if ch[1] - cl[1] > ch[ax] - cl[ax]:
+                ax = 1
+            if ch[2] - cl[2] > ch[ax] - cl[ax]:
+                ax = 2
+            mid = (s0 + e0) // 2
+            _select(order, C, ax, s0, e0 - 1, mid)
+            left[k], right[k] = n, n + 1
+            start[n], end[n] = start[k], mid
+            start[n + 1], end[n + 1] = mid, end[k]
+            stack[top] = n
+            stack[top + 1] = n + 1
+            top += 2
+            n += 2
+    return lo[:n], hi[:n], left[:n], right[:n], start[:n], end[:n]
+
+
+@njit(cache=True, inline="always")
+def _box2(px, py, pz, lo, hi, k):
+    d = 0.0
+    if px < lo[k, 0]:
+        d += (lo[k, 0] - px) ** 2
+    elif px > hi[k, 0]:
+        d += (px - hi[k, 0]) ** 2
+    if py < lo[k, 1]:
+        d += (lo[k, 1] - py) ** 2
+    elif py > hi[k, 1]:
+        d += (py - hi[k, 1]) ** 2
+    if pz < lo[k, 2]:
+        d += (lo[k, 2] - pz) ** 2
+    elif pz > hi[k, 2]:
+        d += (pz - hi[k, 2]) ** 2
+    return d
+
+
+@njit(cache=True)
+def closest(px, py, pz, V, F, order, lo, hi, left, right, start, end, hint, stack):
+    """``(squared distance, face)`` of the closest triangle to p; ``hint`` a face to start from
+    (or -1)."""
+    best = np.inf
+    bf = -1
+    if hint >= 0:
+        best = _tri_dist2(px, py, pz, V, F[hint, 0], F[hint, 1], F[hint, 2])
+        bf = hint
+    top = 0
+    stack[0] = 0
+    top = 1
+    while top > 0:
+        top -= 1
+        k = stack[top]
+        if _box2(px, py, pz, lo, hi, k) >= best:
+            continue
+        if left[k] < 0:
+            for i in range(start[k], end[k]):
+                f = order[i]
+                d = _tri_dist2(px, py, pz, V, F[f, 0], F[f, 1], F[f, 2])
+                if d < best:
+                    best = d
+                    bf = f
+        else:
+            a, b = left[k], right[k]
+            da, db = _box2(px, py, pz, lo, hi, a), _box2(px, py, pz, lo, hi, b)
+            if da < db:                      # nearer child on top of the stack
+                if db < best:
+                    stack[top] = b
+                    top += 1
+                if da < best:
+                    stack[top] = a
+                    top += 1
+            else:
+                if da < best:
+                    stack[top] = a
+                    top += 1
+                if db < best:
+                    stack[top] = b
+                    top += 1
+    return best, bf
+
+
+@njit(cache=True)
+def query_many(P, hints, V, F, order, lo, hi, left, right, start, end):
+    """Distances (k,) and closest faces (k,) of points P (k, 3)."""
+    k = P.shape[0]
+    d = np.empty(k)
+    f = np.empty(k, np.int64)
+    stack = np.empty(256, np.int64)
+    for i in range(k):
+        d2, fi = closest(P[i, 0], P[i, 1], P[i, 2], V, F, order, lo, hi, left, right, start, end, hints[i], stack)
+        d[i] = math.sqrt(d2)
+        f[i] = fi
+    return d, f
+
+
+# ----------------------------------------------------------------------------- branch and bound
+
+@njit(cache=True, inline="always")
+def _dist_to_face(px, py, pz, VY, FY, f):
+    return math.sqrt(_tri_dist2(px, py, pz, VY, FY[f, 0], FY[f, 1], FY[f, 2]))
+
+
+@njit(cache=True)
+def _convex(P, VY, FY, f):
+    """max over the corners of P (3, 3) of the distance to face f: an upper bound of the
+    distance to the surface over the whole triangle (convexity of the distance to a triangle)."""
+    w = 0.0
+    for i in range(3):
+        w = max(w, _dist_to_face(P[i, 0], P[i, 1], P[i, 2], VY, FY, f))
+    return w
+
+
+@njit(cache=True)
+def _upper(P, D, I, VY, FY, order, lo, hi, left, right, start, end, stack, thr, state):
+    """Upper bound of the distance to the surface over triangle P (3, 3) with corner distances
+    D (3,) and closest faces I (3,): Lipschitz bounds from the corners (``max D + rho``, rho the
+    largest distance from a point of the triangle to its nearest corner) and from each corner
+    (``D_i + farthest corner``), convexity with the corners' closest faces, and while still
+    above ``thr`` the centroid (one query: Lipschitz and convexity with its closest face;
+    its distance raises the lower bound ``state[0]``, ``state[1]`` counts queries)."""
+    a2 = (P[1, 0] - P[2, 0]) ** 2 + (P[1, 1] - P[2, 1]) ** 2 + (P[1, 2] - P[2, 2]) ** 2
+    b2 = (P[2, 0] - P[0, 0]) ** 2 + (P[2, 1] - P[0, 1]) ** 2 + (P[2, 2] - P[0, 2]) ** 2
+    c2 = (P[0, 0] - P[1, 0]) ** 2 + (P[0, 1] - P[1, 1]) ** 2 + (P[0, 2] - P[1, 2]) ** 2
+    a, b, c = math.sqrt(a2), math.sqrt(b2), math.sqrt(c2)
+    longest2 = max(a2, b2, c2)
+    s = 0.5 * (a + b + c)
+    area2 = s * (s - a) * (s - b) * (s - c)
+    if 2.0 * longest2 < a2 + b2 + c2 and area2 > 0.0:
+        rho = min(a * b * c / (4.0 * math.sqrt(area2)), math.sqrt(longest2 / 2.0))
+    else:
+        rho = math.sqrt(longest2 / 2.0)
+    dmax = max(D[0], D[1], D[2])
+    u = min(dmax + rho, D[0] + max(c, b), D[1] + max(c, a), D[2] + max(a, b))
+    for j in range(3):
+        if u <= thr:
+            return max(u, dmax)
+        if (j == 1 and I[1] == I[0]) or (j == 2 and (I[2] == I[0] or I[2] == I[1])):
+            continue                                 # the same face: the same bound
+        u = min(u, _convex(P, VY, FY, I[j]))
+    if u > thr:
+        cx = (P[0, 0] + P[1, 0] + P[2, 0]) / 3.0
+        cy = (P[0, 1] + P[1, 1] + P[2, 1]) / 3.0
+        cz = (P[0, 2] + P[1, 2] + P[2, 2]) / 3.0
+        d2, fc = closest(cx, cy, cz, VY, FY, order, lo, hi, left, right, start, end, I[0], stack)
+        dc = math.sqrt(d2)
+        state[1] += 1.0
+        if dc > state[0]:
+            state[0] = dc
+        r = 0.0
+        for i in range(3):
+            r = max(r, math.sqrt((P[i, 0] - cx) ** 2 + (P[i, 1] - cy) ** 2 + (P[i, 2] - cz) ** 2))
+        u = min(u, dc + r, _convex(P, VY, FY, fc))
+    return max(u, dmax)
+
+
+@njit(cache=True)
+def roots(VX, FX, dV, iV, VY, FY, order, lo, hi, left, right, start, end, eps, atol, state):
+    """Upper bound (m,) of every triangle of X (`_upper`); raises the lower bound state[0]."""
+    m = FX.shape[0]
+    ub = np.empty(m)
+    P = np.empty((3, 3))
+    D = np.empty(3)
+    I = np.empty(3, np.int64)
+    stack = np.empty(256, np.int64)
+    for f in range(m):
+        for i in range(3):
+            v = FX[f, i]
+            P[i, 0], P[i, 1], P[i, 2] = VX[v, 0], VX[v, 1], VX[v, 2]
+            D[i], I[i] = dV[v], iV[v]
+        ub[f] = _upper(P, D, I, VY, FY, order, lo, hi, left, right, start, end, stack,
+                       (1.0 + eps) * state[0] + atol, state)
+    return ub
+
+
+@njit(cache=True, inline="always")
+def _sift_up(H, K, i):
+    x, kx = H[i], K[i]
+    while i > 0:
+        p = (i - 1) >> 1
+        if K[p] >= kx:
+            break
+        H[i], K[i] = H[p], K[p]
+        i = p
+    H[i], K[i] = x, kx
+
+
+@njit(cache=True, inline="always")
+def _sift_down(H, K, n, i):
+    x, kx = H[i], K[i]
+    while True:
+        c = 2 * i + 1
+        if c >= n:
+            break
+        if c + 1 < n and K[c + 1] > K[c]:
+            c += 1
+        if K[c] <= kx:
+            break
+        H[i], K[i] = H[c], K[c]
+        i = c
+    H[i], K[i] = x, kx
+
+
+@njit(cache=True)
+def best_first(tris, ub0, VX, FX, dV, iV, VY, FY, order, lo, hi, left, right, start, end, eps, atol,
+               max_points, max_pops, store, state):
+    """Best-first branch and bound: always split the open sub-triangle with the largest upper
+    bound (a max-heap), so the lower bound rises as fast as possible and no sub-triangle is split
+    whose bound is below ``(1 + eps) L_final + atol``. ``store`` = (SP, SD, SI, SU, H, free) is
+    the open set, carried between calls (``max_pops`` splits per call, so the caller can check a
+    clock; ``SU`` holds the heap's keys, aligned with ``H``); ``tris``/``ub0`` (open root
+    triangles) are added on the first call (``state[4] == 0``).
+    ``state``: [L, queries, settled, open, initialised, heap size, free count, done].
+    Returns the (possibly grown) store."""
+    SP, SD, SI, SU, H, free = store
+    n = int(state[5])
+    nfree = int(state[6])
+    if state[4] == 0.0:
+        state[4] = 1.0
+        for t in range(tris.size):
+            f = tris[t]
+            if n >= SU.size or nfree == 0:
+                break
+            nfree -= 1
+            s = free[nfree]
+            for i in range(3):
+                v = FX[f, i]
+                SP[s, i, 0], SP[s, i, 1], SP[s, i, 2] = VX[v, 0], VX[v, 1], VX[v, 2]
+                SD[s, i], SI[s, i] = dV[v], iV[v]
+            H[n] = s
+            SU[n] = ub0[t]
+            _sift_up(H, SU, n)
+            n += 1
+    M = np.empty((3, 3))
+    MD = np.empty(3)
+    MI = np.empty(3, np.int64)
+    CP = np.empty((3, 3))
+    CD = np.empty(3)
+    CI = np.empty(3, np.int64)
+    stack = np.empty(256, np.int64)
+    pops = 0
+    while n > 0 and pops < max_pops:
+        s = H[0]
+        u = SU[0]
+        thr = (1.0 + eps) * state[0] + atol
+        if u <= thr:                                 # the largest open bound is closed: done
+            state[2] = max(state[2], u)
+            break
+        if state[1] + 7.0 > max_points:
+            break
+        if nfree < 3:                                # grow the store
+            cap = SU.size
+            SP2 = np.empty((2 * cap, 3, 3))
+            SD2 = np.empty((2 * cap, 3))
+            SI2 = np.empty((2 * cap, 3), np.int64)
+            SU2 = np.empty(2 * cap)
+            H2 = np.empty(2 * cap, np.int64)
+            F2 = np.empty(2 * cap, np.int64)
+            SP2[:cap], SD2[:cap], SI2[:cap], SU2[:n], H2[:n] = SP, SD, SI, SU[:n], H[:n]
+            F2[:nfree] = free[:nfree]
+            for k in range(cap, 2 * cap):
+                F2[nfree] = k
+                nfree += 1
+            SP, SD, SI, SU, H, free = SP2, SD2, SI2, SU2, H2, F2
+        pops += 1
+        n -= 1                                       # pop the top
+        H[0], SU[0] = H[n], SU[n]
+        if n > 0:
+            _sift_down(H, SU, n, 0)
+        P = SP[s]
+        for e in range(3):                           # midpoint of the edge opposite corner e
+            i, j = (e + 1) % 3, (e + 2) % 3
+            mx = 0.5 * (P[i, 0] + P[j, 0])
+            my = 0.5 * (P[i, 1] + P[j, 1])
+            mz = 0.5 * (P[i, 2] + P[j, 2])
+            hint = SI[s, i] if SD[s, i] <= SD[s, j] else SI[s, j]
+            d2, fm = closest(mx, my, mz, VY, FY, order, lo, hi, left, right, start, end, hint, stack)
+            M[e, 0], M[e, 1], M[e, 2] = mx, my, mz
+            MD[e] = math.sqrt(d2)
+            MI[e] = fm
+            state[1] += 1.0
+            if MD[e] > state[0]:
+                state[0] = MD[e]
+        thr = (1.0 + eps) * state[0] + atol
+        # children: corner ci with the midpoints of its two edges, then the middle triangle; the
+        # parent's slot is reused by the last child
+        for q in range(4):
+            if q < 3:
+                i1, i2 = (q + 1) % 3, (q + 2) % 3
+                for d in range(3):
+                    CP[0, d], CP[1, d], CP[2, d] = SP[s, q, d], M[i2, d], M[i1, d]
+                CD[0], CD[1], CD[2] = SD[s, q], MD[i2], MD[i1]
+                CI[0], CI[1], CI[2] = SI[s, q], MI[i2], MI[i1]
+            else:
+                for d in range(3):
+                    CP[0, d], CP[1, d], CP[2, d] = M[0, d], M[1, d], M[2, d]
+                CD[0], CD[1], CD[2] = MD[0], MD[1], MD[2]
+                CI[0], CI[1], CI[2] = MI[0], MI[1], MI[2]
+            cu = _upper(CP, CD, CI, VY, FY, order, lo, hi, left, right, start, end, stack, thr, state)
+            if cu <= (1.0 + eps) * state[0] + atol:
+                state[2] = max(state[2], cu)
+                if q == 3:
+                    free[nfree] = s
+                    nfree += 1
+                continue
+            if q == 3:
+                t = s
+            else:
+                nfree -= 1
+                t = free[nfree]
+            for a in range(3):
+                SP[t, a, 0], SP[t, a, 1], SP[t, a, 2] = CP[a, 0], CP[a, 1], CP[a, 2]
+                SD[t, a], SI[t, a] = CD[a], CI[a]
+            H[n] = t
+            SU[n] = cu
+            _sift_up(H, SU, n)
+            n += 1
+    state[5] = n
+    state[6] = nfree
+    state[3] = SU[0] if n > 0 else 0.0
+    state[7] = 1.0 if (n == 0 or SU[0] <= (1.0 + eps) * state[0] + atol) else 0.0
+    return SP, SD, SI, SU, H, free
