@@ -16,7 +16,10 @@ collected below ``sigma`` must be exactly that many. A band whose window leaves 
 count disagrees, is redone with a closer shift; after ``retries`` failures `BandFailure` is
 raised and the caller falls back to one ARPACK run. At the top of each window the outermost
 cluster (eigenvalues within ``1e-6`` relative of the largest found) is left to the next band,
-so a multiplet is never split between bands.
+so a multiplet is never split between bands. ARPACK converges slowly when a window's edge
+falls inside a cluster of nearly equal eigenvalues (the sphere's ``2 l + 1``-fold multiplets):
+on such spectra a band can cost as much as one run for all k pairs; on generic meshes (no
+multiplets) the bands are about twice as fast at k = 200 (`benchmarks/bench_spectrum.py`).
 """
 from __future__ import annotations
 
@@ -46,7 +49,7 @@ def band_eigenpairs(A, M, k: int, sigma0: float, band: int = 50, seed: int = 0, 
     from scipy.sparse.linalg import LinearOperator, eigsh
     A, M = sp.csc_matrix(A), sp.csc_matrix(M)
     n = A.shape[0]
-    m = int(min(band, n - 1))
+    m = int(min(band, n - 1, k + max(8, k // 20)))     # no wider than one run for a small k
     rng = np.random.default_rng(seed)
     lams, vecs = [], []
     collected = 0
