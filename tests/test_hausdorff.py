@@ -130,3 +130,19 @@ def test_compiled_hierarchy_equals_libigl_distances():
         assert np.abs(d - ref).max() <= 1e-15 * diag
         hinted = query_many(P, np.roll(f, 1), *tree)[0]     # hints from other points: same answer
         assert np.abs(hinted - ref).max() <= 1e-15 * diag
+
+
+def test_corresponding_vertices_give_a_valid_tighter_bracket():
+    """A smoothed mesh against its clean original (same faces): the displacement cap gives a
+    bracket that overlaps the one found without it and is no wider; mismatched faces are refused."""
+    from harness.noise import apply_noise
+    m = datasets.load("bunny").clean
+    V = methods.get("scratch.taubin")(apply_noise(m.V, m.F, "gaussian_normal", 0.3, 0), m.F).V
+    a = hausdorff(V, m.F, m.V, m.F, n_samples=0)
+    b = hausdorff(V, m.F, m.V, m.F, n_samples=0, corresponding=True)
+    assert a["hausdorff_certified"] and b["hausdorff_certified"]
+    assert max(a["hausdorff"], b["hausdorff"]) <= min(a["hausdorff_upper"], b["hausdorff_upper"]) * (1 + 1e-12)
+    assert b["hausdorff_upper"] - b["hausdorff"] <= a["hausdorff_upper"] - a["hausdorff"] + 1e-15
+    assert b["hausdorff_points"] < a["hausdorff_points"]
+    with pytest.raises(ValueError, match="corresponding"):
+        hausdorff(V[:-1], m.F[:10], m.V, m.F, n_samples=0, corresponding=True)

@@ -305,8 +305,10 @@ def _upper(P, D, I, VY, FY, order, lo, hi, left, right, start, end, stack, thr, 
 
 
 @njit(cache=True)
-def roots(VX, FX, dV, iV, VY, FY, order, lo, hi, left, right, start, end, eps, atol, state):
-    """Upper bound (m,) of every triangle of X (`_upper`); raises the lower bound state[0]."""
+def roots(VX, FX, dV, iV, VY, FY, order, lo, hi, left, right, start, end, eps, atol, state, cap):
+    """Upper bound (m,) of every triangle of X (`_upper`, and ``cap[f]``, a bound known a
+    priori: when it already closes the triangle no query is made); raises the lower bound
+    state[0]."""
     m = FX.shape[0]
     ub = np.empty(m)
     P = np.empty((3, 3))
@@ -318,8 +320,12 @@ def roots(VX, FX, dV, iV, VY, FY, order, lo, hi, left, right, start, end, eps, a
             v = FX[f, i]
             P[i, 0], P[i, 1], P[i, 2] = VX[v, 0], VX[v, 1], VX[v, 2]
             D[i], I[i] = dV[v], iV[v]
-        ub[f] = _upper(P, D, I, VY, FY, order, lo, hi, left, right, start, end, stack,
-                       (1.0 + eps) * state[0] + atol, state)
+        thr = (1.0 + eps) * state[0] + atol
+        if cap[f] <= thr:
+            ub[f] = max(cap[f], D[0], D[1], D[2])
+        else:
+            ub[f] = min(_upper(P, D, I, VY, FY, order, lo, hi, left, right, start, end, stack, thr, state),
+                        max(cap[f], D[0], D[1], D[2]))
     return ub
 
 
