@@ -1,12 +1,13 @@
 """Compiled exact point-to-triangle-mesh distance (a bounding-volume hierarchy) and the
-depth-first branch and bound of the certified Hausdorff distance (`harness.metrics.hausdorff`).
+best-first branch and bound of the certified Hausdorff distance (`harness.metrics.hausdorff`).
 
-BVH: triangles sorted along a Morton curve of their centroids, split in halves top-down down to
-leaves of at most ``LEAF`` triangles; each node keeps the axis-aligned box of its triangles.
-A query starts from a hint triangle's distance (the closest triangle of a nearby point), visits
-nodes nearest box first and prunes any box farther than the best distance so far; the distance
-to a triangle is the exact closest-point distance (Ericson, Real-Time Collision Detection,
-5.1.5). Squared distances throughout; results are exact up to rounding.
+BVH: built top-down, each node split at the median centroid along the longest axis of its
+centroids' box, down to leaves of at most ``LEAF`` triangles; each node keeps the axis-aligned
+box of its triangles (computed bottom-up). A query starts from a hint triangle's distance (the
+closest triangle of a nearby point), visits nodes nearest box first and prunes any box farther
+than the best distance so far; the distance to a triangle is the exact closest-point distance
+(Ericson, Real-Time Collision Detection, 5.1.5). Squared distances throughout; results are
+exact up to rounding.
 """
 from __future__ import annotations
 
@@ -15,7 +16,10 @@ import math
 import numpy as np
 from numba import njit
 
+from ._cover_bound import cover_bound
+
 LEAF = 4
+COVER = 1.5          # the covering bound keeps Y's triangles with b_t up to COVER times the threshold
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -128,33 +132,20 @@ def build(V, F, C, order):
     while top > 0:
         top -= 1
         k = stack[top]
-        for d in range(3):
-            lo[k, d] = np.inf
-            hi[k, d] = -np.inf
-        for i in range(start[k], end[k]):
-            f = order[i]
-            for j in range(3):
-                v = F[f, j]
-                for d in range(3):
-                    x = V[v, d]
-                    if x < lo[k, d]:
-                        lo[k, d] = x
-                    if x > hi[k, d]:
-                        hi[k, d] = x
         if end[k] - start[k] > LEAF:
             # split at the median centroid along the longest axis of the centroids' box
             s0, e0 = start[k], end[k]
-            cl = np.full(3, np.inf)
-            ch = np.full(3, -np.inf)
+            cl0, cl1, cl2 = np.inf, np.inf, np.inf
+            ch0, ch1, ch2 = -np.inf, -np.inf, -np.inf
             for i in range(s0, e0):
-                for d in range(3):
-                    x = C[order[i], d]
-                    cl[d] = min(cl[d], x)
-                    ch[d] = max(ch[d], x)
+                f = order[i]
+                cl0, ch0 = min(cl0, C[f, 0]), max(ch0, C[f, 0])
+                cl1, ch1 = min(cl1, C[f, 1]), max(ch1, C[f, 1])
+                cl2, ch2 = min(cl2, C[f, 2]), max(ch2, C[f, 2])
             ax = 0
-            if ch[1] - cl[1] > ch[ax] - cl[ax]:
+            if ch1 - cl1 > ch0 - cl0:
                 ax = 1
-            if ch[2] - cl[2] > ch[ax] - cl[ax]:
+            if ch2 - cl2 > max(ch0 - cl0, ch1 - cl1):
                 ax = 2
             mid = (s0 + e0) // 2
             _select(order, C, ax, s0, e0 - 1, mid)
@@ -165,7 +156,61 @@ def build(V, F, C, order):
             stack[top + 1] = n + 1
             top += 2
             n += 2
+    for k in range(n - 1, -1, -1):           # boxes bottom-up: children have larger indices
+        if left[k] < 0:
+            for d in range(3):
+                lo[k, d] = np.inf
+                hi[k, d] = -np.inf
+            for i in range(start[k], end[k]):
+                f = order[i]
+                for j in range(3):
+                    v = F[f, j]
+                    for d in range(3):
+                        x = V[v, d]
+                        if x < lo[k, d]:
+                            lo[k, d] = x
+                        if x > hi[k, d]:
+                            hi[k, d] = x
+        else:
+            a, b = left[k], right[k]
+            for d in range(3):
+                lo[k, d] = min(lo[a, d], lo[b, d])
+                hi[k, d] = max(hi[a, d], hi[b, d])
     return lo[:n], hi[:n], left[:n], right[:n], start[:n], end[:n]
+
+
+@njit(cache=True)
+def centroids(V, F):
+    """Centroids (m, 3) of the triangles."""
+    C = np.empty((F.shape[0], 3))
+    for f in range(F.shape[0]):
+        for d in range(3):
+            C[f, d] = (V[F[f, 0], d] + V[F[f, 1], d] + V[F[f, 2], d]) / 3.0
+    return C
+
+
+@njit(cache=True)
+def leaf_order(V, F, order):
+    """``(V', F')``: the triangles in ``order`` and the vertices renumbered in order of first
+    use (unused vertices dropped), so that queries read contiguous memory."""
+    m = order.size
+    remap = np.full(V.shape[0], -1, np.int64)
+    Fo = np.empty((m, 3), np.int64)
+    used = np.empty(V.shape[0], np.int64)
+    nu = 0
+    for i in range(m):
+        for j in range(3):
+            v = F[order[i], j]
+            if remap[v] < 0:
+                remap[v] = nu
+                used[nu] = v
+                nu += 1
+            Fo[i, j] = remap[v]
+    Vo = np.empty((nu, 3))
+    for i in range(nu):
+        for d in range(3):
+            Vo[i, d] = V[used[i], d]
+    return Vo, Fo
 
 
 @njit(cache=True, inline="always")
@@ -262,13 +307,15 @@ def _convex(P, VY, FY, f):
 
 
 @njit(cache=True)
-def _upper(P, D, I, VY, FY, order, lo, hi, left, right, start, end, stack, thr, state):
+def _upper(P, D, I, VY, FY, NY, order, lo, hi, left, right, start, end, stack, thr, state, W, seeds):
     """Upper bound of the distance to the surface over triangle P (3, 3) with corner distances
-    D (3,) and closest faces I (3,): Lipschitz bounds from the corners (``max D + rho``, rho the
-    largest distance from a point of the triangle to its nearest corner) and from each corner
-    (``D_i + farthest corner``), convexity with the corners' closest faces, and while still
-    above ``thr`` the centroid (one query: Lipschitz and convexity with its closest face;
-    its distance raises the lower bound ``state[0]``, ``state[1]`` counts queries)."""
+    D (3,) and closest faces I (3,), the first that settles it (``<= thr``) of: Lipschitz bounds
+    from the corners (``max D + rho``, rho the largest distance from a point of the triangle to
+    its nearest corner, and ``D_i + farthest corner``); convexity with the corners' closest
+    faces; the centroid (one query: Lipschitz and convexity with its closest face; its distance
+    raises the lower bound ``state[0]``, ``state[1]`` counts queries); the covering bound
+    (`harness.metrics._cover_bound`) over Y's triangles grown from those four faces (``NY``
+    its face neighbours, ``W`` its scratch, ``seeds`` (4,) scratch)."""
     a2 = (P[1, 0] - P[2, 0]) ** 2 + (P[1, 1] - P[2, 1]) ** 2 + (P[1, 2] - P[2, 2]) ** 2
     b2 = (P[2, 0] - P[0, 0]) ** 2 + (P[2, 1] - P[0, 1]) ** 2 + (P[2, 2] - P[0, 2]) ** 2
     c2 = (P[0, 0] - P[1, 0]) ** 2 + (P[0, 1] - P[1, 1]) ** 2 + (P[0, 2] - P[1, 2]) ** 2
@@ -288,24 +335,29 @@ def _upper(P, D, I, VY, FY, order, lo, hi, left, right, start, end, stack, thr, 
         if (j == 1 and I[1] == I[0]) or (j == 2 and (I[2] == I[0] or I[2] == I[1])):
             continue                                 # the same face: the same bound
         u = min(u, _convex(P, VY, FY, I[j]))
-    if u > thr:
-        cx = (P[0, 0] + P[1, 0] + P[2, 0]) / 3.0
-        cy = (P[0, 1] + P[1, 1] + P[2, 1]) / 3.0
-        cz = (P[0, 2] + P[1, 2] + P[2, 2]) / 3.0
-        d2, fc = closest(cx, cy, cz, VY, FY, order, lo, hi, left, right, start, end, I[0], stack)
-        dc = math.sqrt(d2)
-        state[1] += 1.0
-        if dc > state[0]:
-            state[0] = dc
-        r = 0.0
-        for i in range(3):
-            r = max(r, math.sqrt((P[i, 0] - cx) ** 2 + (P[i, 1] - cy) ** 2 + (P[i, 2] - cz) ** 2))
-        u = min(u, dc + r, _convex(P, VY, FY, fc))
+    if u <= thr:
+        return max(u, dmax)
+    seeds[0], seeds[1], seeds[2], seeds[3] = I[0], I[1], I[2], -1
+    u = min(u, cover_bound(P, seeds, VY, FY, NY, COVER * thr, W))
+    if u <= thr:
+        return max(u, dmax)
+    cx = (P[0, 0] + P[1, 0] + P[2, 0]) / 3.0
+    cy = (P[0, 1] + P[1, 1] + P[2, 1]) / 3.0
+    cz = (P[0, 2] + P[1, 2] + P[2, 2]) / 3.0
+    d2, fc = closest(cx, cy, cz, VY, FY, order, lo, hi, left, right, start, end, I[0], stack)
+    dc = math.sqrt(d2)
+    state[1] += 1.0
+    if dc > state[0]:
+        state[0] = dc
+    r = 0.0
+    for i in range(3):
+        r = max(r, math.sqrt((P[i, 0] - cx) ** 2 + (P[i, 1] - cy) ** 2 + (P[i, 2] - cz) ** 2))
+    u = min(u, dc + r, _convex(P, VY, FY, fc))
     return max(u, dmax)
 
 
 @njit(cache=True)
-def roots(VX, FX, dV, iV, VY, FY, order, lo, hi, left, right, start, end, eps, atol, state, cap):
+def roots(VX, FX, dV, iV, VY, FY, order, lo, hi, left, right, start, end, NY, W, eps, atol, state, cap):
     """Upper bound (m,) of every triangle of X (`_upper`, and ``cap[f]``, a bound known a
     priori: when it already closes the triangle no query is made); raises the lower bound
     state[0]."""
@@ -315,6 +367,7 @@ def roots(VX, FX, dV, iV, VY, FY, order, lo, hi, left, right, start, end, eps, a
     D = np.empty(3)
     I = np.empty(3, np.int64)
     stack = np.empty(256, np.int64)
+    seeds = np.empty(4, np.int64)
     for f in range(m):
         for i in range(3):
             v = FX[f, i]
@@ -324,7 +377,7 @@ def roots(VX, FX, dV, iV, VY, FY, order, lo, hi, left, right, start, end, eps, a
         if cap[f] <= thr:
             ub[f] = max(cap[f], D[0], D[1], D[2])
         else:
-            ub[f] = min(_upper(P, D, I, VY, FY, order, lo, hi, left, right, start, end, stack, thr, state),
+            ub[f] = min(_upper(P, D, I, VY, FY, NY, order, lo, hi, left, right, start, end, stack, thr, state, W, seeds),
                         max(cap[f], D[0], D[1], D[2]))
     return ub
 
@@ -358,7 +411,7 @@ def _sift_down(H, K, n, i):
 
 
 @njit(cache=True)
-def best_first(tris, ub0, VX, FX, dV, iV, VY, FY, order, lo, hi, left, right, start, end, eps, atol,
+def best_first(tris, ub0, VX, FX, dV, iV, VY, FY, order, lo, hi, left, right, start, end, NY, W, eps, atol,
                max_points, max_pops, store, state):
     """Best-first branch and bound: always split the open sub-triangle with the largest upper
     bound (a max-heap), so the lower bound rises as fast as possible and no sub-triangle is split
@@ -394,6 +447,7 @@ def best_first(tris, ub0, VX, FX, dV, iV, VY, FY, order, lo, hi, left, right, st
     CD = np.empty(3)
     CI = np.empty(3, np.int64)
     stack = np.empty(256, np.int64)
+    seeds = np.empty(4, np.int64)
     pops = 0
     while n > 0 and pops < max_pops:
         s = H[0]
@@ -452,7 +506,7 @@ def best_first(tris, ub0, VX, FX, dV, iV, VY, FY, order, lo, hi, left, right, st
                     CP[0, d], CP[1, d], CP[2, d] = M[0, d], M[1, d], M[2, d]
                 CD[0], CD[1], CD[2] = MD[0], MD[1], MD[2]
                 CI[0], CI[1], CI[2] = MI[0], MI[1], MI[2]
-            cu = _upper(CP, CD, CI, VY, FY, order, lo, hi, left, right, start, end, stack, thr, state)
+            cu = _upper(CP, CD, CI, VY, FY, NY, order, lo, hi, left, right, start, end, stack, thr, state, W, seeds)
             if cu <= (1.0 + eps) * state[0] + atol:
                 state[2] = max(state[2], cu)
                 if q == 3:

@@ -14,6 +14,7 @@ class Surface:
         self.F = np.ascontiguousarray(F, dtype=np.int64)
         self.tree = None                 # libigl's AABB, built on the first `query`
         self._bvh = None
+        self._nb = None
         self.count = 0
 
     def bvh(self) -> tuple:
@@ -23,18 +24,20 @@ class Surface:
         of first use, so a query reads contiguous memory. Face indices it reports refer to
         ``F'``; distances are those to the same surface."""
         if self._bvh is None:
-            from ._bvh_kernel import build
+            from ._bvh_kernel import build, centroids, leaf_order
             order = np.arange(len(self.F), dtype=np.int64)
-            C = self.V[self.F].mean(axis=1) if len(self.F) else np.zeros((0, 3))
-            nodes = build(self.V, self.F, np.ascontiguousarray(C), order)
-            Fo = self.F[order]
-            first = np.unique(Fo.ravel(), return_index=True)[1] if len(Fo) else np.zeros(0, np.int64)
-            used = Fo.ravel()[np.sort(first)]
-            remap = np.zeros(len(self.V), np.int64)
-            remap[used] = np.arange(len(used))
-            self._bvh = (np.ascontiguousarray(self.V[used]), np.ascontiguousarray(remap[Fo]),
-                         np.arange(len(Fo), dtype=np.int64), *nodes)
+            nodes = build(self.V, self.F, centroids(self.V, self.F), order)
+            self._bvh = (*leaf_order(self.V, self.F, order), np.arange(len(self.F), dtype=np.int64), *nodes)
         return self._bvh
+
+    def neighbours(self) -> np.ndarray:
+        """Face neighbours (m, 3) of the hierarchy's faces ``F'`` (`bvh`): the face across edge
+        ``(F'[f, j], F'[f, j+1])``, -1 on a boundary or non-manifold edge."""
+        if self._nb is None:
+            from ._cover_bound import face_neighbours
+            V, F = self.bvh()[:2]
+            self._nb = face_neighbours(F, len(V))
+        return self._nb
 
     def query(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Distances (k,) and closest face indices (k,) of points (k, 3)."""
