@@ -277,13 +277,15 @@ def closest(px, py, pz, V, F, order, lo, hi, left, right, start, end, hint, stac
 
 @njit(cache=True)
 def query_many(P, hints, V, F, order, lo, hi, left, right, start, end):
-    """Distances (k,) and closest faces (k,) of points P (k, 3)."""
+    """Distances (k,) and closest faces (k,) of points P (k, 3); a point without a hint (-1)
+    starts from the previous point's closest face (consecutive points are often near)."""
     k = P.shape[0]
     d = np.empty(k)
     f = np.empty(k, np.int64)
     stack = np.empty(256, np.int64)
     for i in range(k):
-        d2, fi = closest(P[i, 0], P[i, 1], P[i, 2], V, F, order, lo, hi, left, right, start, end, hints[i], stack)
+        h = hints[i] if (hints[i] >= 0 or i == 0) else f[i - 1]
+        d2, fi = closest(P[i, 0], P[i, 1], P[i, 2], V, F, order, lo, hi, left, right, start, end, h, stack)
         d[i] = math.sqrt(d2)
         f[i] = fi
     return d, f
