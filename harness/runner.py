@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import tasks
+from . import input_store, tasks
 from .config import Case
 from .errors import ShootoutError
 from .tasks.base import CaseInput
@@ -176,6 +176,7 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
         full = method.resolve_params(case.params)
         row["params"] = json.dumps(full, sort_keys=True, default=str)
         inp, pair_level = prepare_input(case)
+        inp.cache.update(input_store.load(case, task.input_facts))
         if pair_level is not None:
             row["noise_level"] = pair_level
         row["n_vertices"], row["n_faces"] = inp.clean.n_vertices, inp.clean.n_faces
@@ -203,6 +204,7 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
                     row["method_mem_mb"] = round(max(hwm - rss0, 0) / 1024.0, 2)
         row.update(timing_columns(times, cold))
         row.update(task.measure(inp, result, full))
+        input_store.save(case, inp.cache, task.input_facts)
         if want_meshes and task.output_mesh is not None:
             extras["meshes"] = saved_meshes(case, task, inp, result)
         if want_view and task.view is not None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import time
 from multiprocessing.connection import wait as mp_wait
 
+from .. import input_store
 from ..runner import run_case
 from .isolation import _Job, signals_blocked
 
@@ -27,9 +28,10 @@ class SerialExecutor:
         pass
 
     def run(self, cases, want_meshes=False):
-        for c in cases:
-            row, extras = run_case(c, want_meshes=want_meshes)
-            yield c, row, extras
+        with input_store.session():
+            for c in cases:
+                row, extras = run_case(c, want_meshes=want_meshes)
+                yield c, row, extras
 
     def close(self):
         pass
@@ -53,6 +55,8 @@ class LocalExecutor:
         _preload_tasks(todo)
         todo.reverse()
         running: list[_Job] = []
+        store = input_store.session()
+        store.__enter__()
         try:
             while todo or running:
                 while todo and len(running) < self.workers:
@@ -79,6 +83,7 @@ class LocalExecutor:
         finally:
             for job in running:                # interrupted: leave no orphan behind
                 job.abort()
+            store.__exit__(None, None, None)
 
     def close(self):
         pass

@@ -108,6 +108,7 @@ class Task:
     checks: tuple = ()          # (name, fn(method, V, F)) conformance checks of this task's methods
     invalid_when: tuple = ()    # `Invalid` rules: rows that are not valid results (ranked last, never "best")
     preload: Callable[[], None] | None = None   # warm compiled measuring code in the driver before forking
+    input_facts: tuple = ()     # `CaseInput.cache` keys that depend on the input alone (harness.input_store)
 
     @property
     def columns(self) -> list[str]:

@@ -193,4 +193,4 @@ TASK = Task(
     intro="Discrete curvature estimators against the analytic curvature of procedural surfaces "
           "(pointwise values; H > 0 on a sphere with outward normals; errors relative to the exact values).",
     metrics=tuple(_METRICS), measure=measure, check_result=_check, view=view, view_metric="H_rel_l2",
-    output_mesh=output_mesh, order=40, checks=(("sphere_signs", _sphere_signs),))
+    output_mesh=output_mesh, order=40, checks=(("sphere_signs", _sphere_signs),), input_facts=("curvature",))

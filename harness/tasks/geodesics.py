@@ -194,4 +194,5 @@ TASK = Task(
         Metric("per_source_s", "info", "the method's time per source after precomputation (its own split)", unit="s"),
     ),
     params=PARAMS, prepare=prepare, measure=measure, check_result=_check, view=view, view_metric="rel_error_mean",
-    output_mesh=output_mesh, order=50, checks=(("zero_at_source", _zero_at_source),))
+    output_mesh=output_mesh, order=50, checks=(("zero_at_source", _zero_at_source),),
+    input_facts=("geodesic_reference",))

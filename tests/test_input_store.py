@@ -1,0 +1,57 @@
+"""Per-input facts shared across the cases of one input (`harness.input_store`): computed once,
+equal to a fresh computation, private to the session and gone after it."""
+import os
+from pathlib import Path
+
+import numpy as np
+
+import harness
+from harness import input_store
+from harness.config import load_config
+from harness.runner import prepare_input
+
+
+CFG = {"name": "store", "repeats": 1, "time_budget": 0, "meshes": ["bunny"],
+       "noise": [{"model": "gaussian_normal", "levels": [0.3, 0.5]}],
+       "tasks": {"smoothing": {"methods": ["scratch.explicit", "scratch.taubin"]}}}
+
+
+def test_facts_are_computed_once_per_input_and_equal_a_fresh_computation(tmp_path, monkeypatch):
+    import harness.mesh as mesh_mod
+    from harness.tasks import smoothing
+    calls = []
+    real = mesh_mod.topology
+    monkeypatch.setattr(mesh_mod, "topology", lambda V, F: calls.append(len(V)) or real(V, F))
+    frames = harness.run(CFG, out=tmp_path / "r", executor="serial", quiet=True)
+    rows = frames["smoothing"]
+    assert (rows["status"] == "ok").all() and len(rows) == 4
+    assert len(calls) == 2          # two inputs (noise levels) of two cases each: once per input, not 4
+    for case in load_config(CFG).cases:             # the shared input metrics equal a fresh computation
+        inp, _ = prepare_input(case)
+        fresh = smoothing._input_metrics(inp)
+        row = rows[rows["case_id"] == case.case_id].iloc[0]
+        for k, v in fresh.items():
+            assert row[k] == v, (case.case_id, k)
+    # two levels are two inputs: their input metrics differ
+    assert rows.groupby("noise_level")["input_ev_mean"].nunique().eq(1).all()
+    assert rows["input_ev_mean"].nunique() == 2
+
+
+def test_the_store_is_private_to_a_session_and_removed_after_it(tmp_path):
+    case = load_config(CFG).cases[0]
+    assert input_store.load(case, ("x",)) == {}          # outside a session: nothing kept
+    input_store.save(case, {"x": 1}, ("x",))
+    with input_store.session():
+        d = Path(os.environ[input_store.ENV])
+        assert (d.stat().st_mode & 0o777) == 0o700
+        input_store.save(case, {"x": np.arange(3), ("y", 2): "t", "z": "not declared"}, ("x", "y"))
+        got = input_store.load(case, ("x", "y", "z"))
+        assert set(got) == {"x", ("y", 2)} and np.array_equal(got["x"], np.arange(3))
+        other = next(c for c in load_config(CFG).cases if c.noise_level != case.noise_level)
+        assert input_store.load(other, ("x",)) == {}
+        for f in d.iterdir():                            # a torn file is a miss, not an error
+            f.write_bytes(b"\x80garbage")
+        assert input_store.load(case, ("x",)) == {}
+        with input_store.session():                      # nested: the same store
+            assert os.environ[input_store.ENV] == str(d)
+    assert input_store.ENV not in os.environ and not d.exists()
