@@ -47,7 +47,7 @@ _Surface = Surface           # the AABB-backed surface (harness.metrics.surface_
 
 def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, atol: float = 0.0,
               max_points: int = 1_000_000, deadline: float = float("inf"), lower: float = 0.0,
-              cap: np.ndarray | None = None) -> dict:
+              cap: np.ndarray | None = None, all_vertices: bool = False) -> dict:
     """Bracket ``h(X, Y) = max_{p in X} d(p, Y)`` (module docstring), compiled: the vertices of X
     are queried, every triangle gets its upper bound (one centroid query where the corners do
     not settle it), then the open sub-triangle with the largest bound is split, best first (a
@@ -57,8 +57,9 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, ato
     at a point of X.
 
     Returns ``lower``, ``upper`` (``upper >= h >= lower``), ``certified`` (the bracket met
-    ``upper <= (1 + eps) lower + atol``), ``points`` (distance queries made) and ``rounds``
-    (batches of splits).
+    ``upper <= (1 + eps) lower + atol``), ``points`` (distance queries made), ``rounds``
+    (batches of splits) and ``vertex_distances`` (k,) (each vertex of X to Y; with
+    ``all_vertices`` also the vertices in no face, else 0 there).
     """
     from . import _bvh_kernel as K
     VX = np.ascontiguousarray(VX, dtype=np.float64)
@@ -66,7 +67,8 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, ato
     tree = Y.bvh()
     from ._cover_bound import work
     NY, W = Y.neighbours(), work(len(tree[1]))
-    used = np.flatnonzero(np.bincount(FX.ravel(), minlength=len(VX))) if len(FX) else np.zeros(0, np.int64)
+    inface = np.bincount(FX.ravel(), minlength=len(VX)) > 0 if len(FX) else np.zeros(len(VX), bool)
+    used = np.arange(len(VX)) if (all_vertices and len(tree[1])) else np.flatnonzero(inface)
     dV = np.zeros(len(VX))
     iV = np.zeros(len(VX), np.int64)
     if len(used):
@@ -74,7 +76,7 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, ato
                                           *tree)
     # state: [lower, queries, settled, open, initialised, heap size, free slots, done]
     state = np.zeros(8)
-    state[0] = max(lower, float(dV[used].max()) if len(used) else 0.0)
+    state[0] = max(lower, float(dV[inface].max()) if inface.any() else 0.0)
     state[1] = float(len(used))
     cap = np.full(len(FX), np.inf) if cap is None else np.ascontiguousarray(cap, dtype=np.float64)
     ub = K.roots(VX, FX, dV, iV, *tree, NY, W, eps, atol, state, cap)
@@ -99,12 +101,13 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, ato
     upper = max(low, float(state[2]), float(state[3]))
     Y.count += int(state[1])
     return {"lower": low, "upper": upper, "certified": upper <= (1.0 + eps) * low + atol,
-            "points": int(state[1]), "rounds": rounds}
+            "points": int(state[1]), "rounds": rounds, "vertex_distances": dV}
 
 
 def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_points: int = 1_000_000,
               max_seconds: float = 30.0, n_samples: int = 20000, seed: int = 0,
-              surface_b: Surface | None = None, corresponding: bool = False) -> dict:
+              surface_b: Surface | None = None, corresponding: bool = False,
+              vertex_distances: bool = False) -> dict:
     """Certified symmetric Hausdorff distance and sampled mean surface distances.
 
     ``hausdorff``: the largest distance found (a lower bound), with ``hausdorff_upper`` the
@@ -121,6 +124,9 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
     triangle onto its twin bounds its distance to the other surface by its corners' largest
     displacement ``max_i |a_i - b_i|`` (the norm is convex), which closes most triangles
     without a query.
+
+    ``vertex_distances``: also return ``"vertex_distances_ab"``, the exact distance of every
+    vertex of A to B (k,) (the bracket queries them anyway; 0 for vertices in no face).
 
     ``surface_dist_mean``: the symmetric mean surface distance, the average of the two one-sided
     area-weighted means ``mean_{p in A} d(p, B)`` and ``mean_{p in B} d(p, A)``, each estimated
@@ -148,7 +154,7 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
             raise ValueError("corresponding=True needs the same faces on the same number of vertices")
         disp = np.linalg.norm(VA - VB, axis=1)
         cap_ab = cap_ba = disp[np.asarray(FA, dtype=np.int64)].max(axis=1) if len(FA) else None
-    ab = one_sided(VA, FA, SB, eps, atol, max_points, deadline, lower=seed_ab, cap=cap_ab)
+    ab = one_sided(VA, FA, SB, eps, atol, max_points, deadline, lower=seed_ab, cap=cap_ab, all_vertices=vertex_distances)
     ba = one_sided(VB, FB, SA, eps, atol, max_points, deadline, lower=seed_ba, cap=cap_ba)
     lower = max(ab["lower"], ba["lower"])
     upper = max(ab["upper"], ba["upper"])
@@ -157,6 +163,8 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
                 "hausdorff_certified": bool(ab["certified"] and ba["certified"]),
                 "hausdorff_ab": ab["lower"], "hausdorff_ba": ba["lower"],
                 "hausdorff_points": ab["points"] + ba["points"]})
+    if vertex_distances:
+        out["vertex_distances_ab"] = ab["vertex_distances"]
     return out
 
 

@@ -66,14 +66,16 @@ def point_surface_distance(P: np.ndarray, V: np.ndarray, F: np.ndarray, surface:
 
 
 def surface_distance(V: np.ndarray, F: np.ndarray, V_clean: np.ndarray, F_clean: np.ndarray,
-                     surface: Surface | None = None) -> dict:
+                     surface: Surface | None = None, d: np.ndarray | None = None) -> dict:
     """Distances of the result's vertices to the clean surface.
 
     ``dist_mean`` = mean_i d(v_i, S_clean). ``ev_sun`` (Sun et al. 2007) =
     sqrt( sum_i A_i d(v_i, S_clean)^2 / sum_i A_i ), A_i the barycentric area of vertex i on
-    the result mesh (one third of its incident faces' areas).
+    the result mesh (one third of its incident faces' areas). ``d``: those distances, when
+    already computed (e.g. by the Hausdorff bracket's vertex queries).
     """
-    d = point_surface_distance(V, V_clean, F_clean, surface)
+    if d is None:
+        d = point_surface_distance(V, V_clean, F_clean, surface)
     dbl = double_areas(V, F)
     A = np.bincount(F.ravel(), weights=np.repeat(dbl / 6.0, 3), minlength=len(V))
     tot = A.sum()

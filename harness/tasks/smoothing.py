@@ -76,9 +76,9 @@ def measure(inp, result, params) -> dict:
         return row
     ve = vertex_error(V_out, V_clean)
     S = _clean_surface(inp)
-    sd = surface_distance(V_out, F, V_clean, F, S)
     hd = hausdorff(V_out, F, V_clean, F, eps=inp.settings.get("hausdorff_eps", 1e-3), n_samples=0, surface_b=S,
-                   corresponding=True)
+                   corresponding=True, vertex_distances=True)
+    sd = surface_distance(V_out, F, V_clean, F, d=hd["vertex_distances_ab"])
     row.update({"ev_mean": ve["ev_mean"] / diag, "ev_rms": ve["ev_rms"] / diag,
                 "dist_mean": sd["dist_mean"] / diag, "ev_sun": sd["ev_sun"] / diag,
                 "hausdorff": hd["hausdorff"] / diag, "hausdorff_gap": hd["hausdorff_gap"],
