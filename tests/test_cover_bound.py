@@ -109,3 +109,28 @@ def test_a_second_sheet_and_a_fin_keep_the_bound_valid():
     S3 = Surface(V3, F3)
     b3 = _bound(S3, P, 1.0)
     assert b3 == np.inf or b3 >= _max_distance(S3, P)
+
+
+def test_a_sliver_triangle_gets_no_bound():
+    """Three corners collinear up to rounding: the computed normal is noise, so no covering bound
+    (a finite one here was 6% below the true maximum before the sliver test)."""
+    V, F = _grid(3, z=lambda x, y: 0.04 * np.sin(6 * x) * np.cos(5 * y))
+    P = np.array([float.fromhex(h) for h in [
+        "0x1.05ef2cfe42089p-2", "0x1.8e4a17a69a4e6p-1", "0x1.f222fd8b40f58p-7",
+        "0x1.9c60abd901e03p-2", "0x1.1e02bbf18bd7ep-2", "-0x1.bd64bd0824c70p-8",
+        "0x1.3dcd63dd4ba99p-2", "0x1.2f7cf8a934778p-1", "0x1.cce6df3403262p-8"]]).reshape(3, 3)
+    S = Surface(V, F)
+    b = _bound(S, P, 0.05)
+    assert b == np.inf or b >= _max_distance(S, P, 400)
+
+
+def test_face_neighbours_are_linear_on_a_fan():
+    """A hub vertex in 32,000 faces (a tessellated cap): neighbours are the adjacent spokes."""
+    from harness.metrics._cover_bound import face_neighbours
+    m = 32000
+    t = np.linspace(0, 2 * np.pi, m + 1)[:-1]
+    V = np.vstack([[0, 0, 0], np.column_stack([np.cos(t), np.sin(t), np.zeros(m)])])
+    F = np.column_stack([np.zeros(m, np.int64), 1 + np.arange(m), 1 + (np.arange(m) + 1) % m])
+    N = face_neighbours(F, len(V))
+    assert np.array_equal(N[:, 0], (np.arange(m) - 1) % m) and np.array_equal(N[:, 2], (np.arange(m) + 1) % m)
+    assert (N[:, 1] == -1).all()

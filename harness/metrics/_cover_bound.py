@@ -17,6 +17,10 @@ cancelled. When no edge of ``boundary(S)`` meets ``T`` the winding number is con
 ``T``; if it is at least 1 at ``T``'s centroid, every point of ``T`` lies in some projected
 triangle (every term is 0 or 1). Points on projected edges follow by continuity.
 
+``T``'s frame is made orthonormal by Gram-Schmidt and the rounding residue of its corners' heights
+is added to the bound; a sliver (``|u x v| <= 1e-6 |u| |v|``), whose computed normal is noise,
+gets no covering bound.
+
 This bound is tight where Y is locally a graph over the plane of ``T`` at a small height (a
 coarse triangle over the finer surface it simplifies: there corner-based bounds need
 subdivision down to the scale of Y's triangles); it overestimates by ``1 / cos`` of Y's tilt.
@@ -50,19 +54,34 @@ def face_neighbours(F, n):
             slot[fill[a]] = 3 * f + j
             fill[a] += 1
     N = np.full((m, 3), -1, np.int64)
+    key = np.empty(3 * m, np.int64)
+    for p in range(3 * m):                    # the larger vertex of each half-edge
+        h = slot[p]
+        key[p] = max(F[h // 3, h % 3], F[h // 3, (h % 3 + 1) % 3])
     for v in range(n):
-        for p in range(start[v], start[v + 1]):
-            h = slot[p]
-            f, j = h // 3, h % 3
-            b = max(F[f, j], F[f, (j + 1) % 3])
-            match, count = -1, 0
-            for q in range(start[v], start[v + 1]):
-                g = slot[q]
-                if q != p and max(F[g // 3, g % 3], F[g // 3, (g % 3 + 1) % 3]) == b:
-                    match = g
-                    count += 1
-            if count == 1:
-                N[f, j] = match // 3
+        s0, s1 = start[v], start[v + 1]
+        if s1 - s0 > 16:                      # sort the bucket by its larger vertex
+            o = np.argsort(key[s0:s1], kind="mergesort")
+            key[s0:s1] = key[s0:s1][o]
+            slot[s0:s1] = slot[s0:s1][o]
+        else:
+            for p in range(s0 + 1, s1):       # insertion sort: buckets hold about 3 half-edges
+                k, h = key[p], slot[p]
+                q = p - 1
+                while q >= s0 and key[q] > k:
+                    key[q + 1], slot[q + 1] = key[q], slot[q]
+                    q -= 1
+                key[q + 1], slot[q + 1] = k, h
+        p = s0
+        while p < s1:                         # runs of equal edges: exactly two are neighbours
+            e = p
+            while e < s1 and key[e] == key[p]:
+                e += 1
+            if e - p == 2:
+                g, h = slot[p], slot[p + 1]
+                N[g // 3, g % 3] = h // 3
+                N[h // 3, h % 3] = g // 3
+            p = e
     return N
 
 
@@ -80,14 +99,27 @@ def cover_bound(P, seeds, VY, FY, NY, r, W):
     nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
     nn = math.sqrt(nx * nx + ny * ny + nz * nz)
     lu = math.sqrt(ux * ux + uy * uy + uz * uz)
-    if nn == 0.0 or lu == 0.0:
+    lv = math.sqrt(vx * vx + vy * vy + vz * vz)
+    if not nn > 1e-6 * lu * lv:              # a sliver: its normal is rounding noise
         return np.inf
     nx, ny, nz = nx / nn, ny / nn, nz / nn
+    # an orthonormal frame (u, w, n) by Gram-Schmidt; the corners' residual heights h1, h2
+    # (rounding) are added to the bound: a point q of T is |h(q)| <= max(|h1|, |h2|) off the
+    # plane, so its distance to t's point along n is at most |h_t| + |h(q)|
+    h1 = ux * nx + uy * ny + uz * nz
+    h2 = vx * nx + vy * ny + vz * nz
+    ux, uy, uz = ux - h1 * nx, uy - h1 * ny, uz - h1 * nz
+    lu = math.sqrt(ux * ux + uy * uy + uz * uz)
+    if lu == 0.0:
+        return np.inf
     ux, uy, uz = ux / lu, uy / lu, uz / lu
     wx, wy, wz = ny * uz - nz * uy, nz * ux - nx * uz, nx * uy - ny * ux
-    # T in its plane: (0, 0), (lu, 0), (cx, cy) with cy > 0
+    # T projected on its plane: (0, 0), (lu, 0), (cx, cy) with cy > 0
     cx = vx * ux + vy * uy + vz * uz
     cy = vx * wx + vy * wy + vz * wz
+    if not cy > 1e-6 * lv:
+        return np.inf
+    margin = max(abs(h1), abs(h2)) + 1e-14 * (lu + lv)
     size = max(lu, math.sqrt(cx * cx + cy * cy)) + r
     ta = 1e-10 * size * size
     px0, py0, pz0 = P[0, 0], P[0, 1], P[0, 2]
@@ -180,7 +212,7 @@ def cover_bound(P, seeds, VY, FY, NY, r, W):
             if _meets(ax, ay, bx, by, lu, cx, cy, ta):
                 return np.inf
             wind += _crossing(ax, ay, bx, by, gx, gy)
-    return bound if wind >= 1 else np.inf
+    return bound + margin if wind >= 1 else np.inf
 
 
 def work(n_faces: int) -> tuple:
