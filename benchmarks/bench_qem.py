@@ -2,7 +2,7 @@
 libigl QSlim) on large meshes, to 10% of the faces.
 
 Run:  .venv/bin/python benchmarks/bench_qem.py [--sizes large,200k] [--repeats 3]
-                                               [--with pygel,qslim] [--ratio 0.1]
+                                               [--with pygel,qslim,open3d] [--ratio 0.1]
 
 Meshes (built here, deterministic):
 - ``large``: the bundled armadillo (86,482 faces) with two rounds of Loop subdivision
@@ -68,7 +68,7 @@ def main(argv=None) -> int:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--ratio", type=float, default=0.1)
     ap.add_argument("--with", dest="extra", default="",
-                    help="comma list of slow extra peers: pygel, qslim")
+                    help="comma list of extra peers: pygel, qslim, open3d (optional extra), meshoptimizer")
     args = ap.parse_args(argv)
 
     import methods
@@ -76,7 +76,8 @@ def main(argv=None) -> int:
     fast = {"scratch.qem": methods.get("scratch.qem"),
             "fast_simplification.qem": methods.get("fast_simplification.qem")}
     slow = {"meshlab.qem": methods.get("meshlab.qem")}
-    extra = {"pygel": "pygel.qem", "qslim": "libigl.qslim"}
+    extra = {"pygel": "pygel.qem", "qslim": "libigl.qslim", "open3d": "open3d.qem",
+             "meshoptimizer": "meshoptimizer.qem"}
     for e in filter(None, args.extra.split(",")):
         slow[extra[e]] = methods.get(extra[e])
 

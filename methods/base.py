@@ -67,6 +67,7 @@ class Method:
     doc: str = ""
     cite: str = ""
     expected_failures: dict = field(default_factory=dict, compare=False)
+    extra: str = ""             # optional-dependency extra that installs its library ("" = default install)
 
     @property
     def backend(self) -> str:
@@ -83,7 +84,8 @@ class Method:
             try:
                 importlib.import_module(mod)
             except Exception as exc:  # ImportError, or a broken binary wheel
-                return f"{self.library}: cannot import {mod!r} ({type(exc).__name__}: {exc})"
+                hint = f"; optional: pip install 'mesh-shootout[{self.extra}]'" if self.extra else ""
+                return f"{self.library}: cannot import {mod!r} ({type(exc).__name__}: {exc}){hint}"
         return None
 
     @property

@@ -12,7 +12,8 @@ from methods.registry import BROKEN
 
 ALL = methods.all_methods()
 IDS = [m.name for m in ALL]
-BUILTIN = [m for m in ALL if m.func.__module__.startswith("methods.")]
+BUILTIN = [m for m in ALL if m.func.__module__.startswith("methods.") and not m.extra]
+OPTIONAL = [m for m in ALL if m.func.__module__.startswith("methods.") and m.extra]
 
 
 def test_every_builtin_module_imports():
@@ -30,6 +31,19 @@ def test_registry_has_the_promised_methods():
 def test_builtin_is_available(m):
     # make test installs every backend, so no built-in may be unavailable here
     assert m.unavailable_reason() is None
+
+
+@pytest.mark.parametrize("m", OPTIONAL, ids=[m.name for m in OPTIONAL])
+def test_optional_backend_is_available_or_says_how_to_install_it(m):
+    why = m.unavailable_reason()
+    assert why is None or f"pip install 'mesh-shootout[{m.extra}]'" in why
+
+
+def test_the_optional_extras_are_declared():
+    import tomllib
+    from pathlib import Path
+    extras = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())["project"]["optional-dependencies"]
+    assert OPTIONAL and all(m.extra in extras for m in OPTIONAL)
 
 
 @parametrize_with_checks(ALL)

@@ -17,7 +17,7 @@ from harness.metrics.hausdorff import hausdorff
 
 CLOSED = ["knight", "bunny", "spot", "fertility", "max", "fandisk", "armadillo"]
 ADAPTERS = ["scratch.qem", "fast_simplification.qem", "pyfqmr.qem", "meshlab.qem", "pygel.qem",
-            "libigl.qslim", "libigl.decimate"]
+            "libigl.qslim", "libigl.decimate", "open3d.qem"]
 
 
 def mesh(name):
