@@ -47,14 +47,16 @@ _Surface = Surface           # the AABB-backed surface (harness.metrics.surface_
 
 def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, atol: float = 0.0,
               max_points: int = 1_000_000, deadline: float = float("inf"), lower: float = 0.0,
-              cap: np.ndarray | None = None, all_vertices: bool = False) -> dict:
+              cap: np.ndarray | None = None, all_vertices: bool = False,
+              hints: np.ndarray | None = None) -> dict:
     """Bracket ``h(X, Y) = max_{p in X} d(p, Y)`` (module docstring), compiled: the vertices of X
     are queried, every triangle gets its upper bound (one centroid query where the corners do
     not settle it), then the open sub-triangle with the largest bound is split, best first (a
     max-heap), each midpoint queried from the closest face of the nearer corner (the
     `harness.metrics._bvh_kernel` hierarchy over Y), in batches of splits between which
     ``deadline`` is checked. ``lower`` may seed the lower bound with a distance already found
-    at a point of X.
+    at a point of X. ``hints`` (k,): for each vertex of X a face of Y (index into Y's ``F``,
+    -1 for none) near it, where its query starts.
 
     Returns ``lower``, ``upper`` (``upper >= h >= lower``), ``certified`` (the bracket met
     ``upper <= (1 + eps) lower + atol``), ``points`` (distance queries made), ``rounds``
@@ -72,8 +74,8 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, ato
     dV = np.zeros(len(VX))
     iV = np.zeros(len(VX), np.int64)
     if len(used):
-        dV[used], iV[used] = K.query_many(np.ascontiguousarray(VX[used]), np.full(len(used), -1, np.int64),
-                                          *tree)
+        h = np.full(len(used), -1, np.int64) if hints is None else Y.leaf_faces(np.asarray(hints)[used])
+        dV[used], iV[used] = K.query_many(np.ascontiguousarray(VX[used]), np.ascontiguousarray(h), *tree)
     # state: [lower, queries, settled, open, initialised, heap size, free slots, done]
     state = np.zeros(8)
     state[0] = max(lower, float(dV[inface].max()) if inface.any() else 0.0)
@@ -148,14 +150,18 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
         seed_ab, seed_ba = float(dab.max()), float(dba.max())
         se = np.sqrt(dab.var(ddof=1) / dab.size + dba.var(ddof=1) / dba.size) / 2 if n_samples > 1 else float("nan")
         out.update(surface_dist_mean=float((dab.mean() + dba.mean()) / 2), surface_dist_mean_se=float(se))
-    cap_ab = cap_ba = None
+    cap_ab = cap_ba = hints = None
     if corresponding:
         if VA.shape != VB.shape or not np.array_equal(FA, FB):
             raise ValueError("corresponding=True needs the same faces on the same number of vertices")
+        FA = np.asarray(FA, dtype=np.int64)
         disp = np.linalg.norm(VA - VB, axis=1)
-        cap_ab = cap_ba = disp[np.asarray(FA, dtype=np.int64)].max(axis=1) if len(FA) else None
-    ab = one_sided(VA, FA, SB, eps, atol, max_points, deadline, lower=seed_ab, cap=cap_ab, all_vertices=vertex_distances)
-    ba = one_sided(VB, FB, SA, eps, atol, max_points, deadline, lower=seed_ba, cap=cap_ba)
+        cap_ab = cap_ba = disp[FA].max(axis=1) if len(FA) else None
+        hints = np.full(len(VA), -1, np.int64)         # a face around each vertex, on both sides
+        hints[FA.ravel()] = np.repeat(np.arange(len(FA)), 3)
+    ab = one_sided(VA, FA, SB, eps, atol, max_points, deadline, lower=seed_ab, cap=cap_ab, all_vertices=vertex_distances,
+                   hints=hints)
+    ba = one_sided(VB, FB, SA, eps, atol, max_points, deadline, lower=seed_ba, cap=cap_ba, hints=hints)
     lower = max(ab["lower"], ba["lower"])
     upper = max(ab["upper"], ba["upper"])
     gap = 0.0 if upper - lower <= atol else ((upper - lower) / lower if lower > 0 else float("inf"))

@@ -15,6 +15,7 @@ class Surface:
         self.tree = None                 # libigl's AABB, built on the first `query`
         self._bvh = None
         self._nb = None
+        self._pos = None
         self.count = 0
 
     def bvh(self) -> tuple:
@@ -28,7 +29,16 @@ class Surface:
             order = np.arange(len(self.F), dtype=np.int64)
             nodes = build(self.V, self.F, centroids(self.V, self.F), order)
             self._bvh = (*leaf_order(self.V, self.F, order), np.arange(len(self.F), dtype=np.int64), *nodes)
+            self._pos = np.empty(len(order), np.int64)
+            self._pos[order] = np.arange(len(order))
         return self._bvh
+
+    def leaf_faces(self, faces: np.ndarray) -> np.ndarray:
+        """The hierarchy's indices (into ``F'``, `bvh`) of faces given by their index in ``F``
+        (-1 stays -1)."""
+        self.bvh()
+        faces = np.asarray(faces, dtype=np.int64)
+        return np.where(faces >= 0, self._pos[np.maximum(faces, 0)], -1)
 
     def neighbours(self) -> np.ndarray:
         """Face neighbours (m, 3) of the hierarchy's faces ``F'`` (`bvh`): the face across edge
