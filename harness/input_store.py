@@ -5,8 +5,10 @@ mesh's topology, the noisy input's own metrics, an exact geodesic reference) wou
 recomputed by each method's case. A task names such entries in ``Task.input_facts``: values that
 depend on the case's input alone (mesh, noise model, level, seed, fraction and the measuring
 settings), never on the method or its result. After a case, the runner stores those entries in
-a private directory of the session (`session`, created with mode 0700 and removed at its end);
-later cases of the same input load them before measuring. Computing a fact stays in the case
+a private directory of the session (`session`: an unguessable name, created with mode 0700 on
+the first store and removed at the session's end; known to this process and its forked case
+processes only, never through the environment); later cases of the same task and input load
+them before measuring. Computing a fact stays in the case
 process, so a mesh that crashes a measurement costs that case's row, never the driver. A missing,
 unreadable or concurrently written store is a cache miss, not an error.
 """
@@ -16,39 +18,48 @@ import contextlib
 import hashlib
 import os
 import pickle
+import secrets
 import shutil
 import tempfile
 from pathlib import Path
 
-ENV = "SHOOTOUT_INPUT_STORE"
+_DIR: str | None = None       # this session's store; forked case processes inherit it
 
 
 @contextlib.contextmanager
 def session():
     """A private store for the cases run inside the block (in this process and its forks)."""
-    if os.environ.get(ENV):
-        yield                                # nested: the outer session's store serves
+    global _DIR
+    if _DIR is not None:
+        yield                                # nested in this process: the outer store serves
         return
-    d = tempfile.mkdtemp(prefix="shootout-inputs-")
-    os.environ[ENV] = d
+    _DIR = os.path.join(tempfile.gettempdir(), "shootout-inputs-" + secrets.token_hex(16))
     try:
         yield
     finally:
-        os.environ.pop(ENV, None)
+        d, _DIR = _DIR, None
         shutil.rmtree(d, ignore_errors=True)
 
 
-def _path(case) -> Path | None:
-    d = os.environ.get(ENV)
-    if not d:
+def _path(case, create: bool = False) -> Path | None:
+    if _DIR is None:
         return None
-    ident = [sorted(case.mesh.items()), case.noise_model, repr(case.noise_level), case.seed,
-             repr(case.fraction), case.hausdorff_samples, repr(case.hausdorff_eps)]
+    if create:
+        try:
+            os.mkdir(_DIR, 0o700)
+        except FileExistsError:                # made by another case of this session: check it
+            st = os.lstat(_DIR)
+            if not os.path.isdir(_DIR) or os.path.islink(_DIR) or st.st_uid != os.getuid() or st.st_mode & 0o077:
+                return None
+        except OSError:
+            return None
+    ident = [case.task, sorted(case.mesh.items()), case.mesh_key, case.noise_model, repr(case.noise_level),
+             case.seed, repr(case.fraction), tuple(case.plugins), case.hausdorff_samples, repr(case.hausdorff_eps)]
     if "file" in case.mesh:
         with contextlib.suppress(OSError):
             st = os.stat(case.mesh["file"])
             ident.append((st.st_size, st.st_mtime_ns))
-    return Path(d) / (hashlib.sha1(repr(ident).encode()).hexdigest() + ".pkl")
+    return Path(_DIR) / (hashlib.sha1(repr(ident).encode()).hexdigest() + ".pkl")
 
 
 def _wanted(key, names) -> bool:
@@ -70,7 +81,7 @@ def load(case, names) -> dict:
 
 def save(case, cache: dict, names) -> None:
     """Add the case's facts among ``names`` to its input's store (atomic replace; best effort)."""
-    p = _path(case) if names else None
+    p = _path(case, create=True) if names else None
     if p is None:
         return
     facts = {k: v for k, v in cache.items() if _wanted(k, names)}

@@ -37,21 +37,29 @@ def test_facts_are_computed_once_per_input_and_equal_a_fresh_computation(tmp_pat
     assert rows["input_ev_mean"].nunique() == 2
 
 
-def test_the_store_is_private_to_a_session_and_removed_after_it(tmp_path):
+def test_the_store_is_private_to_a_session_and_removed_after_it(tmp_path, monkeypatch):
+    import dataclasses
     case = load_config(CFG).cases[0]
+    monkeypatch.setenv("SHOOTOUT_INPUT_STORE", str(tmp_path))     # the environment is never trusted
     assert input_store.load(case, ("x",)) == {}          # outside a session: nothing kept
     input_store.save(case, {"x": 1}, ("x",))
+    assert not any(tmp_path.iterdir())
     with input_store.session():
-        d = Path(os.environ[input_store.ENV])
-        assert (d.stat().st_mode & 0o777) == 0o700
+        d = Path(input_store._DIR)
+        assert not d.exists()                            # created on the first store only
         input_store.save(case, {"x": np.arange(3), ("y", 2): "t", "z": "not declared"}, ("x", "y"))
+        assert (d.stat().st_mode & 0o777) == 0o700 and d.parent != tmp_path
         got = input_store.load(case, ("x", "y", "z"))
         assert set(got) == {"x", ("y", 2)} and np.array_equal(got["x"], np.arange(3))
         other = next(c for c in load_config(CFG).cases if c.noise_level != case.noise_level)
-        assert input_store.load(other, ("x",)) == {}
+        assert input_store.load(other, ("x",)) == {}     # another noise level: another input
+        # the same spec under another label gets other noise (seeded by the label), another task
+        # another namespace: neither sees these facts
+        assert input_store.load(dataclasses.replace(case, mesh_key="other"), ("x",)) == {}
+        assert input_store.load(dataclasses.replace(case, task="simplification"), ("x",)) == {}
         for f in d.iterdir():                            # a torn file is a miss, not an error
             f.write_bytes(b"\x80garbage")
         assert input_store.load(case, ("x",)) == {}
         with input_store.session():                      # nested: the same store
-            assert os.environ[input_store.ENV] == str(d)
-    assert input_store.ENV not in os.environ and not d.exists()
+            assert input_store._DIR == str(d)
+    assert input_store._DIR is None and not d.exists()
