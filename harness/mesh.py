@@ -19,7 +19,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from .core.geometry import edge_face_counts, mean_edge_length  # noqa: F401
+from .core.geometry import COMPILED_EDGES_FROM, edge_face_counts, mean_edge_length  # noqa: F401
 from .errors import InvalidMeshError
 
 SUPPORTED = (".obj", ".off", ".ply", ".stl")
@@ -368,6 +368,9 @@ def validate(V, F, name: str = "", repair: bool = True) -> Mesh:
 
 def nonmanifold_vertices(F: np.ndarray, n: int) -> np.ndarray:
     """Indices of vertices whose incident faces form more than one edge-connected fan."""
+    if len(F) >= COMPILED_EDGES_FROM:
+        from .core._edges_kernel import fan_counts
+        return np.flatnonzero(fan_counts(np.ascontiguousarray(F, dtype=np.int64), int(n)) > 1)
     m = len(F)
     corner_v = F.ravel()                           # corner c = 3 f + k sits at vertex F[f, k]
     c = np.arange(3 * m)

@@ -146,3 +146,22 @@ def test_corresponding_vertices_give_a_valid_tighter_bracket():
     assert b["hausdorff_points"] < a["hausdorff_points"]
     with pytest.raises(ValueError, match="corresponding"):
         hausdorff(V[:-1], m.F[:10], m.V, m.F, n_samples=0, corresponding=True)
+
+
+@pytest.mark.parametrize("level", [0.0, 0.3, 3.0])
+def test_corresponding_bracket_skips_settled_triangles_and_stays_valid(level):
+    """With corresponding vertices, B's triangles whose displacement cap is within the threshold
+    set by the A-to-B bound are not queried; the symmetric bracket still contains the bracket
+    found without the correspondence (noise from none to three mean edge lengths)."""
+    from harness.noise import apply_noise
+    from harness.metrics.surface_distance import Surface
+    m = datasets.load("bunny").clean
+    V = apply_noise(m.V, m.F, "gaussian_normal", level, 0) if level else m.V.copy()
+    a = hausdorff(V, m.F, m.V, m.F, n_samples=0)
+    SB = Surface(m.V, m.F)
+    b = hausdorff(V, m.F, m.V, m.F, n_samples=0, corresponding=True, surface_b=SB)
+    assert b["hausdorff_certified"]
+    assert max(a["hausdorff"], b["hausdorff"]) <= min(a["hausdorff_upper"], b["hausdorff_upper"]) * (1 + 1e-12) + 1e-15
+    assert b["hausdorff_points"] < a["hausdorff_points"]
+    if level == 0.0:
+        assert b["hausdorff_upper"] == 0.0

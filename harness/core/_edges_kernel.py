@@ -54,3 +54,61 @@ def edges_and_counts(F, n):
             counts[k] = c
             k += 1
     return E[:k], counts[:k]
+
+
+@njit(cache=True, inline="always")
+def _root(parent, p):
+    while parent[p] != p:
+        parent[p] = parent[parent[p]]
+        p = parent[p]
+    return p
+
+
+@njit(cache=True)
+def fan_counts(F, n):
+    """Number of edge-connected fans of faces around each vertex (n,), for faces ``F`` (m, 3)
+    int64: two corners at a vertex v are in one fan when their faces share an edge (v, x),
+    i.e. when the corners' other two vertices share an x (0 for unreferenced vertices)."""
+    m = F.shape[0]
+    start = np.zeros(n + 1, np.int64)
+    for f in range(m):
+        for c in range(3):
+            start[F[f, c] + 1] += 1
+    for i in range(n):
+        start[i + 1] += start[i]
+    fill = start[:-1].copy()
+    nxt = np.empty(3 * m, np.int64)           # the corner's two other vertices, grouped by vertex
+    prv = np.empty(3 * m, np.int64)
+    for f in range(m):
+        for c in range(3):
+            v = F[f, c]
+            nxt[fill[v]] = F[f, (c + 1) % 3]
+            prv[fill[v]] = F[f, (c + 2) % 3]
+            fill[v] += 1
+    parent = np.arange(3 * m)
+    fans = np.zeros(n, np.int64)
+    for v in range(n):
+        s, e = start[v], start[v + 1]
+        if e - s <= 48:                       # a few corners: compare every pair
+            for p in range(s, e):
+                for q in range(p + 1, e):
+                    if nxt[p] == nxt[q] or nxt[p] == prv[q] or prv[p] == nxt[q] or prv[p] == prv[q]:
+                        a, b = _root(parent, p), _root(parent, q)
+                        if a != b:
+                            parent[max(a, b)] = min(a, b)
+        else:                                 # many: sort the (other vertex, corner) pairs
+            k = e - s
+            key = np.empty(2 * k, np.int64)
+            for p in range(k):
+                key[2 * p] = nxt[s + p]
+                key[2 * p + 1] = prv[s + p]
+            order = np.argsort(key, kind="mergesort")
+            for t in range(1, 2 * k):
+                if key[order[t]] == key[order[t - 1]]:
+                    a, b = _root(parent, s + order[t] // 2), _root(parent, s + order[t - 1] // 2)
+                    if a != b:
+                        parent[max(a, b)] = min(a, b)
+        for p in range(s, e):
+            if parent[p] == p:
+                fans[v] += 1
+    return fans

@@ -50,8 +50,9 @@ def edge_face_counts(F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def warm() -> None:
     """Load (or compile) the compiled edge extraction once, e.g. in a driver before it forks."""
-    from ._edges_kernel import edges_and_counts
+    from ._edges_kernel import edges_and_counts, fan_counts
     edges_and_counts(np.array([[0, 1, 2]], dtype=np.int64), 3)
+    fan_counts(np.array([[0, 1, 2]], dtype=np.int64), 3)
 
 
 def unique_edges(F: np.ndarray) -> np.ndarray:
@@ -76,10 +77,25 @@ def mean_edge_length(V: np.ndarray, F: np.ndarray) -> float:
 # ----------------------------------------------------------------------------- faces
 
 
+def cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise cross products (k, 3) of (k, 3) arrays: the operations of ``np.cross`` (same
+    values bit for bit) without its axis shuffling and temporaries."""
+    a0, a1, a2 = a[:, 0], a[:, 1], a[:, 2]
+    b0, b1, b2 = b[:, 0], b[:, 1], b[:, 2]
+    out = np.empty((len(a), 3), dtype=np.result_type(a, b))
+    np.multiply(a1, b2, out=out[:, 0])
+    out[:, 0] -= a2 * b1
+    np.multiply(a2, b0, out=out[:, 1])
+    out[:, 1] -= a0 * b2
+    np.multiply(a0, b1, out=out[:, 2])
+    out[:, 2] -= a1 * b0
+    return out
+
+
 def face_cross(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     """``(v1 - v0) x (v2 - v0)`` per face (m, 3): twice the area times the unit normal."""
     p0 = V[F[:, 0]]
-    return np.cross(V[F[:, 1]] - p0, V[F[:, 2]] - p0)
+    return cross_rows(V[F[:, 1]] - p0, V[F[:, 2]] - p0)
 
 
 def double_areas(V: np.ndarray, F: np.ndarray) -> np.ndarray:
@@ -112,7 +128,7 @@ def area(V: np.ndarray, F: np.ndarray) -> float:
 def volume(V: np.ndarray, F: np.ndarray) -> float:
     """Signed enclosed volume by the divergence theorem, ``sum_f v0 . (v1 x v2) / 6``
     (meaningful for closed, consistently oriented meshes; positive for outward normals)."""
-    return float(np.einsum("ij,ij->i", V[F[:, 0]], np.cross(V[F[:, 1]], V[F[:, 2]])).sum() / 6.0)
+    return float(np.einsum("ij,ij->i", V[F[:, 0]], cross_rows(V[F[:, 1]], V[F[:, 2]])).sum() / 6.0)
 
 
 def edge_lengths(V: np.ndarray, F: np.ndarray) -> np.ndarray:
@@ -148,7 +164,7 @@ def corner_cotangents(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndar
     """
     p0, p1, p2 = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     e0, e1, e2 = p2 - p1, p0 - p2, p1 - p0          # edge opposite corner k
-    dbl = np.linalg.norm(np.cross(e1, e2), axis=1)
+    dbl = np.linalg.norm(cross_rows(e1, e2), axis=1)
     dots = np.stack([-(e1 * e2).sum(1), -(e2 * e0).sum(1), -(e0 * e1).sum(1)], axis=1)
     safe = np.where(dbl > 0, dbl, 1.0)
     C = np.where((dbl > 0)[:, None], dots / safe[:, None], 0.0)
@@ -161,7 +177,7 @@ def corner_angles(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     for k in range(3):
         a = V[F[:, (k + 1) % 3]] - V[F[:, k]]
         b = V[F[:, (k + 2) % 3]] - V[F[:, k]]
-        out[:, k] = np.degrees(np.arctan2(np.linalg.norm(np.cross(a, b), axis=1), (a * b).sum(1)))
+        out[:, k] = np.degrees(np.arctan2(np.linalg.norm(cross_rows(a, b), axis=1), (a * b).sum(1)))
     return out
 
 

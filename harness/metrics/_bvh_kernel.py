@@ -113,8 +113,10 @@ def _select(order, C, ax, lo, hi, k):
 def build(V, F, C, order):
     """Nodes of the BVH over the triangles (centroids ``C``), splitting each node at the median
     centroid along its longest axis; ``order`` (a permutation of the faces) is rearranged in
-    place. Returns ``lo``, ``hi`` (N, 3) boxes, ``left``/``right`` children (-1 at a leaf) and
-    ``start``/``end`` ranges of ``order`` at the leaves. Node 0 is the root."""
+    place. Returns the nodes packed in ``B`` (N, 8): the box's low and high corners
+    ``B[k, 0:3]``, ``B[k, 3:6]``, then for an inner node its children ``B[k, 6]`` and
+    ``B[k, 7] = B[k, 6] + 1``, for a leaf ``-1 - start`` and ``end``, its range of ``order``
+    (so ``B[k, 6] < 0`` marks a leaf). Node 0 is the root."""
     m = order.size
     cap = 2 * m + 1                      # leaves hold >= 1 triangle: at most 2m - 1 nodes
     lo = np.empty((cap, 3))
@@ -176,7 +178,18 @@ def build(V, F, C, order):
             for d in range(3):
                 lo[k, d] = min(lo[a, d], lo[b, d])
                 hi[k, d] = max(hi[a, d], hi[b, d])
-    return lo[:n], hi[:n], left[:n], right[:n], start[:n], end[:n]
+    B = np.empty((n, 8))                     # packed: one node per 64 bytes
+    for k in range(n):
+        for d in range(3):
+            B[k, d] = lo[k, d]
+            B[k, 3 + d] = hi[k, d]
+        if left[k] < 0:
+            B[k, 6] = -1.0 - start[k]
+            B[k, 7] = end[k]
+        else:
+            B[k, 6] = left[k]                # right[k] == left[k] + 1
+            B[k, 7] = right[k]
+    return B
 
 
 @njit(cache=True)
@@ -214,78 +227,91 @@ def leaf_order(V, F, order):
 
 
 @njit(cache=True, inline="always")
-def _box2(px, py, pz, lo, hi, k):
+def _box2(px, py, pz, B, k):
+    """Squared distance from p to the box of node k."""
     d = 0.0
-    if px < lo[k, 0]:
-        d += (lo[k, 0] - px) ** 2
-    elif px > hi[k, 0]:
-        d += (px - hi[k, 0]) ** 2
-    if py < lo[k, 1]:
-        d += (lo[k, 1] - py) ** 2
-    elif py > hi[k, 1]:
-        d += (py - hi[k, 1]) ** 2
-    if pz < lo[k, 2]:
-        d += (lo[k, 2] - pz) ** 2
-    elif pz > hi[k, 2]:
-        d += (pz - hi[k, 2]) ** 2
+    t = B[k, 0] - px
+    if t > 0.0:
+        d += t * t
+    t = px - B[k, 3]
+    if t > 0.0:
+        d += t * t
+    t = B[k, 1] - py
+    if t > 0.0:
+        d += t * t
+    t = py - B[k, 4]
+    if t > 0.0:
+        d += t * t
+    t = B[k, 2] - pz
+    if t > 0.0:
+        d += t * t
+    t = pz - B[k, 5]
+    if t > 0.0:
+        d += t * t
     return d
 
 
 @njit(cache=True)
-def closest(px, py, pz, V, F, order, lo, hi, left, right, start, end, hint, stack):
+def closest(px, py, pz, V, F, B, hint, stack, dstack):
     """``(squared distance, face)`` of the closest triangle to p; ``hint`` a face to start from
-    (or -1)."""
+    (or -1). ``stack``/``dstack`` (256,): scratch for the nodes to visit and their box
+    distances."""
     best = np.inf
     bf = -1
     if hint >= 0:
         best = _tri_dist2(px, py, pz, V, F[hint, 0], F[hint, 1], F[hint, 2])
         bf = hint
-    top = 0
     stack[0] = 0
+    dstack[0] = 0.0
     top = 1
     while top > 0:
         top -= 1
-        k = stack[top]
-        if _box2(px, py, pz, lo, hi, k) >= best:
+        if dstack[top] >= best:                # pruned by a triangle found since it was pushed
             continue
-        if left[k] < 0:
-            for i in range(start[k], end[k]):
-                f = order[i]
+        k = stack[top]
+        c = B[k, 6]
+        if c < 0.0:                            # a leaf: its triangles F[start:end]
+            for f in range(int(-1.0 - c), int(B[k, 7])):
                 d = _tri_dist2(px, py, pz, V, F[f, 0], F[f, 1], F[f, 2])
                 if d < best:
                     best = d
                     bf = f
-        else:
-            a, b = left[k], right[k]
-            da, db = _box2(px, py, pz, lo, hi, a), _box2(px, py, pz, lo, hi, b)
-            if da < db:                      # nearer child on top of the stack
+        else:                                  # children a and a + 1, nearer box on top
+            a = int(c)
+            da, db = _box2(px, py, pz, B, a), _box2(px, py, pz, B, a + 1)
+            if da < db:
                 if db < best:
-                    stack[top] = b
+                    stack[top] = a + 1
+                    dstack[top] = db
                     top += 1
                 if da < best:
                     stack[top] = a
+                    dstack[top] = da
                     top += 1
             else:
                 if da < best:
                     stack[top] = a
+                    dstack[top] = da
                     top += 1
                 if db < best:
-                    stack[top] = b
+                    stack[top] = a + 1
+                    dstack[top] = db
                     top += 1
     return best, bf
 
 
 @njit(cache=True)
-def query_many(P, hints, V, F, order, lo, hi, left, right, start, end):
+def query_many(P, hints, V, F, B):
     """Distances (k,) and closest faces (k,) of points P (k, 3); a point without a hint (-1)
     starts from the previous point's closest face (consecutive points are often near)."""
     k = P.shape[0]
     d = np.empty(k)
     f = np.empty(k, np.int64)
     stack = np.empty(256, np.int64)
+    dstack = np.empty(256)
     for i in range(k):
         h = hints[i] if (hints[i] >= 0 or i == 0) else f[i - 1]
-        d2, fi = closest(P[i, 0], P[i, 1], P[i, 2], V, F, order, lo, hi, left, right, start, end, h, stack)
+        d2, fi = closest(P[i, 0], P[i, 1], P[i, 2], V, F, B, h, stack, dstack)
         d[i] = math.sqrt(d2)
         f[i] = fi
     return d, f
@@ -309,7 +335,7 @@ def _convex(P, VY, FY, f):
 
 
 @njit(cache=True)
-def _upper(P, D, I, VY, FY, NY, order, lo, hi, left, right, start, end, stack, thr, state, W, seeds):
+def _upper(P, D, I, VY, FY, NY, B, stack, dstack, thr, state, W, seeds):
     """Upper bound of the distance to the surface over triangle P (3, 3) with corner distances
     D (3,) and closest faces I (3,), the first that settles it (``<= thr``) of: Lipschitz bounds
     from the corners (``max D + rho``, rho the largest distance from a point of the triangle to
@@ -346,7 +372,7 @@ def _upper(P, D, I, VY, FY, NY, order, lo, hi, left, right, start, end, stack, t
     cx = (P[0, 0] + P[1, 0] + P[2, 0]) / 3.0
     cy = (P[0, 1] + P[1, 1] + P[2, 1]) / 3.0
     cz = (P[0, 2] + P[1, 2] + P[2, 2]) / 3.0
-    d2, fc = closest(cx, cy, cz, VY, FY, order, lo, hi, left, right, start, end, I[0], stack)
+    d2, fc = closest(cx, cy, cz, VY, FY, B, I[0], stack, dstack)
     dc = math.sqrt(d2)
     state[1] += 1.0
     if dc > state[0]:
@@ -359,7 +385,7 @@ def _upper(P, D, I, VY, FY, NY, order, lo, hi, left, right, start, end, stack, t
 
 
 @njit(cache=True)
-def roots(VX, FX, dV, iV, VY, FY, order, lo, hi, left, right, start, end, NY, W, eps, atol, state, cap):
+def roots(VX, FX, dV, iV, VY, FY, B, NY, W, eps, atol, state, cap):
     """Upper bound (m,) of every triangle of X (`_upper`, and ``cap[f]``, a bound known a
     priori: when it already closes the triangle no query is made); raises the lower bound
     state[0]."""
@@ -369,6 +395,7 @@ def roots(VX, FX, dV, iV, VY, FY, order, lo, hi, left, right, start, end, NY, W,
     D = np.empty(3)
     I = np.empty(3, np.int64)
     stack = np.empty(256, np.int64)
+    dstack = np.empty(256)
     seeds = np.empty(4, np.int64)
     for f in range(m):
         for i in range(3):
@@ -379,7 +406,7 @@ def roots(VX, FX, dV, iV, VY, FY, order, lo, hi, left, right, start, end, NY, W,
         if cap[f] <= thr:
             ub[f] = max(cap[f], D[0], D[1], D[2])
         else:
-            ub[f] = min(_upper(P, D, I, VY, FY, NY, order, lo, hi, left, right, start, end, stack, thr, state, W, seeds),
+            ub[f] = min(_upper(P, D, I, VY, FY, NY, B, stack, dstack, thr, state, W, seeds),
                         max(cap[f], D[0], D[1], D[2]))
     return ub
 
@@ -413,7 +440,7 @@ def _sift_down(H, K, n, i):
 
 
 @njit(cache=True)
-def best_first(tris, ub0, VX, FX, dV, iV, VY, FY, order, lo, hi, left, right, start, end, NY, W, eps, atol,
+def best_first(tris, ub0, VX, FX, dV, iV, VY, FY, B, NY, W, eps, atol,
                max_points, max_pops, store, state):
     """Best-first branch and bound: always split the open sub-triangle with the largest upper
     bound (a max-heap), so the lower bound rises as fast as possible and no sub-triangle is split
@@ -449,6 +476,7 @@ def best_first(tris, ub0, VX, FX, dV, iV, VY, FY, order, lo, hi, left, right, st
     CD = np.empty(3)
     CI = np.empty(3, np.int64)
     stack = np.empty(256, np.int64)
+    dstack = np.empty(256)
     seeds = np.empty(4, np.int64)
     pops = 0
     while n > 0 and pops < max_pops:
@@ -486,7 +514,7 @@ def best_first(tris, ub0, VX, FX, dV, iV, VY, FY, order, lo, hi, left, right, st
             my = 0.5 * (P[i, 1] + P[j, 1])
             mz = 0.5 * (P[i, 2] + P[j, 2])
             hint = SI[s, i] if SD[s, i] <= SD[s, j] else SI[s, j]
-            d2, fm = closest(mx, my, mz, VY, FY, order, lo, hi, left, right, start, end, hint, stack)
+            d2, fm = closest(mx, my, mz, VY, FY, B, hint, stack, dstack)
             M[e, 0], M[e, 1], M[e, 2] = mx, my, mz
             MD[e] = math.sqrt(d2)
             MI[e] = fm
@@ -508,7 +536,7 @@ def best_first(tris, ub0, VX, FX, dV, iV, VY, FY, order, lo, hi, left, right, st
                     CP[0, d], CP[1, d], CP[2, d] = M[0, d], M[1, d], M[2, d]
                 CD[0], CD[1], CD[2] = MD[0], MD[1], MD[2]
                 CI[0], CI[1], CI[2] = MI[0], MI[1], MI[2]
-            cu = _upper(CP, CD, CI, VY, FY, NY, order, lo, hi, left, right, start, end, stack, thr, state, W, seeds)
+            cu = _upper(CP, CD, CI, VY, FY, NY, B, stack, dstack, thr, state, W, seeds)
             if cu <= (1.0 + eps) * state[0] + atol:
                 state[2] = max(state[2], cu)
                 if q == 3:

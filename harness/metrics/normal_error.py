@@ -1,7 +1,7 @@
 """Angle between each face normal of the result and of the clean mesh (same faces)."""
 import numpy as np
 
-from harness.core.geometry import face_normals
+from harness.core.geometry import cross_rows, face_normals
 
 
 def normal_error(V: np.ndarray, V_clean: np.ndarray, F: np.ndarray) -> dict:
@@ -11,7 +11,7 @@ def normal_error(V: np.ndarray, V_clean: np.ndarray, F: np.ndarray) -> dict:
     (zero normal on either side) count as 90 degrees.
     """
     N, C = face_normals(V, F), face_normals(V_clean, F)
-    ang = np.degrees(np.arctan2(np.linalg.norm(np.cross(N, C), axis=1), (N * C).sum(1)))
+    ang = np.degrees(np.arctan2(np.linalg.norm(cross_rows(N, C), axis=1), (N * C).sum(1)))
     deg = (np.linalg.norm(N, axis=1) == 0) | (np.linalg.norm(C, axis=1) == 0)
     ang[deg] = 90.0
     return {"normal_error_deg": float(ang.mean()), "normal_error_rms_deg": float(np.sqrt((ang ** 2).mean()))}

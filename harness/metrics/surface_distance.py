@@ -20,15 +20,15 @@ class Surface:
 
     def bvh(self) -> tuple:
         """Our compiled hierarchy over the same triangles (`harness.metrics._bvh_kernel`), built
-        on first use: ``(V', F', order, lo, hi, left, right, start, end)`` where ``F'`` holds the
-        triangles in leaf order (``order`` is then the identity) and ``V'`` the vertices in order
-        of first use, so a query reads contiguous memory. Face indices it reports refer to
+        on first use: ``(V', F', B)`` where ``F'`` holds the triangles in leaf order (a leaf's
+        range indexes ``F'``), ``V'`` the vertices in order of first use, so a query reads
+        contiguous memory, and ``B`` the packed nodes (`harness.metrics._bvh_kernel.build`). Face indices it reports refer to
         ``F'``; distances are those to the same surface."""
         if self._bvh is None:
             from ._bvh_kernel import build, centroids, leaf_order
             order = np.arange(len(self.F), dtype=np.int64)
             nodes = build(self.V, self.F, centroids(self.V, self.F), order)
-            self._bvh = (*leaf_order(self.V, self.F, order), np.arange(len(self.F), dtype=np.int64), *nodes)
+            self._bvh = (*leaf_order(self.V, self.F, order), nodes)
             self._pos = np.empty(len(order), np.int64)
             self._pos[order] = np.arange(len(order))
         return self._bvh
@@ -48,6 +48,21 @@ class Surface:
             V, F = self.bvh()[:2]
             self._nb = face_neighbours(F, len(V))
         return self._nb
+
+    def corresponding_distances(self, P: np.ndarray) -> np.ndarray:
+        """Exact distances (n,) to this surface of the vertices ``P`` (n, 3) of a mesh with the
+        same faces on corresponding vertices (a displaced copy, e.g. a noisy or smoothed one):
+        each query starts from a face around its vertex, so it usually prunes at once."""
+        from ._bvh_kernel import query_many
+        P = np.ascontiguousarray(P, dtype=np.float64)
+        if len(P) != len(self.V):
+            raise ValueError(f"corresponding_distances needs one point per vertex ({len(self.V)}), got {len(P)}")
+        if len(P) == 0 or len(self.F) == 0:
+            return self.query(P)[0]
+        hints = np.full(len(P), -1, np.int64)
+        hints[self.F.ravel()] = np.repeat(np.arange(len(self.F)), 3)
+        self.count += len(P)
+        return query_many(P, self.leaf_faces(hints), *self.bvh())[0]
 
     def query(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Distances (k,) and closest face indices (k,) of points (k, 3)."""

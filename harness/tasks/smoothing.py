@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.geometry import area, volume, zero_area_faces
+from ..core.geometry import area, edge_face_counts, volume, zero_area_faces
 from ..errors import MethodFailed
 from ..metrics.hausdorff import hausdorff, warm as _warm_hausdorff
 from ..metrics.normal_error import normal_error
@@ -40,8 +40,7 @@ def diverged(V_out: np.ndarray, V_in: np.ndarray) -> bool:
 
 def _closed(inp) -> bool:
     if "closed" not in inp.cache:
-        from ..mesh import topology
-        inp.cache["closed"] = topology(inp.clean.V, inp.clean.F)["boundary_edges"] == 0
+        inp.cache["closed"] = not (edge_face_counts(inp.clean.F)[1] == 1).any()
     return inp.cache["closed"]
 
 
@@ -55,7 +54,8 @@ def _input_metrics(inp) -> dict:
         V_clean, F, diag = inp.clean.V, inp.F, inp.diag
         inp.cache["input_metrics"] = {
             "input_ev_mean": vertex_error(inp.V, V_clean)["ev_mean"] / diag,
-            "input_dist_mean": surface_distance(inp.V, F, V_clean, F, _clean_surface(inp))["dist_mean"] / diag,
+            "input_dist_mean": surface_distance(inp.V, F, V_clean, F, d=_clean_surface(inp).corresponding_distances(
+                inp.V))["dist_mean"] / diag,
             "input_normal_error_deg": normal_error(inp.V, V_clean, F)["normal_error_deg"]}
     return dict(inp.cache["input_metrics"])
 
