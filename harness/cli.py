@@ -191,20 +191,25 @@ def threading_main() -> bool:
     return threading.current_thread() is threading.main_thread()
 
 
-def _sigterm(signum, frame):
-    raise KeyboardInterrupt
-
-
 def main(argv=None) -> int:
     import signal
+
+    from . import errors
+    from .errors import interrupt_seen, on_interrupt
+    errors._INTERRUPTED = False
     if threading_main():
-        signal.signal(signal.SIGTERM, _sigterm)         # a terminated run stops like an interrupted one
+        # a terminated run stops like an interrupted one; both are remembered (harness.errors)
+        signal.signal(signal.SIGTERM, on_interrupt)
+        signal.signal(signal.SIGINT, on_interrupt)
     args = _parser().parse_args(argv)
     handler = {"run": _cmd_run, "methods": _cmd_methods, "datasets": _cmd_datasets,
                "report": _cmd_report, "views": _cmd_views, "eval": _cmd_eval,
                "compare": _cmd_compare}[args.command]
     try:
-        return handler(args)
+        code = handler(args)
+        if interrupt_seen():             # an interrupt swallowed where exceptions are ignored
+            raise KeyboardInterrupt
+        return code
     except ShootoutError as exc:
         print(f"shootout: {exc}", file=sys.stderr)
         return getattr(exc, "exit_code", 2)

@@ -28,3 +28,26 @@ class RunInterrupted(ShootoutError):
     continued with ``--resume``. Exit 1."""
 
     exit_code = 1
+
+
+# An interrupt (SIGINT/SIGTERM) raises KeyboardInterrupt where it lands, but Python drops an
+# exception raised inside a weakref callback or a __del__ ("Exception ignored in ..."), so the
+# CLI's handlers also set this flag and the driver checks it at safe points: a Ctrl-C is never lost.
+_INTERRUPTED = False
+
+
+def on_interrupt(signum=None, frame=None):
+    """Signal handler: remember the interrupt, then raise KeyboardInterrupt."""
+    global _INTERRUPTED
+    _INTERRUPTED = True
+    raise KeyboardInterrupt
+
+
+def check_interrupt() -> None:
+    """Raise KeyboardInterrupt if an interrupt arrived and was swallowed on its way."""
+    if _INTERRUPTED:
+        raise KeyboardInterrupt
+
+
+def interrupt_seen() -> bool:
+    return _INTERRUPTED

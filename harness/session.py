@@ -13,7 +13,7 @@ from pathlib import Path
 
 from . import tasks
 from .config import Config, load_config
-from .errors import ShootoutError
+from .errors import ShootoutError, check_interrupt
 from .executors import make_executor
 from .mesh import write_ply
 from .provenance import git_commit, machine_info, now_iso, package_versions
@@ -330,6 +330,8 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
             if bar is not None:
                 bar.set_postfix_str(f"{case.method} on {case.mesh_key}", refresh=False)
                 bar.update(1)
+            check_interrupt()
+        check_interrupt()
         meta["status"] = "finished"
     except KeyboardInterrupt:
         meta["status"] = "interrupted"

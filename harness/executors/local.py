@@ -13,6 +13,7 @@ from multiprocessing.connection import wait as mp_wait
 
 from .. import input_store
 from ..runner import run_case
+from ..errors import check_interrupt
 from .isolation import _Job, signals_blocked
 
 
@@ -70,6 +71,7 @@ class LocalExecutor:
                     now = time.perf_counter()
                     wait_s = min(wait_s, max(0.0, min(j.t0 + self.timeout - now for j in running)))
                 ready = set(mp_wait([j.conn for j in running] + [j.sentinel for j in running], timeout=wait_s))
+                check_interrupt()
                 for job in [j for j in running if j.conn in ready or j.sentinel in ready or j.ended()]:
                     running.remove(job)
                     row, extras = job.collect()
