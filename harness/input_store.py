@@ -8,7 +8,8 @@ settings), never on the method or its result. After a case, the runner stores th
 a private directory of the session (`session`: an unguessable name, created with mode 0700 on
 the first store and removed at the session's end; known to this process and its forked case
 processes only, never through the environment); later cases of the same task and input load
-them before measuring. Computing a fact stays in the case
+them before measuring. The store holds at most `MAX_BYTES` and a quarter of the free space;
+beyond that a fact is recomputed instead of kept. Computing a fact stays in the case
 process, so a mesh that crashes a measurement costs that case's row, never the driver. A missing,
 unreadable or concurrently written store is a cache miss, not an error.
 """
@@ -62,6 +63,19 @@ def _path(case, create: bool = False) -> Path | None:
     return Path(_DIR) / (hashlib.sha1(repr(ident).encode()).hexdigest() + ".pkl")
 
 
+MAX_BYTES = 2 * 1024**3       # the store's total size, and at most a quarter of the free space
+
+
+def _room(directory: Path, size: int) -> bool:
+    """Whether ``size`` more bytes fit the store (`MAX_BYTES`, a quarter of the free space)."""
+    try:
+        used = sum(e.stat().st_size for e in os.scandir(directory) if e.is_file(follow_symlinks=False))
+        free = shutil.disk_usage(directory).free
+    except OSError:
+        return False
+    return used + size <= MAX_BYTES and size <= free // 4
+
+
 def _wanted(key, names) -> bool:
     return key in names or (isinstance(key, tuple) and bool(key) and key[0] in names)
 
@@ -93,9 +107,12 @@ def save(case, cache: dict, names) -> None:
     old.update(facts)
     tmp = None
     try:
+        blob = pickle.dumps(old, protocol=pickle.HIGHEST_PROTOCOL)
+        if not _room(p.parent, len(blob)):
+            return
         fd, tmp = tempfile.mkstemp(dir=p.parent, suffix=".tmp")
         with os.fdopen(fd, "wb") as fh:
-            pickle.dump(old, fh, protocol=pickle.HIGHEST_PROTOCOL)
+            fh.write(blob)
         os.replace(tmp, p)
     except Exception:  # noqa: BLE001 - a full disk or a vanished store only costs the reuse
         if tmp is not None:

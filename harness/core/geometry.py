@@ -203,18 +203,20 @@ def compact(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return V[used], remap[F]
 
 
-def sample_surface(V: np.ndarray, F: np.ndarray, n: int, seed: int = 0) -> np.ndarray:
+def sample_surface(V: np.ndarray, F: np.ndarray, n: int, seed: int = 0, return_faces: bool = False):
     """``n`` area-uniform random points (n, 3): faces drawn with probability proportional to
-    area, points uniform in the face (barycentric (1 - sqrt(r1), sqrt(r1)(1 - r2), sqrt(r1) r2))."""
+    area, points uniform in the face (barycentric (1 - sqrt(r1), sqrt(r1)(1 - r2), sqrt(r1) r2)).
+    ``return_faces``: also the face (n,) of each point."""
     rng = np.random.default_rng(seed)
     dbl = double_areas(V, F)
     if n <= 0 or dbl.sum() <= 0:
-        return np.zeros((0, 3))
+        return (np.zeros((0, 3)), np.zeros(0, np.int64)) if return_faces else np.zeros((0, 3))
     f = rng.choice(len(F), size=n, p=dbl / dbl.sum())
     r1 = np.sqrt(rng.random(n))
     r2 = rng.random(n)
     a, b, c = 1 - r1, r1 * (1 - r2), r1 * r2
-    return a[:, None] * V[F[f, 0]] + b[:, None] * V[F[f, 1]] + c[:, None] * V[F[f, 2]]
+    P = a[:, None] * V[F[f, 0]] + b[:, None] * V[F[f, 1]] + c[:, None] * V[F[f, 2]]
+    return (P, f) if return_faces else P
 
 
 def bounding_box_diagonal(V: np.ndarray) -> float:

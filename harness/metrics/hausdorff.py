@@ -45,10 +45,37 @@ from .surface_distance import Surface
 _Surface = Surface           # the AABB-backed surface (harness.metrics.surface_distance)
 
 
+def vertex_queries(VX: np.ndarray, FX: np.ndarray, Y: Surface, all_vertices: bool = False,
+                   hints: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Distances (k,) of the vertices of X to Y and their closest faces (k,; indices into the
+    hierarchy's ``F'``, `Surface.bvh`); vertices in no face get 0 and face 0 unless
+    ``all_vertices``. ``hints``: as in `one_sided`."""
+    from ._bvh_kernel import query_many
+    VX = np.ascontiguousarray(VX, dtype=np.float64)
+    tree = Y.bvh()
+    used = _queried(VX, FX, all_vertices and len(tree[1]) > 0)
+    dV = np.zeros(len(VX))
+    iV = np.zeros(len(VX), np.int64)
+    if len(used):
+        h = np.full(len(used), -1, np.int64) if hints is None else Y.leaf_faces(np.asarray(hints)[used])
+        dV[used], iV[used] = query_many(np.ascontiguousarray(VX[used]), np.ascontiguousarray(h), *tree)
+    Y.count += len(used)
+    return dV, iV
+
+
+def _queried(VX, FX, all_vertices: bool) -> np.ndarray:
+    """The vertices of X whose distance is queried: all, or those in a face."""
+    if all_vertices:
+        return np.arange(len(VX))
+    if not len(FX):
+        return np.zeros(0, np.int64)
+    return np.flatnonzero(np.bincount(np.asarray(FX).ravel(), minlength=len(VX)) > 0)
+
+
 def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, atol: float = 0.0,
               max_points: int = 1_000_000, deadline: float = float("inf"), lower: float = 0.0,
               cap: np.ndarray | None = None, all_vertices: bool = False,
-              hints: np.ndarray | None = None) -> dict:
+              hints: np.ndarray | None = None, vertex: tuple | None = None) -> dict:
     """Bracket ``h(X, Y) = max_{p in X} d(p, Y)`` (module docstring), compiled: the vertices of X
     are queried, every triangle gets its upper bound (one centroid query where the corners do
     not settle it), then the open sub-triangle with the largest bound is split, best first (a
@@ -56,7 +83,8 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, ato
     `harness.metrics._bvh_kernel` hierarchy over Y), in batches of splits between which
     ``deadline`` is checked. ``lower`` may seed the lower bound with a distance already found
     at a point of X. ``hints`` (k,): for each vertex of X a face of Y (index into Y's ``F``,
-    -1 for none) near it, where its query starts.
+    -1 for none) near it, where its query starts. ``vertex``: the `vertex_queries` of X made
+    already (with the same ``all_vertices``), which are then not repeated.
 
     Returns ``lower``, ``upper`` (``upper >= h >= lower``), ``certified`` (the bracket met
     ``upper <= (1 + eps) lower + atol``), ``points`` (distance queries made), ``rounds``
@@ -70,16 +98,12 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, ato
     from ._cover_bound import work
     NY, W = Y.neighbours(), work(len(tree[1]))
     inface = np.bincount(FX.ravel(), minlength=len(VX)) > 0 if len(FX) else np.zeros(len(VX), bool)
-    used = np.arange(len(VX)) if (all_vertices and len(tree[1])) else np.flatnonzero(inface)
-    dV = np.zeros(len(VX))
-    iV = np.zeros(len(VX), np.int64)
-    if len(used):
-        h = np.full(len(used), -1, np.int64) if hints is None else Y.leaf_faces(np.asarray(hints)[used])
-        dV[used], iV[used] = K.query_many(np.ascontiguousarray(VX[used]), np.ascontiguousarray(h), *tree)
+    n_used = len(_queried(VX, FX, all_vertices and len(tree[1]) > 0))
+    dV, iV = vertex if vertex is not None else vertex_queries(VX, FX, Y, all_vertices, hints)
     # state: [lower, queries, settled, open, initialised, heap size, free slots, done]
     state = np.zeros(8)
     state[0] = max(lower, float(dV[inface].max()) if inface.any() else 0.0)
-    state[1] = float(len(used))
+    state[1] = float(n_used)
     cap = np.full(len(FX), np.inf) if cap is None else np.ascontiguousarray(cap, dtype=np.float64)
     ub = K.roots(VX, FX, dV, iV, *tree, NY, W, eps, atol, state, cap)
     thr = (1.0 + eps) * state[0] + atol
@@ -101,7 +125,7 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, ato
             break
     low = float(state[0])
     upper = max(low, float(state[2]), float(state[3]))
-    Y.count += int(state[1])
+    Y.count += int(state[1]) - n_used          # the vertex queries are counted by vertex_queries
     return {"lower": low, "upper": upper, "certified": upper <= (1.0 + eps) * low + atol,
             "points": int(state[1]), "rounds": rounds, "vertex_distances": dV}
 
@@ -143,11 +167,17 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
     SA, SB = Surface(VA, FA), (surface_b if surface_b is not None else Surface(VB, FB))
     out = {}
     seed_ab = seed_ba = 0.0
+    vab = vba = None
     if n_samples:
+        # the vertices first: each sample's query starts from the face closest to a corner of
+        # its triangle (the distances are exact either way)
         from ._bvh_kernel import query_many
-        PA, PB = sample_surface(VA, FA, n_samples, seed), sample_surface(VB, FB, n_samples, seed + 1)
-        dab = query_many(PA, np.full(len(PA), -1, np.int64), *SB.bvh())[0]
-        dba = query_many(PB, np.full(len(PB), -1, np.int64), *SA.bvh())[0]
+        vab = vertex_queries(VA, FA, SB, all_vertices=vertex_distances)
+        vba = vertex_queries(VB, FB, SA)
+        (PA, fa), (PB, fb) = (sample_surface(VA, FA, n_samples, seed, return_faces=True),
+                              sample_surface(VB, FB, n_samples, seed + 1, return_faces=True))
+        dab = query_many(PA, np.ascontiguousarray(vab[1][np.asarray(FA)[fa, 0]]), *SB.bvh())[0]
+        dba = query_many(PB, np.ascontiguousarray(vba[1][np.asarray(FB)[fb, 0]]), *SA.bvh())[0]
         seed_ab, seed_ba = float(dab.max()), float(dba.max())
         se = np.sqrt(dab.var(ddof=1) / dab.size + dba.var(ddof=1) / dba.size) / 2 if n_samples > 1 else float("nan")
         out.update(surface_dist_mean=float((dab.mean() + dba.mean()) / 2), surface_dist_mean_se=float(se))
@@ -161,7 +191,7 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
         hints = np.full(len(VA), -1, np.int64)         # a face around each vertex, on both sides
         hints[FA.ravel()] = np.repeat(np.arange(len(FA)), 3)
     ab = one_sided(VA, FA, SB, eps, atol, max_points, deadline, lower=seed_ab, cap=cap_ab, all_vertices=vertex_distances,
-                   hints=hints)
+                   hints=hints, vertex=vab)
     if corresponding and len(FB):
         # B's triangles whose displacement cap is already within the symmetric threshold need
         # no query: only the others are bracketed (and A's hierarchy is built only for them)
@@ -174,7 +204,8 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
             ba = {"lower": seed_ba, "upper": seed_ba, "points": 0}
         ba["upper"] = max(ba["upper"], settled)
     else:
-        ba = one_sided(VB, FB, SA, eps, atol, max_points, deadline, lower=seed_ba, cap=cap_ba, hints=hints)
+        ba = one_sided(VB, FB, SA, eps, atol, max_points, deadline, lower=seed_ba, cap=cap_ba, hints=hints,
+                       vertex=vba)
     lower = max(ab["lower"], ba["lower"])
     upper = max(ab["upper"], ba["upper"])
     gap = 0.0 if upper - lower <= atol else ((upper - lower) / lower if lower > 0 else float("inf"))

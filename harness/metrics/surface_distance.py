@@ -33,6 +33,13 @@ class Surface:
             self._pos[order] = np.arange(len(order))
         return self._bvh
 
+    def __getstate__(self) -> dict:
+        """Pickled (e.g. kept as a per-input fact) with the hierarchy but without libigl's tree,
+        which is rebuilt on the next `query`."""
+        state = dict(self.__dict__)
+        state["tree"] = None
+        return state
+
     def leaf_faces(self, faces: np.ndarray) -> np.ndarray:
         """The hierarchy's indices (into ``F'``, `bvh`) of faces given by their index in ``F``
         (-1 stays -1)."""

@@ -147,6 +147,6 @@ TASK = Task(
     params=PARAMS, prepare=prepare, measure=measure, check_result=_check, output_mesh=output_mesh, view=view,
     view_metric="hausdorff", axis_params=frozenset({"target_ratio", "target_faces"}),
     checks=(("face_target_reached", _face_target_reached),), order=30,
-    preload=_warm_hausdorff, input_facts=("topology",),
+    preload=_warm_hausdorff, input_facts=("topology", "input_surface"),
     invalid_when=(Invalid("manifold", "==", "non-manifold output", value=False),
                   Invalid("topology_changed", "==", "topology changed", value=True)))

@@ -142,6 +142,6 @@ TASK = Task(
                kind="json"),
     ),
     measure=measure, check_result=_check, output_mesh=output_mesh, view=view, view_metric="dist_mean", order=20,
-    preload=_warm_hausdorff, input_facts=("closed", "input_metrics"),
+    preload=_warm_hausdorff, input_facts=("closed", "input_metrics", "clean_surface"),
     invalid_when=(Invalid("diverged", "==", "diverged", value=True),
                   Invalid("dist_mean", ">", "worse than the noisy input", than="input_dist_mean")))
