@@ -62,3 +62,26 @@ def test_the_store_is_private_to_a_session_and_removed_after_it(tmp_path, monkey
         with input_store.session():                      # nested: the same store
             assert input_store._DIR == str(d)
     assert input_store._DIR is None and not d.exists()
+
+
+def test_the_store_keeps_within_its_size_cap(monkeypatch):
+    """Past `MAX_BYTES` a fact is recomputed instead of kept; a stored surface comes back with
+    its hierarchy (and without libigl's tree, rebuilt on demand) and answers the same queries."""
+    from harness import datasets
+    from harness.metrics.surface_distance import Surface
+    case = load_config(CFG).cases[0]
+    m = datasets.load("bunny").clean
+    S = Surface(m.V, m.F)
+    S.bvh()
+    S.query(m.V[:5])                                     # libigl's tree built: not pickled
+    with input_store.session():
+        monkeypatch.setattr(input_store, "MAX_BYTES", 1000)
+        input_store.save(case, {"clean_surface": S}, ("clean_surface",))
+        assert input_store.load(case, ("clean_surface",)) == {}
+        monkeypatch.setattr(input_store, "MAX_BYTES", 2 * 1024**3)
+        input_store.save(case, {"clean_surface": S}, ("clean_surface",))
+        back = input_store.load(case, ("clean_surface",))["clean_surface"]
+    assert back.tree is None and back._bvh is not None
+    P = m.V + 0.01
+    assert np.array_equal(back.corresponding_distances(P), S.corresponding_distances(P))
+    assert np.allclose(back.query(P)[0], S.query(P)[0], rtol=0, atol=1e-15)
