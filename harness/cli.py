@@ -195,12 +195,25 @@ def main(argv=None) -> int:
     import signal
 
     from . import errors
-    from .errors import interrupt_seen, on_interrupt
+    from .errors import on_interrupt
     errors._INTERRUPTED = False
+    saved = None
     if threading_main():
         # a terminated run stops like an interrupted one; both are remembered (harness.errors)
+        saved = signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT)
         signal.signal(signal.SIGTERM, on_interrupt)
         signal.signal(signal.SIGINT, on_interrupt)
+    try:
+        return _main(argv)
+    finally:
+        if saved is not None:                   # an embedding process gets its handlers back
+            signal.signal(signal.SIGTERM, saved[0])
+            signal.signal(signal.SIGINT, saved[1])
+        errors._INTERRUPTED = False
+
+
+def _main(argv) -> int:
+    from .errors import interrupt_seen
     args = _parser().parse_args(argv)
     handler = {"run": _cmd_run, "methods": _cmd_methods, "datasets": _cmd_datasets,
                "report": _cmd_report, "views": _cmd_views, "eval": _cmd_eval,

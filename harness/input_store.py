@@ -8,8 +8,9 @@ settings), never on the method or its result. After a case, the runner stores th
 a private directory of the session (`session`: an unguessable name, created with mode 0700 on
 the first store and removed at the session's end; known to this process and its forked case
 processes only, never through the environment); later cases of the same task and input load
-them before measuring. The store holds at most `MAX_BYTES` and a quarter of the free space;
-beyond that a fact is recomputed instead of kept. Computing a fact stays in the case
+them before measuring. Each fact is its own file; the store holds at most `MAX_BYTES` in all,
+and a fact at most a quarter of the free space: one that does not fit is recomputed by each
+case instead of kept. Computing a fact stays in the case
 process, so a mesh that crashes a measurement costs that case's row, never the driver. A missing,
 unreadable or concurrently written store is a cache miss, not an error.
 """
@@ -63,11 +64,12 @@ def _path(case, create: bool = False) -> Path | None:
     return Path(_DIR) / (hashlib.sha1(repr(ident).encode()).hexdigest() + ".pkl")
 
 
-MAX_BYTES = 2 * 1024**3       # the store's total size, and at most a quarter of the free space
+MAX_BYTES = 2 * 1024**3       # the store's total size; one fact also at most a quarter of the free space
 
 
 def _room(directory: Path, size: int) -> bool:
-    """Whether ``size`` more bytes fit the store (`MAX_BYTES`, a quarter of the free space)."""
+    """Whether a fact of ``size`` bytes may be kept: the store stays within `MAX_BYTES` and the
+    fact within a quarter of the free space."""
     try:
         used = sum(e.stat().st_size for e in os.scandir(directory) if e.is_file(follow_symlinks=False))
         free = shutil.disk_usage(directory).free
@@ -80,41 +82,56 @@ def _wanted(key, names) -> bool:
     return key in names or (isinstance(key, tuple) and bool(key) and key[0] in names)
 
 
+def _fact_path(p: Path, key, suffix: str = ".pkl") -> Path:
+    """One file per fact: ``<input>-<key hash>.pkl`` (``.skip`` marks a fact too large to keep)."""
+    return p.with_name(p.stem + "-" + hashlib.sha1(repr(key).encode()).hexdigest()[:20] + suffix)
+
+
 def load(case, names) -> dict:
     """The stored facts of the case's input among ``names`` (a key or a tuple key's first item)."""
     p = _path(case) if names else None
-    if p is None or not p.exists():
+    if p is None:
         return {}
+    out = {}
     try:
-        with open(p, "rb") as fh:
-            data = pickle.load(fh)               # written by this session's own cases only
-    except Exception:  # noqa: BLE001 - a torn or concurrent write is a miss
+        entries = [e.path for e in os.scandir(p.parent) if e.name.startswith(p.stem + "-") and e.name.endswith(".pkl")]
+    except OSError:
         return {}
-    return {k: v for k, v in data.items() if _wanted(k, names)} if isinstance(data, dict) else {}
+    for path in entries:
+        try:
+            with open(path, "rb") as fh:
+                key, value = pickle.load(fh)     # written by this session's own cases only
+        except Exception:  # noqa: BLE001 - a torn or concurrent write is a miss
+            continue
+        if _wanted(key, names):
+            out[key] = value
+    return out
 
 
 def save(case, cache: dict, names) -> None:
-    """Add the case's facts among ``names`` to its input's store (atomic replace; best effort)."""
+    """Keep the case's facts among ``names`` that its input's store lacks, one file each (atomic
+    replace; best effort). A fact that does not fit (`_room`) is marked, so that later cases of
+    the input neither keep nor serialise it again."""
     p = _path(case, create=True) if names else None
     if p is None:
         return
-    facts = {k: v for k, v in cache.items() if _wanted(k, names)}
-    if not facts:
-        return
-    old = load(case, names)
-    if all(k in old for k in facts):
-        return
-    old.update(facts)
-    tmp = None
-    try:
-        blob = pickle.dumps(old, protocol=pickle.HIGHEST_PROTOCOL)
-        if not _room(p.parent, len(blob)):
-            return
-        fd, tmp = tempfile.mkstemp(dir=p.parent, suffix=".tmp")
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(blob)
-        os.replace(tmp, p)
-    except Exception:  # noqa: BLE001 - a full disk or a vanished store only costs the reuse
-        if tmp is not None:
-            with contextlib.suppress(Exception):
-                os.unlink(tmp)
+    for key, value in cache.items():
+        if not _wanted(key, names):
+            continue
+        path, skip = _fact_path(p, key), _fact_path(p, key, ".skip")
+        if path.exists() or skip.exists():
+            continue
+        tmp = None
+        try:
+            blob = pickle.dumps((key, value), protocol=pickle.HIGHEST_PROTOCOL)
+            if not _room(p.parent, len(blob)):
+                skip.touch()
+                continue
+            fd, tmp = tempfile.mkstemp(dir=p.parent, suffix=".tmp")
+            with os.fdopen(fd, "wb") as fh:
+                fh.write(blob)
+            os.replace(tmp, path)
+        except Exception:  # noqa: BLE001 - a full disk or a vanished store only costs the reuse
+            if tmp is not None:
+                with contextlib.suppress(Exception):
+                    os.unlink(tmp)

@@ -123,3 +123,14 @@ def test_an_interrupt_swallowed_in_a_weakref_callback_is_not_lost():
             errors.check_interrupt()
     finally:
         errors._INTERRUPTED = False
+
+
+def test_the_cli_gives_back_the_signal_handlers_and_clears_the_flag(capsys):
+    """An embedding process (a notebook, a test) keeps its own handlers after `main`, and an
+    interrupt seen by one call never stops a later run in the same process."""
+    from harness import cli, errors
+    before = signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)
+    errors._INTERRUPTED = True                   # left over from something earlier
+    assert cli.main(["methods"]) == 0            # cleared at the start: not an interrupt
+    assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before
+    assert not errors.interrupt_seen()

@@ -165,3 +165,15 @@ def test_corresponding_bracket_skips_settled_triangles_and_stays_valid(level):
     assert b["hausdorff_points"] < a["hausdorff_points"]
     if level == 0.0:
         assert b["hausdorff_upper"] == 0.0
+
+
+def test_a_zero_area_side_has_no_samples_but_a_certified_bracket():
+    """A collinear triangle (zero area: no area-uniform samples) against a right triangle: the
+    mean surface distance is NaN, the Hausdorff distance exact (1: from (2, 0, 0) and from
+    (0, 1, 0))."""
+    V = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0.0]])
+    VB = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.0]])
+    F = np.array([[0, 1, 2]])
+    h = hausdorff(V, F, VB, F, n_samples=100)
+    assert np.isnan(h["surface_dist_mean"]) and h["hausdorff_certified"]
+    assert h["hausdorff"] == pytest.approx(1.0, abs=1e-15) and h["hausdorff_upper"] == pytest.approx(1.0, abs=1e-12)

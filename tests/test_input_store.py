@@ -74,13 +74,19 @@ def test_the_store_keeps_within_its_size_cap(monkeypatch):
     S = Surface(m.V, m.F)
     S.bvh()
     S.query(m.V[:5])                                     # libigl's tree built: not pickled
+    import dataclasses
+    other = dataclasses.replace(case, seed=case.seed + 100)
     with input_store.session():
         monkeypatch.setattr(input_store, "MAX_BYTES", 1000)
-        input_store.save(case, {"clean_surface": S}, ("clean_surface",))
-        assert input_store.load(case, ("clean_surface",)) == {}
+        input_store.save(case, {"clean_surface": S, "closed": True}, ("clean_surface", "closed"))
+        # the large fact is refused (and marked, so no later case serialises it again); the
+        # small one is kept
+        assert input_store.load(case, ("clean_surface", "closed")) == {"closed": True}
         monkeypatch.setattr(input_store, "MAX_BYTES", 2 * 1024**3)
         input_store.save(case, {"clean_surface": S}, ("clean_surface",))
-        back = input_store.load(case, ("clean_surface",))["clean_surface"]
+        assert input_store.load(case, ("clean_surface",)) == {}
+        input_store.save(other, {"clean_surface": S}, ("clean_surface",))
+        back = input_store.load(other, ("clean_surface",))["clean_surface"]
     assert back.tree is None and back._bvh is not None
     P = m.V + 0.01
     assert np.array_equal(back.corresponding_distances(P), S.corresponding_distances(P))

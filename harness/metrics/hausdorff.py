@@ -143,7 +143,9 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
     ``1e-12`` times the larger bounding-box diagonal, for exact reconstructions) before the
     budget (``max_points`` distance queries per direction, ``max_seconds`` in all) ran out.
     ``hausdorff_ab``/``_ba``: the one-sided lower bounds (A to B, B to A; with
-    ``corresponding``, B to A only over the triangles that the A-to-B bound leaves open).
+    ``corresponding``, B to A only over the triangles whose displacement cap exceeds the
+    threshold ``(1 + eps) max(lower_ab, sampled) + atol``: 0 when none does and no samples
+    were taken, a valid but uninformative lower bound).
 
     ``surface_b``: a prebuilt `Surface` of (VB, FB) to reuse (e.g. the clean mesh's, shared by
     every metric of a case). ``corresponding``: A and B have the same faces on corresponding
@@ -153,7 +155,7 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
     without a query.
 
     ``vertex_distances``: also return ``"vertex_distances_ab"``, the exact distance of every
-    vertex of A to B (k,) (the bracket queries them anyway; 0 for vertices in no face).
+    vertex of A to B (k,) (the bracket queries them anyway; vertices in no face included).
 
     ``surface_dist_mean``: the symmetric mean surface distance, the average of the two one-sided
     area-weighted means ``mean_{p in A} d(p, B)`` and ``mean_{p in B} d(p, A)``, each estimated
@@ -173,14 +175,19 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
         # its triangle (the distances are exact either way)
         from ._bvh_kernel import query_many
         vab = vertex_queries(VA, FA, SB, all_vertices=vertex_distances)
-        vba = vertex_queries(VB, FB, SA)
+        vba = None if corresponding else vertex_queries(VB, FB, SA)
         (PA, fa), (PB, fb) = (sample_surface(VA, FA, n_samples, seed, return_faces=True),
                               sample_surface(VB, FB, n_samples, seed + 1, return_faces=True))
         dab = query_many(PA, np.ascontiguousarray(vab[1][np.asarray(FA)[fa, 0]]), *SB.bvh())[0]
-        dba = query_many(PB, np.ascontiguousarray(vba[1][np.asarray(FB)[fb, 0]]), *SA.bvh())[0]
-        seed_ab, seed_ba = float(dab.max()), float(dba.max())
-        se = np.sqrt(dab.var(ddof=1) / dab.size + dba.var(ddof=1) / dba.size) / 2 if n_samples > 1 else float("nan")
-        out.update(surface_dist_mean=float((dab.mean() + dba.mean()) / 2), surface_dist_mean_se=float(se))
+        hb = vba[1][np.asarray(FB)[fb, 0]] if vba is not None else np.full(len(PB), -1, np.int64)
+        dba = query_many(PB, np.ascontiguousarray(hb), *SA.bvh())[0]
+        seed_ab = float(dab.max()) if dab.size else 0.0        # no samples on a zero-area surface
+        seed_ba = float(dba.max()) if dba.size else 0.0
+        if dab.size and dba.size:
+            se = np.sqrt(dab.var(ddof=1) / dab.size + dba.var(ddof=1) / dba.size) / 2 if n_samples > 1 else float("nan")
+            out.update(surface_dist_mean=float((dab.mean() + dba.mean()) / 2), surface_dist_mean_se=float(se))
+        else:
+            out.update(surface_dist_mean=float("nan"), surface_dist_mean_se=float("nan"))
     cap_ab = cap_ba = hints = None
     if corresponding:
         if VA.shape != VB.shape or not np.array_equal(FA, FB):
@@ -194,7 +201,7 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
                    hints=hints, vertex=vab)
     if corresponding and len(FB):
         # B's triangles whose displacement cap is already within the symmetric threshold need
-        # no query: only the others are bracketed (and A's hierarchy is built only for them)
+        # no query: only the others are bracketed
         open_ = cap_ba > (1.0 + eps) * max(ab["lower"], seed_ba) + atol
         settled = float(cap_ba[~open_].max()) if not open_.all() else 0.0
         if open_.any():
