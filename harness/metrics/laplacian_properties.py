@@ -81,6 +81,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
+from ..core.geometry import edge_face_counts
+
 SYM_TOL = 1e-10
 ZERO_TOL = 1e-12
 LIN_TOL = 1e-9
@@ -149,9 +151,7 @@ def laplacian_properties(W, M, V, F, planar: bool | None = None) -> dict:
     out["SYM"] = out["sym_error"] <= SYM_TOL
 
     # ---- positivity (denominator independent of explicit zeros in the storage)
-    n_mesh_edges = int(np.count_nonzero(np.diff(edge_keys))) + 1 if edge_keys.size else 0
-    self_loops = edge_keys[(edge_keys // n) == (edge_keys % n)]
-    n_mesh_edges -= np.unique(self_loops).size
+    n_mesh_edges = int(np.count_nonzero((edge_keys // n) != (edge_keys % n)))   # directed, no self-loops
     n_off = n_mesh_edges + out["loc_violations"]
     n_neg = int(np.count_nonzero(offd & (vals < -ZERO_TOL * wmax)))
     out["neg_weights"] = n_neg / n_off if n_off else 0.0
@@ -254,10 +254,12 @@ def _symmetrizer(W, n):
 
 
 def _edge_keys(F: np.ndarray, n: int) -> np.ndarray:
-    """Sorted directed keys ``i*n + j`` of both orientations of every mesh edge (with repeats)."""
-    i = np.concatenate([F[:, 0], F[:, 1], F[:, 2], F[:, 1], F[:, 2], F[:, 0]])
-    j = np.concatenate([F[:, 1], F[:, 2], F[:, 0], F[:, 0], F[:, 1], F[:, 2]])
-    keys = i * np.int64(n) + j
+    """Sorted unique directed keys ``i*n + j`` of both orientations of every mesh edge (a
+    degenerate face's self-loop ``i*n + i`` once)."""
+    E = edge_face_counts(F)[0] if len(F) else np.zeros((0, 2), np.int64)
+    i, j = E[:, 0], E[:, 1]
+    loop = i == j
+    keys = np.concatenate([i * np.int64(n) + j, j[~loop] * np.int64(n) + i[~loop]])
     keys.sort()
     return keys
 
