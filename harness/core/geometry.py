@@ -219,6 +219,31 @@ def sample_surface(V: np.ndarray, F: np.ndarray, n: int, seed: int = 0, return_f
     return (P, f) if return_faces else P
 
 
+def _spread3(x: np.ndarray) -> np.ndarray:
+    """Insert two zero bits between the low 21 bits of x (for 3-D Morton codes)."""
+    x = x.astype(np.uint64) & np.uint64(0x1FFFFF)
+    x = (x | (x << np.uint64(32))) & np.uint64(0x1F00000000FFFF)
+    x = (x | (x << np.uint64(16))) & np.uint64(0x1F0000FF0000FF)
+    x = (x | (x << np.uint64(8))) & np.uint64(0x100F00F00F00F00F)
+    x = (x | (x << np.uint64(4))) & np.uint64(0x10C30C30C30C30C3)
+    x = (x | (x << np.uint64(2))) & np.uint64(0x1249249249249249)
+    return x
+
+
+def morton_order(P: np.ndarray) -> np.ndarray:
+    """Indices (k,) that sort the points P (k, 3) along a Morton (Z-order) curve over their
+    bounding cube, 2^20 cells per axis (stable among equal codes): points near in space end up
+    mostly near in the order."""
+    P = np.asarray(P, dtype=np.float64)
+    if len(P) == 0:
+        return np.zeros(0, np.int64)
+    lo = P.min(axis=0)
+    ext = float((P.max(axis=0) - lo).max()) or 1.0
+    g = np.minimum(((P - lo) / ext * (1 << 20)).astype(np.int64), (1 << 21) - 1)
+    code = _spread3(g[:, 0]) | (_spread3(g[:, 1]) << np.uint64(1)) | (_spread3(g[:, 2]) << np.uint64(2))
+    return np.argsort(code, kind="stable")
+
+
 def bounding_box_diagonal(V: np.ndarray) -> float:
     """Length of the axis-aligned bounding box's diagonal."""
     return float(np.linalg.norm(V.max(0) - V.min(0)))

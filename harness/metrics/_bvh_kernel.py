@@ -227,28 +227,15 @@ def leaf_order(V, F, order):
 
 
 @njit(cache=True, inline="always")
+def _gap2(lo, hi, p):
+    t = max(lo - p, p - hi, 0.0)
+    return t * t
+
+
+@njit(cache=True, inline="always")
 def _box2(px, py, pz, B, k):
     """Squared distance from p to the box of node k."""
-    d = 0.0
-    t = B[k, 0] - px
-    if t > 0.0:
-        d += t * t
-    t = px - B[k, 3]
-    if t > 0.0:
-        d += t * t
-    t = B[k, 1] - py
-    if t > 0.0:
-        d += t * t
-    t = py - B[k, 4]
-    if t > 0.0:
-        d += t * t
-    t = B[k, 2] - pz
-    if t > 0.0:
-        d += t * t
-    t = pz - B[k, 5]
-    if t > 0.0:
-        d += t * t
-    return d
+    return _gap2(B[k, 0], B[k, 3], px) + _gap2(B[k, 1], B[k, 4], py) + _gap2(B[k, 2], B[k, 5], pz)
 
 
 @njit(cache=True)

@@ -38,7 +38,7 @@ import time
 
 import numpy as np
 
-from ..core.geometry import sample_surface
+from ..core.geometry import morton_order, sample_surface
 from .surface_distance import Surface
 
 
@@ -57,6 +57,7 @@ def vertex_queries(VX: np.ndarray, FX: np.ndarray, Y: Surface, all_vertices: boo
     dV = np.zeros(len(VX))
     iV = np.zeros(len(VX), np.int64)
     if len(used):
+        used = used[morton_order(VX[used])]         # neighbouring queries read neighbouring nodes
         h = np.full(len(used), -1, np.int64) if hints is None else Y.leaf_faces(np.asarray(hints)[used])
         dV[used], iV[used] = query_many(np.ascontiguousarray(VX[used]), np.ascontiguousarray(h), *tree)
     Y.count += len(used)
@@ -75,7 +76,7 @@ def _queried(VX, FX, all_vertices: bool) -> np.ndarray:
 def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, atol: float = 0.0,
               max_points: int = 1_000_000, deadline: float = float("inf"), lower: float = 0.0,
               cap: np.ndarray | None = None, all_vertices: bool = False,
-              hints: np.ndarray | None = None, vertex: tuple | None = None) -> dict:
+              hints: np.ndarray | None = None) -> dict:
     """Bracket ``h(X, Y) = max_{p in X} d(p, Y)`` (module docstring), compiled: the vertices of X
     are queried, every triangle gets its upper bound (one centroid query where the corners do
     not settle it), then the open sub-triangle with the largest bound is split, best first (a
@@ -83,8 +84,7 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, ato
     `harness.metrics._bvh_kernel` hierarchy over Y), in batches of splits between which
     ``deadline`` is checked. ``lower`` may seed the lower bound with a distance already found
     at a point of X. ``hints`` (k,): for each vertex of X a face of Y (index into Y's ``F``,
-    -1 for none) near it, where its query starts. ``vertex``: the `vertex_queries` of X made
-    already (with the same ``all_vertices``), which are then not repeated.
+    -1 for none) near it, where its query starts.
 
     Returns ``lower``, ``upper`` (``upper >= h >= lower``), ``certified`` (the bracket met
     ``upper <= (1 + eps) lower + atol``), ``points`` (distance queries made), ``rounds``
@@ -99,7 +99,7 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, ato
     NY, W = Y.neighbours(), work(len(tree[1]))
     inface = np.bincount(FX.ravel(), minlength=len(VX)) > 0 if len(FX) else np.zeros(len(VX), bool)
     n_used = len(_queried(VX, FX, all_vertices and len(tree[1]) > 0))
-    dV, iV = vertex if vertex is not None else vertex_queries(VX, FX, Y, all_vertices, hints)
+    dV, iV = vertex_queries(VX, FX, Y, all_vertices, hints)
     # state: [lower, queries, settled, open, initialised, heap size, free slots, done]
     state = np.zeros(8)
     state[0] = max(lower, float(dV[inface].max()) if inface.any() else 0.0)
@@ -128,6 +128,17 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, ato
     Y.count += int(state[1]) - n_used          # the vertex queries are counted by vertex_queries
     return {"lower": low, "upper": upper, "certified": upper <= (1.0 + eps) * low + atol,
             "points": int(state[1]), "rounds": rounds, "vertex_distances": dV}
+
+
+def _in_face_order(P: np.ndarray, faces: np.ndarray, Y: Surface) -> np.ndarray:
+    """Distances (k,) of the points P (k, 3) to Y, queried in the order of ``faces`` (the face
+    each point lies on), returned in the order of P."""
+    from ._bvh_kernel import query_many
+    order = np.argsort(faces, kind="stable")
+    d = np.empty(len(P))
+    d[order] = query_many(np.ascontiguousarray(P[order]), np.full(len(P), -1, np.int64), *Y.bvh())[0]
+    Y.count += len(P)
+    return d
 
 
 def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_points: int = 1_000_000,
@@ -169,18 +180,12 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
     SA, SB = Surface(VA, FA), (surface_b if surface_b is not None else Surface(VB, FB))
     out = {}
     seed_ab = seed_ba = 0.0
-    vab = vba = None
     if n_samples:
-        # the vertices first: each sample's query starts from the face closest to a corner of
-        # its triangle (the distances are exact either way)
-        from ._bvh_kernel import query_many
-        vab = vertex_queries(VA, FA, SB, all_vertices=vertex_distances)
-        vba = None if corresponding else vertex_queries(VB, FB, SA)
+        # queried in the order of their faces (neighbouring queries read neighbouring nodes),
+        # each from the previous point's closest face; the distances are exact either way
         (PA, fa), (PB, fb) = (sample_surface(VA, FA, n_samples, seed, return_faces=True),
                               sample_surface(VB, FB, n_samples, seed + 1, return_faces=True))
-        dab = query_many(PA, np.ascontiguousarray(vab[1][np.asarray(FA)[fa, 0]]), *SB.bvh())[0]
-        hb = vba[1][np.asarray(FB)[fb, 0]] if vba is not None else np.full(len(PB), -1, np.int64)
-        dba = query_many(PB, np.ascontiguousarray(hb), *SA.bvh())[0]
+        dab, dba = _in_face_order(PA, fa, SB), _in_face_order(PB, fb, SA)
         seed_ab = float(dab.max()) if dab.size else 0.0        # no samples on a zero-area surface
         seed_ba = float(dba.max()) if dba.size else 0.0
         if dab.size and dba.size:
@@ -198,7 +203,7 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
         hints = np.full(len(VA), -1, np.int64)         # a face around each vertex, on both sides
         hints[FA.ravel()] = np.repeat(np.arange(len(FA)), 3)
     ab = one_sided(VA, FA, SB, eps, atol, max_points, deadline, lower=seed_ab, cap=cap_ab, all_vertices=vertex_distances,
-                   hints=hints, vertex=vab)
+                   hints=hints)
     if corresponding and len(FB):
         # B's triangles whose displacement cap is already within the symmetric threshold need
         # no query: only the others are bracketed
@@ -211,8 +216,7 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
             ba = {"lower": seed_ba, "upper": seed_ba, "points": 0}
         ba["upper"] = max(ba["upper"], settled)
     else:
-        ba = one_sided(VB, FB, SA, eps, atol, max_points, deadline, lower=seed_ba, cap=cap_ba, hints=hints,
-                       vertex=vba)
+        ba = one_sided(VB, FB, SA, eps, atol, max_points, deadline, lower=seed_ba, cap=cap_ba, hints=hints)
     lower = max(ab["lower"], ba["lower"])
     upper = max(ab["upper"], ba["upper"])
     gap = 0.0 if upper - lower <= atol else ((upper - lower) / lower if lower > 0 else float("inf"))

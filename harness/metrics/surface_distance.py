@@ -66,10 +66,14 @@ class Surface:
             raise ValueError(f"corresponding_distances needs one point per vertex ({len(self.V)}), got {len(P)}")
         if len(P) == 0 or len(self.F) == 0:
             return self.query(P)[0]
+        from ..core.geometry import morton_order
         hints = np.full(len(P), -1, np.int64)
         hints[self.F.ravel()] = np.repeat(np.arange(len(self.F)), 3)
         self.count += len(P)
-        return query_many(P, self.leaf_faces(hints), *self.bvh())[0]
+        order = morton_order(P)                   # neighbouring queries read neighbouring nodes
+        d = np.empty(len(P))
+        d[order] = query_many(np.ascontiguousarray(P[order]), self.leaf_faces(hints[order]), *self.bvh())[0]
+        return d
 
     def query(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Distances (k,) and closest face indices (k,) of points (k, 3)."""

@@ -11,7 +11,7 @@ import warnings
 
 import numpy as np
 
-from harness.core.geometry import compact
+from harness.core.geometry import compact, morton_order
 from methods import Param, SimplificationResult, register
 
 
@@ -102,17 +102,6 @@ def setup(V: np.ndarray, F: np.ndarray, boundary_weight: float):
     return Q, E, bnd
 
 
-def _spread3(x: np.ndarray) -> np.ndarray:
-    """Insert two zero bits between the low 21 bits of x (for 3-D Morton codes)."""
-    x = x.astype(np.uint64) & np.uint64(0x1FFFFF)
-    x = (x | (x << np.uint64(32))) & np.uint64(0x1F00000000FFFF)
-    x = (x | (x << np.uint64(16))) & np.uint64(0x1F0000FF0000FF)
-    x = (x | (x << np.uint64(8))) & np.uint64(0x100F00F00F00F00F)
-    x = (x | (x << np.uint64(4))) & np.uint64(0x10C30C30C30C30C3)
-    x = (x | (x << np.uint64(2))) & np.uint64(0x1249249249249249)
-    return x
-
-
 def spatial_order(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Renumber vertices along a Morton (Z-order) curve and sort faces by their first vertex.
 
@@ -121,12 +110,8 @@ def spatial_order(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray,
     cuts the cache misses of the collapse loop several-fold on meshes whose file order is
     poor (e.g. subdivided ones). Pure relabelling: the result is the same mesh.
     """
-    lo = V.min(axis=0)
-    ext = float((V.max(axis=0) - lo).max()) or 1.0
-    g = np.minimum(((V - lo) / ext * (1 << 20)).astype(np.int64), (1 << 21) - 1)
-    code = _spread3(g[:, 0]) | (_spread3(g[:, 1]) << np.uint64(1)) | (_spread3(g[:, 2]) << np.uint64(2))
     from methods.scratch.qem_setup_kernel import faces_by_min_vertex
-    perm = np.argsort(code, kind="stable")
+    perm = morton_order(V)
     rank = np.empty_like(perm)
     rank[perm] = np.arange(perm.size)
     F2 = faces_by_min_vertex(np.ascontiguousarray(rank[F]), len(V))
