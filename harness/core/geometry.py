@@ -219,6 +219,13 @@ def sample_surface(V: np.ndarray, F: np.ndarray, n: int, seed: int = 0, return_f
     return (P, f) if return_faces else P
 
 
+def face_around_vertex(F: np.ndarray, n: int) -> np.ndarray:
+    """For each of ``n`` vertices one face (m) that uses it, -1 for a vertex in no face."""
+    out = np.full(int(n), -1, np.int64)
+    out[np.asarray(F).ravel()] = np.repeat(np.arange(len(F)), 3)
+    return out
+
+
 def _spread3(x: np.ndarray) -> np.ndarray:
     """Insert two zero bits between the low 21 bits of x (for 3-D Morton codes)."""
     x = x.astype(np.uint64) & np.uint64(0x1FFFFF)

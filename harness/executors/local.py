@@ -12,8 +12,8 @@ import time
 from multiprocessing.connection import wait as mp_wait
 
 from .. import input_store
-from ..runner import run_case
 from ..errors import check_interrupt
+from ..runner import run_case
 from .isolation import _Job, signals_blocked
 
 

@@ -38,39 +38,11 @@ import time
 
 import numpy as np
 
-from ..core.geometry import morton_order, sample_surface
+from ..core.geometry import face_around_vertex, morton_order, sample_surface
 from .surface_distance import Surface
 
 
 _Surface = Surface           # the AABB-backed surface (harness.metrics.surface_distance)
-
-
-def vertex_queries(VX: np.ndarray, FX: np.ndarray, Y: Surface, all_vertices: bool = False,
-                   hints: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Distances (k,) of the vertices of X to Y and their closest faces (k,; indices into the
-    hierarchy's ``F'``, `Surface.bvh`); vertices in no face get 0 and face 0 unless
-    ``all_vertices``. ``hints``: as in `one_sided`."""
-    from ._bvh_kernel import query_many
-    VX = np.ascontiguousarray(VX, dtype=np.float64)
-    tree = Y.bvh()
-    used = _queried(VX, FX, all_vertices and len(tree[1]) > 0)
-    dV = np.zeros(len(VX))
-    iV = np.zeros(len(VX), np.int64)
-    if len(used):
-        used = used[morton_order(VX[used])]         # neighbouring queries read neighbouring nodes
-        h = np.full(len(used), -1, np.int64) if hints is None else Y.leaf_faces(np.asarray(hints)[used])
-        dV[used], iV[used] = query_many(np.ascontiguousarray(VX[used]), np.ascontiguousarray(h), *tree)
-    Y.count += len(used)
-    return dV, iV
-
-
-def _queried(VX, FX, all_vertices: bool) -> np.ndarray:
-    """The vertices of X whose distance is queried: all, or those in a face."""
-    if all_vertices:
-        return np.arange(len(VX))
-    if not len(FX):
-        return np.zeros(0, np.int64)
-    return np.flatnonzero(np.bincount(np.asarray(FX).ravel(), minlength=len(VX)) > 0)
 
 
 def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, atol: float = 0.0,
@@ -98,12 +70,17 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, ato
     from ._cover_bound import work
     NY, W = Y.neighbours(), work(len(tree[1]))
     inface = np.bincount(FX.ravel(), minlength=len(VX)) > 0 if len(FX) else np.zeros(len(VX), bool)
-    n_used = len(_queried(VX, FX, all_vertices and len(tree[1]) > 0))
-    dV, iV = vertex_queries(VX, FX, Y, all_vertices, hints)
+    used = np.arange(len(VX)) if (all_vertices and len(tree[1])) else np.flatnonzero(inface)
+    dV = np.zeros(len(VX))
+    iV = np.zeros(len(VX), np.int64)
+    if len(used):
+        used = used[morton_order(VX[used])]         # neighbouring queries read neighbouring nodes
+        h = np.full(len(used), -1, np.int64) if hints is None else Y.leaf_faces(np.asarray(hints)[used])
+        dV[used], iV[used] = K.query_many(np.ascontiguousarray(VX[used]), np.ascontiguousarray(h), *tree)
     # state: [lower, queries, settled, open, initialised, heap size, free slots, done]
     state = np.zeros(8)
     state[0] = max(lower, float(dV[inface].max()) if inface.any() else 0.0)
-    state[1] = float(n_used)
+    state[1] = float(len(used))
     cap = np.full(len(FX), np.inf) if cap is None else np.ascontiguousarray(cap, dtype=np.float64)
     ub = K.roots(VX, FX, dV, iV, *tree, NY, W, eps, atol, state, cap)
     thr = (1.0 + eps) * state[0] + atol
@@ -125,7 +102,7 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, ato
             break
     low = float(state[0])
     upper = max(low, float(state[2]), float(state[3]))
-    Y.count += int(state[1]) - n_used          # the vertex queries are counted by vertex_queries
+    Y.count += int(state[1])
     return {"lower": low, "upper": upper, "certified": upper <= (1.0 + eps) * low + atol,
             "points": int(state[1]), "rounds": rounds, "vertex_distances": dV}
 
@@ -200,8 +177,7 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
         FA = np.asarray(FA, dtype=np.int64)
         disp = np.linalg.norm(VA - VB, axis=1)
         cap_ab = cap_ba = disp[FA].max(axis=1) if len(FA) else None
-        hints = np.full(len(VA), -1, np.int64)         # a face around each vertex, on both sides
-        hints[FA.ravel()] = np.repeat(np.arange(len(FA)), 3)
+        hints = face_around_vertex(FA, len(VA))        # on both sides
     ab = one_sided(VA, FA, SB, eps, atol, max_points, deadline, lower=seed_ab, cap=cap_ab, all_vertices=vertex_distances,
                    hints=hints)
     if corresponding and len(FB):

@@ -22,8 +22,8 @@ class Surface:
         """Our compiled hierarchy over the same triangles (`harness.metrics._bvh_kernel`), built
         on first use: ``(V', F', B)`` where ``F'`` holds the triangles in leaf order (a leaf's
         range indexes ``F'``), ``V'`` the vertices in order of first use, so a query reads
-        contiguous memory, and ``B`` the packed nodes (`harness.metrics._bvh_kernel.build`). Face indices it reports refer to
-        ``F'``; distances are those to the same surface."""
+        contiguous memory, and ``B`` the packed nodes (`harness.metrics._bvh_kernel.build`).
+        Face indices it reports refer to ``F'``; distances are those to the same surface."""
         if self._bvh is None:
             from ._bvh_kernel import build, centroids, leaf_order
             order = np.arange(len(self.F), dtype=np.int64)
@@ -66,9 +66,8 @@ class Surface:
             raise ValueError(f"corresponding_distances needs one point per vertex ({len(self.V)}), got {len(P)}")
         if len(P) == 0 or len(self.F) == 0:
             return self.query(P)[0]
-        from ..core.geometry import morton_order
-        hints = np.full(len(P), -1, np.int64)
-        hints[self.F.ravel()] = np.repeat(np.arange(len(self.F)), 3)
+        from ..core.geometry import face_around_vertex, morton_order
+        hints = face_around_vertex(self.F, len(P))
         self.count += len(P)
         order = morton_order(P)                   # neighbouring queries read neighbouring nodes
         d = np.empty(len(P))
