@@ -11,8 +11,8 @@ median, which is less sensitive to other processes than wall time.
 Contenders
 - libigl:  ``igl.cotmatrix(V, F)`` + ``igl.massmatrix(V, F, MASSMATRIX_TYPE_VORONOI)``
 - scratch: ``methods.scratch.laplacians.cotan(V, F, mass="voronoi")`` (the registered
-  method's function, no argument validation; at this size it builds the CSR pattern and
-  fills weights and areas in one compiled pass)
+  method's function, no argument validation; at this size one compiled assembly writes the
+  CSR rows and the Voronoi areas directly, `operators.cotan_laplacian`)
 - scratch (registered): ``methods.get("scratch.cotan")(V, F)``, the same plus the
   interface's argument validation (informational)
 - re-assembly: ``CotanPattern(F, n)`` built once, then ``pattern.assemble(V)`` (numeric pass

@@ -174,18 +174,28 @@ def test_degenerate_triangles_give_finite_weights(name):
 
 
 def test_compiled_assembly_equals_numpy_path():
-    """The single-pass compiled assembly (used by scratch.cotan from FAST_MIN_FACES faces) and
-    its cached-pattern re-assembly equal the numpy path to 1e-13 relative, including on
-    degenerate faces (zero area, repeated vertex, needle, isolated vertex)."""
+    """The one-off compiled assembly (used by scratch.cotan from FAST_MIN_FACES faces) and the
+    cached-pattern re-assembly equal the numpy path to 1e-13 relative, with the same sorted
+    CSR structure, on a closed mesh, an open one (camelhead), degenerate faces (zero area,
+    repeated vertex, needle, isolated vertex) and a vertex of valence 60."""
     from methods.scratch import operators as op
     V, F = load(MESH_DIR / "decimated-knight.off")
-    meshes = [(V, F), _degenerate_mesh()]
+    t = np.linspace(0, 2 * np.pi, 61)[:-1]              # a bumpy closed fan of 60 triangles:
+    fan_V = np.c_[np.cos(t), np.sin(t), 0.1 * np.sin(5 * t)]    # row 0 has 120 pairs to sort
+    fan_V = np.r_[[[0.0, 0.0, 0.3]], fan_V]
+    fan_F = np.c_[np.zeros(60, np.int64), 1 + np.arange(60), 1 + (np.arange(60) + 1) % 60]
+    meshes = [(V, F), load(MESH_DIR / "camelhead.off"), _degenerate_mesh(), (fan_V, fan_F)]
     for V, F in meshes:
+        pattern = op.CotanPattern(F, V.shape[0])
         for mass in ("voronoi", "barycentric"):
             W, M = op.cotan_laplacian(V, F, mass)
+            Wp, Mp = pattern.assemble(V, mass)
             assert np.isfinite(W.data).all() and np.isfinite(M.data).all()
             assert rel_err(W, op.cotan_weights(V, F)) < 1e-13
             assert rel_err(M, op.mass_matrix(V, F, mass)) < 1e-13
+            assert rel_err(Wp, W) < 1e-13 and rel_err(Mp, M) < 1e-13
+            assert np.array_equal(W.indptr, Wp.indptr) and np.array_equal(W.indices, Wp.indices)
+            assert W.has_sorted_indices
     V, F = meshes[0]
     pattern = op.CotanPattern(F, V.shape[0])
     V2 = V + 0.01 * np.sin(7 * V[:, [1, 2, 0]])

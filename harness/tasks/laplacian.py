@@ -40,7 +40,7 @@ def _check(result: LaplacianResult, V, F):
             raise MethodFailed(f"returned {what} of dtype {A.dtype}, expected float64")
         if A.shape != (n, n):
             raise MethodFailed(f"returned {what} of shape {A.shape}, expected ({n}, {n})")
-        A = A.astype(np.float64)
+        A = A.astype(np.float64, copy=False)
         if not np.isfinite(A.data).all():      # NaN weights would pass as NaN metrics
             k = int((~np.isfinite(A.data)).sum())
             raise MethodFailed(f"returned {what} with {k} non-finite (NaN or inf) entries")

@@ -123,11 +123,10 @@ def cotan(V, F, *, mass="voronoi"):
     exactly on (intrinsic) Delaunay meshes. Zero-area faces contribute nothing (module docstring).
 
     Implementation: below ``FAST_MIN_FACES`` faces, vectorized numpy (`operators.cotan_weights`,
-    `operators.mass_matrix`); from there on, one numba pass that builds the CSR pattern and
-    writes weights and Voronoi areas straight into it (`operators.cotan_laplacian`: about
-    2.5-3x faster than libigl's cotmatrix + massmatrix at 1.3M faces, see
-    benchmarks/bench_laplacian.py). Both agree to ~1e-15 relative. The threshold keeps the
-    one-off numba compilation (~3 s on a cold cache) away from small meshes.
+    `operators.mass_matrix`); from there on, one compiled assembly that writes the CSR rows and
+    the Voronoi areas directly (`operators.cotan_laplacian`; benchmarks/bench_laplacian.py
+    compares it with libigl). Both agree to ~1e-15 relative. The threshold keeps the one-off
+    numba compilation (~3 s on a cold cache) away from small meshes.
     """
     m = F.shape[0]
     if m >= FAST_MIN_FACES and 6 * m + V.shape[0] < 2**31 - 1:

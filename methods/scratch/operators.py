@@ -4,10 +4,10 @@ All functions take ``V`` (n, 3) float64 and ``F`` (m, 3) int64 and return numpy 
 scipy sparse CSR matrices in libigl's sign convention (off-diagonal weights positive where
 POS holds, diagonal = minus the row's off-diagonal sum).
 
-Two assembly paths give the same matrices (to ~1e-15 relative): the vectorized numpy
-functions (`cotan_weights`, `mass_matrix`, ...) and a compiled single pass
-(`CotanPattern`, `cotan_laplacian`: CSR pattern built once per connectivity, then weights and
-mixed Voronoi areas written straight into it), used for large meshes and re-assembly.
+Three assembly paths give the same matrices (to ~1e-15 relative): the vectorized numpy
+functions (`cotan_weights`, `mass_matrix`, ...), a compiled one-off assembly
+(`cotan_laplacian`) for large meshes, and `CotanPattern` (CSR pattern built once per
+connectivity, then weights and mixed Voronoi areas written straight into it) for re-assembly.
 numba is imported lazily, on the first compiled call.
 """
 from __future__ import annotations
@@ -195,42 +195,66 @@ def _pattern_kernel(F0, n):
     return indptr, indices[:out].copy(), slot, diag, F
 
 
-def _numeric_kernel(V, F, slot, diag, indptr, nnz, want_mass):
-    """Cotangent weights into the CSR values, and mixed Voronoi areas; one pass over faces.
+def _face_terms(V, i0, i1, i2, want_mass):
+    """Half cotangent weights and mixed Voronoi corner areas of face (i0, i1, i2).
 
-    Same formulas and degenerate-face policy as `corner_cotangents` / `voronoi_areas`.
+    ``w_k = cot(angle at corner k) / 2`` belongs to the edge opposite corner k; ``a_k`` is
+    corner k's share of the face area (Meyer et al. 2003: circumcentric part
+    ``(|e_j|^2 cot_j + |e_l|^2 cot_l) / 8`` on non-obtuse faces; area/2 at an obtuse corner
+    and area/4 at the others), zero unless ``want_mass``. A zero-area face gives zeros
+    (the policy of `corner_cotangents` / `voronoi_areas`).
     """
+    # edge vectors opposite corner k: e0 = p2 - p1, e1 = p0 - p2, e2 = p1 - p0
+    e0x = V[i2, 0] - V[i1, 0]
+    e0y = V[i2, 1] - V[i1, 1]
+    e0z = V[i2, 2] - V[i1, 2]
+    e1x = V[i0, 0] - V[i2, 0]
+    e1y = V[i0, 1] - V[i2, 1]
+    e1z = V[i0, 2] - V[i2, 2]
+    e2x = V[i1, 0] - V[i0, 0]
+    e2y = V[i1, 1] - V[i0, 1]
+    e2z = V[i1, 2] - V[i0, 2]
+    cx = e1y * e2z - e1z * e2y
+    cy = e1z * e2x - e1x * e2z
+    cz = e1x * e2y - e1y * e2x
+    dbl = np.sqrt(cx * cx + cy * cy + cz * cz)
+    if dbl > 0.0:
+        c0 = -(e1x * e2x + e1y * e2y + e1z * e2z) / dbl
+        c1 = -(e2x * e0x + e2y * e0y + e2z * e0z) / dbl
+        c2 = -(e0x * e1x + e0y * e1y + e0z * e1z) / dbl
+    else:
+        c0 = 0.0
+        c1 = 0.0
+        c2 = 0.0
+    a0 = 0.0
+    a1 = 0.0
+    a2 = 0.0
+    if want_mass:
+        if c0 < 0.0 or c1 < 0.0 or c2 < 0.0:
+            a = dbl / 2.0
+            a0 = a / 2.0 if c0 < 0.0 else a / 4.0
+            a1 = a / 2.0 if c1 < 0.0 else a / 4.0
+            a2 = a / 2.0 if c2 < 0.0 else a / 4.0
+        else:
+            s0 = e0x * e0x + e0y * e0y + e0z * e0z
+            s1 = e1x * e1x + e1y * e1y + e1z * e1z
+            s2 = e2x * e2x + e2y * e2y + e2z * e2z
+            a0 = (s1 * c1 + s2 * c2) / 8.0
+            a1 = (s2 * c2 + s0 * c0) / 8.0
+            a2 = (s0 * c0 + s1 * c1) / 8.0
+    return 0.5 * c0, 0.5 * c1, 0.5 * c2, a0, a1, a2
+
+
+def _numeric_kernel(V, F, slot, diag, indptr, nnz, want_mass):
+    """Cotangent weights into the CSR values of a `CotanPattern`, and mixed Voronoi areas;
+    one pass over the faces (`_face_terms`)."""
     m = F.shape[0]
     n = V.shape[0]
     data = np.zeros(nnz, np.float64)
     area = np.zeros(n if want_mass else 0, np.float64)
     for f in range(m):
         i0, i1, i2 = F[f, 0], F[f, 1], F[f, 2]
-        # edge vectors opposite corner k: e0 = p2 - p1, e1 = p0 - p2, e2 = p1 - p0
-        e0x = V[i2, 0] - V[i1, 0]
-        e0y = V[i2, 1] - V[i1, 1]
-        e0z = V[i2, 2] - V[i1, 2]
-        e1x = V[i0, 0] - V[i2, 0]
-        e1y = V[i0, 1] - V[i2, 1]
-        e1z = V[i0, 2] - V[i2, 2]
-        e2x = V[i1, 0] - V[i0, 0]
-        e2y = V[i1, 1] - V[i0, 1]
-        e2z = V[i1, 2] - V[i0, 2]
-        cx = e1y * e2z - e1z * e2y
-        cy = e1z * e2x - e1x * e2z
-        cz = e1x * e2y - e1y * e2x
-        dbl = np.sqrt(cx * cx + cy * cy + cz * cz)
-        if dbl > 0.0:
-            c0 = -(e1x * e2x + e1y * e2y + e1z * e2z) / dbl
-            c1 = -(e2x * e0x + e2y * e0y + e2z * e0z) / dbl
-            c2 = -(e0x * e1x + e0y * e1y + e0z * e1z) / dbl
-        else:
-            c0 = 0.0
-            c1 = 0.0
-            c2 = 0.0
-        w0 = 0.5 * c0
-        w1 = 0.5 * c1
-        w2 = 0.5 * c2
+        w0, w1, w2, a0, a1, a2 = _face_terms(V, i0, i1, i2, want_mass)
         data[slot[f, 0]] += w0
         data[slot[f, 3]] += w0
         data[slot[f, 1]] += w1
@@ -238,18 +262,9 @@ def _numeric_kernel(V, F, slot, diag, indptr, nnz, want_mass):
         data[slot[f, 2]] += w2
         data[slot[f, 5]] += w2
         if want_mass:
-            if c0 < 0.0 or c1 < 0.0 or c2 < 0.0:
-                a = dbl / 2.0
-                area[i0] += a / 2.0 if c0 < 0.0 else a / 4.0
-                area[i1] += a / 2.0 if c1 < 0.0 else a / 4.0
-                area[i2] += a / 2.0 if c2 < 0.0 else a / 4.0
-            else:
-                s0 = e0x * e0x + e0y * e0y + e0z * e0z
-                s1 = e1x * e1x + e1y * e1y + e1z * e1z
-                s2 = e2x * e2x + e2y * e2y + e2z * e2z
-                area[i0] += (s1 * c1 + s2 * c2) / 8.0
-                area[i1] += (s2 * c2 + s0 * c0) / 8.0
-                area[i2] += (s0 * c0 + s1 * c1) / 8.0
+            area[i0] += a0
+            area[i1] += a1
+            area[i2] += a2
     # diagonal = minus the row's off-diagonal sum: one sequential pass over the rows (cheaper
     # than three random read-modify-writes per face)
     for i in range(n):
@@ -260,6 +275,158 @@ def _numeric_kernel(V, F, slot, diag, indptr, nnz, want_mass):
                 acc += data[p]
         data[d] = -acc
     return data, area
+
+
+def _sort_pairs(bc, bv, k):
+    """Sort the first k (column, value) pairs of ``bc``, ``bv`` by column, in place
+    (insertion sort for the usual short rows, a merge sort beyond 32 pairs)."""
+    if k <= 32:
+        for p in range(1, k):
+            x = bc[p]
+            y = bv[p]
+            q = p - 1
+            while q >= 0 and bc[q] > x:
+                bc[q + 1] = bc[q]
+                bv[q + 1] = bv[q]
+                q -= 1
+            bc[q + 1] = x
+            bv[q + 1] = y
+    else:
+        o = np.argsort(bc[:k], kind="mergesort")
+        c = bc[:k][o]
+        v = bv[:k][o]
+        bc[:k] = c
+        bv[:k] = v
+
+
+def _single_pass_kernel(V, F0, n, want_mass):
+    """``W`` in CSR (``indptr``, ``indices`` int32, ``data``) and mixed Voronoi areas, for one
+    assembly without a reusable pattern.
+
+    The faces are sorted by their smallest vertex (counting sort). Then one sweep over the
+    rows i = 0, 1, ... builds the upper triangle (columns j > i) row by row: the faces whose
+    smallest vertex is i give their two edges at i directly, and their third edge (j, k),
+    i < j < k, is appended to row j's pending list, complete by the time row j is reached.
+    The row's pairs (column, half weight, `_face_terms`) are sorted and equal columns summed;
+    corner areas are added on the way. Edges with equal ends (degenerate faces) are skipped:
+    their weight is zero and the diagonal is recomputed anyway. A last pass writes the full
+    rows in order: row i is its lower part (``(i, j)`` for j < i, placed while row j was
+    written, hence in column order), the diagonal (minus the row's off-diagonal sum) and its
+    upper part. Every mesh edge and every diagonal has an entry (explicit zeros where weights
+    cancel), as in `CotanPattern`. Requires fewer than 2^31 entries (int32 indices).
+    """
+    m = F0.shape[0]
+    first = np.zeros(n + 1, np.int64)
+    pstart = np.zeros(n + 1, np.int64)
+    for f in range(m):
+        a, b, c = F0[f, 0], F0[f, 1], F0[f, 2]
+        lo = min(a, b, c)
+        first[lo + 1] += 1
+        if a != lo and b != lo and a != b:          # the edge away from lo (if any)
+            pstart[min(a, b) + 1] += 1
+        elif b != lo and c != lo and b != c:
+            pstart[min(b, c) + 1] += 1
+        elif c != lo and a != lo and c != a:
+            pstart[min(c, a) + 1] += 1
+    longest = 0
+    for i in range(n):
+        longest = max(longest, 2 * first[i + 1] + pstart[i + 1])
+        first[i + 1] += first[i]
+        pstart[i + 1] += pstart[i]
+    F = np.empty((m, 3), np.int32)
+    for f in range(m):
+        a, b, c = F0[f, 0], F0[f, 1], F0[f, 2]
+        lo = min(a, b, c)
+        p = first[lo]
+        first[lo] = p + 1                           # ends as the end of row lo's faces
+        F[p, 0] = a
+        F[p, 1] = b
+        F[p, 2] = c
+    pfill = pstart[:-1].copy()
+    pcol = np.empty(pstart[n], np.int32)
+    pval = np.empty(pstart[n], np.float64)
+    area = np.zeros(n if want_mass else 0, np.float64)
+    uptr = np.empty(n + 1, np.int64)
+    ucol = np.empty(3 * m, np.int32)
+    uval = np.empty(3 * m, np.float64)
+    lcnt = np.zeros(n, np.int64)
+    bc = np.empty(longest + 1, np.int64)
+    bv = np.empty(longest + 1, np.float64)
+    uptr[0] = 0
+    out = 0
+    f0 = 0
+    for i in range(n):
+        k = 0
+        for f in range(f0, first[i]):
+            i0, i1, i2 = F[f, 0], F[f, 1], F[f, 2]
+            w0, w1, w2, a0, a1, a2 = _face_terms(V, i0, i1, i2, want_mass)
+            for e in range(3):
+                if e == 0:
+                    a, b, w = i1, i2, w0
+                elif e == 1:
+                    a, b, w = i2, i0, w1
+                else:
+                    a, b, w = i0, i1, w2
+                if a == b:
+                    continue
+                lo, hi = min(a, b), max(a, b)
+                if lo == i:
+                    bc[k] = hi
+                    bv[k] = w
+                    k += 1
+                else:
+                    p = pfill[lo]
+                    pfill[lo] = p + 1
+                    pcol[p] = hi
+                    pval[p] = w
+            if want_mass:
+                area[i0] += a0
+                area[i1] += a1
+                area[i2] += a2
+        f0 = first[i]
+        for p in range(pstart[i], pstart[i + 1]):
+            bc[k] = pcol[p]
+            bv[k] = pval[p]
+            k += 1
+        _sort_pairs(bc, bv, k)
+        o = out - 1
+        for p in range(k):
+            if o >= out and ucol[o] == bc[p]:
+                uval[o] += bv[p]
+            else:
+                o += 1
+                ucol[o] = bc[p]
+                uval[o] = bv[p]
+                lcnt[bc[p]] += 1
+        out = o + 1
+        uptr[i + 1] = out
+    indptr = np.empty(n + 1, np.int64)
+    indptr[0] = 0
+    for i in range(n):
+        indptr[i + 1] = indptr[i] + lcnt[i] + 1 + (uptr[i + 1] - uptr[i])
+    indices = np.empty(indptr[n], np.int32)
+    data = np.empty(indptr[n], np.float64)
+    lfill = indptr[:-1].copy()
+    for i in range(n):
+        d = lfill[i]                      # row i's lower part is complete
+        acc = 0.0
+        for p in range(indptr[i], d):
+            acc += data[p]
+        o = d + 1
+        for p in range(uptr[i], uptr[i + 1]):
+            j = ucol[p]
+            w = uval[p]
+            indices[o] = j
+            data[o] = w
+            o += 1
+            acc += w
+            q = lfill[j]
+            lfill[j] = q + 1
+            indices[q] = i
+            data[q] = w
+        indices[d] = i
+        data[d] = -acc
+    return indptr, indices, data, area
 
 
 _KERNELS: dict = {}
@@ -276,6 +443,10 @@ def _kernel(name: str):
         except ImportError:  # pragma: no cover - numba is a project dependency
             _KERNELS[name] = func
         else:
+            g = globals()
+            for callee in ("_face_terms", "_sort_pairs"):   # callees are compiled first
+                if not hasattr(g[callee], "py_func"):
+                    g[callee] = njit(cache=True, nogil=True, inline="always")(g[callee])
             _KERNELS[name] = njit(cache=True, nogil=True)(func)
     return _KERNELS[name]
 
@@ -324,12 +495,25 @@ def _diag_csr(a: np.ndarray) -> sp.csr_matrix:
 
 
 def cotan_laplacian(V: np.ndarray, F: np.ndarray, mass: str = "voronoi", pattern: CotanPattern | None = None):
-    """Cotangent weights and mass matrix in one pass: ``(W, M)`` (see `CotanPattern`).
+    """Cotangent weights and mass matrix ``(W, M)`` from compiled passes; numba is required.
 
-    ``pattern`` reuses a sparsity pattern built for the same ``F``; numba is required.
+    Without ``pattern``: one assembly (`_single_pass_kernel`); with a `CotanPattern` built for
+    the same ``F``: its numeric pass only. Both equal ``cotan_weights(V, F)`` and
+    ``mass_matrix(V, F, mass)`` to ~1e-15 relative (summation order), rows sorted by column.
+    At most ~357M faces (int32 indices).
     """
-    if pattern is None:
-        pattern = CotanPattern(F, V.shape[0])
-    return pattern.assemble(V, mass)
-
-
+    if pattern is not None:
+        return pattern.assemble(V, mass)
+    F = np.ascontiguousarray(F, dtype=np.int64)
+    n = V.shape[0]
+    if 6 * F.shape[0] + n >= 2**31 - 1:
+        raise ValueError("the compiled assembly uses int32 indices: at most ~357M faces; "
+                         "use cotan_weights / mass_matrix for larger meshes")
+    V = np.ascontiguousarray(V, dtype=np.float64)
+    want = mass == "voronoi"
+    indptr, indices, data, area = _kernel("_single_pass_kernel")(V, F, n, want)
+    if indices.size < np.iinfo(np.int32).max:
+        indptr = indptr.astype(np.int32)
+    W = sp.csr_matrix((data, indices, indptr), shape=(n, n), copy=False)
+    M = _diag_csr(area) if want else mass_matrix(V, F, mass)
+    return W, M
