@@ -172,6 +172,8 @@ def _pattern_kernel(F0, n):
     low = (1 << 32) - 1
     for i in range(n):
         s, t = start[i], start[i + 1]
+        if t - s > 32:
+            key[s:t] = key[s:t][np.argsort(key[s:t], kind="mergesort")]
         for p in range(s + 1, t):          # insertion sort of the (short) row
             x = key[p]
             q = p - 1
