@@ -77,11 +77,45 @@ def _reset_peak() -> bool:
         return False
 
 
+_POOLS: tuple | None = None   # (threadpoolctl controller, loaded objects at its scan), see scan_thread_pools
+
+
+def _loaded_objects() -> int | None:
+    """Number of shared objects loaded in this process (``dl_iterate_phdr``), None if unknown."""
+    try:
+        import ctypes
+        count = [0]
+
+        def seen(_info, _size, _data):
+            count[0] += 1
+            return 0
+
+        proto = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.c_void_p, ctypes.c_size_t, ctypes.c_void_p)
+        ctypes.CDLL(None).dl_iterate_phdr(proto(seen), None)
+        return count[0]
+    except (OSError, AttributeError, ImportError):
+        return None
+
+
+def scan_thread_pools() -> None:
+    """Find this process's BLAS/OpenMP thread pools once (threadpoolctl), in the driver before
+    forking: case processes inherit the scan and `limit_threads` reuses it unless a shared
+    object was loaded since (then it scans again)."""
+    global _POOLS
+    try:
+        from threadpoolctl import ThreadpoolController
+    except ImportError:
+        return
+    _POOLS = (ThreadpoolController(), _loaded_objects())
+
+
 def limit_threads(n: int | None):
     """Limit BLAS/OpenMP thread pools of this process to ``n`` (None or 0: leave them); returns the
-    threadpoolctl controller (keep it alive) and the limits as recorded in run.json."""
+    threadpoolctl limiter (keep it alive for the case)."""
     if not n:
         return None
+    if _POOLS is not None and _POOLS[1] is not None and _POOLS[1] == _loaded_objects():
+        return _POOLS[0].limit(limits=int(n))
     try:
         from threadpoolctl import threadpool_limits
     except ImportError:

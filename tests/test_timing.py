@@ -67,3 +67,26 @@ def test_back_to_back_runs_compare_equal_and_a_2x_slowdown_is_flagged(tmp_path):
     assert slow.returncode == 1, slow.stdout
     flagged = [ln for ln in slow.stdout.splitlines() if ln.startswith("REGRESSION")]
     assert flagged and all("slowdown.sleep" in ln and "time_s" in ln for ln in flagged), slow.stdout
+
+
+def test_thread_limits_reuse_the_drivers_scan_until_a_library_is_loaded():
+    """`limit_threads` in a case process reuses the driver's thread-pool scan (so a case does not
+    pay for it) and limits every pool it found; a shared object loaded after the scan is seen
+    (the count of loaded objects changes), so the limits are then set from a new scan."""
+    import ctypes
+    import threadpoolctl
+    from harness import runner
+    runner.scan_thread_pools()
+    n0 = runner._loaded_objects()
+    assert n0 and n0 == runner._POOLS[1]
+    lim = runner.limit_threads(1)
+    try:
+        assert all(p["num_threads"] == 1 for p in threadpoolctl.threadpool_info())
+    finally:
+        lim.restore_original_limits()
+    with open("/proc/self/maps") as fh:
+        mapped = fh.read()
+    new = next(name for name in ("libform.so.6", "libmenu.so.6", "libgdbm.so.6", "libexpatw.so.1")
+               if name not in mapped)
+    ctypes.CDLL(new)
+    assert runner._loaded_objects() > n0

@@ -99,6 +99,8 @@ def _preload_tasks(cases) -> None:
     processes inherit it instead of loading it again (best effort: harness code, never a method's)."""
     from .. import tasks
     from ..core import geometry
+    from ..runner import scan_thread_pools
+    scan_thread_pools()
     try:
         geometry.warm()
     except Exception:  # noqa: BLE001 - the numpy path below the threshold still works
