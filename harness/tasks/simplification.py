@@ -9,9 +9,9 @@ import numpy as np
 
 from ..core.params import Param
 from ..errors import MethodFailed
-from ..metrics.hausdorff import hausdorff, warm as _warm_hausdorff
+from ..metrics.hausdorff import hausdorff
 from ..metrics.surface_distance import cached_surface, point_surface_distance
-from ..metrics.triangle_quality import triangle_quality
+from ..metrics.triangle_quality import triangle_quality, warm as _warm_metrics
 from .base import Invalid, Metric, Task, float_array
 
 
@@ -147,6 +147,6 @@ TASK = Task(
     params=PARAMS, prepare=prepare, measure=measure, check_result=_check, output_mesh=output_mesh, view=view,
     view_metric="hausdorff", axis_params=frozenset({"target_ratio", "target_faces"}),
     checks=(("face_target_reached", _face_target_reached),), order=30,
-    preload=_warm_hausdorff, input_facts=("topology", "input_surface"),
+    preload=_warm_metrics, input_facts=("topology", "input_surface"),
     invalid_when=(Invalid("manifold", "==", "non-manifold output", value=False),
                   Invalid("topology_changed", "==", "topology changed", value=True)))

@@ -9,10 +9,10 @@ import numpy as np
 
 from ..core.geometry import area, edge_face_counts, volume, zero_area_faces
 from ..errors import MethodFailed
-from ..metrics.hausdorff import hausdorff, warm as _warm_hausdorff
+from ..metrics.hausdorff import hausdorff
 from ..metrics.normal_error import normal_error
 from ..metrics.surface_distance import cached_surface, point_surface_distance, surface_distance
-from ..metrics.triangle_quality import triangle_quality
+from ..metrics.triangle_quality import triangle_quality, warm as _warm_metrics
 from ..metrics.vertex_error import vertex_error
 from .base import Invalid, Metric, Task, float_array
 
@@ -142,6 +142,6 @@ TASK = Task(
                kind="json"),
     ),
     measure=measure, check_result=_check, output_mesh=output_mesh, view=view, view_metric="dist_mean", order=20,
-    preload=_warm_hausdorff, input_facts=("closed", "input_metrics", "clean_surface"),
+    preload=_warm_metrics, input_facts=("closed", "input_metrics", "clean_surface"),
     invalid_when=(Invalid("diverged", "==", "diverged", value=True),
                   Invalid("dist_mean", ">", "worse than the noisy input", than="input_dist_mean")))
