@@ -330,8 +330,8 @@ def validate(V, F, name: str = "", repair: bool = True) -> Mesh:
     if F.shape[1] != 3:
         raise InvalidMeshError(f"{label}faces must be triangles, got {F.shape[1]} corners")
     F = F.astype(np.int64)
-    bad = ~np.isfinite(V).all(axis=1)
-    if bad.any():
+    if not np.isfinite(V).all():
+        bad = ~np.isfinite(V).all(axis=1)
         raise InvalidMeshError(f"{label}{int(bad.sum())} vertices with NaN or inf coordinates "
                                f"(first: {np.flatnonzero(bad)[:5].tolist()})")
     if F.min() < 0 or F.max() >= len(V):

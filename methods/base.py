@@ -41,9 +41,8 @@ def check_arrays(V, F) -> tuple[np.ndarray, np.ndarray]:
             raise ValueError(f"F must hold integer indices, got dtype {F.dtype}")
     V = np.ascontiguousarray(V, dtype=np.float64)
     F = np.ascontiguousarray(F, dtype=np.int64)
-    bad = ~np.isfinite(V).all(axis=1)
-    if bad.any():
-        idx = np.flatnonzero(bad)
+    if not np.isfinite(V).all():            # (a row-wise all() is 30x slower: only on failure)
+        idx = np.flatnonzero(~np.isfinite(V).all(axis=1))
         raise ValueError(f"{idx.size} vertices have NaN or inf coordinates (first: {idx[:5].tolist()})")
     if F.min() < 0 or F.max() >= V.shape[0]:
         raise ValueError(f"face indices out of range [0, {V.shape[0]}): min {F.min()}, max {F.max()}")
