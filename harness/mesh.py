@@ -12,6 +12,7 @@ non-manifold edges and vertices, several components, boundaries.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -46,6 +47,14 @@ class Mesh:
     def diagonal(self) -> float:
         """Length of the bounding-box diagonal."""
         return float(np.linalg.norm(self.V.max(0) - self.V.min(0)))
+
+    @functools.cached_property
+    def noise_frame(self) -> tuple[float, np.ndarray]:
+        """``(mean edge length, area-weighted unit vertex normals (n, 3))``: what the noise
+        models scale and displace by (`harness.noise`), computed once per mesh (the mesh is not
+        modified after loading)."""
+        from .core.geometry import vertex_normals
+        return mean_edge_length(self.V, self.F), vertex_normals(self.V, self.F)
 
 
 # ----------------------------------------------------------------------------- reading

@@ -27,21 +27,26 @@ def rng_for(mesh_key: str, model: str, level: float, seed: int) -> np.random.Gen
 
 
 def apply_noise(V: np.ndarray, F: np.ndarray, model: str, level: float, seed: int,
-                mesh_key: str = "", fraction: float = 1.0) -> np.ndarray:
-    """Noisy copy of ``V`` (n, 3) under ``model`` at ``level`` (multiples of the mean edge length)."""
+                mesh_key: str = "", fraction: float = 1.0, frame=None) -> np.ndarray:
+    """Noisy copy of ``V`` (n, 3) under ``model`` at ``level`` (multiples of the mean edge length).
+
+    ``frame``: ``(mean edge length, vertex normals)`` of ``(V, F)`` if already known
+    (`harness.mesh.Mesh.noise_frame`); computed here otherwise.
+    """
     if model == "none" or level == 0:
         return V.copy()
     if model not in MODELS:
         raise ValueError(f"unknown noise model {model!r}; expected one of {MODELS}")
     rng = rng_for(mesh_key, model, level, seed)
-    sigma = float(level) * mean_edge_length(V, F)
+    mean_edge, normals = frame if frame is not None else (mean_edge_length(V, F), None)
+    sigma = float(level) * mean_edge
     n = len(V)
     g = rng.standard_normal(n)
     if model == "gaussian_random":
         d = rng.standard_normal((n, 3))
         d /= np.linalg.norm(d, axis=1, keepdims=True)
     else:
-        d = vertex_normals(V, F)
+        d = normals if normals is not None else vertex_normals(V, F)
     if model == "impulsive":
         mask = np.zeros(n, bool)
         mask[rng.permutation(n)[: int(round(fraction * n))]] = True

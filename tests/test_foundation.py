@@ -187,6 +187,20 @@ def test_noise_bit_identical_across_processes():
     assert outs == {here + "\n"}
 
 
+@pytest.mark.parametrize("model", ["gaussian_normal", "gaussian_random", "impulsive"])
+def test_noise_from_the_cached_frame_is_bit_identical(model):
+    """The runner passes the mesh's cached (mean edge length, vertex normals) computed in the
+    driver: the noisy coordinates are the same bits as when apply_noise computes them."""
+    from harness.config import Case
+    from harness.runner import prepare_input
+    m = datasets.load("armadillo").clean
+    plain = apply_noise(m.V, m.F, model, 0.3, 5, "armadillo", fraction=0.2)
+    assert np.array_equal(apply_noise(m.V, m.F, model, 0.3, 5, "armadillo", fraction=0.2, frame=m.noise_frame), plain)
+    case = Case(case_id="c", task="smoothing", mesh={"bundled": "armadillo"}, mesh_key="armadillo",
+                noise_model=model, noise_level=0.3, seed=5, fraction=0.2, method="scratch.taubin", params={})
+    assert np.array_equal(prepare_input(case)[0].V, plain)
+
+
 # ----------------------------------------------------------------------------- config
 
 GOOD = {"name": "t", "meshes": ["knight"], "noise": [{"model": "none"}],

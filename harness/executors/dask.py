@@ -263,17 +263,19 @@ def run_task(case: Case, blobs: dict, timeout: float | None, want_meshes: bool):
 
 
 def _warm(case: Case) -> None:
-    """Load the registry, the case's plugins and (bundled/procedural) mesh in the worker once,
-    so the forked children inherit them instead of re-importing per case. Best effort: any
-    failure happens again in the isolated child and becomes that case's row. Files are left
-    to the child (a C++ reader could crash on a malformed one)."""
+    """Load the registry, the case's plugins and (bundled/procedural) mesh with its noise frame in
+    the worker once, so the forked children inherit them instead of re-importing per case. Best
+    effort: any failure happens again in the isolated child and becomes that case's row. Files
+    are left to the child (a C++ reader could crash on a malformed one)."""
     try:
         from ..plugins import import_methods
         methods = import_methods()
         methods.load_plugins(list(case.plugins))
         if not any(k in case.mesh for k in FILE_KEYS):
             from .. import datasets
-            datasets.load(case.mesh)
+            src = datasets.load(case.mesh)
+            if src.noisy_V is None:
+                src.clean.noise_frame
     except Exception:  # noqa: BLE001 - reported by the child, as a row
         pass
 

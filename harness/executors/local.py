@@ -115,9 +115,10 @@ def _preload_tasks(cases) -> None:
 
 
 def _warm_mesh_cache(cases) -> None:
-    """Load each distinct bundled or procedural mesh once in the driver so forked children
-    inherit it. File meshes are never read here: a reader that crashes on a bad file must
-    cost that file's rows, not the driver (best effort: failures fail again, as error rows)."""
+    """Load each distinct bundled or procedural mesh (and its noise frame) once in the driver so
+    forked children inherit it. File meshes are never read here: a reader that crashes on a bad
+    file must cost that file's rows, not the driver (best effort: failures fail again, as error
+    rows)."""
     from .. import datasets
     seen = set()
     for c in cases:
@@ -128,6 +129,8 @@ def _warm_mesh_cache(cases) -> None:
             continue
         seen.add(key)
         try:
-            datasets.load(c.mesh)
+            src = datasets.load(c.mesh)
+            if src.noisy_V is None:
+                src.clean.noise_frame        # computed once, inherited by every case of the mesh
         except Exception:  # noqa: BLE001 - the case's own child reports it as an error row
             pass
