@@ -96,11 +96,11 @@ class LocalExecutor:
 
 def _preload_tasks(cases) -> None:
     """Run each task's ``preload`` (compiled measuring code) once in the driver, so forked case
-    processes inherit it instead of loading it again (best effort: harness code, never a method's)."""
+    processes inherit it instead of loading it again (best effort: harness code, never a method's);
+    then scan the thread pools (last: after every library the preloads brought in)."""
     from .. import tasks
     from ..core import geometry
     from ..runner import scan_thread_pools
-    scan_thread_pools()
     try:
         geometry.warm()
     except Exception:  # noqa: BLE001 - the numpy path below the threshold still works
@@ -112,6 +112,7 @@ def _preload_tasks(cases) -> None:
                 fn()
         except Exception:  # noqa: BLE001 - a failure here shows again, as the cases' rows
             pass
+    scan_thread_pools()
 
 
 def _warm_mesh_cache(cases) -> None:
