@@ -215,12 +215,13 @@ def qem(V, F, *, target_faces, preserve_boundary=False, boundary_weight=100.0,
     SIGGRAPH 1997. T. Dey, H. Edelsbrunner, S. Guha, D. Nekhayev, "Topology preserving edge
     contraction", 1999.
     """
-    from methods.scratch.qem_kernel import kernel
+    from methods.scratch.qem_kernel import kernel, workspace
 
     build_lists, loop = kernel()
     V, F, _ = spatial_order(np.asarray(V, dtype=np.float64), np.asarray(F, dtype=np.int64))
     Q, E, bnd = setup(V, F, float(boundary_weight))
-    head, nxt = build_lists(F, V.shape[0])
+    ws = workspace(V.shape[0], F.shape[0])
+    build_lists(F, *ws[:3])
     c0 = math.cos(math.radians(max_normal_angle))
     if relax:
         cos_stages = np.array([c0, min(c0, 0.0), min(c0, math.cos(math.radians(150.0)))])
@@ -228,7 +229,7 @@ def qem(V, F, *, target_faces, preserve_boundary=False, boundary_weight=100.0,
     else:
         cos_stages = np.array([c0])
         q_stages = np.array([float(min_quality)])
-    falive, nfaces, _, _, _ = loop(V, F, Q, bnd, E, head, nxt, int(target_faces), cos_stages,
+    falive, nfaces, _, _, _ = loop(V, F, Q, bnd, E, *ws, int(target_faces), cos_stages,
                                    q_stages, 1e5, 3.0, bool(preserve_boundary))
     if nfaces > 1.01 * target_faces + 2:
         warnings.warn(f"scratch.qem: stopped at {nfaces} faces (asked {target_faces}): every "

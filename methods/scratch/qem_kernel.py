@@ -10,10 +10,15 @@ Data structures (all flat arrays, no Python objects):
 
 * ``F`` (m, 3) faces, edited in place (a collapsed vertex is replaced by the survivor, so face
   orientation is never changed); ``falive`` (m,) marks live faces.
-* per-vertex singly linked lists of face corners: corner ``c = 3 f + k`` belongs to vertex
-  ``F[f, k]``; ``head[v]`` is the first corner of ``v``, ``nxt[c]`` the next. A collapse of ``v``
-  into ``u`` rewrites ``v``'s corners and splices its list in front of ``u``'s; corners of dead
-  faces are unlinked lazily by the next walk over the list.
+* per-vertex lists of face corners in one int32 arena: corner ``c = 3 f + k`` belongs to
+  vertex ``F[f, k]``; the corners of the live faces of ``v`` are
+  ``L[start[v] : start[v] + deg[v]]``. A collapse of ``v`` into ``u`` rewrites ``v``'s corners
+  and appends ``u``'s new list (``v``'s corners off the edge's faces, then ``u``'s) at the end
+  of the arena; the third vertex of each removed face drops that corner in place. When the
+  arena is full, the live lists are copied to a fresh one in vertex order (`arena_gc`).
+  Contiguous lists make the faces of a vertex independent loads: before a candidate is
+  tested, the faces of both ends and then their vertices' data are prefetched
+  (`prefetch_ring`), so the memory latencies overlap instead of adding up face after face.
 * quadrics ``Q`` (n, 10): ``a11 a12 a13 a22 a23 a33 b1 b2 b3 c`` of
   ``x^T A x + 2 b^T x + c``.
 * the priority queue of candidate collapses: a 4-ary min-heap holding the cheapest entries
@@ -257,23 +262,91 @@ def heap_grow(H, hn, cap):
     return H2
 
 
-def clean_list(head, nxt, falive, v):
-    """Unlink the corners of dead faces from v's list; returns the number of live faces."""
-    prev = -1
-    c = head[v]
-    cnt = 0
-    while c != -1:
-        nc = nxt[c]
-        if not falive[c // 3]:
-            if prev == -1:
-                head[v] = nc
-            else:
-                nxt[prev] = nc
-        else:
-            cnt += 1
-            prev = c
-        c = nc
-    return cnt
+def prefetch(a, i):
+    """Hint that the cache line of ``a[i]`` (row i of a 2-D array) is needed soon; compiled to
+    ``llvm.prefetch`` by `kernel` (no-op in plain Python)."""
+
+
+def _prefetch_intrinsic():
+    from llvmlite import ir
+    from numba.core import cgutils, types
+    from numba.extending import intrinsic
+
+    @intrinsic
+    def prefetch_(typingctx, arr, idx):
+        def codegen(context, builder, signature, args):
+            aryty = signature.args[0]
+            ary = context.make_array(aryty)(context, builder, args[0])
+            zero = context.get_constant(types.intp, 0)
+            ptr = cgutils.get_item_pointer2(
+                context, builder, ary.data, cgutils.unpack_tuple(builder, ary.shape),
+                cgutils.unpack_tuple(builder, ary.strides), aryty.layout,
+                [args[1]] + [zero] * (aryty.ndim - 1))
+            i32 = ir.IntType(32)
+            ptr = builder.bitcast(ptr, ir.IntType(8).as_pointer())
+            fn = cgutils.get_or_insert_function(
+                builder.module, ir.FunctionType(ir.VoidType(), [ptr.type, i32, i32, i32]),
+                "llvm.prefetch.p0")
+            builder.call(fn, [ptr, i32(0), i32(3), i32(1)])
+            return context.get_dummy_value()
+        return types.void(arr, idx), codegen
+    return prefetch_
+
+
+def prefetch_ring(V, Q, F, L, start, deg, tag, stamp, u, v):
+    """Prefetch what the test and the collapse of edge (u, v) will read: the faces of u and v,
+    then the positions, quadrics, tags, stamps and list headers of their vertices. The loads
+    are independent, so their memory latencies overlap (the walks that follow would otherwise
+    wait for them one face at a time)."""
+    for side in range(2):
+        w = u if side == 0 else v
+        s0 = start[w]
+        for i in range(s0, s0 + deg[w]):
+            prefetch(F, L[i] // 3)
+    for side in range(2):
+        w = u if side == 0 else v
+        s0 = start[w]
+        for i in range(s0, s0 + deg[w]):
+            f = L[i] // 3
+            for k in range(3):
+                x = F[f, k]
+                prefetch(V, x)
+                prefetch(Q, x)
+                prefetch(Q[x], 9)
+                prefetch(tag, x)
+                prefetch(stamp, x)
+                prefetch(start, x)
+                prefetch(deg, x)
+
+
+def drop_dead(L, start, deg, falive, w):
+    """Remove the corners of dead faces from w's list, in place (order kept)."""
+    j = start[w]
+    e = j + deg[w]
+    for i in range(j, e):
+        c = L[i]
+        if falive[c // 3]:
+            L[j] = c
+            j += 1
+    deg[w] = j - start[w]
+
+
+def arena_gc(L, start, deg, n, need):
+    """A fresh arena holding every vertex's list in vertex order, with room for at least
+    ``need`` more corners; returns (arena, used length)."""
+    live = 0
+    for w in range(n):
+        live += deg[w]
+    L2 = np.empty(2 * live + need + 1024, dtype=np.int32)
+    e = 0
+    for w in range(n):
+        s0 = start[w]
+        d = deg[w]
+        for i in range(d):
+            L2[e + i] = L[s0 + i]
+        start[w] = e
+        e += d
+    return L2, e
 
 
 def tri_quality(ax, ay, az, bx, by, bz, cx, cy, cz):
@@ -336,20 +409,17 @@ def face_quality(V, F, f):
     return q
 
 
-def min_quality_around(V, F, falive, head, nxt, u, v):
-    """Worst face quality among the live faces of u and v (before the collapse)."""
+def min_quality_around(V, F, L, start, deg, u, v):
+    """Worst face quality among the faces of u and v (before the collapse)."""
     q = INF
     for side in range(2):
-        c = head[u] if side == 0 else head[v]
-        while c != -1:
-            f = c // 3
-            if falive[f]:
-                q = min(q, face_quality(V, F, f))
-            c = nxt[c]
+        w = u if side == 0 else v
+        for i in range(start[w], start[w] + deg[w]):
+            q = min(q, face_quality(V, F, L[i] // 3))
     return q
 
 
-def can_collapse(V, F, falive, head, nxt, bnd, tag, token, u, v, px, py, pz,
+def can_collapse(V, F, L, start, deg, bnd, tag, token, u, v, px, py, pz,
                  cos_max, q_min):
     """Topological (link condition) and geometric (normal flip, needle) tests of u <- v at p.
 
@@ -363,88 +433,76 @@ def can_collapse(V, F, falive, head, nxt, bnd, tag, token, u, v, px, py, pz,
     n_uv = 0
     o0 = -1
     o1 = -1
-    c = head[u]
-    while c != -1:
+    for i in range(start[u], start[u] + deg[u]):
+        c = L[i]
         f = c // 3
-        if falive[f]:
-            i0 = F[f, 0]
-            i1 = F[f, 1]
-            i2 = F[f, 2]
-            tag[i0] = token
-            tag[i1] = token
-            tag[i2] = token
-            if i0 == v or i1 == v or i2 == v:
-                n_uv += 1
-                if n_uv == 1:
-                    o0 = i0 + i1 + i2 - u - v
-                elif n_uv == 2:
-                    o1 = i0 + i1 + i2 - u - v
-                else:
-                    return 1
+        i0 = F[f, 0]
+        i1 = F[f, 1]
+        i2 = F[f, 2]
+        tag[i0] = token
+        tag[i1] = token
+        tag[i2] = token
+        if i0 == v or i1 == v or i2 == v:
+            n_uv += 1
+            if n_uv == 1:
+                o0 = i0 + i1 + i2 - u - v
+            elif n_uv == 2:
+                o1 = i0 + i1 + i2 - u - v
             else:
-                bad, qn = face_after(V, F, f, c % 3, px, py, pz, cos_max)
-                if bad:
-                    return 3
-                qnew = min(qnew, qn)
-        c = nxt[c]
+                return 1
+        else:
+            bad, qn = face_after(V, F, f, c % 3, px, py, pz, cos_max)
+            if bad:
+                return 3
+            qnew = min(qnew, qn)
     if n_uv == 0:
         return 1
     if n_uv == 2 and bnd[u] and bnd[v]:
         return 1
     # --- faces of v: common neighbours of u and v must be exactly the apexes
     common = 0
-    c = head[v]
-    while c != -1:
+    for i in range(start[v], start[v] + deg[v]):
+        c = L[i]
         f = c // 3
-        if falive[f]:
-            i0 = F[f, 0]
-            i1 = F[f, 1]
-            i2 = F[f, 2]
-            for k in range(3):
-                w = F[f, k]
-                if w != v and w != u and tag[w] == token:
-                    tag[w] = token + 1
-                    common += 1
-            if not (i0 == u or i1 == u or i2 == u):
-                bad, qn = face_after(V, F, f, c % 3, px, py, pz, cos_max)
-                if bad:
-                    return 3
-                qnew = min(qnew, qn)
-        c = nxt[c]
+        i0 = F[f, 0]
+        i1 = F[f, 1]
+        i2 = F[f, 2]
+        for k in range(3):
+            w = F[f, k]
+            if w != v and w != u and tag[w] == token:
+                tag[w] = token + 1
+                common += 1
+        if not (i0 == u or i1 == u or i2 == u):
+            bad, qn = face_after(V, F, f, c % 3, px, py, pz, cos_max)
+            if bad:
+                return 3
+            qnew = min(qnew, qn)
     if common != n_uv:
         return 1
-    if qnew < q_min and qnew < min_quality_around(V, F, falive, head, nxt, u, v):
+    if qnew < q_min and qnew < min_quality_around(V, F, L, start, deg, u, v):
         return 4
     # --- the apexes must keep a valid fan
     for j in range(n_uv):
         w = o0 if j == 0 else o1
-        cnt = 0
-        c = head[w]
-        while c != -1:
-            if falive[c // 3]:
-                cnt += 1
-            c = nxt[c]
+        cnt = deg[w]
         if cnt <= 1 or ((not bnd[w]) and cnt <= 3):
             return 2
     return 0
 
 
-def push_ring(Q, V, F, falive, head, nxt, bnd, stamp, tag, token, u, H, hn, P, pn, tau,
+def push_ring(Q, V, F, L, start, deg, bnd, stamp, tag, token, u, H, hn, P, pn, tau,
               cond_max, dist_max, fix_boundary):
     """Queue the collapses of every edge (u, w) of u's ring; returns the new (heap size,
     pool size). The caller guarantees capacity for 2 valence(u) more entries in each.
     """
-    c = head[u]
-    while c != -1:
-        f = c // 3
-        if falive[f]:
-            for k in range(3):
-                w = F[f, k]
-                if w != u and tag[w] != token:
-                    tag[w] = token
-                    hn, pn = push_edge(Q, V, bnd, stamp, u, w, H, hn, P, pn, tau, cond_max,
-                                       dist_max, fix_boundary)
-        c = nxt[c]
+    for i in range(start[u], start[u] + deg[u]):
+        f = L[i] // 3
+        for k in range(3):
+            w = F[f, k]
+            if w != u and tag[w] != token:
+                tag[w] = token
+                hn, pn = push_edge(Q, V, bnd, stamp, u, w, H, hn, P, pn, tau, cond_max,
+                                   dist_max, fix_boundary)
     return hn, pn
 
 
@@ -498,39 +556,54 @@ def placement_of(Q, V, bnd, u, v, cond_max, dist_max, fix_boundary):
 
 
 # ----------------------------------------------------------------------------- main loop
-def build_lists(F, n):
-    """Per-vertex corner lists (head (n,), nxt (3m,)), each in increasing corner order."""
+def workspace(n, m):
+    """Arrays of the collapse loop for n vertices and m faces, allocated by numpy (which
+    advises huge pages for large arrays; numba's allocator does not): the corner-list arena
+    L (2 x 3m), start (n,), deg (n,), falive (m,), stamp (n,), tag (n,)."""
+    return (np.empty(6 * m + 1024, dtype=np.int32), np.empty(n, dtype=np.int64),
+            np.zeros(n, dtype=np.int32), np.ones(m, dtype=np.bool_), np.zeros(n, dtype=np.int64),
+            np.zeros(n, dtype=np.int64))
+
+
+def build_lists(F, L, start, deg):
+    """Per-vertex corner lists in one arena: vertex v's corners, in increasing order, are
+    ``L[start[v] : start[v] + deg[v]]`` (filled in place; deg must be zero)."""
     m = F.shape[0]
-    head = np.full(n, -1, dtype=np.int64)
-    nxt = np.full(3 * m, -1, dtype=np.int64)
-    for c in range(3 * m - 1, -1, -1):
+    n = start.shape[0]
+    for c in range(3 * m):
+        deg[F[c // 3, c % 3]] += 1
+    e = 0
+    for v in range(n):
+        start[v] = e
+        e += deg[v]
+    for c in range(3 * m):
         v = F[c // 3, c % 3]
-        nxt[c] = head[v]
-        head[v] = c
-    return head, nxt
+        L[start[v]] = c
+        start[v] += 1
+    for v in range(n):
+        start[v] -= deg[v]
 
 
-def collapse_loop(V, F, Q, bnd, E, head, nxt, target, cos_stages, q_stages, cond_max,
-                  dist_max, fix_boundary):
+def collapse_loop(V, F, Q, bnd, E, L, start, deg, falive, stamp, tag, target, cos_stages,
+                  q_stages, cond_max, dist_max, fix_boundary):
     """Collapse edges in order of quadric error until ``target`` faces remain.
 
-    ``V``, ``F``, ``Q``, ``bnd``, ``head``, ``nxt`` are modified in place. ``E`` (e, 2) are
-    the initial edges. ``cos_stages``/``q_stages``: geometric thresholds of successive
-    stages. A round ends when the queue empties; the next round re-queues every live edge
-    (rejected collapses may have become valid): the same stage once more if the round made
-    progress, else the next stage. The loop stops at the target or when no stage is left.
+    ``V``, ``F``, ``Q``, ``bnd`` and the `workspace` arrays (lists filled by `build_lists`) are
+    modified in place. ``E`` (e, 2) are the initial edges. ``cos_stages``/``q_stages``:
+    geometric thresholds of successive stages. A round ends when the queue empties; the next
+    round re-queues every live edge (rejected collapses may have become valid): the same stage
+    once more if the round made progress, else the next stage. The loop stops at the target or
+    when no stage is left.
 
     Returns (falive, n_faces, n_collapses, stage reached, rejections per reason (5,)).
     """
     n = V.shape[0]
     m = F.shape[0]
-    falive = np.ones(m, dtype=np.bool_)
-    stamp = np.zeros(n, dtype=np.int64)
-    tag = np.zeros(n, dtype=np.int64)
     token = 1
     nfaces = m
     ncoll = 0
     reasons = np.zeros(5, dtype=np.int64)
+    ae = 3 * m               # used length of the arena (lists are appended at the end)
 
     pcap = max(64, E.shape[0] + E.shape[0] // 2)
     P = np.empty(2 * pcap, dtype=np.int64)
@@ -592,9 +665,10 @@ def collapse_loop(V, F, Q, bnd, E, head, nxt, target, cos_stages, q_stages, cond
             v = uv & 0xFFFFFFFF
             if s != stamp[u] + stamp[v]:
                 continue  # stale entry (a dead vertex has a hugely negative stamp)
+            prefetch_ring(V, Q, F, L, start, deg, tag, stamp, u, v)
             px, py, pz = placement_of(Q, V, bnd, u, v, cond_max, dist_max, fix_boundary)
             token += 2
-            why = can_collapse(V, F, falive, head, nxt, bnd, tag, token, u, v, px, py, pz,
+            why = can_collapse(V, F, L, start, deg, bnd, tag, token, u, v, px, py, pz,
                                cos_max, q_min)
             if why != 0:
                 reasons[why] += 1
@@ -605,29 +679,45 @@ def collapse_loop(V, F, Q, bnd, E, head, nxt, target, cos_stages, q_stages, cond
             V[u, 2] = pz
             for j in range(10):
                 Q[u, j] += Q[v, j]
-            c = head[v]
-            tail = -1
-            while c != -1:
+            if ae + deg[u] + deg[v] > L.shape[0]:
+                L, ae = arena_gc(L, start, deg, n, deg[u] + deg[v])
+            # u's new list (at the end of the arena): v's corners off the edge's faces
+            # (rewritten to u), then u's corners off those faces; the faces of the edge die
+            # and leave their third vertices' lists
+            e = ae
+            for i in range(start[v], start[v] + deg[v]):
+                c = L[i]
                 f = c // 3
-                if falive[f]:
-                    if F[f, 0] == u or F[f, 1] == u or F[f, 2] == u:
-                        falive[f] = False
-                        nfaces -= 1
-                    else:
-                        F[f, c % 3] = u
-                tail = c
-                c = nxt[c]
-            if tail != -1:
-                nxt[tail] = head[u]
-                head[u] = head[v]
-            head[v] = -1
+                if F[f, 0] == u or F[f, 1] == u or F[f, 2] == u:
+                    falive[f] = False
+                    nfaces -= 1
+                else:
+                    F[f, c % 3] = u
+                    L[e] = c
+                    e += 1
+            for i in range(start[u], start[u] + deg[u]):
+                c = L[i]
+                if falive[c // 3]:
+                    L[e] = c
+                    e += 1
+            for i in range(start[v], start[v] + deg[v]):
+                f = L[i] // 3
+                if not falive[f]:
+                    for k in range(3):
+                        w = F[f, k]
+                        if w != u and w != v:
+                            drop_dead(L, start, deg, falive, w)
+            start[u] = ae
+            deg[u] = e - ae
+            ae = e
+            deg[v] = 0
             stamp[v] = DEAD
             stamp[u] += 1
             if bnd[v]:
                 bnd[u] = True
             ncoll += 1
             done_in_stage += 1
-            val = clean_list(head, nxt, falive, u)
+            val = deg[u]
             if pn > next_compact:
                 pn = pool_compact(P, pn, stamp)
                 next_compact = pn + pn // 4 + 4096
@@ -638,7 +728,7 @@ def collapse_loop(V, F, Q, bnd, E, head, nxt, target, cos_stages, q_stages, cond
                 pcap = 2 * pcap
                 P = grow_pool(P, pn, pcap)
             token += 2
-            hn, pn = push_ring(Q, V, F, falive, head, nxt, bnd, stamp, tag, token, u, H, hn,
+            hn, pn = push_ring(Q, V, F, L, start, deg, bnd, stamp, tag, token, u, H, hn,
                                P, pn, tau, cond_max, dist_max, fix_boundary)
         rounds += 1
         rounds_at_stage += 1
@@ -661,17 +751,19 @@ _SIGS = {
     "pool_threshold": "i8(i8[::1], i8, i8)",
     "refill": "Tuple((i8[::1], i8, i8, i8))(i8[::1], i8, i8[::1], i8, i8, i8[::1])",
     "grow_pool": "i8[::1](i8[::1], i8, i8)",
-    "clean_list": "i8(i8[::1], i8[::1], b1[::1], i8)",
+    "drop_dead": "void(i4[::1], i8[::1], i4[::1], b1[::1], i8)",
+    "arena_gc": "Tuple((i4[::1], i8))(i4[::1], i8[::1], i4[::1], i8, i8)",
     "tri_quality": "UniTuple(f8, 5)(f8, f8, f8, f8, f8, f8, f8, f8, f8)",
     "face_after": "Tuple((b1, f8))(f8[:, ::1], i8[:, ::1], i8, i8, f8, f8, f8, f8)",
     "face_quality": "f8(f8[:, ::1], i8[:, ::1], i8)",
-    "min_quality_around": "f8(f8[:, ::1], i8[:, ::1], b1[::1], i8[::1], i8[::1], i8, i8)",
+    "min_quality_around": "f8(f8[:, ::1], i8[:, ::1], i4[::1], i8[::1], i4[::1], i8, i8)",
     "edge_cost": "Tuple((i8, i8, f8))(f8[:, ::1], f8[:, ::1], b1[::1], i8, i8, f8, f8, b1)",
     "placement_of": "UniTuple(f8, 3)(f8[:, ::1], f8[:, ::1], b1[::1], i8, i8, f8, f8, b1)",
-    "build_lists": "Tuple((i8[::1], i8[::1]))(i8[:, ::1], i8)",
+    "build_lists": "void(i8[:, ::1], i4[::1], i8[::1], i4[::1])",
 }
 _JIT_ORDER = ("place", "key_code", "heap_alloc", "heap_sift_down", "heap_push", "heap_grow",
-              "pool_compact", "pool_threshold", "refill", "grow_pool", "clean_list",
+              "pool_compact", "pool_threshold", "refill", "grow_pool", "prefetch_ring",
+              "drop_dead", "arena_gc",
               "tri_quality", "face_after", "face_quality", "min_quality_around",
               "can_collapse", "edge_cost", "push_edge", "push_ring", "placement_of",
               "build_lists", "collapse_loop")
@@ -679,10 +771,12 @@ _JIT_ORDER = ("place", "key_code", "heap_alloc", "heap_sift_down", "heap_push", 
 
 @functools.lru_cache(maxsize=None)
 def kernel():
-    """Compile (or load from numba's on-disk cache); returns (`build_lists`, `collapse_loop`)."""
+    """Compile (or load from numba's on-disk cache); returns (`build_lists`, `collapse_loop`)
+    (`workspace`, plain numpy, allocates their arrays)."""
     import numba
 
     g = globals()
+    g["prefetch"] = _prefetch_intrinsic()
     for name in _JIT_ORDER:
         if name in _SIGS:
             g[name] = numba.njit(_SIGS[name], cache=True)(g[name])
