@@ -319,6 +319,18 @@ def prefetch_ring(V, Q, F, L, start, deg, tag, stamp, u, v):
                 prefetch(deg, x)
 
 
+def prefetch_ends(V, Q, start, deg, stamp, u, v):
+    """Prefetch the stamps, list headers, positions and quadrics of u and v."""
+    for side in range(2):
+        w = u if side == 0 else v
+        prefetch(stamp, w)
+        prefetch(start, w)
+        prefetch(deg, w)
+        prefetch(V, w)
+        prefetch(Q, w)
+        prefetch(Q[w], 9)
+
+
 def drop_dead(L, start, deg, falive, w):
     """Remove the corners of dead faces from w's list, in place (order kept)."""
     j = start[w]
@@ -661,6 +673,9 @@ def collapse_loop(V, F, Q, bnd, E, L, start, deg, falive, stamp, tag, target, co
             hn -= 1
             if hn > 0:
                 heap_sift_down(H, hn, 0, H[HB + 2 * hn], H[HB + 2 * hn + 1])
+                # the next entry to pop (unless a push undercuts it): start loading its ends
+                nuv = H[HB + 1]
+                prefetch_ends(V, Q, start, deg, stamp, nuv >> 32, nuv & 0xFFFFFFFF)
             u = uv >> 32
             v = uv & 0xFFFFFFFF
             if s != stamp[u] + stamp[v]:
@@ -763,7 +778,7 @@ _SIGS = {
 }
 _JIT_ORDER = ("place", "key_code", "heap_alloc", "heap_sift_down", "heap_push", "heap_grow",
               "pool_compact", "pool_threshold", "refill", "grow_pool", "prefetch_ring",
-              "drop_dead", "arena_gc",
+              "prefetch_ends", "drop_dead", "arena_gc",
               "tri_quality", "face_after", "face_quality", "min_quality_around",
               "can_collapse", "edge_cost", "push_edge", "push_ring", "placement_of",
               "build_lists", "collapse_loop")
