@@ -28,7 +28,7 @@ Data structures (all flat arrays, no Python objects):
   mantissa bits, see `key_code`), so integer comparison of the first word orders by error.
   Every entry with key code <= ``tau`` is in the heap, every other one in the pool; a new
   entry goes to the heap or the pool accordingly. When the heap runs empty, ``tau`` is raised
-  to about the ``max(2^15, pool / 16)``-th smallest key of the pool (estimated from a sample)
+  to about the ``max(2^15, pool / 10)``-th smallest key of the pool (estimated from a sample)
   and those entries are moved into the heap (`refill`). Pops therefore come out in exactly
   the order of a single heap, but the heap stays small (cache resident) and most pushes are a
   sequential append. 16-byte entries put a node's 4 children in one 64-byte cache line (the
@@ -664,7 +664,7 @@ def collapse_loop(V, F, Q, bnd, E, L, start, deg, falive, stamp, tag, target, co
             if hn == 0:
                 if pn == 0:
                     break
-                tau = pool_threshold(P, pn, max(HEAP_K, pn // 16))
+                tau = pool_threshold(P, pn, max(HEAP_K, pn // 10))
                 H, hcap, hn, pn = refill(H, hcap, P, pn, tau, stamp)
                 next_compact = pn + pn // 4 + 4096
                 continue
