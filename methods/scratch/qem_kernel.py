@@ -268,9 +268,14 @@ def prefetch(a, i):
 
 
 def _prefetch_intrinsic():
+    import llvmlite.binding
     from llvmlite import ir
     from numba.core import cgutils, types
     from numba.extending import intrinsic
+
+    # the intrinsic's name carries its pointer type: ``p0`` with the opaque pointers of LLVM 17
+    # and later, ``p0i8`` with the typed pointers that llvmlite uses on older LLVM
+    name = "llvm.prefetch.p0" if llvmlite.binding.llvm_version_info[0] >= 17 else "llvm.prefetch.p0i8"
 
     @intrinsic
     def prefetch_(typingctx, arr, idx):
@@ -286,7 +291,7 @@ def _prefetch_intrinsic():
             ptr = builder.bitcast(ptr, ir.IntType(8).as_pointer())
             fn = cgutils.get_or_insert_function(
                 builder.module, ir.FunctionType(ir.VoidType(), [ptr.type, i32, i32, i32]),
-                "llvm.prefetch.p0")
+                name)
             builder.call(fn, [ptr, i32(0), i32(3), i32(1)])
             return context.get_dummy_value()
         return types.void(arr, idx), codegen
