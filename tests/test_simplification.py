@@ -120,6 +120,29 @@ def test_scratch_qem_is_deterministic(qem):
     assert np.array_equal(a.F, b.F) and np.array_equal(a.V, b.V)
 
 
+def test_prefetch_hint_compiles_for_any_integer_index():
+    """The prefetch hint of scratch.qem's kernel is a no-op for the results; it must compile
+    with int32/uint32/int64 indices into 1-D and 2-D arrays (the index is widened to intp)."""
+    from numba import njit
+
+    from methods.scratch.qem_kernel import _prefetch_intrinsic
+    pf = _prefetch_intrinsic()
+
+    @njit
+    def total(a, b, idx32):
+        s = 0.0
+        for i in range(a.shape[0]):
+            pf(a, np.int32(i))
+            pf(a, np.uint32(i))
+            pf(b, np.int64(i))
+            pf(b, idx32[i])
+            s += a[i] + b[i, 0]
+        return s
+
+    a, b = np.arange(10.0), np.ones((10, 3))
+    assert total(a, b, np.arange(10, dtype=np.int32)) == 55.0
+
+
 def test_scratch_qem_impossible_target_warns(qem):
     """A tetrahedron cannot lose a face without breaking the link condition: the method stops
     at 4 faces, keeps it manifold and says so with a RuntimeWarning."""

@@ -283,10 +283,11 @@ def _prefetch_intrinsic():
             aryty = signature.args[0]
             ary = context.make_array(aryty)(context, builder, args[0])
             zero = context.get_constant(types.intp, 0)
+            idx = context.cast(builder, args[1], signature.args[1], types.intp)
             ptr = cgutils.get_item_pointer2(
                 context, builder, ary.data, cgutils.unpack_tuple(builder, ary.shape),
                 cgutils.unpack_tuple(builder, ary.strides), aryty.layout,
-                [args[1]] + [zero] * (aryty.ndim - 1))
+                [idx] + [zero] * (aryty.ndim - 1))
             i32 = ir.IntType(32)
             ptr = builder.bitcast(ptr, ir.IntType(8).as_pointer())
             fn = cgutils.get_or_insert_function(
