@@ -467,8 +467,11 @@ def test_compiled_triangle_quality_equals_numpy():
     from harness.metrics._quality_kernel import face_quality
     clean = datasets.load({"bundled": "armadillo"}).clean
     Vn = apply_noise(clean.V, clean.F, "gaussian_normal", 0.3, 0)
-    degenerate_V = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0], [1, 0, 0], [np.nan, 0, 0]], float)
-    degenerate_F = np.array([[0, 1, 2], [0, 1, 3], [1, 1, 3], [1, 4, 3], [0, 5, 3]], np.int64)
+    degenerate_V = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0], [1, 0, 0], [np.nan, 0, 0],
+                             [0, 0, 0], [-1, -2, -3]], float)
+    # the last two faces have a zero-length edge whose dot products sum to -0.0 in plain order
+    degenerate_F = np.array([[0, 1, 2], [0, 1, 3], [1, 1, 3], [1, 4, 3], [0, 5, 3], [0, 6, 7],
+                             [7, 7, 6]], np.int64)
     for V, F in ((Vn, clean.F), (degenerate_V, degenerate_F)):
         got = face_quality(V, F)
         want = tq._face_quality(V, F)
@@ -476,6 +479,7 @@ def test_compiled_triangle_quality_equals_numpy():
             assert np.array_equal(np.isnan(g), np.isnan(w))
             ok = ~np.isnan(w)
             assert np.abs(g[ok] - w[ok]).max() <= 1e-12
+    assert face_quality(degenerate_V, degenerate_F)[1][5:].tolist() == [0.0, 0.0]   # not 180
     assert len(clean.F) >= tq.COMPILED_FROM
     q = triangle_quality(Vn, clean.F)
     fmin, fmax, rr = tq._face_quality(Vn, clean.F)

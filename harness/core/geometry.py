@@ -172,12 +172,16 @@ def corner_cotangents(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndar
 
 
 def corner_angles(V: np.ndarray, F: np.ndarray) -> np.ndarray:
-    """Interior angle at each corner (m, 3), in degrees, via atan2(|a x b|, a . b)."""
+    """Interior angle at each corner (m, 3), in degrees, via atan2(|a x b|, a . b).
+
+    A corner with a zero-length edge has angle 0 (``a . b`` is taken as +0, never -0, so the
+    angle does not depend on the signs of the other edge's coordinates)."""
     out = np.empty((len(F), 3))
     for k in range(3):
         a = V[F[:, (k + 1) % 3]] - V[F[:, k]]
         b = V[F[:, (k + 2) % 3]] - V[F[:, k]]
-        out[:, k] = np.degrees(np.arctan2(np.linalg.norm(cross_rows(a, b), axis=1), (a * b).sum(1)))
+        dot = (a * b).sum(1) + 0.0                    # -0.0 + 0.0 == +0.0
+        out[:, k] = np.degrees(np.arctan2(np.linalg.norm(cross_rows(a, b), axis=1), dot))
     return out
 
 

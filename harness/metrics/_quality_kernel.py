@@ -10,7 +10,8 @@ from numba import njit
 @njit(cache=True)
 def face_quality(V, F):
     """Per face (m,) each: smallest and largest interior angle (degrees, ``atan2(|a x b|, a . b)``
-    at each corner, as `harness.core.geometry.corner_angles`) and ``2 r_in / r_circ``
+    at each corner, as `harness.core.geometry.corner_angles`: 0 at a corner with a zero-length
+    edge) and ``2 r_in / r_circ``
     (``8 (s-a)(s-b)(s-c) / (abc)``, clipped to [0, 1]; 0 when an edge has zero length)."""
     m = F.shape[0]
     amin = np.empty(m)
@@ -28,7 +29,8 @@ def face_quality(V, F):
             cx = ay * bz - az * by
             cy = az * bx - ax * bz
             cz = ax * by - ay * bx
-            t = math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), ax * bx + ay * by + az * bz) * deg
+            dot = ax * bx + ay * by + az * bz + 0.0        # never -0.0: angle 0 at a zero-length edge
+            t = math.atan2(math.sqrt(cx * cx + cy * cy + cz * cz), dot) * deg
             nan = nan or t != t
             lo = min(lo, t)
             hi = max(hi, t)
