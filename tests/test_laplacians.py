@@ -205,6 +205,19 @@ def test_compiled_assembly_equals_numpy_path():
     assert W2.has_sorted_indices
 
 
+@pytest.mark.parametrize("bad", [-1, 4, 2**40])
+def test_compiled_assembly_rejects_out_of_range_faces(bad):
+    """A face index outside [0, n) is a ValueError from both compiled paths (they write by
+    index; without the check a negative index corrupted memory and n gave a wrong W)."""
+    from methods.scratch import operators as op
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    F = np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, bad]])
+    with pytest.raises(ValueError, match=r"face indices must lie in \[0, 4\)"):
+        op.cotan_laplacian(V, F)
+    with pytest.raises(ValueError, match=r"face indices must lie in \[0, 4\)"):
+        op.CotanPattern(F, 4)
+
+
 @pytest.mark.parametrize("name", ["libigl.cotan", "libigl.intrinsic_delaunay"])
 def test_libigl_adapters_on_degenerate_mesh(name):
     """libigl does not clamp (zero-area faces give inf/NaN, or std::bad_alloc in the intrinsic

@@ -132,7 +132,11 @@ def _pattern_kernel(F0, n):
     m = F0.shape[0]
     first = np.zeros(n + 1, np.int64)
     for f in range(m):
-        first[min(F0[f, 0], F0[f, 1], F0[f, 2]) + 1] += 1
+        lo = min(F0[f, 0], F0[f, 1], F0[f, 2])
+        if lo < 0 or max(F0[f, 0], F0[f, 1], F0[f, 2]) >= n:     # empty arrays: out of range
+            return (np.empty(0, np.int64), np.empty(0, np.int32), np.empty((0, 6), np.int32),
+                    np.empty(0, np.int32), np.empty((0, 3), np.int64))
+        first[lo + 1] += 1
     for i in range(n):
         first[i + 1] += first[i]
     F = np.empty((m, 3), np.int64)
@@ -320,16 +324,21 @@ def _single_pass_kernel(V, F0, n, want_mass):
     m = F0.shape[0]
     first = np.zeros(n + 1, np.int64)
     pstart = np.zeros(n + 1, np.int64)
+    bad = 0
     for f in range(m):
         a, b, c = F0[f, 0], F0[f, 1], F0[f, 2]
         lo = min(a, b, c)
-        first[lo + 1] += 1
+        bad |= lo | (n - 1 - max(a, b, c))          # negative iff an index is out of [0, n)
+        first[min(max(lo, -1), n - 1) + 1] += 1     # in bounds either way
         if a != lo and b != lo and a != b:          # the edge away from lo (if any)
-            pstart[min(a, b) + 1] += 1
+            pstart[min(max(min(a, b), -1), n - 1) + 1] += 1
         elif b != lo and c != lo and b != c:
-            pstart[min(b, c) + 1] += 1
+            pstart[min(max(min(b, c), -1), n - 1) + 1] += 1
         elif c != lo and a != lo and c != a:
-            pstart[min(c, a) + 1] += 1
+            pstart[min(max(min(c, a), -1), n - 1) + 1] += 1
+    if bad < 0:                                     # empty arrays: an index out of range
+        return (np.empty(0, np.int64), np.empty(0, np.int32), np.empty(0, np.float64),
+                np.empty(0, np.float64))
     longest = 0
     for i in range(n):
         longest = max(longest, 2 * first[i + 1] + pstart[i + 1])
@@ -432,6 +441,7 @@ def _single_pass_kernel(V, F0, n, want_mass):
 
 
 _KERNELS: dict = {}
+_OUT_OF_RANGE = "face indices must lie in [0, {n}) (the number of vertices)"
 
 
 def _kernel(name: str):
@@ -469,6 +479,8 @@ class CotanPattern:
             raise ValueError("CotanPattern uses int32 indices: at most ~357M faces; "
                              "use cotan_weights / mass_matrix for larger meshes")
         self.indptr, self.indices, self.slot, self.diag, self.Fp = _kernel("_pattern_kernel")(self.F, self.n)
+        if self.indptr.size == 0:
+            raise ValueError(_OUT_OF_RANGE.format(n=self.n))
         if self.indices.size < np.iinfo(np.int32).max:
             self.indptr = self.indptr.astype(np.int32)
 
@@ -502,7 +514,7 @@ def cotan_laplacian(V: np.ndarray, F: np.ndarray, mass: str = "voronoi", pattern
     Without ``pattern``: one assembly (`_single_pass_kernel`); with a `CotanPattern` built for
     the same ``F``: its numeric pass only. Both equal ``cotan_weights(V, F)`` and
     ``mass_matrix(V, F, mass)`` to ~1e-15 relative (summation order), rows sorted by column.
-    At most ~357M faces (int32 indices).
+    At most ~357M faces (int32 indices). Raises ValueError for a face index outside [0, n).
     """
     if pattern is not None:
         return pattern.assemble(V, mass)
@@ -514,6 +526,8 @@ def cotan_laplacian(V: np.ndarray, F: np.ndarray, mass: str = "voronoi", pattern
     V = np.ascontiguousarray(V, dtype=np.float64)
     want = mass == "voronoi"
     indptr, indices, data, area = _kernel("_single_pass_kernel")(V, F, n, want)
+    if indptr.size == 0:
+        raise ValueError(_OUT_OF_RANGE.format(n=n))
     if indices.size < np.iinfo(np.int32).max:
         indptr = indptr.astype(np.int32)
     W = sp.csr_matrix((data, indices, indptr), shape=(n, n), copy=False)
