@@ -143,6 +143,14 @@ def test_prefetch_hint_compiles_for_any_integer_index():
     assert total(a, b, np.arange(10, dtype=np.int32)) == 55.0
 
 
+def test_scratch_qem_rejects_faces_with_a_repeated_vertex(qem):
+    """A face (u, v, v) is not a triangle of a manifold mesh: a clear error, not a miscount."""
+    V, F = mesh("knight")
+    F = np.vstack([F, [F[0, 0], F[0, 1], F[0, 1]]])
+    with pytest.raises(ValueError, match="1 face\\(s\\) repeat a vertex index"):
+        qem(V, F, target_ratio=0.5)
+
+
 def test_scratch_qem_impossible_target_warns(qem):
     """A tetrahedron cannot lose a face without breaking the link condition: the method stops
     at 4 faces, keeps it manifold and says so with a RuntimeWarning."""

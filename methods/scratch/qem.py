@@ -186,7 +186,8 @@ def qem(V, F, *, target_faces, preserve_boundary=False, boundary_weight=100.0,
     Parameters
     ----------
     V : (n, 3) float64 array
-    F : (m, 3) int64 array, a manifold triangle mesh (open or closed)
+    F : (m, 3) int64 array, a manifold triangle mesh (open or closed); a face that repeats a
+        vertex index is a ValueError
     target_faces : int
         Stop when this many faces remain (every collapse of an interior edge removes 2,
         of a boundary edge 1, so the result is ``target_faces`` or one less).
@@ -217,8 +218,13 @@ def qem(V, F, *, target_faces, preserve_boundary=False, boundary_weight=100.0,
     """
     from methods.scratch.qem_kernel import kernel, workspace
 
+    F = np.asarray(F, dtype=np.int64)
+    repeated = (F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 2] == F[:, 0])
+    if repeated.any():
+        raise ValueError(f"scratch.qem needs triangles: {int(repeated.sum())} face(s) repeat a "
+                         f"vertex index (first: face {int(np.argmax(repeated))})")
     build_lists, loop = kernel()
-    V, F, _ = spatial_order(np.asarray(V, dtype=np.float64), np.asarray(F, dtype=np.int64))
+    V, F, _ = spatial_order(np.asarray(V, dtype=np.float64), F)
     Q, E, bnd = setup(V, F, float(boundary_weight))
     ws = workspace(V.shape[0], F.shape[0])
     build_lists(F, *ws[:3])
