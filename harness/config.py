@@ -53,6 +53,11 @@ class Case:
     threads: int = 0                # BLAS/OpenMP threads of the case process (0: no limit)
     hausdorff_eps: float = 1e-3     # relative gap the certified Hausdorff distance aims for
 
+    @property
+    def adds_noise(self) -> bool:
+        """Whether the input is the clean mesh plus noise (it then uses the mesh's noise frame)."""
+        return self.noise_model != "none" and self.noise_level != 0
+
 
 @dataclass
 class Config:

@@ -161,7 +161,7 @@ def prepare_input(case: Case) -> tuple[CaseInput, float | None]:
     settings = {"hausdorff_samples": case.hausdorff_samples, "hausdorff_eps": case.hausdorff_eps}
     if src.noisy_V is not None:
         return CaseInput(clean, src.noisy_V, clean.F, clean.diagonal(), settings), src.pair_level
-    frame = clean.noise_frame if case.noise_model != "none" and case.noise_level != 0 else None
+    frame = clean.noise_frame if case.adds_noise else None
     V_in = apply_noise(clean.V, clean.F, case.noise_model, case.noise_level, case.seed,
                        mesh_key=case.mesh_key, fraction=case.fraction, frame=frame)
     return CaseInput(clean, V_in, clean.F, clean.diagonal(), settings, shape=src.shape), None

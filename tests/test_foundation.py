@@ -187,6 +187,22 @@ def test_noise_bit_identical_across_processes():
     assert outs == {here + "\n"}
 
 
+def test_driver_computes_the_noise_frame_only_for_meshes_that_get_noise():
+    """The driver warms a mesh's noise frame (mean edge length, normals) only when one of its
+    cases adds noise: a clean-only mesh costs no frame and no extra (n, 3) array."""
+    from harness.config import Case
+    from harness.executors.local import _warm_mesh_cache
+
+    def case(spec, level):
+        return Case(case_id="c", task="laplacian", mesh=spec, mesh_key="k", noise_model="gaussian_normal",
+                    noise_level=level, seed=0, fraction=1.0, method="scratch.cotan", params={})
+    clean_only, noisy = {"procedural": "sphere", "subdivisions": 2}, {"procedural": "sphere", "subdivisions": 3}
+    datasets._load_cached.cache_clear()          # no frame left over from an earlier test
+    _warm_mesh_cache([case(clean_only, 0.0), case(noisy, 0.0), case(noisy, 0.2)])
+    assert "noise_frame" not in vars(datasets.load(clean_only).clean)
+    assert "noise_frame" in vars(datasets.load(noisy).clean)
+
+
 @pytest.mark.parametrize("model", ["gaussian_normal", "gaussian_random", "impulsive"])
 def test_noise_from_the_cached_frame_is_bit_identical(model):
     """The runner passes the mesh's cached (mean edge length, vertex normals) computed in the

@@ -69,13 +69,14 @@ def test_back_to_back_runs_compare_equal_and_a_2x_slowdown_is_flagged(tmp_path):
     assert flagged and all("slowdown.sleep" in ln and "time_s" in ln for ln in flagged), slow.stdout
 
 
-def test_thread_limits_reuse_the_drivers_scan_until_a_library_is_loaded():
+def test_thread_limits_reuse_the_drivers_scan_until_a_library_is_loaded(monkeypatch):
     """`limit_threads` in a case process reuses the driver's thread-pool scan (so a case does not
     pay for it) and limits every pool it found; a shared object loaded after the scan is seen
     (the count of loaded objects changes), so the limits are then set from a new scan."""
     import ctypes
     import threadpoolctl
     from harness import runner
+    monkeypatch.setattr(runner, "_POOLS", runner._POOLS)   # the scan is undone after the test
     runner.scan_thread_pools()
     n0 = runner._loaded_objects()
     assert n0 and n0 == runner._POOLS[1]

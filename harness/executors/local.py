@@ -131,7 +131,7 @@ def _warm_mesh_cache(cases) -> None:
         seen.add(key)
         try:
             src = datasets.load(c.mesh)
-            if src.noisy_V is None:
+            if src.noisy_V is None and any(d.adds_noise and d.mesh == c.mesh for d in cases):
                 src.clean.noise_frame        # computed once, inherited by every case of the mesh
         except Exception:  # noqa: BLE001 - the case's own child reports it as an error row
             pass
