@@ -120,14 +120,14 @@ def _pattern_kernel(F0, n):
     """CSR pattern of the mesh Laplacian (edges + diagonal) and the slot of every entry.
 
     The faces are first reordered by their smallest vertex (a counting sort, ``Fp``), so that
-    the numeric pass, which follows ``Fp``, updates the CSR rows nearly in order (on an
-    icosphere it then takes 0.44x the time it takes in the given face order). Entry
+    the numeric pass, which follows ``Fp``, updates the CSR rows nearly in order. Entry
     ``e = 6 f + k`` (k = 0..2) is the directed edge of face ``Fp[f]`` opposite corner k,
     ``Fp[f, k+1] -> Fp[f, k+2]``; ``e = 6 f + k + 3`` is its reverse. Returns
     ``indptr (n+1), indices (nnz), slot (m, 6) int32, diag (n) int32, Fp (m, 3)`` where
     ``slot[f, k]`` / ``diag[i]`` is the index into the CSR value array of that entry / of
     ``(i, i)`` (int32: the numeric pass is memory-bound, so its index streams are kept small;
-    the caller falls back to the numpy assembly beyond 2^31 entries).
+    the caller falls back to the numpy assembly beyond 2^31 entries). Empty arrays when a
+    face index lies outside [0, n).
     """
     m = F0.shape[0]
     first = np.zeros(n + 1, np.int64)
@@ -319,7 +319,8 @@ def _single_pass_kernel(V, F0, n, want_mass):
     rows in order: row i is its lower part (``(i, j)`` for j < i, placed while row j was
     written, hence in column order), the diagonal (minus the row's off-diagonal sum) and its
     upper part. Every mesh edge and every diagonal has an entry (explicit zeros where weights
-    cancel), as in `CotanPattern`. Requires fewer than 2^31 entries (int32 indices).
+    cancel), as in `CotanPattern`. Requires fewer than 2^31 entries (int32 indices). Returns
+    empty arrays (before any write by face index) when an index lies outside [0, n).
     """
     m = F0.shape[0]
     first = np.zeros(n + 1, np.int64)
