@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 import pandas as pd
+import pytest
 
 import harness
 
@@ -91,3 +92,30 @@ def test_thread_limits_reuse_the_drivers_scan_until_a_library_is_loaded(monkeypa
                if name not in mapped)
     ctypes.CDLL(new)
     assert runner._loaded_objects() > n0
+
+
+def test_pools_a_method_loads_on_its_first_call_are_limited_for_the_samples(tmp_path):
+    """A method that loads an OpenMP runtime inside its first call (here PyMeshLab's libgomp,
+    imported in the call) gets that pool limited to the case's threads before the timed
+    samples: the cold call may run unlimited, the samples may not. A fresh interpreter, so no
+    earlier test has loaded libgomp."""
+    pytest.importorskip("pymeshlab")
+    log = tmp_path / "seen.jsonl"
+    code = (
+        "from harness.config import Case\n"
+        "from harness.runner import run_case\n"
+        "c = Case(case_id='c', task='smoothing', mesh={'bundled': 'knight'}, mesh_key='knight',\n"
+        "         noise_model='none', noise_level=0.0, seed=0, fraction=1.0,\n"
+        "         method='lazy_openmp.identity', params={}, repeats=3, time_budget=0.0,\n"
+        "         plugins=('tests.plugins.lazy_openmp',), threads=1)\n"
+        "row, _ = run_case(c)\n"
+        "assert row['status'] == 'ok', row.get('error')\n")
+    env = {k: v for k, v in os.environ.items() if k != "OMP_NUM_THREADS"}
+    env.update(LAZY_OPENMP_LOG=str(log), PYTHONPATH=str(ROOT))
+    r = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, capture_output=True, text=True,
+                       timeout=300)
+    assert r.returncode == 0, r.stderr[-2000:]
+    calls = [json.loads(line) for line in log.read_text().splitlines()]
+    assert len(calls) >= 4                              # the cold call and three samples
+    assert calls[0] and max(calls[0]) == (os.cpu_count() or 1)   # loaded unlimited by the cold call
+    assert all(c == [1] * len(c) and c for c in calls[1:]), calls
