@@ -288,7 +288,9 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
             "timing": {"threads_per_case": threads, "min_repeats": cfg.repeats,
                        "time_budget_s": cfg.cases[0].time_budget if cfg.cases else None,
                        "protocol": "one untimed cold call on the case's own input (time_cold_s), then samples "
-                                   "until both repeats and time_budget_s are reached; median and quartiles"}}
+                                   "until both repeats and time_budget_s are reached; median and quartiles; "
+                                   "BLAS/OpenMP pools limited to threads_per_case, again after the cold "
+                                   "call if it loaded libraries"}}
     meta["load_average"] = [_load()]
     if resume:
         meta["resumed_at"] = now_iso()
