@@ -55,8 +55,9 @@ class Case:
 
     @property
     def adds_noise(self) -> bool:
-        """Whether the input is the clean mesh plus noise (it then uses the mesh's noise frame)."""
-        return self.noise_model != "none" and self.noise_level != 0
+        """Whether the harness adds noise to the clean mesh (it then uses the mesh's noise frame);
+        False for a clean input and for a given noisy/clean pair (model ``given``)."""
+        return self.noise_model not in ("none", "given") and self.noise_level != 0
 
 
 @dataclass

@@ -8,7 +8,8 @@ Timing protocol (the method call alone; metrics are not timed):
 1. the thread pools of this process (OpenBLAS, OpenMP, MKL through threadpoolctl) are limited to
    ``case.threads`` (the session sets ``cores // workers``) so concurrent cases do not
    oversubscribe the cores, and limited again after the cold call if it loaded shared objects
-   (a library the method imports on its first call); pools a method starts later are not seen;
+   (a library the method imports on its first call; always where the loaded objects cannot be
+   counted); pools a method starts later are not seen;
 2. cold call: the method runs once on the case's own input, untimed as a sample; its wall time
    is ``time_cold_s`` (imports, JIT compilation or cache loads, library start-up: a cost of its
    own, never mixed into the samples);
@@ -221,11 +222,11 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
             row.update(status="unavailable", error=why)
             return row, extras
         limits = limit_threads(case.threads)  # noqa: F841  (kept alive for the case)
-        loaded = _loaded_objects() if case.threads else None
+        loaded = _loaded_objects()
         t0 = time.perf_counter()
         method(inp.V.copy(), inp.F.copy(), **case.params)          # cold call: same code path, own input
         cold = time.perf_counter() - t0
-        if loaded is not None and _loaded_objects() != loaded:
+        if case.threads and (loaded is None or _loaded_objects() != loaded):
             limits = limit_threads(case.threads)  # noqa: F841  (pools the cold call loaded)
         times, result, spent = [], None, 0.0
         while len(times) < case.repeats or (spent < case.time_budget and len(times) < MAX_SAMPLES):

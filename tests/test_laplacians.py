@@ -218,6 +218,20 @@ def test_compiled_assembly_rejects_out_of_range_faces(bad):
         op.CotanPattern(F, 4)
 
 
+def test_cotan_pattern_rejects_positions_of_another_size():
+    """A pattern re-assembles only positions for its own vertex count (its numeric pass reads V
+    and writes the areas by the pattern's indices)."""
+    from methods.scratch import operators as op
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    F = np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])
+    pattern = op.CotanPattern(F, 4)
+    for bad in (V[:3], np.vstack([V, V]), V[:, :2]):
+        with pytest.raises(ValueError, match="this pattern is for 4 vertices"):
+            op.cotan_laplacian(bad, F, pattern=pattern)
+    W, _ = op.cotan_laplacian(V, F, pattern=pattern)
+    assert W.shape == (4, 4)
+
+
 @pytest.mark.parametrize("name", ["libigl.cotan", "libigl.intrinsic_delaunay"])
 def test_libigl_adapters_on_degenerate_mesh(name):
     """libigl does not clamp (zero-area faces give inf/NaN, or std::bad_alloc in the intrinsic

