@@ -151,6 +151,17 @@ def test_scratch_qem_rejects_faces_with_a_repeated_vertex(qem):
         qem(V, F, target_ratio=0.5)
 
 
+def test_scratch_qem_rejects_more_faces_than_int32_corner_ids_hold():
+    """Corner ids are int32: a mesh of 716M faces (a zero-stride view, no memory) is refused
+    before any allocation (the function itself: the registered method's input checks would
+    scan all 2.1G indices first)."""
+    from methods.scratch.qem import qem as qem_function
+    F = np.lib.stride_tricks.as_strided(np.arange(3, dtype=np.int64), shape=(716_000_000, 3),
+                                        strides=(0, 8))
+    with pytest.raises(ValueError, match="at most 715,827,882 faces"):
+        qem_function(np.eye(3), F, target_faces=1)
+
+
 def test_scratch_qem_impossible_target_warns(qem):
     """A tetrahedron cannot lose a face without breaking the link condition: the method stops
     at 4 faces, keeps it manifold and says so with a RuntimeWarning."""

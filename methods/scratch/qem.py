@@ -186,8 +186,8 @@ def qem(V, F, *, target_faces, preserve_boundary=False, boundary_weight=100.0,
     Parameters
     ----------
     V : (n, 3) float64 array
-    F : (m, 3) int64 array, a manifold triangle mesh (open or closed); a face that repeats a
-        vertex index is a ValueError
+    F : (m, 3) int64 array, a manifold triangle mesh (open or closed), fewer than ~716M faces
+        (int32 corner ids); a face that repeats a vertex index is a ValueError
     target_faces : int
         Stop when this many faces remain (every collapse of an interior edge removes 2,
         of a boundary edge 1, so the result is ``target_faces`` or one less).
@@ -219,6 +219,9 @@ def qem(V, F, *, target_faces, preserve_boundary=False, boundary_weight=100.0,
     from methods.scratch.qem_kernel import kernel, workspace
 
     F = np.asarray(F, dtype=np.int64)
+    if 3 * F.shape[0] >= 2**31 - 1:
+        raise ValueError(f"scratch.qem keeps corner ids in int32: at most {(2**31 - 2) // 3:,} faces, "
+                         f"got {F.shape[0]:,}")
     repeated = (F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 2] == F[:, 0])
     if repeated.any():
         raise ValueError(f"scratch.qem needs triangles: {int(repeated.sum())} face(s) repeat a "
