@@ -330,13 +330,16 @@ def _single_pass_kernel(V, F0, n, want_mass):
         a, b, c = F0[f, 0], F0[f, 1], F0[f, 2]
         lo = min(a, b, c)
         bad |= lo | (n - 1 - max(a, b, c))          # negative iff an index is out of [0, n)
-        first[min(max(lo, -1), n - 1) + 1] += 1     # in bounds either way
-        if a != lo and b != lo and a != b:          # the edge away from lo (if any)
-            pstart[min(max(min(a, b), -1), n - 1) + 1] += 1
+        first[min(max(lo, -1), n - 1) + 1] += 1     # clamped: in bounds either way
+        if a != lo and b != lo and a != b:          # the edge away from lo (if any): its smaller end
+            j = min(a, b)
         elif b != lo and c != lo and b != c:
-            pstart[min(max(min(b, c), -1), n - 1) + 1] += 1
+            j = min(b, c)
         elif c != lo and a != lo and c != a:
-            pstart[min(max(min(c, a), -1), n - 1) + 1] += 1
+            j = min(c, a)
+        else:
+            continue
+        pstart[min(max(j, -1), n - 1) + 1] += 1
     if bad < 0:                                     # empty arrays: an index out of range
         return (np.empty(0, np.int64), np.empty(0, np.int32), np.empty(0, np.float64),
                 np.empty(0, np.float64))
