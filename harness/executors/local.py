@@ -121,17 +121,21 @@ def _warm_mesh_cache(cases) -> None:
     file must cost that file's rows, not the driver (best effort: failures fail again, as error
     rows)."""
     from .. import datasets
+
+    def key(c):
+        return repr(sorted(c.mesh.items()))
+    noisy = {key(c) for c in cases if c.adds_noise}
     seen = set()
     for c in cases:
         if "file" in c.mesh:
             continue
-        key = repr(sorted(c.mesh.items()))
-        if key in seen or len(seen) >= 8:
+        k = key(c)
+        if k in seen or len(seen) >= 8:
             continue
-        seen.add(key)
+        seen.add(k)
         try:
             src = datasets.load(c.mesh)
-            if src.noisy_V is None and any(d.adds_noise and d.mesh == c.mesh for d in cases):
+            if src.noisy_V is None and k in noisy:
                 src.clean.noise_frame        # computed once, inherited by every case of the mesh
         except Exception:  # noqa: BLE001 - the case's own child reports it as an error row
             pass
