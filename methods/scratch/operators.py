@@ -306,7 +306,7 @@ def _sort_pairs(bc, bv, k):
 
 
 def _single_pass_kernel(V, F0, n, want_mass):
-    """``W`` in CSR (``indptr``, ``indices`` int32, ``data``) and mixed Voronoi areas, for one
+    """``W`` in CSR (``indptr`` and ``indices`` int32, ``data``) and mixed Voronoi areas, for one
     assembly without a reusable pattern.
 
     The faces are sorted by their smallest vertex (counting sort). Then one sweep over the
@@ -323,8 +323,8 @@ def _single_pass_kernel(V, F0, n, want_mass):
     empty arrays (before any unclamped write by face index) when an index lies outside [0, n).
     """
     m = F0.shape[0]
-    first = np.zeros(n + 1, np.int64)
-    pstart = np.zeros(n + 1, np.int64)
+    first = np.zeros(n + 1, np.int32)
+    pstart = np.zeros(n + 1, np.int32)
     bad = 0
     for f in range(m):
         a, b, c = F0[f, 0], F0[f, 1], F0[f, 2]
@@ -341,7 +341,7 @@ def _single_pass_kernel(V, F0, n, want_mass):
             continue
         pstart[min(max(j, -1), n - 1) + 1] += 1
     if bad < 0:                                     # empty arrays: an index out of range
-        return (np.empty(0, np.int64), np.empty(0, np.int32), np.empty(0, np.float64),
+        return (np.empty(0, np.int32), np.empty(0, np.int32), np.empty(0, np.float64),
                 np.empty(0, np.float64))
     longest = 0
     for i in range(n):
@@ -357,19 +357,19 @@ def _single_pass_kernel(V, F0, n, want_mass):
         F[p, 0] = a
         F[p, 1] = b
         F[p, 2] = c
-    pfill = pstart[:-1].copy()
     pcol = np.empty(pstart[n], np.int32)
     pval = np.empty(pstart[n], np.float64)
     area = np.zeros(n if want_mass else 0, np.float64)
-    uptr = np.empty(n + 1, np.int64)
+    uptr = np.empty(n + 1, np.int32)
     ucol = np.empty(3 * m, np.int32)
     uval = np.empty(3 * m, np.float64)
-    lcnt = np.zeros(n, np.int64)
+    lcnt = np.zeros(n, np.int32)
     bc = np.empty(longest + 1, np.int64)
     bv = np.empty(longest + 1, np.float64)
     uptr[0] = 0
     out = 0
     f0 = 0
+    ps = 0
     for i in range(n):
         k = 0
         for f in range(f0, first[i]):
@@ -390,8 +390,8 @@ def _single_pass_kernel(V, F0, n, want_mass):
                     bv[k] = w
                     k += 1
                 else:
-                    p = pfill[lo]
-                    pfill[lo] = p + 1
+                    p = pstart[lo]
+                    pstart[lo] = p + 1
                     pcol[p] = hi
                     pval[p] = w
             if want_mass:
@@ -399,10 +399,11 @@ def _single_pass_kernel(V, F0, n, want_mass):
                 area[i1] += a1
                 area[i2] += a2
         f0 = first[i]
-        for p in range(pstart[i], pstart[i + 1]):
+        for p in range(ps, pstart[i]):
             bc[k] = pcol[p]
             bv[k] = pval[p]
             k += 1
+        ps = pstart[i]
         _sort_pairs(bc, bv, k)
         o = out - 1
         for p in range(k):
@@ -415,7 +416,7 @@ def _single_pass_kernel(V, F0, n, want_mass):
                 lcnt[bc[p]] += 1
         out = o + 1
         uptr[i + 1] = out
-    indptr = np.empty(n + 1, np.int64)
+    indptr = np.empty(n + 1, np.int32)
     indptr[0] = 0
     for i in range(n):
         indptr[i + 1] = indptr[i] + lcnt[i] + 1 + (uptr[i + 1] - uptr[i])
@@ -536,8 +537,6 @@ def cotan_laplacian(V: np.ndarray, F: np.ndarray, mass: str = "voronoi", pattern
     indptr, indices, data, area = _kernel("_single_pass_kernel")(V, F, n, want)
     if indptr.size == 0:
         raise ValueError(_OUT_OF_RANGE.format(n=n))
-    if indices.size < np.iinfo(np.int32).max:
-        indptr = indptr.astype(np.int32)
     W = sp.csr_matrix((data, indices, indptr), shape=(n, n), copy=False)
     M = _diag_csr(area) if want else mass_matrix(V, F, mass)
     return W, M
