@@ -4,8 +4,10 @@
 For each task and each ranking metric (``rank=True`` in the task's declaration), a *cell* is one
 (mesh, noise model, noise level) and, for tasks with axis parameters, one value of them (e.g.
 simplification's target). In each cell every method variant gets the mean of its metric over
-seeds, and the variants are ranked (1 = best, by the metric's declared direction; ties get the
-average rank). Rows that are not valid results (`validity`: the task's declared ``invalid_when``
+seeds, and the variants are ranked (1 = best, by the metric's declared direction). Values closer
+than the metric's declared resolution tie (`tie_groups`: within ``max(rel * |best|, abs)`` of the
+best value of their group, ``rel``/``abs`` the compare tolerance of the task's declaration), so a
+difference in rounding noise wins nothing; ties get the average rank. Rows that are not valid results (`validity`: the task's declared ``invalid_when``
 rules, e.g. diverged, ended worse than the noisy input, non-manifold or topology-changing
 output) rank last in their cell, tied, and are counted
 in ``invalid_cells``. Cells where a variant has no value (failed, timed out, not run) are left
@@ -101,8 +103,47 @@ def cell_values(spec: dict, df: pd.DataFrame, metric: str, axis_params=()):
     return vals, inval
 
 
+def tolerance(spec: dict, metric: str) -> tuple[float, float]:
+    """``(rel, abs)``: the compare tolerance the task declares for ``metric`` (defaults 0.01, 0)."""
+    for m in spec.get("metrics", []):
+        if m.get("name") == metric:
+            return float(m.get("rel", 0.01)), float(m.get("abs", 0.0))
+    return 0.01, 0.0
+
+
+def tie_groups(score: np.ndarray, rel: float, abs_: float) -> np.ndarray:
+    """Group ids (0 = best) of ``score`` (lower is better; +inf for invalid results, which all tie
+    last). Sorted ascending, a value joins the current group when it lies within
+    ``max(rel * |g|, abs_)`` of the group's first (best) value g, else it starts the next group:
+    a chain of small steps cannot tie values that differ by more than the tolerance."""
+    score = np.asarray(score, dtype=np.float64)
+    order = np.argsort(score, kind="stable")
+    gid = np.empty(len(score), np.int64)
+    g, head = -1, None
+    for i in order:
+        v = score[i]
+        if head is None or not (v == head or (np.isfinite(head) and v - head <= max(rel * abs(head), abs_))):
+            g, head = g + 1, v
+        gid[i] = g
+    return gid
+
+
+def _tied_rank_row(score: np.ndarray, rel: float, abs_: float) -> np.ndarray:
+    """Ranks 1..k of one cell's scores, tied within the tolerance (`tie_groups`), average rank per tie."""
+    gid = tie_groups(score, rel, abs_)
+    ranks = np.empty(len(score))
+    start = 0
+    for g in range(int(gid.max()) + 1 if len(gid) else 0):
+        members = gid == g
+        n = int(members.sum())
+        ranks[members] = start + (n + 1) / 2.0
+        start += n
+    return ranks
+
+
 def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_params=()):
-    """(ranks DataFrame cells x variants, missing per variant, invalid per variant)."""
+    """(ranks DataFrame cells x variants, missing per variant, invalid per variant); values within
+    the metric's tolerance tie (`tie_groups`)."""
     if metric not in df or not len(df):
         return pd.DataFrame(), {}, {}
     vals, inval = cell_values(spec, df, metric, axis_params)
@@ -111,17 +152,21 @@ def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_para
     inv = inval.loc[complete.index]
     sign = -1.0 if better == "higher" else 1.0
     score = (sign * complete).where(~inv, np.inf)
-    ranks = score.rank(axis=1, method="average")
+    rel, abs_ = tolerance(spec, metric)
+    ranks = pd.DataFrame([_tied_rank_row(r, rel, abs_) for r in score.to_numpy()],
+                         index=score.index, columns=score.columns)
     return ranks, missing.sum().to_dict(), inv.sum().to_dict()
 
 
 WINNER_COLUMNS = ["task", "metric", "better", "mesh", "noise_model", "noise_level", "setting", "best", "value",
-                  "runner_up", "runner_up_value", "variants", "invalid_excluded"]
+                  "tied_with_best", "runner_up", "runner_up_value", "variants", "invalid_excluded"]
 
 
 def winners(frames: dict, specs: dict) -> pd.DataFrame:
-    """Per task, ranking metric and cell: the best valid variant and the runner-up (invalid
-    results are excluded and counted in ``invalid_excluded``)."""
+    """Per task, ranking metric and cell: the best valid variant, the variants tied with it
+    (within the metric's tolerance, `tie_groups`; ``tied_with_best``, comma-separated) and the
+    runner-up, the best variant outside that tie (invalid results are excluded and counted in
+    ``invalid_excluded``)."""
     rows = []
     for task, df in frames.items():
         spec = specs.get(task) or {}
@@ -134,15 +179,25 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
                 ok = v[~inval.loc[cell] & v.notna()]
                 if ok.empty:
                     continue
-                order = ok.sort_values(ascending=m["better"] == "lower")
+                order = ok.sort_values(ascending=m["better"] == "lower", kind="stable")
+                sign = -1.0 if m["better"] == "higher" else 1.0
+                gid = tie_groups(sign * order.to_numpy(), *tolerance(spec, m["name"]))
+                tied = [str(x) for x in order.index[1:][gid[1:] == 0]]
+                rest = order[gid > 0]
                 mesh, noise, level, setting = cell.split("|", 3)
                 rows.append({"task": task, "metric": m["name"], "better": m["better"], "mesh": mesh,
                              "noise_model": noise, "noise_level": level, "setting": "" if setting == "{}" else setting,
-                             "best": order.index[0], "value": float(order.iloc[0]),
-                             "runner_up": order.index[1] if len(order) > 1 else "",
-                             "runner_up_value": float(order.iloc[1]) if len(order) > 1 else None,
+                             "best": order.index[0], "value": float(order.iloc[0]), "tied_with_best": ", ".join(tied),
+                             "runner_up": rest.index[0] if len(rest) else "",
+                             "runner_up_value": float(rest.iloc[0]) if len(rest) else None,
                              "variants": int(v.notna().sum()), "invalid_excluded": int(inval.loc[cell].sum())})
     return pd.DataFrame(rows, columns=WINNER_COLUMNS)
+
+
+def _best(r) -> str:
+    """The best variant, and those tied with it."""
+    tied = "" if pd.isna(r.tied_with_best) else str(r.tied_with_best)
+    return f"{r.best} (tied: {tied})" if tied else str(r.best)
 
 
 def winners_markdown(w: pd.DataFrame) -> str:
@@ -151,7 +206,7 @@ def winners_markdown(w: pd.DataFrame) -> str:
         out.append(f"### {task}: best by {metric} ({g.iloc[0].better} is better)\n\n"
                    "| mesh | noise | setting | best | value | runner-up | value | invalid excluded |\n"
                    "|---|---|---|---|---:|---|---:|---:|")
-        out += [f"| {r.mesh} | {r.noise_model} {r.noise_level} | {r.setting} | {r.best} | {r.value:.4g} | {r.runner_up} | "
+        out += [f"| {r.mesh} | {r.noise_model} {r.noise_level} | {r.setting} | {_best(r)} | {r.value:.4g} | {r.runner_up} | "
                 f"{'' if pd.isna(r.runner_up_value) else format(r.runner_up_value, '.4g')} | {r.invalid_excluded} |"
                 for r in g.itertuples()]
         out.append("")
@@ -163,7 +218,7 @@ def winners_latex(w: pd.DataFrame) -> str:
     for (task, metric), g in w.groupby(["task", "metric"], sort=False):
         out += [r"\begin{table}[t]", r"\centering", r"\begin{tabular}{llllrlr}", r"\toprule",
                 r"mesh & noise & setting & best & value & runner-up & value \\", r"\midrule"]
-        out += [f"{_tex(r.mesh)} & {_tex(r.noise_model)} {_tex(r.noise_level)} & {_tex(r.setting)} & {_tex(r.best)} & "
+        out += [f"{_tex(r.mesh)} & {_tex(r.noise_model)} {_tex(r.noise_level)} & {_tex(r.setting)} & {_tex(_best(r))} & "
                 f"{r.value:.4g} & {_tex(r.runner_up)} & "
                 f"{'' if pd.isna(r.runner_up_value) else format(r.runner_up_value, '.4g')} \\\\" for r in g.itertuples()]
         out += [r"\bottomrule", r"\end{tabular}",

@@ -12,6 +12,30 @@ from scipy import stats
 from harness import leaderboard as L
 
 
+def _ranks_with_ties(score, rel, abs_):
+    """Average ranks where a value within max(rel |head|, abs) of its tie's first value joins it."""
+    score = np.asarray(score, float)
+    order = sorted(range(len(score)), key=lambda i: score[i])
+    out = np.empty(len(score))
+    p = 0
+    while p < len(order):
+        head = score[order[p]]
+        q = p + 1
+        while q < len(order) and (score[order[q]] == head or
+                                  (np.isfinite(head) and score[order[q]] - head <= max(rel * abs(head), abs_))):
+            q += 1
+        for i in order[p:q]:
+            out[i] = (p + 1 + q) / 2.0
+        p = q
+    return out
+
+
+def _tol(metric):
+    from harness.tasks import get
+    m = next(m for m in get("smoothing").spec()["metrics"] if m["name"] == metric)
+    return m["rel"], m["abs"]
+
+
 def test_leaderboard_mean_ranks_equal_an_independent_recomputation(tiny_run):
     lb = pd.read_csv(tiny_run / "leaderboard.csv")
     assert set(L.COLUMNS) <= set(lb.columns) and (tiny_run / "leaderboard.tex").is_file()
@@ -26,7 +50,7 @@ def test_leaderboard_mean_ranks_equal_an_independent_recomputation(tiny_run):
             invalid = cell.groupby(variant.values).apply(
                 lambda g: bool((g["diverged"] == True).any() or (g["dist_mean"] > g["input_dist_mean"]).any()))  # noqa: E712
             score = np.where(invalid.reindex(vals.index).to_numpy(), np.inf, vals.to_numpy())
-            for v, r in zip(vals.index, stats.rankdata(score)):
+            for v, r in zip(vals.index, _ranks_with_ties(score, *_tol(metric))):
                 ranks.setdefault(v, []).append(r)
         got = lb[(lb.task == "smoothing") & (lb.metric == metric)].set_index("method")["mean_rank"]
         want = pd.Series({v: np.mean(r) for v, r in ranks.items()})
@@ -93,3 +117,25 @@ def test_winners_equal_an_independent_recomputation(tiny_run):
                 assert row.empty
                 continue
             assert row["best"].iloc[0] == vals.idxmin() and row["value"].iloc[0] == pytest.approx(vals.min(), rel=1e-12)
+            rel, abs_ = _tol(metric)
+            tied = sorted(v for v, x in vals.items() if v != vals.idxmin() and x - vals.min() <= max(rel * vals.min(), abs_))
+            got_tied = row["tied_with_best"].iloc[0]
+            assert sorted([] if pd.isna(got_tied) else got_tied.split(", ")) == tied
+
+
+def test_values_within_the_metric_tolerance_tie():
+    """Rounding noise wins nothing: values within max(rel |best|, abs) of a tie's best value share
+    its average rank; a chain of small steps does not tie values further apart than that."""
+    assert list(L._tied_rank_row(np.array([0.026002323720907227, 0.026002323720908473, 0.05]), 0.01, 0.0)) == [1.5, 1.5, 3]
+    assert list(L._tied_rank_row(np.array([1.016, 1.0, 1.008]), 0.01, 0.0)) == [3, 1.5, 1.5]
+    assert list(L._tied_rank_row(np.array([np.inf, 0.0, 1e-12, np.inf, 0.5]), 0.01, 1e-9)) == [4.5, 1.5, 1.5, 4.5, 3]
+    assert list(L._tied_rank_row(np.array([3.0, 1.0, 2.0]), 0.0, 0.0)) == [3, 1, 2]
+    rows = [{"mesh": "a", "noise_model": "none", "noise_level": None, "method": m, "params": "{}", "status": "ok",
+             "K_rel_l2": v} for m, v in (("x", 0.0047997), ("y", 0.0047990), ("z", 0.01))]
+    spec = {"curvature": {"metrics": [{"name": "K_rel_l2", "better": "lower", "rank": True, "rel": 0.01, "abs": 1e-9}],
+                          "axis_params": [], "invalid_when": []}}
+    w = L.winners({"curvature": pd.DataFrame(rows)}, spec).iloc[0]
+    assert (w.best, w.tied_with_best, w.runner_up) == ("y", "x", "z")
+    assert "y (tied: x)" in L.winners_markdown(L.winners({"curvature": pd.DataFrame(rows)}, spec))
+    lb = L.leaderboard({"curvature": pd.DataFrame(rows)}, spec).set_index("method")["mean_rank"]
+    assert lb.to_dict() == {"x": 1.5, "y": 1.5, "z": 3.0}

@@ -271,7 +271,8 @@ def render(run_dir) -> str:
             "rank of each method over all (mesh, noise, level[, target]) cells, the Friedman test and the Nemenyi "
             "critical difference (Demšar 2006): methods joined by a bar do not differ significantly (α = 0.05). "
             "Invalid results (diverged, worse than the noisy input, non-manifold or topology-changing) rank last in "
-            "their cell; cells with a missing result are left out. Also in leaderboard.csv, .md and .tex.</p>"
+            "their cell; cells with a missing result are left out; values closer than the metric's compare tolerance tie. "
+            "Also in leaderboard.csv, .md and .tex.</p>"
             "<div id='leaderboard-body'></div></section>",
             *[_task_section(t, specs[t], frames) for t in order],
             "<section id='views'><h2>3D views</h2><p>Meshes side by side, coloured by the per-vertex quantity "
