@@ -151,3 +151,12 @@ def test_unit_square_neumann_spectrum_and_flip_invariance(tmp_path):
     cot = df[df["params"].str.contains('"cotan"')].set_index("mesh")["eig_rel_error_max"]
     assert abs(idt.iloc[0] - idt.iloc[1]) <= 1e-9 * idt.iloc[0]
     assert abs(cot.iloc[0] - cot.iloc[1]) > 1e-6 * cot.iloc[0]
+
+
+def test_unit_square_reference_holds_every_requested_eigenvalue():
+    """The Neumann spectrum of the unit square, pi^2 (a^2 + b^2), against a brute-force grid far
+    larger than needed: the reference's own grid reached too few lattice points from k ~ 940."""
+    a = np.arange(120)
+    brute = np.sort((np.pi ** 2 * (a[:, None] ** 2 + a[None, :] ** 2)).ravel())
+    for k in (1, 2, 36, 939, 940, 1000, 2000):
+        assert np.array_equal(analytic({"procedural": "plane_delaunay"}, k), brute[:k]), k

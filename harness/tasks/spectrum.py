@@ -71,7 +71,10 @@ def analytic(shape: dict | None, k: int) -> np.ndarray | None:
     natural (Neumann) boundary condition a discrete Laplacian imposes, ``pi^2 (a^2 + b^2)`` for
     integers ``a, b >= 0``."""
     if shape and shape.get("procedural") in ("plane_delaunay", "plane_nondelaunay"):
-        a = np.arange(int(np.ceil(np.sqrt(k))) + 2)
+        # a quarter disc of radius R holds at least pi R^2 / 4 lattice points, so the k smallest
+        # have a^2 + b^2 <= 4k/pi; the grid reaches past that radius
+        top = int(np.ceil(np.sqrt(4.0 * k / np.pi))) + 2
+        a = np.arange(top)
         return np.sort((np.pi ** 2 * (a[:, None] ** 2 + a[None, :] ** 2)).ravel())[:k]
     if not shape or shape.get("procedural") not in ("sphere", "sphere_random"):
         return None
