@@ -10,7 +10,7 @@ best value of their group, ``rel``/``abs`` the compare tolerance of the task's d
 difference in rounding noise wins nothing; ties get the average rank. Rows that are not valid results (`validity`: the task's declared ``invalid_when``
 rules, e.g. diverged, ended worse than the noisy input, non-manifold or topology-changing
 output) rank last in their cell, tied, and are counted
-in ``invalid_cells``. Cells where a variant has no value (failed, timed out, not run) are left
+in ``invalid_cells``. Cells where a variant has no value for some seed (failed, timed out, not run) are left
 out of the test and counted in ``missing_cells``. With N complete cells and k variants:
 
 - Friedman: ``chi2_F = 12 N / (k (k+1)) [sum_j R_j^2 - k (k+1)^2 / 4]``, R_j the mean ranks,
@@ -85,7 +85,8 @@ def _variant(df: pd.DataFrame, axis: set) -> pd.Series:
 
 
 def cell_values(spec: dict, df: pd.DataFrame, metric: str, axis_params=()):
-    """(values, invalid): cells x variants tables of the metric's mean over seeds (ok rows) and of
+    """(values, invalid): cells x variants tables of the metric's mean over seeds (ok rows; blank
+    when any seed of the variant has no value there: failed, timed out or not measured) and of
     whether a variant's result in the cell is invalid. Cell labels are ``mesh|noise model|noise
     level|axis parameters (JSON)``."""
     d = df.copy()
@@ -98,7 +99,8 @@ def cell_values(spec: dict, df: pd.DataFrame, metric: str, axis_params=()):
     val = pd.to_numeric(d[metric], errors="coerce")
     d["_value"] = val.where(d["status"] == "ok")
     g = d.groupby(["_cell", "_variant"])
-    vals = g["_value"].mean().unstack("_variant")
+    every_seed = g["_value"].count() == g.size()     # a failed seed is a missing cell, not an easier mean
+    vals = g["_value"].mean().where(every_seed).unstack("_variant")
     inval = g["_invalid"].any().unstack("_variant").reindex_like(vals).fillna(False).astype(bool)
     return vals, inval
 

@@ -139,3 +139,22 @@ def test_values_within_the_metric_tolerance_tie():
     assert "y (tied: x)" in L.winners_markdown(L.winners({"curvature": pd.DataFrame(rows)}, spec))
     lb = L.leaderboard({"curvature": pd.DataFrame(rows)}, spec).set_index("method")["mean_rank"]
     assert lb.to_dict() == {"x": 1.5, "y": 1.5, "z": 3.0}
+
+
+def test_a_seed_that_failed_makes_the_cell_missing():
+    """X errors on the hard seed: it is not ranked on its easy seed alone (it would win), the cell
+    is missing for X and counted; winners skip X there."""
+    rows = []
+    for seed, (x, y) in enumerate(((0.15, 0.10), (None, 0.30))):
+        for m, v in (("X", x), ("Y", y)):
+            rows.append({"mesh": "a", "noise_model": "gaussian", "noise_level": 0.3, "seed": seed, "method": m,
+                         "params": "{}", "status": "ok" if v is not None else "error", "K_rel_l2": v})
+    rows += [{"mesh": "b", "noise_model": "none", "noise_level": None, "seed": 0, "method": m, "params": "{}",
+              "status": "ok", "K_rel_l2": v} for m, v in (("X", 0.2), ("Y", 0.1))]
+    spec = {"curvature": {"metrics": [{"name": "K_rel_l2", "better": "lower", "rank": True, "rel": 0.01, "abs": 1e-9}],
+                          "axis_params": [], "invalid_when": []}}
+    lb = L.leaderboard({"curvature": pd.DataFrame(rows)}, spec).set_index("method")
+    assert lb.loc["X", "missing_cells"] == 1 and lb.loc["X", "cells"] == 1
+    assert lb.loc["Y", "mean_rank"] == 1.0
+    w = L.winners({"curvature": pd.DataFrame(rows)}, spec)
+    assert w.set_index("mesh").loc["a", "best"] == "Y" and w.set_index("mesh").loc["a", "runner_up"] == ""
