@@ -94,3 +94,58 @@ def test_meshlab_geodesic_is_close_to_exact():
     (measured; bounds 1e-5 and 0.5%)."""
     assert rel_errors({"procedural": "plane_delaunay", "n_points": 2000}, "meshlab.geodesic", k=2).mean() < 1e-5
     assert rel_errors({"procedural": "sphere", "subdivisions": 4}, "meshlab.geodesic", k=2).mean() < 0.005
+
+
+def _two_copies(name="knight"):
+    s = datasets.load(name).clean
+    V, F = s.V, s.F
+    shift = np.array([2.0 * np.ptp(V[:, 0]) + 1.0, 0.0, 0.0])
+    return np.vstack([V, V + shift]), np.vstack([F, F + len(V)]), V, F
+
+
+def test_scratch_heat_on_a_disconnected_mesh_is_the_heat_method_on_the_source_component():
+    """Two copies of knight: a source's distances on its own copy equal those on knight alone
+    (1e-9 of the largest), +inf on the other copy. One vertex was pinned for the whole mesh and the
+    sign taken from the mean over both copies: the distances came out negative."""
+    V2, F2, V, F = _two_copies()
+    n = len(V)
+    for s in (5, n + 5):
+        D2 = methods.get("scratch.heat").func(V2, F2, sources=np.array([s]))
+        D1 = methods.get("scratch.heat").func(V, F, sources=np.array([s % n])).D[0]
+        own = slice(0, n) if s < n else slice(n, 2 * n)
+        other = slice(n, 2 * n) if s < n else slice(0, n)
+        assert np.abs(D2.D[0][own] - D1).max() <= 1e-9 * D1.max()
+        assert np.isinf(D2.D[0][other]).all()
+
+
+def test_dirichlet_heat_with_a_boundary_source_is_an_error():
+    """u = 0 on the boundary: a boundary source gives a zero heat step and D = 0 everywhere."""
+    from harness.core.geometry import boundary_vertices
+    s = datasets.load("woody").clean
+    b = int(np.flatnonzero(boundary_vertices(s.F, len(s.V)))[0])
+    with pytest.raises(ValueError, match="on the boundary"):
+        methods.get("scratch.heat").func(s.V, s.F, sources=np.array([b]), boundary="dirichlet")
+    D = methods.get("scratch.heat").func(s.V, s.F, sources=np.array([b]), boundary="average").D
+    assert D.max() > 0
+
+
+def test_unreachable_vertices_are_left_out_of_every_error(tmp_path):
+    """On two copies of knight the exact reference is 0 on the other copy (libigl's convention) and
+    the heat methods return inf (scratch) or a finite value there: the rows are ok, the errors are
+    measured on the source's copy (scratch.heat's mean relative error was 0.7, with negative
+    distances), and unreachable_fraction is 1/2."""
+    import igl
+    V2, F2, V, F = _two_copies()
+    igl.write_triangle_mesh(str(tmp_path / "two.obj"), V2, F2)
+    igl.write_triangle_mesh(str(tmp_path / "one.obj"), V, F)
+    run({"name": "geo", "repeats": 1, "meshes": [{"file": str(tmp_path / "two.obj")}, {"file": str(tmp_path / "one.obj")}],
+         "noise": [{"model": "none"}],
+         "tasks": {"geodesics": {"methods": ["scratch.heat", "libigl.heat", "meshlab.geodesic"],
+                                 "params": {"sources": 1}}}}, out=tmp_path / "run", quiet=True)
+    df = pd.read_csv(tmp_path / "run" / "geodesics.csv")
+    assert (df["status"] == "ok").all(), df[["method", "error"]]
+    two, one = df[df["mesh"] == "two"].set_index("method"), df[df["mesh"] == "one"].set_index("method")
+    assert (two["unreachable_fraction"] == 0.5).all() and (one["unreachable_fraction"] == 0).all()
+    for t in (one, two):
+        assert (t.loc[["scratch.heat", "libigl.heat"], "rel_error_mean"] < 0.1).all()
+        assert t.loc["scratch.heat", "rel_error_mean"] == pytest.approx(t.loc["libigl.heat", "rel_error_mean"], rel=1e-6)

@@ -14,11 +14,18 @@ Columns: ``rel_error_mean`` / ``rel_error_max`` = mean / max over sources and ve
 ``|D - D*| / D*`` over vertices farther than ``EXCLUDE = 3`` mean edge lengths from the source
 (near the source relative errors of every method blow up and say nothing); ``abs_error_mean`` the
 mean ``|D - D*|`` over all vertices as a fraction of the diagonal; ``gradient_error`` the
-area-weighted mean over faces (outside the excluded disc) of ``| |grad D| - 1 |`` (an exact
-distance has unit gradient almost everywhere); ``symmetry_error`` (two or more sources) the max
+area-weighted mean over faces (outside the excluded disc) of ``| |grad D| - 1 |``, informative only:
+the exact distance has unit gradient almost everywhere, but its linear interpolant on the mesh
+does not (0.03 on bunny), so a lower value is not a better distance; ``symmetry_error`` (two or more sources) the max
 over source pairs of ``|D_a(b) - D_b(a)| / D*(a, b)``; ``precompute_s`` and ``per_source_s``
 as the method reports them (factorizations once, then the per-source work; blank when the
 method does not split its time).
+
+Disconnected meshes: a vertex in another connected component than the source (vertices joined
+by faces) is unreachable. A method may return any value there (``+inf`` is the convention; a
+NaN or -inf anywhere, or a non-finite value at a reachable vertex, fails the case); the errors,
+the gradient and the symmetry are measured over reachable vertices and source pairs only, and
+``unreachable_fraction`` says how many (source, vertex) pairs were left out.
 """
 from __future__ import annotations
 
@@ -67,9 +74,20 @@ def _check(result: GeodesicResult, V, F):
     if D.ndim == 1:
         D = D[None, :]
     result.D = float_array("", "D", D, (-1, V.shape[0]))
-    if not np.isfinite(result.D).all():
-        raise MethodFailed(f"returned D with {int((~np.isfinite(result.D)).sum())} non-finite value(s)")
+    bad = np.isnan(result.D) | (result.D == -np.inf)
+    if bad.any():
+        raise MethodFailed(f"returned D with {int(bad.sum())} NaN or -inf value(s)")
     return result
+
+
+def components(F: np.ndarray, n: int) -> np.ndarray:
+    """Connected-component label (n,) of each vertex, vertices joined by the faces' edges."""
+    from scipy.sparse.csgraph import connected_components
+    import scipy.sparse as sp
+    F = np.asarray(F, dtype=np.int64)
+    a, b = F.ravel(), F[:, [1, 2, 0]].ravel()
+    G = sp.coo_matrix((np.ones(len(a), np.int8), (a, b)), shape=(n, n))
+    return connected_components(G, directed=False)[1]
 
 
 # ----------------------------------------------------------------------------- reference
@@ -121,13 +139,20 @@ def measure(inp, result, params) -> dict:
         raise MethodFailed(f"returned {D.shape[0]} distance rows for {len(src)} source(s)")
     ref, exact = reference(inp, src)
     inp.cache["geodesic_last_reference"] = ref[0]          # for this case's view (built right after)
+    comp = components(F, len(V))
+    reach = comp[None, :] == comp[src][:, None]            # (k, n): same component as the source
+    if not np.isfinite(D[reach]).all():
+        raise MethodFailed(f"returned {int((~np.isfinite(D[reach])).sum())} non-finite distance(s) at vertices "
+                           "connected to the source")
     h = mean_edge_length(V, F)
-    far = ref > EXCLUDE * h
-    rel = np.abs(D - ref)[far] / ref[far]
+    far = reach & (ref > EXCLUDE * h)
+    err = np.abs(np.where(reach, D, 0.0) - ref)
+    rel = err[far] / ref[far]
     row = {"reference_exact": exact, "precompute_s": result.precompute_s, "per_source_s": result.per_source_s,
            "rel_error_mean": float(rel.mean()) if rel.size else None,
            "rel_error_max": float(rel.max()) if rel.size else None,
-           "abs_error_mean": float(np.abs(D - ref).mean() / inp.diag)}
+           "abs_error_mean": float(err[reach].mean() / inp.diag),
+           "unreachable_fraction": float(1.0 - reach.mean())}
     # |grad D| per face from the edge differences and the Gram matrix of the face's edges
     e1, e2 = V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]
     g11, g12, g22 = (e1 * e1).sum(1), (e1 * e2).sum(1), (e2 * e2).sum(1)
@@ -135,9 +160,9 @@ def measure(inp, result, params) -> dict:
     A = double_areas(V, F) / 2
     errs = []
     for k in range(len(src)):
-        d = D[k]
+        d = np.where(reach[k], D[k], 0.0)
         du1, du2 = d[F[:, 1]] - d[F[:, 0]], d[F[:, 2]] - d[F[:, 0]]
-        ok = (det > 0) & (ref[k][F].min(axis=1) > EXCLUDE * h)
+        ok = (det > 0) & reach[k][F].all(axis=1) & (ref[k][F].min(axis=1) > EXCLUDE * h)
         g = np.sqrt(np.maximum((g22 * du1 ** 2 - 2 * g12 * du1 * du2 + g11 * du2 ** 2)[ok] / det[ok], 0.0))
         if ok.any():
             errs.append(float((A[ok] * np.abs(g - 1)).sum() / A[ok].sum()))
@@ -145,7 +170,7 @@ def measure(inp, result, params) -> dict:
     if len(src) >= 2:
         a, b = np.triu_indices(len(src), 1)
         dab, dba, dref = D[a, src[b]], D[b, src[a]], ref[a, src[b]]
-        keep = dref > 0
+        keep = (dref > 0) & (comp[src[a]] == comp[src[b]])
         row["symmetry_error"] = float((np.abs(dab - dba)[keep] / dref[keep]).max()) if keep.any() else None
     return row
 
@@ -154,6 +179,8 @@ def view(inp, result) -> list:
     """The input coloured by the distance from the first source, with 12 level lines, and by its
     absolute error against the reference."""
     D = result.D[0] / inp.diag
+    fin = np.isfinite(D)
+    D = np.where(fin, D, D[fin].max() if fin.any() else 0.0)   # unreachable: drawn at the largest distance
     out = [("distance", inp.V, inp.F, D, "geodesic distance from the first source, 12 level lines", {"isolines": 12})]
     ref = inp.cache.get("geodesic_last_reference")
     if ref is not None and ref.shape == D.shape:
@@ -188,8 +215,11 @@ TASK = Task(
         Metric("rel_error_mean", "lower", "mean |D - D*| / D* (outside 3 mean edge lengths of the source)", rank=True, **_E),
         Metric("rel_error_max", "lower", "max |D - D*| / D* (outside 3 mean edge lengths of the source)", **_E),
         Metric("abs_error_mean", "lower", "mean |D - D*| over all vertices", unit="diag", **_E),
-        Metric("gradient_error", "lower", "area-weighted mean | |grad D| - 1 | over faces away from the source", **_E),
+        Metric("gradient_error", "info", "area-weighted mean | |grad D| - 1 | over faces away from the source (no "
+               "direction: the linear interpolant of the exact distance does not have unit gradient either)", **_E),
         Metric("symmetry_error", "lower", "max over source pairs |D_a(b) - D_b(a)| / D*(a, b)", **_E),
+        Metric("unreachable_fraction", "input", "fraction of (source, vertex) pairs in another connected component "
+               "than the source (left out of every error)", **_E),
         Metric("precompute_s", "info", "the method's precomputation time (its own split)", unit="s"),
         Metric("per_source_s", "info", "the method's time per source after precomputation (its own split)", unit="s"),
     ),

@@ -8,8 +8,11 @@ mass and ``t = t_factor * h^2`` (``h`` the mean edge length):
    averages the Neumann solution and the Dirichlet one (``u = 0`` on the boundary), as the paper
    recommends; ``neumann``/``dirichlet`` use one of them;
 2. ``X = grad u / |grad u|`` per face;
-3. Poisson: ``-W phi = b``, ``b_i = sum_f A_f grad(phi_i) . X_f``, then ``phi`` shifted to 0 at the
-   source (and negated if its mean is negative, so distances are positive).
+3. Poisson: ``-W phi = b``, ``b_i = sum_f A_f grad(phi_i) . X_f`` (one vertex of each connected
+   component pinned), then ``phi`` shifted to 0 at the source (and negated if its mean over the
+   source's component is negative, so distances are positive); ``+inf`` on the other components.
+
+``boundary: dirichlet`` with a source on the boundary is a ValueError (the heat step is zero).
 
 Everything is computed from edge lengths only (per face: ``e . grad u`` is the difference of
 ``u`` along the edge, ``|grad u|`` comes from the Gram matrix of two edges, and
@@ -90,7 +93,13 @@ class HeatSolver:
         self.neumann = factorize(Q, solver) if use_n else None
         self.free = np.flatnonzero(~bnd)
         self.dirichlet = factorize(Q[self.free][:, self.free].tocsr(), solver) if use_d else None
-        K = (-W).tocsr()[1:, 1:]                            # stiffness with vertex 0 pinned
+        self.boundary = bnd if boundary == "dirichlet" else None
+        from harness.tasks.geodesics import components
+        self.comp = components(F, n)
+        pinned = np.zeros(n, bool)
+        pinned[np.unique(self.comp, return_index=True)[1]] = True   # one vertex per connected component
+        self.unpinned = np.flatnonzero(~pinned)
+        K = (-W).tocsr()[self.unpinned][:, self.unpinned]
         self.poisson = factorize(K.tocsr(), solver)
 
     def heat(self, s: int) -> np.ndarray:
@@ -106,12 +115,19 @@ class HeatSolver:
         return sum(parts) / len(parts)
 
     def distance(self, s: int) -> np.ndarray:
+        if self.boundary is not None and self.boundary[s]:
+            raise ValueError(f"boundary: dirichlet with source vertex {s} on the boundary: the heat step is zero "
+                             "there (u = 0 on the boundary); use boundary: average or neumann")
         u = self.heat(s)
         b = _unit_gradient_divergence(u, self.F, self.l, self.C, self.n)
         phi = np.zeros(self.n)
-        phi[1:] = self.poisson.solve(b[1:] - 0.0)
+        phi[self.unpinned] = self.poisson.solve(b[self.unpinned])
+        mine = self.comp == self.comp[s]
         phi -= phi[s]
-        return -phi if phi.mean() < 0 else phi
+        if phi[mine].mean() < 0:
+            phi = -phi
+        phi[~mine] = np.inf                                 # not reachable from the source
+        return phi
 
 
 @register("scratch.heat", task="geodesics", library="scratch",
