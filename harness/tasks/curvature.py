@@ -22,8 +22,10 @@ max |q*|``; where ``q*`` vanishes identically (K on a cylinder or plane) the den
 replaced by the bounding-box diagonal's scale (``1/diag^2`` for K, ``1/diag`` for the others), so
 the column stays dimensionless. ``q_boundary_max``: the same max over boundary vertices (open
 meshes). ``gauss_bonnet_error``: ``|sum_i K_i A_i - 2 pi chi| / (2 pi max(|chi|, 1))`` on closed
-meshes, with the method's own vertex areas when it returns them (the discrete Gauss-Bonnet theorem
-makes this 0 for the angle defect over any areas it was divided by).
+meshes, always with the barycentric areas ``A`` above, whatever areas a method divided by: with
+its own areas the discrete Gauss-Bonnet theorem makes an angle defect integrate to exactly
+``2 pi chi``, so the column would say whether a method returns its areas rather than anything
+about its K (a method's ``area`` is not used).
 """
 from __future__ import annotations
 
@@ -141,9 +143,8 @@ def measure(inp, result, params) -> dict:
             if bnd.any():
                 row[f"{q}_boundary_max"] = float(np.abs(err[bnd]).max() / max_den)
     if result.K is not None and f["closed"]:
-        areas = result.area if result.area is not None else A
         chi = f["chi"]
-        row["gauss_bonnet_error"] = float(abs((result.K * areas).sum() - 2 * np.pi * chi) / (2 * np.pi * max(abs(chi), 1)))
+        row["gauss_bonnet_error"] = float(abs((result.K * A).sum() - 2 * np.pi * chi) / (2 * np.pi * max(abs(chi), 1)))
     return row
 
 
@@ -185,7 +186,7 @@ for _q, _what in (("K", "Gaussian curvature"), ("H", "mean curvature"), ("k1", "
         Metric(f"{_q}_rel_l2", "lower", f"{_what}: area-weighted relative L2 error, interior vertices", rank=_q in ("K", "H"), **_E),
         Metric(f"{_q}_max", "lower", f"{_what}: max error over max |exact|, interior vertices", **_E),
         Metric(f"{_q}_boundary_max", "lower", f"{_what}: max error over max |exact|, boundary vertices", **_E)]
-_METRICS += [Metric("gauss_bonnet_error", "lower", "|sum K A - 2 pi chi| / (2 pi max(|chi|, 1)), closed meshes", **_E)]
+_METRICS += [Metric("gauss_bonnet_error", "lower", "|sum K A - 2 pi chi| / (2 pi max(|chi|, 1)), barycentric areas A, closed meshes", **_E)]
 _METRICS += [Metric(f"provides_{q}", "info", f"the method estimates {q}", kind="bool") for q in QUANTITIES]
 
 TASK = Task(
