@@ -160,3 +160,18 @@ def test_unit_square_reference_holds_every_requested_eigenvalue():
     brute = np.sort((np.pi ** 2 * (a[:, None] ** 2 + a[None, :] ** 2)).ravel())
     for k in (1, 2, 36, 939, 940, 1000, 2000):
         assert np.array_equal(analytic({"procedural": "plane_delaunay"}, k), brute[:k]), k
+
+
+def test_residual_is_scale_free():
+    """The same (perturbed) eigenpairs on the sphere scaled by s (W the same, M s^2, lambda / s^2)
+    give the same residual_max; it was proportional to 1/s (1.4e-3 at s = 0.1, 1.4e-5 at 10)."""
+    from harness.tasks.spectrum import _residual
+    V, F, _ = sphere(3)
+    r = methods.get("scratch.spectrum")(V, F, k=10)
+    X = r.vectors + 1e-6 * np.random.default_rng(0).standard_normal(r.vectors.shape)
+    got = []
+    for s in (0.1, 1.0, 10.0, 100.0):
+        M, lam = r.M * s ** 2, r.values / s ** 2
+        norms = np.sqrt(np.einsum("ij,ij->j", X, M @ X))
+        got.append(_residual(r.W @ X + (M @ X) * lam, M, norms, lam))
+    assert got[1] > 0 and np.allclose(got, got[1], rtol=1e-9, atol=0), got
