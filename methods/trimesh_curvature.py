@@ -5,8 +5,14 @@
 triangulations and normal cycle") integrate K and H over the ball of radius ``r`` around each
 vertex; the adapter divides by the ball's area on a flat surface, ``pi r^2``, to give pointwise
 values in the task's conventions (H > 0 on a sphere with outward normals). ``r = radius * h``
-with ``h`` the mean edge length. The division assumes the ball meets the surface in a full disc:
-near a boundary (a cut disc) the values are underestimated, and large radii smooth the field.
+with ``h`` the mean edge length. Large radii smooth the field.
+
+Near a boundary K is far too large, as trimesh computes it: trimesh takes every vertex's angle
+defect against ``2 pi``, also at boundary vertices (whose defect is against ``pi``), so each
+boundary vertex inside a ball adds about ``pi`` to that ball's K (on a flat square, exact K = 0,
+interior vertices within ``r`` of the boundary read a median K of 174 at the default radius).
+The adapter keeps trimesh's values; the task's interior errors (``K_rel_l2``, ``K_max``) include
+those vertices. The division by ``pi r^2`` also assumes a full disc, which a boundary cuts.
 """
 from __future__ import annotations
 
