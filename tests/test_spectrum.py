@@ -175,3 +175,21 @@ def test_residual_is_scale_free():
         norms = np.sqrt(np.einsum("ij,ij->j", X, M @ X))
         got.append(_residual(r.W @ X + (M @ X) * lam, M, norms, lam))
     assert got[1] > 0 and np.allclose(got, got[1], rtol=1e-9, atol=0), got
+
+
+def test_a_numerically_flat_face_is_a_clear_error():
+    """An icosphere with a T-junction closed by a collinear triangle (cross-product double area
+    ~1e-18, Heron area 0): both cotangent spectra name the face instead of failing inside the
+    factorization ("not positive definite", "exactly singular"); the tufted operator copes."""
+    from harness.mesh import validate
+    V, F, _ = sphere(3)
+    a, b, c = F[0]
+    m = len(V)
+    V = np.vstack([V, 0.5 * (V[a] + V[b])])
+    F = np.vstack([F[1:], [[a, m, c], [m, b, c], [b, m, a]]])
+    mesh = validate(V, F)
+    for name in ("scratch.spectrum", "libigl.eigsh"):
+        with pytest.raises(ValueError, match="zero-area face"):
+            methods.get(name)(mesh.V, mesh.F, k=10)
+    lam = methods.get("scratch.spectrum")(mesh.V, mesh.F, k=10, operator="tufted").values
+    assert abs(lam[0]) < 1e-6 and lam[1] > 1.0

@@ -11,11 +11,14 @@ from methods import SpectrumResult, register
           cite="the plain pipeline: igl.cotmatrix + igl.massmatrix(VORONOI) + scipy eigsh(sigma)")
 def libigl_eigsh(V, F, *, k=20):
     """What a user would write: libigl's cotangent matrix and Voronoi mass, scipy's ``eigsh`` in
-    shift-invert mode (``sigma`` as `scratch.spectrum`'s) with scipy's own sparse LU inside."""
+    shift-invert mode (``sigma`` as `scratch.spectrum`'s) with scipy's own sparse LU inside.
+    Zero-area faces are a ValueError naming them (libigl's cotangents are undefined there)."""
     import igl
     from scipy.sparse.linalg import eigsh
 
+    from methods.libigl import reject_zero_area
     from methods.scratch.spectrum import inversion_shift
+    reject_zero_area(V, F, "libigl.eigsh")
     W = sp.csr_matrix(igl.cotmatrix(V, F))
     M = sp.csr_matrix(igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI))
     k = int(min(k, len(V) - 1))

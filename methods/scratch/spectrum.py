@@ -131,7 +131,17 @@ def smallest_eigenpairs(W, M, k: int, solver: str = "auto", linear_solver: str =
                                   doc="eigensolver (module docstring)"),
                   "linear_solver": solver_param()})
 def spectrum(V, F, *, k=20, operator="cotan", mass="voronoi", solver="auto", linear_solver="auto"):
-    """The k smallest eigenpairs of the chosen operator and mass (module docstring)."""
+    """The k smallest eigenpairs of the chosen operator and mass (module docstring). With the
+    input triangulation's cotangents (``operator: cotan`` or ``mass: voronoi``) a zero-area face
+    (cross product or Heron, `harness.core.geometry.zero_area_faces`) is a ValueError: a face
+    whose cross product is 1e-18 but whose Heron area is 0 has cotangents of 1e15, and the
+    factorization fails or the spectrum is meaningless; the intrinsic operators handle it."""
+    if operator in ("cotan", "uniform") and (operator == "cotan" or mass == "voronoi"):
+        from harness.core.geometry import zero_area_faces
+        bad = zero_area_faces(V, F)
+        if bad.size:
+            raise ValueError(f"{bad.size} zero-area face(s) (first: {bad[:5].tolist()}): their cotangents are not "
+                             "finite; use operator: intrinsic_delaunay or tufted, or remove them")
     W, M = operator_and_mass(V, F, operator, mass)
     lam, X = smallest_eigenpairs(W, M, k, solver, linear_solver)
     return SpectrumResult(values=lam, vectors=X, W=W, M=M)
