@@ -30,7 +30,14 @@ each metric's ``better`` direction and ``rel``/``abs`` tolerance, recorded in ru
   sample counts cannot reach significance (fewer than 5 samples a side) are counted as
   inconclusive, never as regressions. B's samples are first divided by the run's drift (the
   median over all cases of the ratio of median times: a machine busier during one run slows
-  every case alike; ``--absolute-time`` turns this off). Rows without samples fall back to: median
+  every case alike; ``--absolute-time`` turns this off). Load from other processes during a
+  whole sample window stretches every sample, the fastest included; so where both rows say how
+  many cores other processes kept busy during their samples (``others_cpu``), a wall-time
+  regression (improvement) is only inconclusive when B's (A's) machine was busier by
+  ``BUSY_CORES`` (0.5) or more and the median process CPU time (``cpu_times``) did not grow
+  (shrink) by ``time_factor`` as well. On an equally quiet machine a wall-time change counts
+  whatever its CPU time does (sleeps, I/O, lost parallelism and work in other processes are
+  not in a process's CPU time). Rows without samples fall back to: median
   over ``time_factor`` x A's, fastest B repeat slower than slowest A repeat, > 1 ms;
 * a case whose status was ok and is not any more regresses; a case of RUN_A missing in RUN_B
   regresses too (an interrupted or shrunken run must not pass CI); cases new in RUN_B are listed.
@@ -55,6 +62,7 @@ from .schema import number as _num
 
 TIME_FACTOR = 1.5
 TIME_FLOOR_S = 1e-3
+BUSY_CORES = 0.5
 
 
 @dataclass(frozen=True)
@@ -100,6 +108,7 @@ def rule_for(metric: str, task: str | None = None, rules: dict | None = None) ->
 
 SKIP = {"case_id", "task", "mesh", "noise_model", "noise_level", "seed", "method", "library", "params",
         "status", "error", "time_s", "time_min_s", "time_max_s", "time_q1_s", "time_q3_s", "time_cold_s", "times",
+        "time_cpu_s", "cpu_times", "others_cpu",
         "method_mem_mb", "repeats", "min_angle_hist"}
 
 
@@ -158,10 +167,11 @@ ALPHA = 0.01
 BOOTSTRAP = 2000
 
 
-def time_samples(row: dict) -> list[float] | None:
-    """The row's timed samples (seconds), or None when the run stored none."""
+def time_samples(row: dict, column: str = "times") -> list[float] | None:
+    """The row's timed samples (seconds; ``cpu_times`` for their CPU times), or None when the run
+    stored none."""
     try:
-        t = json.loads(row.get("times") or "null")
+        t = json.loads(row.get(column) or "null")
     except (TypeError, ValueError):
         return None
     if isinstance(t, list) and t and all(isinstance(x, (int, float)) and not isinstance(x, bool)
@@ -215,6 +225,34 @@ def run_drift(rows_a: dict, rows_b: dict) -> float:
     return float(np.median(r)) if len(r) >= 5 else 1.0
 
 
+def cpu_ratio(ra: dict, rb: dict) -> float | None:
+    """Median process CPU time per sample, B over A (``cpu_times``), or None without them."""
+    a, b = time_samples(ra, "cpu_times"), time_samples(rb, "cpu_times")
+    if not a or not b:
+        return None
+    import numpy as np
+    ma = float(np.median(a))
+    return float(np.median(b)) / ma if ma > 0 else None
+
+
+def busier(ra: dict, rb: dict) -> float | None:
+    """Cores other processes kept busy during B's samples minus during A's (``others_cpu``)."""
+    a, b = _num(ra.get("others_cpu")), _num(rb.get("others_cpu"))
+    return None if a is None or b is None else b - a
+
+
+def _load_explains(ra: dict, rb: dict, verdict: str, factor: float) -> bool:
+    """The slower run's machine was busier with other processes by ``BUSY_CORES`` or more, and the
+    CPU time did not move by ``factor`` the same way."""
+    d = busier(ra, rb)
+    if d is None:
+        return False
+    c = cpu_ratio(ra, rb)
+    if verdict == "regression":
+        return d >= BUSY_CORES and not (c is not None and c > factor)
+    return -d >= BUSY_CORES and not (c is not None and c < 1 / factor)
+
+
 def judge_time(ra: dict, rb: dict, factor: float = TIME_FACTOR, drift: float = 1.0) -> str:
     """'regression' | 'improvement' | 'inconclusive' | 'same' (see the module docstring)."""
     eff = time_effect(ra, rb, drift)
@@ -222,11 +260,14 @@ def judge_time(ra: dict, rb: dict, factor: float = TIME_FACTOR, drift: float = 1
         if not eff["conclusive"]:
             return "inconclusive"
         lo, hi = eff["ci"]
+        verdict = "same"
         if eff["p_slower"] < ALPHA and lo > factor and eff["min_ratio"] > factor and eff["diff"] > TIME_FLOOR_S:
-            return "regression"
+            verdict = "regression"
         if eff["p_faster"] < ALPHA and hi < 1 / factor and eff["min_ratio"] < 1 / factor and -eff["diff"] > TIME_FLOOR_S:
-            return "improvement"
-        return "same"
+            verdict = "improvement"
+        if verdict != "same" and _load_explains(ra, rb, verdict, factor):
+            return "inconclusive"
+        return verdict
     a, b = _num(ra.get("time_s")), _num(rb.get("time_s"))
     if a is None or b is None:
         return "same"
@@ -249,8 +290,11 @@ def _time_note(ra: dict, rb: dict, drift: float = 1.0) -> str:
     lo, hi = eff["ci"]
     p = min(eff["p_slower"], eff["p_faster"])
     rel = f" relative to the run drift {drift:.3g}x" if drift != 1.0 else ""
+    c, d = cpu_ratio(ra, rb), busier(ra, rb)
+    load = "" if d is None else (f"other processes kept {_num(ra.get('others_cpu')):.2g} / "
+                                 f"{_num(rb.get('others_cpu')):.2g} cores busy (A / B), ")
     return (f"B/A {eff['ratio']:.3g}x{rel} [95% CI {lo:.3g}, {hi:.3g}], fastest {eff['min_ratio']:.3g}x, "
-            f"Mann-Whitney p={p:.2g}, "
+            f"Mann-Whitney p={p:.2g}, " + ("" if c is None else f"CPU time B/A {c:.3g}x, ") + load +
             f"{eff['n'][0]} vs {eff['n'][1]} samples" + ("" if eff["conclusive"] else " (too few to decide)"))
 
 
@@ -372,8 +416,9 @@ def timing_notes(meta_a: dict, meta_b: dict, res: dict) -> list[str]:
         notes.append(f"load average (1 min) at start/end: A {la}, B {lb}")
     n_inc = sum(c["verdict"] == "inconclusive" for c in res["changes"])
     if n_inc:
-        notes.append(f"{n_inc} case(s) have too few timed samples on one side to decide on time (inconclusive, "
-                     "not counted as regressions; raise repeats or time_budget)")
+        notes.append(f"{n_inc} case(s) are inconclusive on time (not counted as regressions): too few timed samples "
+                     "on one side (raise repeats or time_budget), or a wall-time change while other processes "
+                     "kept the slower run's machine busier, without a CPU-time change (see each case's note)")
     if any(time_samples(r) is None for r in list(res["rows_a"].values()) + list(res["rows_b"].values())
            if r.get("status") == "ok"):
         notes.append("some rows store no timed samples (older runs): their time is judged on median/min/max only")

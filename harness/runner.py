@@ -13,11 +13,19 @@ Timing protocol (the method call alone; metrics are not timed):
 2. cold call: the method runs once on the case's own input, untimed as a sample; its wall time
    is ``time_cold_s`` (imports, JIT compilation or cache loads, library start-up: a cost of its
    own, never mixed into the samples);
-3. samples: at least ``repeats`` calls, and more while the summed sample time is below
+3. settle: before the first sample the runner waits (at most 0.3 s) until the process's other
+   threads use no CPU (`settle`): OpenBLAS workers that the thread limit creates spin for a while
+   and would compete with the first samples for the cores;
+4. samples: at least ``repeats`` calls, and more while the summed sample time is below
    ``time_budget_s`` (at most ``MAX_SAMPLES``), like ``timeit``'s autorange; every sample is kept
    (``times``, a JSON list, seconds) and summarised as median ``time_s``, quartiles
    ``time_q1_s``/``time_q3_s``, ``time_min_s``/``time_max_s``; ``repeats`` is the number taken;
-4. memory: ``method_mem_mb`` is the peak resident memory of the first sampled call minus the
+   each sample's process CPU time (all threads of the process) is kept too (``cpu_times``,
+   median ``time_cpu_s``), and ``others_cpu`` is the number of cores other processes kept busy
+   on average during the samples (``/proc/stat``, steal included, minus this process; blank off
+   Linux): ``shootout compare`` does not call a wall-time change a regression when the other
+   run's machine was that much quieter and the CPU time did not move;
+5. memory: ``method_mem_mb`` is the peak resident memory of the first sampled call minus the
    resident memory just before it, in MiB (Linux: freed heap returned to the OS with glibc's
    ``malloc_trim``, then the kernel's high-water mark reset through ``/proc/self/clear_refs``;
    blank elsewhere). It counts pages the call touched beyond what was resident, so memory the
@@ -29,6 +37,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import resource
 import statistics
 import time
@@ -77,6 +86,32 @@ def _reset_peak() -> bool:
         return True
     except OSError:
         return False
+
+
+def settle(limit_s: float = 0.3, window_s: float = 0.002) -> float:
+    """Wait (at most ``limit_s``) until the process's other threads use no CPU: thread pools
+    started or woken before the samples (OpenBLAS workers spin about 0.1 s after they are created,
+    OpenMP and MKL workers after their last task) would otherwise compete with the first samples
+    for the cores. Returns the seconds waited."""
+    t_start = time.perf_counter()
+    while time.perf_counter() - t_start < limit_s:
+        p0, t0, w0 = time.process_time(), time.thread_time(), time.perf_counter()
+        time.sleep(window_s)
+        if (time.process_time() - p0) - (time.thread_time() - t0) < 0.1 * (time.perf_counter() - w0):
+            break
+    return time.perf_counter() - t_start
+
+
+def _machine_busy_s() -> float | None:
+    """CPU seconds all processes of the machine have used (``/proc/stat``: user, nice, system,
+    irq, softirq and, on a virtual machine, steal), None where unknown."""
+    try:
+        with open("/proc/stat") as fh:
+            f = fh.readline().split()
+        ticks = os.sysconf("SC_CLK_TCK")
+        return sum(int(x) for x in f[1:4] + f[6:9]) / ticks
+    except (OSError, ValueError, IndexError, AttributeError):
+        return None
 
 
 _POOLS: tuple | None = None   # (threadpoolctl controller, loaded objects at its scan), see scan_thread_pools
@@ -145,13 +180,18 @@ def base_row(case: Case) -> dict:
             "peak_rss_mb": None}
 
 
-def timing_columns(times: list[float], cold: float | None) -> dict:
-    """The time columns of a row from its samples (seconds, kept to 9 significant digits)."""
+def timing_columns(times: list[float], cold: float | None, cpu: list[float] | None = None) -> dict:
+    """The time columns of a row from its samples (wall and, optionally, process CPU seconds,
+    kept to 9 significant digits)."""
     times = [float(f"{t:.9g}") for t in times]
     q1, q3 = (float(x) for x in np.percentile(times, [25, 75]))
-    return {"time_s": statistics.median(times), "time_min_s": min(times), "time_max_s": max(times),
-            "time_q1_s": q1, "time_q3_s": q3, "time_cold_s": cold, "repeats": len(times),
-            "times": json.dumps(times)}
+    out = {"time_s": statistics.median(times), "time_min_s": min(times), "time_max_s": max(times),
+           "time_q1_s": q1, "time_q3_s": q3, "time_cold_s": cold, "repeats": len(times),
+           "times": json.dumps(times)}
+    if cpu:
+        cpu = [float(f"{t:.9g}") for t in cpu]
+        out.update(time_cpu_s=statistics.median(cpu), cpu_times=json.dumps(cpu))
+    return out
 
 
 def prepare_input(case: Case) -> tuple[CaseInput, float | None]:
@@ -228,21 +268,27 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
         cold = time.perf_counter() - t0
         if case.threads and (loaded is None or _loaded_objects() != loaded):
             limits = limit_threads(case.threads)  # noqa: F841  (pools the cold call loaded)
-        times, result, spent = [], None, 0.0
+        settle()                                    # no spinning pool competes with the samples
+        times, cpu, result, spent = [], [], None, 0.0
+        busy0, own0, wall0 = _machine_busy_s(), time.process_time(), time.perf_counter()
         while len(times) < case.repeats or (spent < case.time_budget and len(times) < MAX_SAMPLES):
             V_arg, F_arg = inp.V.copy(), inp.F.copy()   # a method that writes into its input spoils nothing
             first = not times
             if first:
                 rss0, reset = _status_kib("VmRSS"), _reset_peak()
-            t0 = time.perf_counter()
+            c0, t0 = time.process_time(), time.perf_counter()
             result = method(V_arg, F_arg, **case.params)
             times.append(time.perf_counter() - t0)
+            cpu.append(time.process_time() - c0)
             spent += times[-1]
             if first:
                 hwm = _status_kib("VmHWM")
                 if reset and rss0 is not None and hwm is not None:
                     row["method_mem_mb"] = round(max(hwm - rss0, 0) / 1024.0, 2)
-        row.update(timing_columns(times, cold))
+        busy1, own1, wall1 = _machine_busy_s(), time.process_time(), time.perf_counter()
+        row.update(timing_columns(times, cold, cpu))
+        if busy0 is not None and busy1 is not None and wall1 > wall0:
+            row["others_cpu"] = round(max(0.0, (busy1 - busy0) - (own1 - own0)) / (wall1 - wall0), 3)
         row.update(task.measure(inp, result, full))
         input_store.save(case, inp.cache, task.input_facts)
         if want_meshes and task.output_mesh is not None:

@@ -13,7 +13,8 @@ from . import tasks
 
 COMMON_COLUMNS = ["case_id", "task", "mesh", "n_vertices", "n_faces", "noise_model", "noise_level", "seed",
                   "method", "library", "params", "status", "error", "time_s", "time_min_s", "time_max_s",
-                  "time_q1_s", "time_q3_s", "time_cold_s", "repeats", "times", "method_mem_mb", "peak_rss_mb"]
+                  "time_q1_s", "time_q3_s", "time_cold_s", "repeats", "times", "time_cpu_s", "cpu_times", "others_cpu",
+                  "method_mem_mb", "peak_rss_mb"]
 STATUSES = ("ok", "error", "timeout", "unavailable")
 
 

@@ -137,7 +137,9 @@ def test_time_needs_factor_and_spread(run_a, tmp_path):
     def slow(rows):
         r = rows[0]
         t = [x * 10 + 0.01 for x in json.loads(r["times"])]
-        r.update(times=json.dumps(t), time_s=str(sorted(t)[len(t) // 2]), time_min_s=str(min(t)), time_max_s=str(max(t)))
+        c = [x * 10 + 0.01 for x in json.loads(r["cpu_times"])]      # more work: CPU time grows too
+        r.update(times=json.dumps(t), time_s=str(sorted(t)[len(t) // 2]), time_min_s=str(min(t)), time_max_s=str(max(t)),
+                 cpu_times=json.dumps(c))
     edit(b / "smoothing.csv", slow)
     code, out = run_compare(run_a, b)
     line = next(ln for ln in out.splitlines() if ln.startswith("REGRESSION") and "time_s" in ln)
@@ -164,6 +166,28 @@ def test_time_is_decided_on_the_samples():
     assert judge_time(_row(base[:3]), _row([2 * t for t in base[:3]])) == "inconclusive"
     eff = time_effect(_row(base), _row([2 * t for t in noisy_same]))
     assert 1.6 < eff["ci"][0] < eff["ratio"] < eff["ci"][1] < 2.5 and eff["p_slower"] < 1e-6
+
+
+def test_wall_time_on_a_busier_machine_without_cpu_time_is_inconclusive():
+    """Load from other processes during a whole sample window stretches every sample's wall time,
+    the fastest included (a 4.6x 'regression' with p = 1e-10 between two runs of the same code).
+    When other processes kept B's machine busier (others_cpu) and the CPU time did not move, time
+    is inconclusive; on an equally quiet machine a wall-time change counts even without a CPU
+    change (a sleep, I/O, lost parallelism); more work moves the CPU time and counts anyway."""
+    rng = np.random.default_rng(1)
+    base = list(0.010 * (1 + 0.3 * rng.random(20)))
+    same = list(0.010 * (1 + 0.3 * rng.random(20)))
+    slow = [4 * t for t in same]
+
+    def row(wall, cpu, others):
+        return {**_row(wall), "cpu_times": json.dumps(cpu), "others_cpu": others}
+    assert judge_time(row(base, base, 0.1), row(slow, same, 1.5)) == "inconclusive"
+    assert judge_time(row(base, base, 0.1), row(slow, same, 0.2)) == "regression"      # quiet: a sleep counts
+    assert judge_time(row(base, base, 0.1), row(slow, slow, 1.5)) == "regression"      # more work
+    assert judge_time(row([4 * t for t in base], base, 1.5), row(same, same, 0.1)) == "inconclusive"
+    assert judge_time(row([4 * t for t in base], base, 0.1), row(same, same, 0.1)) == "improvement"
+    assert judge_time(row(base, base, 0.1), row(same, same, 1.5)) == "same"
+    assert judge_time(_row(base), row(slow, same, 1.5)) == "regression"       # A stored no load: as before
 
 
 def test_rules():
@@ -224,7 +248,9 @@ def test_time_can_be_left_out(run_a, tmp_path):
     def slow(rows):
         r = rows[0]
         t = [x * 10 + 0.01 for x in json.loads(r["times"])]
-        r.update(times=json.dumps(t), time_s=str(sorted(t)[len(t) // 2]), time_min_s=str(min(t)), time_max_s=str(max(t)))
+        c = [x * 10 + 0.01 for x in json.loads(r["cpu_times"])]      # more work: CPU time grows too
+        r.update(times=json.dumps(t), time_s=str(sorted(t)[len(t) // 2]), time_min_s=str(min(t)), time_max_s=str(max(t)),
+                 cpu_times=json.dumps(c))
     edit(b / "laplacian.csv", slow)
     assert run_compare(run_a, b)[0] == 1
     code, out = run_compare(run_a, b, time_factor=None)

@@ -8,6 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -41,10 +42,14 @@ def test_protocol_columns(tmp_path):
         times = json.loads(r.times)
         assert len(times) == r.repeats >= 1 and min(times) == r.time_min_s and max(times) == r.time_max_s
         assert r.time_q1_s <= r.time_s <= r.time_q3_s and r.time_cold_s > 0
+        cpu = json.loads(r.cpu_times)                 # one CPU time per sample, median time_cpu_s
+        assert len(cpu) == len(times) and min(cpu) >= 0 and r.time_cpu_s == float(np.median(cpu))
+        assert 0 <= r.others_cpu <= os.cpu_count()
         # autorange: keeps sampling until the budget is spent (or the sample cap)
         assert sum(times) >= 0.15 or len(times) == 1000
     sleep = df[df.method == "slowdown.sleep"]
     assert (sleep["time_s"] > 0.004).all() and (sleep["repeats"] >= 20).all()
+    assert (sleep["time_cpu_s"] < 0.5 * sleep["time_s"]).all()      # sleeping uses no CPU
     meta = json.loads((out / "run.json").read_text())
     assert meta["timing"]["threads_per_case"] == max(1, (os.cpu_count() or 1) // meta["workers"])
     fixed = meta["fixed_cost_per_case_s"]             # outside the method: loading, noise, measuring
