@@ -10,8 +10,11 @@ best value of their group, ``rel``/``abs`` the compare tolerance of the task's d
 difference in rounding noise wins nothing; ties get the average rank. Rows that are not valid results (`validity`: the task's declared ``invalid_when``
 rules, e.g. diverged, ended worse than the noisy input, non-manifold or topology-changing
 output) rank last in their cell, tied, and are counted
-in ``invalid_cells``. Cells where a variant has no value for some seed (failed, timed out, not run) are left
-out of the test and counted in ``missing_cells``. With N complete cells and k variants:
+in ``invalid_cells``; so does a variant whose method failed (error or timeout) on any seed of
+the cell, which is not ranked on the seeds it survived. Cells where a variant has no value for
+some seed otherwise (not run, unavailable, the metric not measured) are left out of the test
+and counted in ``missing_cells``; a variant with no value in any cell (e.g. its library is not
+installed) is left out of the ranking altogether instead of emptying it. With N complete cells and k variants:
 
 - Friedman: ``chi2_F = 12 N / (k (k+1)) [sum_j R_j^2 - k (k+1)^2 / 4]``, R_j the mean ranks,
   p from chi-square with k - 1 degrees of freedom (Demšar eq. 1; valid for N and k not tiny).
@@ -84,14 +87,17 @@ def _variant(df: pd.DataFrame, axis: set) -> pd.Series:
     return pd.Series(out, index=df.index)
 
 
+FAILED = ("error", "timeout")     # a method's own failure: ranks last; "unavailable" is not run (missing)
+
+
 def cell_values(spec: dict, df: pd.DataFrame, metric: str, axis_params=()):
     """(values, invalid): cells x variants tables of the metric's mean over seeds (ok rows; blank
-    when any seed of the variant has no value there: failed, timed out or not measured) and of
-    whether a variant's result in the cell is invalid. Cell labels are ``mesh|noise model|noise
+    when any seed of the variant has no value there) and of whether a variant's result in the
+    cell is invalid (a seed failed, errored or timed out, or broke a validity rule). Cell labels are ``mesh|noise model|noise
     level|axis parameters (JSON)``."""
     d = df.copy()
     d["_variant"] = _variant(d, set(axis_params))
-    d["_invalid"] = (validity(spec, d) != "") & (d["status"] == "ok")
+    d["_invalid"] = (validity(spec, d) != "") & d["status"].isin(FAILED + ("ok",))
     ps = [json.loads(p) if isinstance(p, str) and p else {} for p in d["params"]]
     text = lambda col: [("" if pd.isna(v) else str(v)) for v in d[col]] if col in d else [""] * len(d)  # noqa: E731
     d["_cell"] = ["|".join(t) for t in zip(text("mesh"), text("noise_model"), text("noise_level"),
@@ -150,6 +156,8 @@ def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_para
         return pd.DataFrame(), {}, {}
     vals, inval = cell_values(spec, df, metric, axis_params)
     missing = vals.isna() & ~inval
+    ran = ~missing.all(axis=0)             # a variant with no value anywhere (unavailable) is left out
+    vals, inval, missing = vals.loc[:, ran], inval.loc[:, ran], missing.loc[:, ran]
     complete = vals[~missing.any(axis=1)]
     inv = inval.loc[complete.index]
     sign = -1.0 if better == "higher" else 1.0

@@ -71,7 +71,7 @@ def test_invalid_rows_rank_last_and_missing_cells_are_stated():
     rows = []
     for mesh in ("a", "b", "c"):
         for m, val in (("good", 0.1), ("bad", 0.01), ("gone", 0.05)):
-            st = "error" if (m == "gone" and mesh == "c") else "ok"
+            st = "unavailable" if (m == "gone" and mesh == "c") else "ok"
             rows.append({"mesh": mesh, "noise_model": "none", "noise_level": None, "method": m, "params": "{}",
                          "status": st, "dist_mean": val, "input_dist_mean": 0.05, "diverged": False, "ev_mean": val})
     df = pd.DataFrame(rows)
@@ -141,20 +141,27 @@ def test_values_within_the_metric_tolerance_tie():
     assert lb.to_dict() == {"x": 1.5, "y": 1.5, "z": 3.0}
 
 
-def test_a_seed_that_failed_makes_the_cell_missing():
-    """X errors on the hard seed: it is not ranked on its easy seed alone (it would win), the cell
-    is missing for X and counted; winners skip X there."""
+def test_a_seed_that_failed_ranks_last_in_its_cell():
+    """X errors on the hard seed: it is not ranked on its easy seed alone (it would win), and the
+    cell is not dropped for everyone (which spared X and shrank N): X ranks last there, counted
+    as invalid; winners skip X there. A variant that never ran (unavailable) is left out of the
+    ranking; it emptied the leaderboard (every cell missing a variant)."""
     rows = []
     for seed, (x, y) in enumerate(((0.15, 0.10), (None, 0.30))):
         for m, v in (("X", x), ("Y", y)):
             rows.append({"mesh": "a", "noise_model": "gaussian", "noise_level": 0.3, "seed": seed, "method": m,
                          "params": "{}", "status": "ok" if v is not None else "error", "K_rel_l2": v})
     rows += [{"mesh": "b", "noise_model": "none", "noise_level": None, "seed": 0, "method": m, "params": "{}",
-              "status": "ok", "K_rel_l2": v} for m, v in (("X", 0.2), ("Y", 0.1))]
+              "status": "ok", "K_rel_l2": v} for m, v in (("X", 0.1), ("Y", 0.2))]
+    rows += [{"mesh": m, "noise_model": "none", "noise_level": None, "seed": 0, "method": "Z", "params": "{}",
+              "status": "unavailable", "K_rel_l2": None} for m in ("a", "b")]
     spec = {"curvature": {"metrics": [{"name": "K_rel_l2", "better": "lower", "rank": True, "rel": 0.01, "abs": 1e-9}],
                           "axis_params": [], "invalid_when": []}}
-    lb = L.leaderboard({"curvature": pd.DataFrame(rows)}, spec).set_index("method")
-    assert lb.loc["X", "missing_cells"] == 1 and lb.loc["X", "cells"] == 1
-    assert lb.loc["Y", "mean_rank"] == 1.0
-    w = L.winners({"curvature": pd.DataFrame(rows)}, spec)
-    assert w.set_index("mesh").loc["a", "best"] == "Y" and w.set_index("mesh").loc["a", "runner_up"] == ""
+    df = pd.DataFrame(rows)
+    lb = L.leaderboard({"curvature": df[df.method != "Z"]}, spec).set_index("method")
+    assert lb.loc["X", "invalid_cells"] == 1 and lb.loc["X", "cells"] == 2 and lb.loc["X", "missing_cells"] == 0
+    assert lb.loc["X", "mean_rank"] == 1.5 and lb.loc["Y", "mean_rank"] == 1.5     # last in a, first in b
+    w = L.winners({"curvature": df}, spec).set_index("mesh")
+    assert w.loc["a", "best"] == "Y" and w.loc["a", "invalid_excluded"] == 1
+    lbz = L.leaderboard({"curvature": df}, spec).set_index("method")     # Z never ran: left out, not
+    assert "Z" not in lbz.index and lbz["mean_rank"].to_dict() == lb["mean_rank"].to_dict()   # an empty board
