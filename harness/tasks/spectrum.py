@@ -14,8 +14,9 @@ ascending, they are matched index by index (a multiplet cut at ``k`` matches its
 ``i >= 1`` (``lambda*_0 = 0``; ``lambda_0`` is reported in ``eig0``). Other meshes have no
 analytic spectrum: those columns are blank. ``residual_max``: ``max_i ||W x_i + lambda_i M x_i||_{M^-1}
 / (max(|lambda_i|, lambda_f) ||x_i||_M)``, ``lambda_f`` the smallest returned ``|lambda|`` above
-``1e-8 max |lambda|`` (the first non-zero eigenvalue: the constant mode is measured relative to
-it): the relative residual of ``M^-1 W x = -lambda x`` in the M-norm, dimensionless, so the same
+``1e-8 s`` (the first non-zero eigenvalue: the constant mode is measured relative to it; ``s =
+max |W_ii / M_ii|``, an eigenvalue scale of the operator, when no returned one is above): the
+relative residual of ``M^-1 W x = -lambda x`` in the M-norm, dimensionless, so the same
 eigenpairs give the same value at any mesh scale; ``orthogonality_error``:
 ``max |X^T M X - I|`` after M-normalising each column. ``hks_rel_error`` (spheres, when
 eigenvectors are returned): the heat kernel signature (`harness.metrics.hks`) from the returned
@@ -110,16 +111,20 @@ def measure(inp, result, params) -> dict:
         MX = M @ X
         norms = np.sqrt(np.maximum(np.einsum("ij,ij->j", X, MX), 1e-300))
         R = W @ X + MX * lam[None, :]
-        row["residual_max"] = _residual(R, M, norms, lam)
+        md = sp.csr_matrix(M).diagonal()
+        row["residual_max"] = _residual(R, M, norms, lam, np.divide(sp.csr_matrix(W).diagonal(), md,
+                                                                     out=np.zeros_like(md), where=md > 0))
         Xn = X / norms
         G = Xn.T @ (M @ Xn)
         row["orthogonality_error"] = float(np.abs(G - np.eye(len(lam))).max())
     return row
 
 
-def _residual(R: np.ndarray, M, norms: np.ndarray, lam: np.ndarray) -> float | None:
+def _residual(R: np.ndarray, M, norms: np.ndarray, lam: np.ndarray, W_diag_over_m: np.ndarray) -> float | None:
     """``max_i ||R_i||_{M^-1} / (max(|lambda_i|, lambda_f) ||x_i||_M)`` (module docstring); None
-    where M is singular."""
+    where M is singular. ``W_diag_over_m``: ``W_ii / M_ii``, whose largest magnitude ``s`` (an
+    eigenvalue scale, 1/length^2) decides what counts as zero (``|lambda| <= 1e-8 s``) and stands
+    for ``lambda_f`` when no returned eigenvalue is non-zero."""
     import scipy.sparse.linalg as sla
     Mc = sp.csr_matrix(M)
     off = Mc - sp.diags(Mc.diagonal())
@@ -135,8 +140,11 @@ def _residual(R: np.ndarray, M, norms: np.ndarray, lam: np.ndarray) -> float | N
             return None
     rn = np.sqrt(np.maximum(np.einsum("ij,ij->j", R, MinvR), 0.0))
     a = np.abs(lam)
-    nz = a[a > 1e-8 * a.max()] if a.max() > 0 else a[:0]
-    floor = nz.min() if nz.size else 1.0
+    scale = float(np.abs(W_diag_over_m).max()) if W_diag_over_m.size else 0.0
+    nz = a[a > 1e-8 * scale]
+    floor = nz.min() if nz.size else scale
+    if not floor > 0:
+        return None
     return float((rn / norms / np.maximum(a, floor)).max())
 
 
