@@ -139,13 +139,15 @@ def test_unreachable_vertices_are_left_out_of_every_error(tmp_path):
     igl.write_triangle_mesh(str(tmp_path / "two.obj"), V2, F2)
     igl.write_triangle_mesh(str(tmp_path / "one.obj"), V, F)
     run({"name": "geo", "repeats": 1, "meshes": [{"file": str(tmp_path / "two.obj")}, {"file": str(tmp_path / "one.obj")}],
-         "noise": [{"model": "none"}],
+         "noise": [{"model": "none"}], "save_meshes": True,
          "tasks": {"geodesics": {"methods": ["scratch.heat", "libigl.heat", "meshlab.geodesic"],
                                  "params": {"sources": 1}}}}, out=tmp_path / "run", quiet=True)
     df = pd.read_csv(tmp_path / "run" / "geodesics.csv")
     assert (df["status"] == "ok").all(), df[["method", "error"]]
     two, one = df[df["mesh"] == "two"].set_index("method"), df[df["mesh"] == "one"].set_index("method")
     assert (two["unreachable_fraction"] == 0.5).all() and (one["unreachable_fraction"] == 0).all()
+    ply = (tmp_path / "run" / "meshes" / f"{two.loc['scratch.heat', 'case_id']}.ply").read_text()
+    assert "-1 where unreachable" in ply and "inf" not in ply.split("end_header")[1]
     for t in (one, two):
         assert (t.loc[["scratch.heat", "libigl.heat"], "rel_error_mean"] < 0.1).all()
         assert t.loc["scratch.heat", "rel_error_mean"] == pytest.approx(t.loc["libigl.heat", "rel_error_mean"], rel=1e-6)

@@ -141,6 +141,7 @@ def measure(inp, result, params) -> dict:
     inp.cache["geodesic_last_reference"] = ref[0]          # for this case's view (built right after)
     comp = components(F, len(V))
     reach = comp[None, :] == comp[src][:, None]            # (k, n): same component as the source
+    inp.cache["geodesic_last_reach"] = reach[0]
     if not np.isfinite(D[reach]).all():
         raise MethodFailed(f"returned {int((~np.isfinite(D[reach])).sum())} non-finite distance(s) at vertices "
                            "connected to the source")
@@ -179,17 +180,26 @@ def view(inp, result) -> list:
     """The input coloured by the distance from the first source, with 12 level lines, and by its
     absolute error against the reference."""
     D = result.D[0] / inp.diag
-    fin = np.isfinite(D)
-    D = np.where(fin, D, D[fin].max() if fin.any() else 0.0)   # unreachable: drawn at the largest distance
+    reach = _reach(inp, D)
+    D = np.where(reach, D, D[reach].max() if reach.any() else 0.0)   # unreachable: drawn at the largest distance
     out = [("distance", inp.V, inp.F, D, "geodesic distance from the first source, 12 level lines", {"isolines": 12})]
     ref = inp.cache.get("geodesic_last_reference")
     if ref is not None and ref.shape == D.shape:
-        out.append(("error", inp.V, inp.F, np.abs(D - ref / inp.diag), "|distance - reference|"))
+        out.append(("error", inp.V, inp.F, np.where(reach, np.abs(D - ref / inp.diag), 0.0),
+                    "|distance - reference| (0 where unreachable)"))
     return out
 
 
+def _reach(inp, D: np.ndarray) -> np.ndarray:
+    """Vertices connected to the first source (`measure` leaves them in the cache), else the
+    finite values of ``D``."""
+    r = inp.cache.get("geodesic_last_reach")
+    return r & np.isfinite(D) if r is not None and r.shape == D.shape else np.isfinite(D)
+
+
 def output_mesh(inp, result):
-    return inp.V, inp.F, result.D[0], "quality = geodesic distance from the first source (input units)"
+    D = np.where(_reach(inp, result.D[0]), result.D[0], -1.0)
+    return inp.V, inp.F, D, "quality = geodesic distance from the first source (input units), -1 where unreachable"
 
 
 def _zero_at_source(method, V, F):
