@@ -5,18 +5,17 @@ A row is a flat dict of the common columns (`harness.schema`) plus the task's co
 
 Timing protocol (the method call alone; metrics are not timed):
 
-1. the thread pools of this process (OpenBLAS, OpenMP, MKL through threadpoolctl) are limited to
+1. the thread pools (OpenBLAS, OpenMP, MKL through threadpoolctl) are limited to
    ``case.threads`` (the session sets ``cores // workers``) so concurrent cases do not
-   oversubscribe the cores, and limited again after the cold call if it loaded shared objects
-   (a library the method imports on its first call; always where the loaded objects cannot be
-   counted); pools a method starts later are not seen;
+   oversubscribe the cores: in the driver before it forks the case processes, which inherit the
+   limit (setting it in the case would start fresh OpenBLAS workers that spin for a while and
+   compete with the first samples), and in the case for libraries loaded since, also after the
+   cold call if it loaded shared objects (a library the method imports on its first call;
+   always where the loaded objects cannot be counted); pools a method starts later are not seen;
 2. cold call: the method runs once on the case's own input, untimed as a sample; its wall time
    is ``time_cold_s`` (imports, JIT compilation or cache loads, library start-up: a cost of its
    own, never mixed into the samples);
-3. settle: before the first sample the runner waits (at most 0.3 s) until the process's other
-   threads use no CPU (`settle`): OpenBLAS workers that the thread limit creates spin for a while
-   and would compete with the first samples for the cores;
-4. samples: at least ``repeats`` calls, and more while the summed sample time is below
+3. samples: at least ``repeats`` calls, and more while the summed sample time is below
    ``time_budget_s`` (at most ``MAX_SAMPLES``), like ``timeit``'s autorange; every sample is kept
    (``times``, a JSON list, seconds) and summarised as median ``time_s``, quartiles
    ``time_q1_s``/``time_q3_s``, ``time_min_s``/``time_max_s``; ``repeats`` is the number taken;
@@ -25,7 +24,7 @@ Timing protocol (the method call alone; metrics are not timed):
    on average during the samples (``/proc/stat``, steal included, minus this process; blank off
    Linux): ``shootout compare`` does not call a wall-time change a regression when the other
    run's machine was that much quieter and the CPU time did not move;
-5. memory: ``method_mem_mb`` is the peak resident memory of the first sampled call minus the
+4. memory: ``method_mem_mb`` is the peak resident memory of the first sampled call minus the
    resident memory just before it, in MiB (Linux: freed heap returned to the OS with glibc's
    ``malloc_trim``, then the kernel's high-water mark reset through ``/proc/self/clear_refs``;
    blank elsewhere). It counts pages the call touched beyond what was resident, so memory the
@@ -88,20 +87,6 @@ def _reset_peak() -> bool:
         return False
 
 
-def settle(limit_s: float = 0.3, window_s: float = 0.002) -> float:
-    """Wait (at most ``limit_s``) until the process's other threads use no CPU: thread pools
-    started or woken before the samples (OpenBLAS workers spin about 0.1 s after they are created,
-    OpenMP and MKL workers after their last task) would otherwise compete with the first samples
-    for the cores. Returns the seconds waited."""
-    t_start = time.perf_counter()
-    while time.perf_counter() - t_start < limit_s:
-        p0, t0, w0 = time.process_time(), time.thread_time(), time.perf_counter()
-        time.sleep(window_s)
-        if (time.process_time() - p0) - (time.thread_time() - t0) < 0.1 * (time.perf_counter() - w0):
-            break
-    return time.perf_counter() - t_start
-
-
 def _machine_busy_s() -> float | None:
     """CPU seconds all processes of the machine have used (``/proc/stat``: user, nice, system,
     irq, softirq and, on a virtual machine, steal), None where unknown."""
@@ -134,30 +119,59 @@ def _loaded_objects() -> int | None:
         return None
 
 
-def scan_thread_pools() -> None:
-    """Find this process's BLAS/OpenMP thread pools once (threadpoolctl), in the driver before
-    forking: case processes inherit the scan and `limit_threads` reuses it unless a shared
-    object was loaded since (then it scans again)."""
-    global _POOLS
+_PARENT_LIMIT: tuple | None = None   # (n, threadpoolctl limiter) set before forking, see scan_thread_pools
+
+
+def scan_thread_pools(threads: int | None = None) -> None:
+    """Find this process's BLAS/OpenMP thread pools once (threadpoolctl), in the driver (or a
+    Dask worker) before forking: case processes inherit the scan and `limit_threads` reuses it
+    unless a shared object was loaded since. With ``threads``, the pools are also limited to it
+    here: the limit is library state a forked case process inherits, so the case need not set
+    it again, and setting it again would start fresh OpenBLAS workers that spin for a while and
+    compete with the first timed samples."""
+    global _POOLS, _PARENT_LIMIT
     try:
         from threadpoolctl import ThreadpoolController
     except ImportError:
         return
-    _POOLS = (ThreadpoolController(), _loaded_objects())
+    ctl = ThreadpoolController()
+    if threads:
+        _PARENT_LIMIT = (int(threads), ctl.limit(limits=int(threads)))
+    _POOLS = (ctl, _loaded_objects())
+
+
+def release_thread_pools() -> None:
+    """Undo `scan_thread_pools`'s limit in this process (the run is over)."""
+    global _PARENT_LIMIT
+    if _PARENT_LIMIT is not None:
+        try:
+            _PARENT_LIMIT[1].restore_original_limits()
+        finally:
+            _PARENT_LIMIT = None
 
 
 def limit_threads(n: int | None):
     """Limit BLAS/OpenMP thread pools of this process to ``n`` (None or 0: leave them); returns the
-    threadpoolctl limiter (keep it alive for the case)."""
+    threadpoolctl limiter (keep it alive for the case). Pools the parent process already limited
+    to ``n`` before forking (`scan_thread_pools`) are left alone; only libraries loaded since are
+    limited."""
     if not n:
         return None
-    if _POOLS is not None and _POOLS[1] is not None and _POOLS[1] == _loaded_objects():
-        return _POOLS[0].limit(limits=int(n))
+    n = int(n)
+    scanned = _POOLS is not None and _POOLS[1] is not None
+    inherited = scanned and _PARENT_LIMIT is not None and _PARENT_LIMIT[0] == n
+    if scanned and _POOLS[1] == _loaded_objects():
+        return None if inherited else _POOLS[0].limit(limits=n)
     try:
-        from threadpoolctl import threadpool_limits
+        from threadpoolctl import ThreadpoolController
     except ImportError:
         return None
-    return threadpool_limits(limits=int(n))
+    ctl = ThreadpoolController()
+    if inherited:
+        known = {lib.filepath for lib in _POOLS[0].lib_controllers}
+        new = [lib.filepath for lib in ctl.lib_controllers if lib.filepath not in known]
+        return ctl.select(filepath=new).limit(limits=n) if new else None
+    return ctl.limit(limits=n)
 
 
 def _library(name: str):
@@ -268,7 +282,6 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
         cold = time.perf_counter() - t0
         if case.threads and (loaded is None or _loaded_objects() != loaded):
             limits = limit_threads(case.threads)  # noqa: F841  (pools the cold call loaded)
-        settle()                                    # no spinning pool competes with the samples
         times, cpu, result, spent = [], [], None, 0.0
         busy0, own0, wall0 = _machine_busy_s(), time.process_time(), time.perf_counter()
         while len(times) < case.repeats or (spent < case.time_budget and len(times) < MAX_SAMPLES):

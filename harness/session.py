@@ -287,12 +287,11 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
             "method_sources": method_sources(cfg),
             "timing": {"threads_per_case": threads, "min_repeats": cfg.repeats,
                        "time_budget_s": cfg.cases[0].time_budget if cfg.cases else None,
-                       "protocol": "one untimed cold call on the case's own input (time_cold_s), a wait until no "
-                                   "other thread of the process uses CPU (at most 0.3 s), then samples "
+                       "protocol": "one untimed cold call on the case's own input (time_cold_s), then samples "
                                    "until both repeats and time_budget_s are reached; median and quartiles; each sample's "
                                    "process CPU time kept too (cpu_times); "
-                                   "BLAS/OpenMP pools limited to threads_per_case, again after the cold "
-                                   "call if it loaded libraries"}}
+                                   "BLAS/OpenMP pools limited to threads_per_case (in the driver before "
+                                   "forking; in the case for libraries it loaded)"}}
     meta["load_average"] = [_load()]
     if resume:
         meta["resumed_at"] = now_iso()

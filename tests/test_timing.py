@@ -6,6 +6,7 @@ import json
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -126,3 +127,32 @@ def test_pools_a_method_loads_on_its_first_call_are_limited_for_the_samples(tmp_
         pytest.skip(f"the cold call already saw {calls[0]} OpenMP thread(s) (one CPU, or libgomp "
                     "loaded and limited before the call): nothing to tell apart")
     assert all(c == [1] * len(c) and c for c in calls[1:]), calls
+
+
+def test_a_forked_case_inherits_the_drivers_limit_and_starts_no_spinning_pool():
+    """The driver limits its pools to the case threads before forking; the case keeps that limit
+    without setting it again. Setting it again in the case started fresh OpenBLAS workers that
+    spun for ~0.1 s: a sleeping method's first samples showed as much CPU as wall time."""
+    import threadpoolctl
+    from harness import runner
+    try:
+        runner.scan_thread_pools(2)
+        assert runner._PARENT_LIMIT[0] == 2
+        r, w = os.pipe()
+        pid = os.fork()
+        if pid == 0:                                   # the case process
+            ok = runner.limit_threads(2) is None         # nothing to set: inherited
+            ok &= all(p["num_threads"] == 2 for p in threadpoolctl.threadpool_info()
+                      if p["internal_api"] == "openblas")
+            c0, t0 = time.process_time(), time.perf_counter()
+            time.sleep(0.05)
+            busy = (time.process_time() - c0) / (time.perf_counter() - t0)
+            os.write(w, f"{int(ok)} {busy:.3f}".encode())
+            os._exit(0)
+        os.close(w)
+        ok, busy = os.read(r, 100).decode().split()
+        os.waitpid(pid, 0)
+        assert ok == "1" and float(busy) < 0.2, busy
+    finally:
+        runner.release_thread_pools()
+    assert runner._PARENT_LIMIT is None

@@ -13,7 +13,7 @@ from multiprocessing.connection import wait as mp_wait
 
 from .. import input_store
 from ..errors import check_interrupt
-from ..runner import run_case
+from ..runner import release_thread_pools, run_case
 from .isolation import _Job, signals_blocked
 
 
@@ -86,6 +86,7 @@ class LocalExecutor:
             for job in running:                # interrupted: leave no orphan behind
                 job.abort()
             store.__exit__(None, None, None)
+            release_thread_pools()
 
     def close(self):
         pass
@@ -97,7 +98,8 @@ class LocalExecutor:
 def _preload_tasks(cases) -> None:
     """Run each task's ``preload`` (compiled measuring code) once in the driver, so forked case
     processes inherit it instead of loading it again (best effort: harness code, never a method's);
-    then scan the thread pools (last: after every library the preloads brought in)."""
+    then scan the thread pools and limit them to the cases' threads (last: after every library
+    the preloads brought in; the case processes inherit the limit)."""
     from .. import tasks
     from ..core import geometry
     from ..runner import scan_thread_pools
@@ -112,7 +114,7 @@ def _preload_tasks(cases) -> None:
                 fn()
         except Exception:  # noqa: BLE001 - a failure here shows again, as the cases' rows
             pass
-    scan_thread_pools()
+    scan_thread_pools(next((c.threads for c in cases), None))
 
 
 def _warm_mesh_cache(cases) -> None:
