@@ -31,8 +31,9 @@ each metric's ``better`` direction and ``rel``/``abs`` tolerance, recorded in ru
   inconclusive, never as regressions. B's samples are first divided by the run's drift (the
   median over all cases of the ratio of median times: a machine busier during one run slows
   every case alike; ``--absolute-time`` turns this off). Load from other processes during a
-  whole sample window stretches every sample, the fastest included; so where both rows say how
-  many cores other processes kept busy during their samples (``others_cpu``), a wall-time
+  whole sample window stretches every sample, the fastest included; so between two runs with
+  one worker each (a case then runs alone, and ``others_cpu`` is load from outside the run), where
+  both rows say how many cores other processes kept busy during their samples, a wall-time
   regression (improvement) is only inconclusive when B's (A's) machine was busier by
   ``BUSY_CORES`` (0.5) or more and the median process CPU time (``cpu_times``) did not grow
   (shrink) by ``time_factor`` as well. On an equally quiet machine a wall-time change counts
@@ -253,7 +254,7 @@ def _load_explains(ra: dict, rb: dict, verdict: str, factor: float) -> bool:
     return -d >= BUSY_CORES and not (c is not None and c < 1 / factor)
 
 
-def judge_time(ra: dict, rb: dict, factor: float = TIME_FACTOR, drift: float = 1.0) -> str:
+def judge_time(ra: dict, rb: dict, factor: float = TIME_FACTOR, drift: float = 1.0, load_rule: bool = True) -> str:
     """'regression' | 'improvement' | 'inconclusive' | 'same' (see the module docstring)."""
     eff = time_effect(ra, rb, drift)
     if eff is not None:
@@ -265,7 +266,7 @@ def judge_time(ra: dict, rb: dict, factor: float = TIME_FACTOR, drift: float = 1
             verdict = "regression"
         if eff["p_faster"] < ALPHA and hi < 1 / factor and eff["min_ratio"] < 1 / factor and -eff["diff"] > TIME_FLOOR_S:
             verdict = "improvement"
-        if verdict != "same" and _load_explains(ra, rb, verdict, factor):
+        if verdict != "same" and load_rule and _load_explains(ra, rb, verdict, factor):
             return "inconclusive"
         return verdict
     a, b = _num(ra.get("time_s")), _num(rb.get("time_s"))
@@ -326,11 +327,13 @@ def _label(r: dict) -> str:
 
 
 def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FACTOR, rules=None,
-                 absolute_time: bool = False) -> dict:
+                 absolute_time: bool = False, load_rule: bool = True) -> dict:
     """Every change between two runs' rows: ``{"changes": [...], "only_a": [...], "only_b": [...], ...}``.
 
     ``rules``: ``{task: {metric: Rule}}`` from the runs' task declarations (default: the known tasks).
-    Times are judged relative to the whole run's drift (`run_drift`) unless ``absolute_time``.
+    Times are judged relative to the whole run's drift (`run_drift`) unless ``absolute_time``;
+    ``load_rule``: the other processes' load may make a time change inconclusive (`judge_time`;
+    `compare_runs` sets it only when both runs had one worker, whose cases run alone).
     """
     changes, input_changes = [], []
     drift = run_drift(rows_a, rows_b)
@@ -345,7 +348,7 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
             changes.append({**base, "metric": "status", "a": sa, "b": sb, "verdict": verdict,
                             "note": str(rb.get("error") or "")[:200]})
         if sa == "ok" and sb == "ok" and time_factor:
-            v = judge_time(ra, rb, time_factor, used_drift)
+            v = judge_time(ra, rb, time_factor, used_drift, load_rule)
             a, b = _num(ra.get("time_s")), _num(rb.get("time_s"))
             if a is not None and b is not None and a != b:
                 changes.append({**base, "metric": "time_s", "a": a, "b": b,
@@ -440,7 +443,9 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
     meta_a = RunFolder(run_a).read_run_json() or {}
     meta_b = RunFolder(run_b).read_run_json() or {}
     rules = {**rules_from_specs(meta_a.get("tasks")), **rules_from_specs(meta_b.get("tasks"))}
-    res = compare_rows(ra, rb, time_factor, rules, absolute_time)
+    one_worker = all(m.get("workers") == 1 and m.get("executor", "local") in ("local", "serial")
+                     for m in (meta_a, meta_b))
+    res = compare_rows(ra, rb, time_factor, rules, absolute_time, load_rule=one_worker)
     changes = _sorted(res["changes"])
     regress = [c for c in changes if c["verdict"] == "regression"]
     shown = [c for c in changes if c["verdict"] not in ("within tolerance", "info", "inconclusive")]

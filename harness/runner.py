@@ -22,8 +22,9 @@ Timing protocol (the method call alone; metrics are not timed):
    each sample's process CPU time (all threads of the process) is kept too (``cpu_times``,
    median ``time_cpu_s``), and ``others_cpu`` is the number of cores other processes kept busy
    on average during the samples (``/proc/stat``, steal included, minus this process; blank off
-   Linux): ``shootout compare`` does not call a wall-time change a regression when the other
-   run's machine was that much quieter and the CPU time did not move;
+   Linux and for sample windows under 0.2 s): between two one-worker runs, ``shootout compare``
+   does not call a wall-time change a regression when the other run's machine was quieter by
+   half a core or more and the CPU time did not grow by the same factor;
 4. memory: ``method_mem_mb`` is the peak resident memory of the first sampled call minus the
    resident memory just before it, in MiB (Linux: freed heap returned to the OS with glibc's
    ``malloc_trim``, then the kernel's high-water mark reset through ``/proc/self/clear_refs``;
@@ -39,6 +40,7 @@ import math
 import os
 import resource
 import statistics
+import threading
 import time
 import traceback
 from pathlib import Path
@@ -119,7 +121,7 @@ def _loaded_objects() -> int | None:
         return None
 
 
-_PARENT_LIMIT: tuple | None = None   # (n, threadpoolctl limiter) set before forking, see scan_thread_pools
+_PARENT_LIMIT: tuple | None = None   # (n, limiter, thread id) set before forking, see scan_thread_pools
 
 
 def scan_thread_pools(threads: int | None = None) -> None:
@@ -134,14 +136,15 @@ def scan_thread_pools(threads: int | None = None) -> None:
         from threadpoolctl import ThreadpoolController
     except ImportError:
         return
+    release_thread_pools()                 # a limit set earlier is undone first, never stacked
     ctl = ThreadpoolController()
-    if threads:
-        _PARENT_LIMIT = (int(threads), ctl.limit(limits=int(threads)))
+    if threads:                            # OpenMP's limit holds for the calling thread: it must fork
+        _PARENT_LIMIT = (int(threads), ctl.limit(limits=int(threads)), threading.get_ident())
     _POOLS = (ctl, _loaded_objects())
 
 
 def release_thread_pools() -> None:
-    """Undo `scan_thread_pools`'s limit in this process (the run is over)."""
+    """Undo `scan_thread_pools`'s limit in this process (the local executor, when its run ends)."""
     global _PARENT_LIMIT
     if _PARENT_LIMIT is not None:
         try:
@@ -152,14 +155,15 @@ def release_thread_pools() -> None:
 
 def limit_threads(n: int | None):
     """Limit BLAS/OpenMP thread pools of this process to ``n`` (None or 0: leave them); returns the
-    threadpoolctl limiter (keep it alive for the case). Pools the parent process already limited
-    to ``n`` before forking (`scan_thread_pools`) are left alone; only libraries loaded since are
-    limited."""
+    threadpoolctl limiter, whose ``restore_original_limits()`` undoes it (None: nothing was set).
+    Pools the parent process limited to ``n`` before forking this one from the same thread
+    (`scan_thread_pools`) are left alone; only libraries loaded since are limited."""
     if not n:
         return None
     n = int(n)
     scanned = _POOLS is not None and _POOLS[1] is not None
-    inherited = scanned and _PARENT_LIMIT is not None and _PARENT_LIMIT[0] == n
+    inherited = (scanned and _PARENT_LIMIT is not None and _PARENT_LIMIT[0] == n
+                 and _PARENT_LIMIT[2] == threading.get_ident())
     if scanned and _POOLS[1] == _loaded_objects():
         return None if inherited else _POOLS[0].limit(limits=n)
     try:
@@ -256,6 +260,7 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
     """
     row = base_row(case)
     extras: dict = {}
+    limiters: list = []
     t_case = time.perf_counter()
     try:
         from .plugins import import_methods
@@ -275,13 +280,13 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
         if why:
             row.update(status="unavailable", error=why)
             return row, extras
-        limits = limit_threads(case.threads)  # noqa: F841  (kept alive for the case)
+        limiters.append(limit_threads(case.threads))
         loaded = _loaded_objects()
         t0 = time.perf_counter()
         method(inp.V.copy(), inp.F.copy(), **case.params)          # cold call: same code path, own input
         cold = time.perf_counter() - t0
         if case.threads and (loaded is None or _loaded_objects() != loaded):
-            limits = limit_threads(case.threads)  # noqa: F841  (pools the cold call loaded)
+            limiters.append(limit_threads(case.threads))    # pools the cold call loaded
         times, cpu, result, spent = [], [], None, 0.0
         busy0, own0, wall0 = _machine_busy_s(), time.process_time(), time.perf_counter()
         while len(times) < case.repeats or (spent < case.time_budget and len(times) < MAX_SAMPLES):
@@ -300,8 +305,9 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
                     row["method_mem_mb"] = round(max(hwm - rss0, 0) / 1024.0, 2)
         busy1, own1, wall1 = _machine_busy_s(), time.process_time(), time.perf_counter()
         row.update(timing_columns(times, cold, cpu))
-        if busy0 is not None and busy1 is not None and wall1 > wall0:
-            row["others_cpu"] = round(max(0.0, (busy1 - busy0) - (own1 - own0)) / (wall1 - wall0), 3)
+        if busy0 is not None and busy1 is not None and wall1 - wall0 >= 0.2:   # /proc/stat counts 10 ms ticks
+            others = max(0.0, (busy1 - busy0) - (own1 - own0)) / (wall1 - wall0)
+            row["others_cpu"] = round(min(others, float(os.cpu_count() or 1)), 3)
         row.update(task.measure(inp, result, full))
         input_store.save(case, inp.cache, task.input_facts)
         if want_meshes and task.output_mesh is not None:
@@ -320,4 +326,10 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
     finally:
         row["peak_rss_mb"] = round(peak_rss_mb(), 1)
         extras["case_wall_s"] = time.perf_counter() - t_case
+        for lim in reversed(limiters):      # in-process (serial) runs leave the caller's pools as they were
+            if lim is not None:
+                try:
+                    lim.restore_original_limits()
+                except Exception:  # noqa: BLE001 - best effort, after the row is complete
+                    pass
     return row, extras

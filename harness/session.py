@@ -290,8 +290,8 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
                        "protocol": "one untimed cold call on the case's own input (time_cold_s), then samples "
                                    "until both repeats and time_budget_s are reached; median and quartiles; each sample's "
                                    "process CPU time kept too (cpu_times); "
-                                   "BLAS/OpenMP pools limited to threads_per_case (in the driver before "
-                                   "forking; in the case for libraries it loaded)"}}
+                                   "BLAS/OpenMP pools limited to threads_per_case (by the local driver before "
+                                   "it forks, inherited; else in the case; in the case for libraries loaded since)"}}
     meta["load_average"] = [_load()]
     if resume:
         meta["resumed_at"] = now_iso()

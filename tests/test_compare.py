@@ -188,6 +188,8 @@ def test_wall_time_on_a_busier_machine_without_cpu_time_is_inconclusive():
     assert judge_time(row([4 * t for t in base], base, 0.1), row(same, same, 0.1)) == "improvement"
     assert judge_time(row(base, base, 0.1), row(same, same, 1.5)) == "same"
     assert judge_time(_row(base), row(slow, same, 1.5)) == "regression"       # A stored no load: as before
+    # with several workers a case's siblings are part of others_cpu: the rule is off
+    assert judge_time(row(base, base, 0.1), row(slow, same, 1.5), load_rule=False) == "regression"
 
 
 def test_rules():

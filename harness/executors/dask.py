@@ -264,8 +264,8 @@ def run_task(case: Case, blobs: dict, timeout: float | None, want_meshes: bool):
 
 def _warm(case: Case) -> None:
     """Load the registry, the case's plugins and (bundled/procedural) mesh with its noise frame in
-    the worker once, and limit its thread pools to the case's threads, so the forked children
-    inherit them instead of re-importing (and re-limiting) per case. Best
+    the worker once, so the forked children inherit them instead of re-importing per case (the
+    thread limits are set in each case: a worker may fork from several threads). Best
     effort: any failure happens again in the isolated child and becomes that case's row. Files
     are left to the child (a C++ reader could crash on a malformed one)."""
     try:
@@ -277,10 +277,6 @@ def _warm(case: Case) -> None:
             src = datasets.load(case.mesh)
             if src.noisy_V is None and case.adds_noise:
                 src.clean.noise_frame
-        from .. import runner
-        if case.threads and (runner._PARENT_LIMIT is None or runner._PARENT_LIMIT[0] != case.threads):
-            runner.release_thread_pools()
-            runner.scan_thread_pools(case.threads)      # the forked children inherit the limit
     except Exception:  # noqa: BLE001 - reported by the child, as a row
         pass
 
