@@ -7,11 +7,12 @@ Timing protocol (the method call alone; metrics are not timed):
 
 1. the thread pools (OpenBLAS, OpenMP, MKL through threadpoolctl) are limited to
    ``case.threads`` (the session sets ``cores // workers``) so concurrent cases do not
-   oversubscribe the cores: in the driver before it forks the case processes, which inherit the
-   limit (setting it in the case would start fresh OpenBLAS workers that spin for a while and
-   compete with the first samples), and in the case for libraries loaded since, also after the
-   cold call if it loaded shared objects (a library the method imports on its first call;
-   always where the loaded objects cannot be counted); pools a method starts later are not seen;
+   oversubscribe the cores: by the local executor's driver before it forks the case processes,
+   which inherit the limit (setting it in the case would start fresh OpenBLAS workers that spin
+   for a while and compete with the first samples); elsewhere (serial, Dask) by the case, which
+   undoes it at the end; in the case for libraries loaded since, also after the cold call if it
+   loaded shared objects (a library the method imports on its first call; always where the
+   loaded objects cannot be counted); pools a method starts later are not seen;
 2. cold call: the method runs once on the case's own input, untimed as a sample; its wall time
    is ``time_cold_s`` (imports, JIT compilation or cache loads, library start-up: a cost of its
    own, never mixed into the samples);
@@ -125,9 +126,9 @@ _PARENT_LIMIT: tuple | None = None   # (n, limiter, thread id) set before forkin
 
 
 def scan_thread_pools(threads: int | None = None) -> None:
-    """Find this process's BLAS/OpenMP thread pools once (threadpoolctl), in the driver (or a
-    Dask worker) before forking: case processes inherit the scan and `limit_threads` reuses it
-    unless a shared object was loaded since. With ``threads``, the pools are also limited to it
+    """Find this process's BLAS/OpenMP thread pools once (threadpoolctl), in the driver before
+    forking: case processes inherit the scan and `limit_threads` reuses it unless a shared
+    object was loaded since. With ``threads``, the pools are also limited to it
     here: the limit is library state a forked case process inherits, so the case need not set
     it again, and setting it again would start fresh OpenBLAS workers that spin for a while and
     compete with the first timed samples."""
