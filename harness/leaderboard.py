@@ -8,7 +8,7 @@ seeds, and the variants are ranked (1 = best, by the metric's declared direction
 than the metric's declared resolution tie (`tie_groups`: within ``max(rel * |best|, abs)`` of the
 best value of their group, ``rel``/``abs`` the compare tolerance of the task's declaration), so a
 difference in rounding noise wins nothing; ties get the average rank. Rows that are not valid results (`validity`: the task's declared ``invalid_when``
-rules, e.g. diverged, ended worse than the noisy input, non-manifold or topology-changing
+rules, e.g. diverged, ended worse than the noisy input, over the face target, made non-manifold or topology-changing
 output) rank last in their cell, tied, and are counted
 in ``invalid_cells``; so does a variant whose method failed (error or timeout) on any seed of
 the cell, which is not ranked on the seeds it survived. Cells where a variant has no value for

@@ -90,14 +90,20 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
         clean, noisy, rp = Path(e["clean"]), e.get("noisy"), Path(e["file"])
         key = (str(clean), str(noisy))
         if key not in cleans:
+            raw = read_mesh(clean, repair=False)
             if noisy:
                 src = datasets.load({"file": str(Path(noisy).resolve()), "clean": str(clean.resolve())})
-                cleans[key] = (src.clean, src.noisy_V, len(read_mesh(clean, repair=False).V))
+                cleans[key] = (src.clean, src.noisy_V, len(raw.V), len(raw.F))
             else:
-                cleans[key] = (read_mesh(clean), None, len(read_mesh(clean, repair=False).V))
-        cmesh, V_in, n_raw = cleans[key]
+                cleans[key] = (read_mesh(clean), None, len(raw.V), len(raw.F))
+        cmesh, V_in, n_raw, m_raw = cleans[key]
         r = read_mesh(rp, repair=False)
-        t = e.get("task") or ("smoothing" if len(r.V) in (cmesh.n_vertices, n_raw) else "simplification")
+        same_faces = len(r.F) in (cmesh.n_faces, m_raw)
+        t = e.get("task") or ("smoothing" if len(r.V) in (cmesh.n_vertices, n_raw) and same_faces
+                              else "simplification")
+        if t == "smoothing" and not same_faces:
+            raise ShootoutError(f"{rp.name}: {len(r.F)} faces, but the clean mesh has {cmesh.n_faces}: a smoothing "
+                                "result keeps the clean mesh's faces (use --task simplification to compare surfaces)")
         V = _in_clean_order(r, cmesh, n_raw, rp) if t == "smoothing" else r.V
         row = {"case_id": f"eval{i:04d}", "task": t, "mesh": cmesh.name, "n_vertices": cmesh.n_vertices,
                "n_faces": cmesh.n_faces, "noise_model": "given" if noisy else "none", "noise_level": None,

@@ -75,3 +75,21 @@ def test_a_results_config_gives_the_same_numbers(run_with_meshes, tmp_path):
     path.write_text(yaml.safe_dump(bad))
     assert cli(["run", str(path), "--out", str(tmp_path / "bad")]) == 2
     assert not (tmp_path / "bad").exists()
+
+
+def test_a_simplified_mesh_on_the_clean_vertex_buffer_is_scored_as_simplification(tmp_path):
+    """Half the faces over the clean mesh's own vertices: the vertex count matches the clean mesh,
+    but the faces do not, so it is a simplification (it was scored as a perfect smoothing result:
+    Hausdorff 0); asked for as smoothing, it is an error."""
+    import igl
+    from harness import datasets
+    m = datasets.load("knight").clean
+    igl.write_triangle_mesh(str(tmp_path / "clean.obj"), m.V, m.F)
+    igl.write_triangle_mesh(str(tmp_path / "half.obj"), m.V, m.F[: len(m.F) // 2])
+    assert cli(["eval", str(tmp_path / "half.obj"), "--clean", str(tmp_path / "clean.obj"),
+                "--out", str(tmp_path / "o")]) == 0
+    row = pd.read_csv(tmp_path / "o" / "simplification.csv").iloc[0]
+    assert row["out_faces"] == len(m.F) // 2 and row["hausdorff"] > 0.01
+    assert not (tmp_path / "o" / "smoothing.csv").exists()
+    assert cli(["eval", str(tmp_path / "half.obj"), "--clean", str(tmp_path / "clean.obj"),
+                "--out", str(tmp_path / "o2"), "--task", "smoothing"]) == 2

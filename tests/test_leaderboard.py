@@ -87,13 +87,16 @@ def test_invalid_rows_rank_last_and_missing_cells_are_stated():
 def test_validity_rules_are_the_tasks_declarations():
     """Each declared rule flags exactly its rows, with its reason; blank values never match; a
     spec without rules (an old run folder) falls back to the known task's."""
-    df = pd.DataFrame({"status": ["ok", "ok", "ok", "error", "ok"], "manifold": [True, False, None, False, "False"],
-                       "topology_changed": [False, True, True, False, "false"]})
+    df = pd.DataFrame({"status": ["ok", "ok", "ok", "error", "ok", "ok"],
+                       "manifold_lost": [False, True, None, True, "True", False],
+                       "topology_changed": [False, True, True, False, "false", False],
+                       "over_target": [False, False, False, False, False, True]})
     from harness.tasks import get
     why = L.validity(get("simplification").spec(), df).tolist()
-    assert why == ["", "non-manifold output", "topology changed", "status error", "non-manifold output"]
+    assert why == ["", "non-manifold output from a manifold input", "topology changed", "status error",
+                   "non-manifold output from a manifold input", "kept more faces than the target"]
     assert L.validity({"name": "simplification"}, df).tolist() == why
-    assert L.validity({"name": "nope", "invalid_when": []}, df).tolist() == ["", "", "", "status error", ""]
+    assert L.validity({"name": "nope", "invalid_when": []}, df).tolist() == ["", "", "", "status error", "", ""]
 
 
 def test_winners_equal_an_independent_recomputation(tiny_run):

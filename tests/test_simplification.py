@@ -273,3 +273,32 @@ def test_compiled_quadrics_equal_the_vectorised_sum():
     ref = accumulate_quadrics((F[:, 0], F[:, 1], F[:, 2]), n, d, w, len(m.V))
     Q = vertex_quadrics(m.V, np.ascontiguousarray(F), len(m.V))
     assert np.abs(Q - ref).max() <= 1e-12 * np.abs(ref).max()
+
+
+def test_over_target_component_loss_and_inherited_nonmanifold_are_judged(tmp_path):
+    """A result over its face target, one that drops a component, and a non-manifold input: the
+    first two are invalid (over_target, topology_changed via components_change); a non-manifold
+    output of a non-manifold input is not held against the method (manifold_lost False); a
+    target above the input's face count asks for the input."""
+    import igl
+    from harness import run
+    from harness.tasks.simplification import target_face_count
+    assert target_face_count(1000, None, 10**10) == 1000 and target_face_count(1000, 1.0, None) == 1000
+    V, F = mesh("knight")
+    V2 = np.vstack([V, V * 0.05 + 3.0])                 # a second, small component
+    F2 = np.vstack([F, F + len(V)])
+    igl.write_triangle_mesh(str(tmp_path / "two.obj"), V2, F2)
+    run({"name": "s", "meshes": [{"file": str(tmp_path / "two.obj")}, "woody"], "noise": [{"model": "none"}],
+         "time_budget": 0,
+         "tasks": {"simplification": {"methods": ["scratch.qem", "fast_simplification.qem",
+                                                  {"name": "meshoptimizer.qem", "params": {"lock_border": True}}],
+                                      "params": {"target_ratio": [0.1, 0.02]}}}}, out=tmp_path / "r", quiet=True)
+    import pandas as pd
+    df = pd.read_csv(tmp_path / "r" / "simplification.csv")
+    assert (df["status"] == "ok").all(), df[["method", "error"]]
+    over = df["out_faces"] > df["target_faces"] * 1.01 + 2
+    assert (df["over_target"] == over).all() and df["over_target"].any()    # woody's locked border
+    assert (df["components_change"] < 0).any()                              # the small knight is gone
+    assert (df["topology_changed"] == (df["components_change"] != 0) | (df["genus_change"] != 0)
+            | (df["boundary_loops_change"] != 0)).all()
+    assert not df["manifold_lost"].any() or (df.loc[df["manifold_lost"], "manifold"] == False).all()  # noqa: E712

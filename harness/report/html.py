@@ -270,7 +270,7 @@ def render(run_dir) -> str:
             "<section id='leaderboard'><h2>Leaderboard across meshes</h2><p>Per task and ranking metric: the mean "
             "rank of each method over all (mesh, noise, level[, target]) cells, the Friedman test and the Nemenyi "
             "critical difference (Demšar 2006): methods joined by a bar do not differ significantly (α = 0.05). "
-            "Invalid results (diverged, worse than the noisy input, non-manifold or topology-changing) rank last in "
+            "Invalid results (diverged, worse than the noisy input, over the face target, made non-manifold or topology-changing) rank last in "
             "their cell; cells with a missing result are left out; values closer than the metric's compare tolerance tie. "
             "Also in leaderboard.csv, .md and .tex.</p>"
             "<div id='leaderboard-body'></div></section>",

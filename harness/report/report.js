@@ -793,7 +793,7 @@
   function invalidNote(n) {
     if (!n) return el('span');
     return el('p', {'class': 'caption', text: n + ' row(s) are not valid results (' +
-      'diverged, worse than the noisy input, non-manifold or topology-changing output) and are ' +
+      'diverged, worse than the noisy input, over the face target, non-manifold from a manifold input or topology-changing output) and are ' +
       (showInvalid ? 'included in' : 'left out of') + ' the winners above; the checkbox at the top of the page toggles them.'});
   }
   function cdDiagram(g) {
