@@ -42,7 +42,9 @@ def _truthy(v):
 
 def validity(spec: dict, df: pd.DataFrame) -> pd.Series:
     """Why each row is not a valid result ('' when it is): status not ok, or the first of the
-    task's declared ``invalid_when`` rules (`harness.tasks.base.Invalid`) that matches."""
+    task's declared ``invalid_when`` rules (`harness.tasks.base.Invalid`) that matches; a rule
+    against another column (``than``) matches only beyond the metric's compare tolerance
+    (``max(rel * |other|, abs)``), so rounding noise does not decide validity."""
     why = pd.Series([""] * len(df), index=df.index, dtype=object)
     if "status" not in df:
         return why
@@ -63,7 +65,8 @@ def validity(spec: dict, df: pd.DataFrame) -> pd.Series:
             if rule["than"] not in df:
                 continue
             a, b = pd.to_numeric(df[col], errors="coerce"), pd.to_numeric(df[rule["than"]], errors="coerce")
-            hit = (a > b).fillna(False)
+            rel, abs_ = tolerance(spec or {}, col)      # beyond the metric's own resolution, as compare
+            hit = (a > b + np.maximum(rel * b.abs(), abs_)).fillna(False)
         elif rule.get("op") == ">":
             hit = (pd.to_numeric(df[col], errors="coerce") > float(rule["value"])).fillna(False)
         else:

@@ -206,3 +206,38 @@ def test_bilateral_preserves_features_better_than_diffusion(fandisk_pair):
     bil = _normal_error_deg(methods.get("scratch.bilateral")(N, F).V, F, C)
     imp = _normal_error_deg(methods.get("scratch.implicit")(N, F).V, F, C)
     assert bil < 0.6 * imp
+
+
+def test_flat_input_off_the_origin_is_not_diverged_and_volume_is_translation_free():
+    """A planar mesh at z = 1/3 has zero z extent: rounding-level z motion (1e-16) counted as
+    leaving 100x the box; volume_ratio summed about the origin lost its digits 1e5 diagonals away."""
+    from harness.core.geometry import volume
+    from harness.datasets import load
+    from harness.tasks.smoothing import diverged
+    w = load("woody").clean
+    V = w.V.copy()
+    V[:, 2] = 1.0 / 3.0
+    W = V.copy()
+    W[:, 2] += 1e-16 * np.random.default_rng(0).standard_normal(len(V))
+    assert not diverged(W, V) and diverged(W * 1e3, V)
+    b = load("bunny").clean
+    d = float(np.linalg.norm(np.ptp(b.V, axis=0)))
+    S = b.V * 1.01
+    shift = np.array([1e5 * d, 0.0, 0.0])
+    o = b.V.mean(0)
+    near = volume(S - o, b.F) / volume(b.V - o, b.F)
+    far = volume(S + shift - (o + shift), b.F) / volume(b.V + shift - (o + shift), b.F)
+    assert near == pytest.approx(1.01 ** 3, rel=1e-9) and far == pytest.approx(near, rel=1e-6)
+
+
+def test_worse_than_the_input_needs_more_than_the_metrics_tolerance():
+    """dist_mean 0.014% above the input's, or 1e-18 against an input of 0: rounding, not a worse
+    result (such rows were invalid and left one valid method in the winners table)."""
+    import pandas as pd
+    from harness import leaderboard as L
+    from harness.tasks import get
+    df = pd.DataFrame({"status": ["ok"] * 4, "diverged": [False] * 4,
+                       "dist_mean": [0.00265037, 1e-18, 0.01, 0.00266],
+                       "input_dist_mean": [0.00265, 0.0, 0.005, 0.00265]})
+    why = L.validity(get("smoothing").spec(), df).tolist()
+    assert why == ["", "", "worse than the noisy input", ""], why

@@ -77,9 +77,12 @@ TASK = Task(
         Metric("lin_error", "lower", "max |W X| / (max|W| diag) at interior vertices (planar meshes only)",
                rel=_REL, abs=1e-9),
         Metric("neg_weights", "lower", "fraction of negative off-diagonal weights", rel=_REL, abs=1e-6),
-        Metric("min_eig", "higher", "smallest eigenvalue of -(W + W^T)/2 over the largest magnitude",
-               rel=_REL, abs=1e-10),
-        Metric("psd", "true", "-(W + W^T)/2 positive semi-definite (min_eig >= -1e-10)", kind="bool"),
+        Metric("min_eig", "higher", "symmetric W: smallest eigenvalue of -(W + W^T)/2 over the largest magnitude; "
+               "non-symmetric W: that of the symmetric S in W = D^-1 S, or 0 when Gershgorin certifies it "
+               "(then it is not the symmetric part's)", rel=_REL, abs=1e-10),
+        Metric("psd", "true", "symmetric W: -(W + W^T)/2 positive semi-definite (min_eig >= -1e-10); non-symmetric "
+               "W: every eigenvalue of -W has a non-negative real part (the symmetric part may be indefinite)",
+               kind="bool"),
         Metric("nnz", "info", "stored non-zero entries of W", kind="int"),
         Metric("SYM", "true", "sym_error <= 1e-10", kind="bool"),
         Metric("LOC", "true", "loc_violations == 0", kind="bool"),

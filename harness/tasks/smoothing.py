@@ -30,11 +30,14 @@ def _check(result: SmoothingResult, V, F):
 
 
 def diverged(V_out: np.ndarray, V_in: np.ndarray) -> bool:
-    """True when coordinates are non-finite or leave 100x the input bounding box (about its centre)."""
+    """True when coordinates are non-finite or leave 100x the input bounding box (about its centre),
+    each half-extent taken at least 1e-3 of the box diagonal (a flat input has a zero extent, and
+    rounding-level motion across it is no divergence)."""
     if not np.isfinite(V_out).all():
         return True
     lo, hi = V_in.min(0), V_in.max(0)
-    c, half = (lo + hi) / 2, np.maximum((hi - lo) / 2, 1e-300)
+    c = (lo + hi) / 2
+    half = np.maximum((hi - lo) / 2, max(1e-3 * float(np.linalg.norm(hi - lo)), 1e-300))
     return bool((np.abs(V_out - c) > 100 * half).any())
 
 
@@ -87,8 +90,9 @@ def measure(inp, result, params) -> dict:
     a0 = area(V_clean, F)
     row["area_ratio"] = area(V_out, F) / a0 if a0 > 0 else None
     if _closed(inp):
-        v0 = volume(V_clean, F)
-        row["volume_ratio"] = volume(V_out, F) / v0 if v0 != 0 else None
+        o = V_clean.mean(0)                      # about the clean centroid: no cancellation far from the origin
+        v0 = volume(V_clean - o, F)
+        row["volume_ratio"] = volume(V_out - o, F) / v0 if v0 != 0 else None
     row.update(triangle_quality(V_out, F))
     return row
 

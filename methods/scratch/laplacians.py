@@ -281,8 +281,10 @@ def tufted(V, F, *, mass="barycentric", mollify_factor=1e-5):
     Notes
     -----
     Each face is doubled, sides are glued around every edge in angular order, and the closed
-    cover is flipped to intrinsic Delaunay; weights and masses are halved. POS, SYM, LIN and PSD
-    hold; LOC does not. Unreferenced vertices get zero rows.
+    cover is flipped to intrinsic Delaunay; weights and masses are halved. POS, SYM and PSD hold;
+    LOC does not; LIN holds only on closed meshes with ``mollify_factor`` 0 (mollification moves
+    the edge lengths, and the glued boundary of an open mesh is not a planar interior).
+    Unreferenced vertices get zero rows.
     """
     from methods.scratch.tufted import tufted_laplacian
     W, M = tufted_laplacian(V, F, mass, float(mollify_factor))
