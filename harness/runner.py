@@ -44,6 +44,7 @@ import statistics
 import threading
 import time
 import traceback
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -283,9 +284,11 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
             return row, extras
         limiters.append(limit_threads(case.threads))
         loaded = _loaded_objects()
-        t0 = time.perf_counter()
-        method(inp.V.copy(), inp.F.copy(), **case.params)          # cold call: same code path, own input
-        cold = time.perf_counter() - t0
+        with warnings.catch_warnings(record=True) as said:
+            warnings.simplefilter("always")
+            t0 = time.perf_counter()
+            method(inp.V.copy(), inp.F.copy(), **case.params)      # cold call: same code path, own input
+            cold = time.perf_counter() - t0
         if case.threads and (loaded is None or _loaded_objects() != loaded):
             limiters.append(limit_threads(case.threads))    # pools the cold call loaded
         times, cpu, result, spent = [], [], None, 0.0
@@ -316,8 +319,11 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
         if want_view and task.view is not None:
             extras["view"] = task.view(inp, result)
         row["status"] = "ok"
-        if inp.clean.repairs:
-            row["error"] = "input repaired: " + "; ".join(inp.clean.repairs)
+        notes = ["input repaired: " + "; ".join(inp.clean.repairs)] if inp.clean.repairs else []
+        heard = list(dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in said
+                                   if issubclass(w.category, (RuntimeWarning, UserWarning))))
+        notes += [f"the method warned: {m}" for m in heard[:3]]
+        row["error"] = "; ".join(notes)[:2000]
     except ShootoutError as exc:
         row.update(status="error", error=f"{type(exc).__name__}: {exc}")
     except (Exception, SystemExit) as exc:  # a method's own failure is data: one error row

@@ -302,3 +302,15 @@ def test_over_target_component_loss_and_inherited_nonmanifold_are_judged(tmp_pat
     assert (df["topology_changed"] == (df["components_change"] != 0) | (df["genus_change"] != 0)
             | (df["boundary_loops_change"] != 0)).all()
     assert not df["manifold_lost"].any() or (df.loc[df["manifold_lost"], "manifold"] == False).all()  # noqa: E712
+
+
+def test_a_methods_warning_reaches_its_row(tmp_path):
+    """scratch.qem warns when it stops short of an impossible target: the row says so (the warning
+    was lost in the case process)."""
+    import pandas as pd
+    from harness import run
+    run({"name": "w", "meshes": [{"procedural": "sphere", "subdivisions": 1}], "noise": [{"model": "none"}],
+         "time_budget": 0, "tasks": {"simplification": {"methods": ["scratch.qem"], "params": {"target_faces": [1]}}}},
+        out=tmp_path / "r", quiet=True)
+    row = pd.read_csv(tmp_path / "r" / "simplification.csv").iloc[0]
+    assert row["status"] == "ok" and "the method warned: RuntimeWarning: scratch.qem: stopped at" in row["error"]
