@@ -177,3 +177,26 @@ def test_a_zero_area_side_has_no_samples_but_a_certified_bracket():
     h = hausdorff(V, F, VB, F, n_samples=100)
     assert np.isnan(h["surface_dist_mean"]) and h["hausdorff_certified"]
     assert h["hausdorff"] == pytest.approx(1.0, abs=1e-15) and h["hausdorff_upper"] == pytest.approx(1.0, abs=1e-12)
+
+
+def test_the_hierarchys_numba_cache_is_dropped_when_cover_bound_changes(tmp_path):
+    """numba keys _bvh_kernel's cache by that file alone, but its functions compile cover_bound in:
+    an edited _cover_bound.py must not leave the old machine code running."""
+    from harness.metrics._bvh_kernel import drop_stale_cache
+    here, dep, cache = tmp_path / "_bvh_kernel.py", tmp_path / "_cover_bound.py", tmp_path / "__pycache__"
+    here.write_text("# kernel\n")
+    dep.write_text("# bound v1\n")
+    cache.mkdir()
+
+    def fake_cache():
+        for name in ("_bvh_kernel._upper-324.py311.nbi", "_bvh_kernel._upper-324.py311.1.nbc",
+                     "_cover_bound.cover_bound-38.py311.nbi", "_bvh_kernel.cpython-311.pyc"):
+            (cache / name).write_text("x")
+    fake_cache()
+    assert drop_stale_cache(here)                          # no record yet: cannot vouch for the files
+    assert sorted(p.name for p in cache.iterdir()) == ["_bvh_kernel.cpython-311.pyc", "_bvh_kernel.deps",
+                                                        "_cover_bound.cover_bound-38.py311.nbi"]
+    fake_cache()
+    assert not drop_stale_cache(here) and (cache / "_bvh_kernel._upper-324.py311.nbi").exists()
+    dep.write_text("# bound v2\n")
+    assert drop_stale_cache(here) and not (cache / "_bvh_kernel._upper-324.py311.nbi").exists()

@@ -11,12 +11,42 @@ exact up to rounding.
 """
 from __future__ import annotations
 
+import hashlib
 import math
+from pathlib import Path
 
 import numpy as np
 from numba import njit
 
 from ._cover_bound import cover_bound
+
+
+def drop_stale_cache(here: Path | None = None) -> bool:
+    """Remove this module's numba cache files when ``_cover_bound.py`` changed since they were
+    written. numba keys a cached function by its own file only, and ``_upper`` compiles
+    ``cover_bound`` into itself, so an edited ``_cover_bound`` (a ``git pull`` changes only the
+    files that changed) would otherwise keep running the old machine code. The dependency's
+    hash is kept beside the cache (``__pycache__/_bvh_kernel.deps``). Returns True when files
+    were removed; any file-system error leaves things as they are (numba then falls back on its
+    own rules)."""
+    here = Path(here or __file__).resolve()
+    cache, stem = here.parent / "__pycache__", here.stem
+    stamp = cache / f"{stem}.deps"
+    try:
+        digest = hashlib.sha256(here.with_name("_cover_bound.py").read_bytes()).hexdigest()
+        if stamp.is_file() and stamp.read_text() == digest:
+            return False
+        stale = [f for f in cache.glob(f"{stem}.*") if f.suffix in (".nbi", ".nbc")] if cache.is_dir() else []
+        for f in stale:
+            f.unlink(missing_ok=True)
+        cache.mkdir(exist_ok=True)
+        stamp.write_text(digest)
+        return bool(stale)
+    except OSError:
+        return False
+
+
+drop_stale_cache()
 
 LEAF = 4
 COVER = 1.5          # the covering bound keeps Y's triangles with b_t up to COVER times the threshold
