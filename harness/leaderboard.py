@@ -7,14 +7,16 @@ simplification's target). In each cell every method variant gets the mean of its
 seeds, and the variants are ranked (1 = best, by the metric's declared direction). Values closer
 than the metric's declared resolution tie (`tie_groups`: within ``max(rel * |best|, abs)`` of the
 best value of their group, ``rel``/``abs`` the compare tolerance of the task's declaration), so a
-difference in rounding noise wins nothing; ties get the average rank. Rows that are not valid results (`validity`: the task's declared ``invalid_when``
-rules, e.g. diverged, ended worse than the noisy input, over the face target, made non-manifold or topology-changing
-output) rank last in their cell, tied, and are counted
+difference in rounding noise wins nothing; ties get the average rank. Rows that are not valid
+results (`validity`: the task's declared ``invalid_when`` rules, e.g. diverged, ended worse than
+the noisy input, over the face target, made non-manifold or topology-changing output) rank last
+in their cell, tied, and are counted
 in ``invalid_cells``; so does a variant whose method failed (error or timeout) on any seed of
 the cell, which is not ranked on the seeds it survived. Cells where a variant has no value for
 some seed otherwise (not run, unavailable, the metric not measured) are left out of the test
 and counted in ``missing_cells``; a variant with no value in any cell (e.g. its library is not
-installed) is left out of the ranking altogether instead of emptying it. With N complete cells and k variants:
+installed) is left out of the ranking altogether instead of emptying it. With N complete cells
+and k variants:
 
 - Friedman: ``chi2_F = 12 N / (k (k+1)) [sum_j R_j^2 - k (k+1)^2 / 4]``, R_j the mean ranks,
   p from chi-square with k - 1 degrees of freedom (Demšar eq. 1; valid for N and k not tiny).
@@ -96,8 +98,8 @@ FAILED = ("error", "timeout")     # a method's own failure: ranks last; "unavail
 def cell_values(spec: dict, df: pd.DataFrame, metric: str, axis_params=()):
     """(values, invalid): cells x variants tables of the metric's mean over seeds (ok rows; blank
     when any seed of the variant has no value there) and of whether a variant's result in the
-    cell is invalid (a seed failed, errored or timed out, or broke a validity rule). Cell labels are ``mesh|noise model|noise
-    level|axis parameters (JSON)``."""
+    cell is invalid (a seed errored or timed out, or broke a validity rule). Cell labels are
+    ``mesh|noise model|noise level|axis parameters (JSON)``."""
     d = df.copy()
     d["_variant"] = _variant(d, set(axis_params))
     d["_invalid"] = (validity(spec, d) != "") & d["status"].isin(FAILED + ("ok",))
@@ -108,7 +110,7 @@ def cell_values(spec: dict, df: pd.DataFrame, metric: str, axis_params=()):
     val = pd.to_numeric(d[metric], errors="coerce")
     d["_value"] = val.where(d["status"] == "ok")
     g = d.groupby(["_cell", "_variant"])
-    every_seed = g["_value"].count() == g.size()     # a failed seed is a missing cell, not an easier mean
+    every_seed = g["_value"].count() == g.size()     # no mean over the seeds that happen to have a value
     vals = g["_value"].mean().where(every_seed).unstack("_variant")
     inval = g["_invalid"].any().unstack("_variant").reindex_like(vals).fillna(False).astype(bool)
     return vals, inval

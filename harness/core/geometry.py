@@ -185,6 +185,17 @@ def corner_angles(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     return out
 
 
+def vertex_components(F: np.ndarray, n: int) -> np.ndarray:
+    """Connected-component label (n,) of each of the n vertices, vertices joined by the faces'
+    edges (a vertex in no face is a component of its own)."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+    F = np.asarray(F, dtype=np.int64)
+    a, b = F.ravel(), F[:, [1, 2, 0]].ravel()
+    G = sp.coo_matrix((np.ones(len(a), np.int8), (a, b)), shape=(n, n))
+    return connected_components(G, directed=False)[1]
+
+
 def zero_area_faces(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     """Indices of faces with zero area by the cross product or by Kahan's Heron formula on the
     edge lengths (a numerically flat face can have a cross-product double area of 1e-20 and a

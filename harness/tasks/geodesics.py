@@ -80,16 +80,6 @@ def _check(result: GeodesicResult, V, F):
     return result
 
 
-def components(F: np.ndarray, n: int) -> np.ndarray:
-    """Connected-component label (n,) of each vertex, vertices joined by the faces' edges."""
-    from scipy.sparse.csgraph import connected_components
-    import scipy.sparse as sp
-    F = np.asarray(F, dtype=np.int64)
-    a, b = F.ravel(), F[:, [1, 2, 0]].ravel()
-    G = sp.coo_matrix((np.ones(len(a), np.int8), (a, b)), shape=(n, n))
-    return connected_components(G, directed=False)[1]
-
-
 # ----------------------------------------------------------------------------- reference
 
 def analytic(shape: dict | None, P: np.ndarray, s: np.ndarray) -> np.ndarray | None:
@@ -139,7 +129,8 @@ def measure(inp, result, params) -> dict:
         raise MethodFailed(f"returned {D.shape[0]} distance rows for {len(src)} source(s)")
     ref, exact = reference(inp, src)
     inp.cache["geodesic_last_reference"] = ref[0]          # for this case's view (built right after)
-    comp = components(F, len(V))
+    from ..core.geometry import vertex_components
+    comp = vertex_components(F, len(V))
     reach = comp[None, :] == comp[src][:, None]            # (k, n): same component as the source
     inp.cache["geodesic_last_reach"] = reach[0]
     if not np.isfinite(D[reach]).all():

@@ -111,28 +111,26 @@ def measure(inp, result, params) -> dict:
         MX = M @ X
         norms = np.sqrt(np.maximum(np.einsum("ij,ij->j", X, MX), 1e-300))
         R = W @ X + MX * lam[None, :]
-        md = sp.csr_matrix(M).diagonal()
-        row["residual_max"] = _residual(R, M, norms, lam, np.divide(sp.csr_matrix(W).diagonal(), md,
-                                                                     out=np.zeros_like(md), where=md > 0))
+        row["residual_max"] = _residual(R, W, M, norms, lam)
         Xn = X / norms
         G = Xn.T @ (M @ Xn)
         row["orthogonality_error"] = float(np.abs(G - np.eye(len(lam))).max())
     return row
 
 
-def _residual(R: np.ndarray, M, norms: np.ndarray, lam: np.ndarray, W_diag_over_m: np.ndarray) -> float | None:
+def _residual(R: np.ndarray, W, M, norms: np.ndarray, lam: np.ndarray) -> float | None:
     """``max_i ||R_i||_{M^-1} / (max(|lambda_i|, lambda_f) ||x_i||_M)`` (module docstring); None
-    where M is singular. ``W_diag_over_m``: ``W_ii / M_ii``, whose largest magnitude ``s`` (an
-    eigenvalue scale, 1/length^2) decides what counts as zero (``|lambda| <= 1e-8 s``) and stands
-    for ``lambda_f`` when no returned eigenvalue is non-zero."""
+    where M is singular. ``s = max |W_ii / M_ii|`` (an eigenvalue scale, 1/length^2) decides what
+    counts as zero (``|lambda| <= 1e-8 s``) and stands for ``lambda_f`` when no returned eigenvalue
+    is non-zero."""
     import scipy.sparse.linalg as sla
     Mc = sp.csr_matrix(M)
-    off = Mc - sp.diags(Mc.diagonal())
-    if off.count_nonzero() == 0:
-        d = Mc.diagonal()
-        if (d <= 0).any():
+    md = Mc.diagonal()
+    W_diag_over_m = np.divide(sp.csr_matrix(W).diagonal(), md, out=np.zeros_like(md), where=md > 0)
+    if (Mc - sp.diags(md)).count_nonzero() == 0:
+        if (md <= 0).any():
             return None
-        MinvR = R / d[:, None]
+        MinvR = R / md[:, None]
     else:
         try:
             MinvR = sla.splu(Mc.tocsc()).solve(np.ascontiguousarray(R))

@@ -29,7 +29,8 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
-from harness.core.geometry import boundary_vertices, cotangents_from_lengths, edge_lengths, mean_edge_length
+from harness.core.geometry import (boundary_vertices, cotangents_from_lengths, edge_lengths, mean_edge_length,
+                                   vertex_components)
 from harness.core.solvers import factorize
 from methods import GeodesicResult, Param, register
 from methods.scratch import operators as op
@@ -94,8 +95,7 @@ class HeatSolver:
         self.free = np.flatnonzero(~bnd)
         self.dirichlet = factorize(Q[self.free][:, self.free].tocsr(), solver) if use_d else None
         self.boundary = bnd if boundary == "dirichlet" else None
-        from harness.tasks.geodesics import components
-        self.comp = components(F, n)
+        self.comp = vertex_components(F, n)
         pinned = np.zeros(n, bool)
         pinned[np.unique(self.comp, return_index=True)[1]] = True   # one vertex per connected component
         self.unpinned = np.flatnonzero(~pinned)
