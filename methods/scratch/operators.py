@@ -305,26 +305,25 @@ def _sort_pairs(bc, bv, k):
         bv[:k] = v
 
 
-def _single_pass_kernel(V, F0, n, want_mass):
-    """``W`` in CSR (``indptr`` and ``indices`` int32, ``data``) and mixed Voronoi areas, for one
-    assembly without a reusable pattern.
+def _sweep_kernel(V, F0, n, want_mass, first, pstart, F, pcol, pval, area, uptr, ucol, uval, lcnt):
+    """The upper triangle of ``W`` (rows ``uptr``, columns ``ucol``, values ``uval``), the count of
+    lower entries per column (``lcnt``) and mixed Voronoi areas (``area``), for one assembly
+    without a reusable pattern. Returns the number of upper entries, or -1 (before any write by
+    face index) when an index lies outside [0, n).
 
-    The faces are sorted by their smallest vertex (counting sort). Then one sweep over the
-    rows i = 0, 1, ... builds the upper triangle (columns j > i) row by row: the faces whose
+    The faces are sorted by their smallest vertex (counting sort into ``F``). Then one sweep over
+    the rows i = 0, 1, ... builds the upper triangle (columns j > i) row by row: the faces whose
     smallest vertex is i give their two edges at i directly, and their third edge (j, k),
-    i < j < k, is appended to row j's pending list, complete by the time row j is reached.
-    The row's pairs (column, half weight, `_face_terms`) are sorted and equal columns summed;
-    corner areas are added on the way. Edges with equal ends (degenerate faces) are skipped:
-    their weight is zero and the diagonal is recomputed anyway. A last pass writes the full
-    rows in order: row i is its lower part (``(i, j)`` for j < i, placed while row j was
-    written, hence in column order), the diagonal (minus the row's off-diagonal sum) and its
-    upper part. Every mesh edge and every diagonal has an entry (explicit zeros where weights
-    cancel), as in `CotanPattern`. Requires fewer than 2^31 entries (int32 indices). Returns
-    empty arrays (before any unclamped write by face index) when an index lies outside [0, n).
+    i < j < k, is appended to row j's pending list (``pcol``, ``pval``), complete by the time row
+    j is reached. The row's pairs (column, half weight, `_face_terms`) are sorted and equal
+    columns summed; corner areas are added on the way. Edges with equal ends (degenerate faces)
+    are skipped: their weight is zero and the diagonal is recomputed anyway.
+
+    Work arrays come from the caller (`cotan_laplacian`): ``first``, ``pstart`` (n + 1), ``lcnt``
+    and ``area`` (n) zeroed; ``F`` (m, 3), ``pcol``, ``pval`` (m), ``uptr`` (n + 1), ``ucol``,
+    ``uval`` (3m) uninitialised. Requires 6m + n < 2^31 (int32 counters).
     """
     m = F0.shape[0]
-    first = np.zeros(n + 1, np.int32)
-    pstart = np.zeros(n + 1, np.int32)
     bad = 0
     for f in range(m):
         a, b, c = F0[f, 0], F0[f, 1], F0[f, 2]
@@ -340,15 +339,13 @@ def _single_pass_kernel(V, F0, n, want_mass):
         else:
             continue
         pstart[min(max(j, -1), n - 1) + 1] += 1
-    if bad < 0:                                     # empty arrays: an index out of range
-        return (np.empty(0, np.int32), np.empty(0, np.int32), np.empty(0, np.float64),
-                np.empty(0, np.float64))
+    if bad < 0:
+        return -1
     longest = 0
     for i in range(n):
         longest = max(longest, 2 * first[i + 1] + pstart[i + 1])
         first[i + 1] += first[i]
         pstart[i + 1] += pstart[i]
-    F = np.empty((m, 3), np.int32)
     for f in range(m):
         a, b, c = F0[f, 0], F0[f, 1], F0[f, 2]
         lo = min(a, b, c)
@@ -357,13 +354,6 @@ def _single_pass_kernel(V, F0, n, want_mass):
         F[p, 0] = a
         F[p, 1] = b
         F[p, 2] = c
-    pcol = np.empty(pstart[n], np.int32)
-    pval = np.empty(pstart[n], np.float64)
-    area = np.zeros(n if want_mass else 0, np.float64)
-    uptr = np.empty(n + 1, np.int32)
-    ucol = np.empty(3 * m, np.int32)
-    uval = np.empty(3 * m, np.float64)
-    lcnt = np.zeros(n, np.int32)
     bc = np.empty(longest + 1, np.int64)
     bv = np.empty(longest + 1, np.float64)
     uptr[0] = 0
@@ -416,13 +406,23 @@ def _single_pass_kernel(V, F0, n, want_mass):
                 lcnt[bc[p]] += 1
         out = o + 1
         uptr[i + 1] = out
-    indptr = np.empty(n + 1, np.int32)
+    return out
+
+
+def _rows_kernel(uptr, ucol, uval, lcnt, indptr, indices, data, lfill):
+    """Full CSR rows of ``W`` from its upper triangle (`_sweep_kernel`), into ``indptr`` (n + 1),
+    ``indices``, ``data`` (2 * upper + n) and the work array ``lfill`` (n).
+
+    Row i is its lower part (``(i, j)`` for j < i, placed while row j was written, hence in
+    column order), the diagonal (minus the row's off-diagonal sum) and its upper part. Every
+    mesh edge and every diagonal has an entry (explicit zeros where weights cancel), as in
+    `CotanPattern`.
+    """
+    n = lcnt.size
     indptr[0] = 0
     for i in range(n):
         indptr[i + 1] = indptr[i] + lcnt[i] + 1 + (uptr[i + 1] - uptr[i])
-    indices = np.empty(indptr[n], np.int32)
-    data = np.empty(indptr[n], np.float64)
-    lfill = indptr[:-1].copy()
+        lfill[i] = indptr[i]
     for i in range(n):
         d = lfill[i]                      # row i's lower part is complete
         acc = 0.0
@@ -442,6 +442,36 @@ def _single_pass_kernel(V, F0, n, want_mass):
             data[q] = w
         indices[d] = i
         data[d] = -acc
+
+
+def _single_pass(V, F, n, want_mass):
+    """``(indptr, indices, data, area)`` of one assembly (`_sweep_kernel`, `_rows_kernel`), or
+    None when a face index lies outside [0, n).
+
+    The arrays are allocated here, by numpy, rather than inside the compiled code: numpy asks
+    the kernel for transparent huge pages on large blocks, which makes first touching them
+    several times cheaper than numba's 4 KiB pages (the assembly writes ~100 bytes per face).
+    """
+    m = F.shape[0]
+    first = np.zeros(n + 1, np.int32)
+    pstart = np.zeros(n + 1, np.int32)
+    lcnt = np.zeros(n, np.int32)
+    area = np.zeros(n if want_mass else 0, np.float64)
+    uptr = np.empty(n + 1, np.int32)
+    ucol = np.empty(3 * m, np.int32)
+    uval = np.empty(3 * m, np.float64)
+    Fs = np.empty((m, 3), np.int32)
+    pcol = np.empty(m, np.int32)
+    pval = np.empty(m, np.float64)
+    out = _kernel("_sweep_kernel")(V, F, n, want_mass, first, pstart, Fs, pcol, pval, area, uptr, ucol, uval, lcnt)
+    if out < 0:
+        return None
+    del first, pstart, Fs, pcol, pval
+    nnz = 2 * out + n
+    indptr = np.empty(n + 1, np.int32)
+    indices = np.empty(nnz, np.int32)
+    data = np.empty(nnz, np.float64)
+    _kernel("_rows_kernel")(uptr, ucol, uval, lcnt, indptr, indices, data, np.empty(n, np.int32))
     return indptr, indices, data, area
 
 
@@ -519,7 +549,7 @@ def _diag_csr(a: np.ndarray) -> sp.csr_matrix:
 def cotan_laplacian(V: np.ndarray, F: np.ndarray, mass: str = "voronoi", pattern: CotanPattern | None = None):
     """Cotangent weights and mass matrix ``(W, M)`` from compiled passes; numba is required.
 
-    Without ``pattern``: one assembly (`_single_pass_kernel`); with a `CotanPattern` built for
+    Without ``pattern``: one assembly (`_single_pass`); with a `CotanPattern` built for
     the same ``F``: its numeric pass only. Both equal ``cotan_weights(V, F)`` and
     ``mass_matrix(V, F, mass)`` to ~1e-15 relative (summation order), rows sorted by column.
     At most ~357M faces (int32 indices). Raises ValueError for a face index outside [0, n),
@@ -534,9 +564,10 @@ def cotan_laplacian(V: np.ndarray, F: np.ndarray, mass: str = "voronoi", pattern
                          "use cotan_weights / mass_matrix for larger meshes")
     V = np.ascontiguousarray(V, dtype=np.float64)
     want = mass == "voronoi"
-    indptr, indices, data, area = _kernel("_single_pass_kernel")(V, F, n, want)
-    if indptr.size == 0:
+    csr = _single_pass(V, F, n, want)
+    if csr is None:
         raise ValueError(_OUT_OF_RANGE.format(n=n))
+    indptr, indices, data, area = csr
     W = sp.csr_matrix((data, indices, indptr), shape=(n, n), copy=False)
     M = _diag_csr(area) if want else mass_matrix(V, F, mass)
     return W, M
