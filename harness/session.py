@@ -7,6 +7,7 @@ import errno
 import hashlib
 import json
 import os
+import statistics
 import sys
 import time
 from pathlib import Path
@@ -152,16 +153,17 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
         lock.close()
 
 
-def _fixed_cost(row: dict, extras: dict) -> float | None:
-    """Seconds of an ok case spent outside the method: its wall time minus samples and cold call."""
+def _fixed_cost(row: dict, extras: dict) -> tuple[float, float] | None:
+    """``(fixed, method)`` seconds of an ok case: ``method`` its timed samples plus the cold call,
+    ``fixed`` the rest of its wall time (imports, loading, noise, measuring)."""
     wall = extras.get("case_wall_s")
     if wall is None or row.get("status") != "ok":
         return None
     try:
-        samples = sum(json.loads(row.get("times") or "[]"))
+        method = sum(json.loads(row.get("times") or "[]")) + float(row.get("time_cold_s") or 0.0)
     except (TypeError, ValueError):
         return None
-    return max(0.0, wall - samples - float(row.get("time_cold_s") or 0.0))
+    return max(0.0, wall - method), method
 
 
 def _results_config(source):
@@ -309,7 +311,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
               file=sys.stderr, flush=True)
         bar = _progress(len(cfg.cases), len(done))
     counts: dict[str, int] = {}
-    overhead: list[float] = []
+    overhead: list[tuple[float, float]] = []
     t0 = time.perf_counter()
     extra_cases: list = []
     try:
@@ -359,10 +361,17 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
                    "command": " ".join(sys.argv), "status": meta["status"], "resumed_ok_cases": len(done),
                    "status_counts": counts, "load_average": meta["load_average"]}
         if overhead:
+            fixed = [f for f, _ in overhead]
+            spent = sum(m for _, m in overhead)
+            shares = [f / m for f, m in overhead if m > 0]
             meta["fixed_cost_per_case_s"] = {
-                "mean": round(sum(overhead) / len(overhead), 4), "max": round(max(overhead), 4), "cases": len(overhead),
+                "mean": round(sum(fixed) / len(fixed), 4), "max": round(max(fixed), 4), "cases": len(fixed),
+                "share_of_method_time": round(sum(fixed) / spent, 4) if spent > 0 else None,
+                "median_case_share": round(statistics.median(shares), 4) if shares else None,
                 "definition": "wall time of the case call in its process minus its timed samples and cold call "
-                              "(imports, mesh loading, noise, measuring; not the fork itself); ok cases of this session"}
+                              "(imports, mesh loading, noise, measuring; not the fork itself); ok cases of this session; "
+                              "share_of_method_time: the cases' summed fixed cost over their summed method time "
+                              "(samples + cold call); median_case_share: the median of that ratio per case"}
         meta.update(finished=session["finished"], status_counts=folder.status_counts(),
                     status_counts_this_session=counts, sessions=prev_sessions + [session],
                     wall_s=round(wall + sum(x.get("wall_s") or 0 for x in prev_sessions), 3))

@@ -60,6 +60,11 @@ def test_protocol_columns(tmp_path):
     fixed = meta["fixed_cost_per_case_s"]             # outside the method: loading, noise, measuring
     assert fixed["cases"] == sum(len(pd.read_csv(p)) for p in out.glob("*.csv") if p.stem in ("smoothing", "laplacian"))
     assert 0 <= fixed["mean"] <= fixed["max"] < 30
+    ok = pd.concat([pd.read_csv(out / f"{t}.csv") for t in ("smoothing", "laplacian")])
+    spent = sum(sum(json.loads(t)) for t in ok["times"]) + ok["time_cold_s"].sum()
+    assert fixed["share_of_method_time"] == pytest.approx(fixed["mean"] * fixed["cases"] / spent,
+                                                         abs=5e-5 * fixed["cases"] / spent + 1e-4)   # mean rounded
+    assert 0 <= fixed["median_case_share"]
     mem = pd.read_csv(out / "laplacian.csv")["method_mem_mb"]
     if Path("/proc/self/clear_refs").exists():
         assert mem.notna().all() and (mem >= 0).all()
