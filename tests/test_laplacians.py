@@ -244,3 +244,38 @@ def test_libigl_adapters_on_degenerate_mesh(name):
     r = methods.get(name)(V, F[sound])
     assert r.W.shape == (V.shape[0], V.shape[0]) and r.M.shape == r.W.shape
     assert np.isfinite(r.W.data).all() and abs(r.W[9]).sum() == 0
+
+
+def test_zero_area_faces_screen_keeps_every_degenerate_face():
+    """From COMPILED_EDGES_FROM faces, zero_area_faces screens with a compiled test before the
+    exact measures; on a sphere with inserted flat caps (height / longest edge from 1e-3 down to
+    0), needles, repeated and coincident vertices, at scales 1e-120 to 1e120 and far from the
+    origin, it returns exactly the faces that the unscreened measures give."""
+    from harness.core import geometry as g
+    from harness.datasets import icosphere
+    V0, F0 = icosphere(5)
+    assert F0.shape[0] == 20480 >= g.COMPILED_EDGES_FROM
+    n = V0.shape[0]
+    extra_V, extra_F = [], []
+    for k, h in enumerate([1e-3, 1e-5, 3e-6, 1e-7, 1e-8, 1e-9, 1e-12, 1e-16, 1e-20, 0.0]):
+        base = n + 3 * k
+        extra_V += [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.37, h, 0.0]]    # cap: apex near the long edge
+        extra_F += [[base, base + 1, base + 2]]
+    base = n + len(extra_V)
+    extra_V += [[0.0, 0.0, 0.0], [1e-9, 0.0, 0.0], [0.5, 1.0, 0.0], [0.5, 1.0, 0.0]]  # needle, duplicate
+    extra_F += [[base, base + 1, base + 2], [base, base + 2, base + 3], [base, base, base + 2]]
+    V = np.vstack([V0, np.array(extra_V)])
+    F = np.vstack([F0, np.array(extra_F, np.int64)])
+    rng = np.random.default_rng(0)
+    scales = [(1.0, 0.0), (1e-120, 0.0), (1e-81, 0.0), (1e-78, 0.0), (1e-60, 0.0), (1e60, 0.0),
+              (1e120, 0.0), (1.0, 1e6), (1e-3, 1e3)]
+    for scale, offset in scales:
+        W = V * scale + offset
+        R = np.linalg.qr(rng.standard_normal((3, 3)))[0]
+        for P in (W, (W - offset) @ R.T + offset):
+            with np.errstate(over="ignore", under="ignore", invalid="ignore"):   # 1e120: squares overflow
+                exact = np.flatnonzero(g._zero_area(P, F))
+                got = g.zero_area_faces(P, F)
+            assert np.array_equal(got, exact), (scale, offset, got, exact)
+            assert {20491, 20492} <= set(exact.tolist())    # the duplicate and the repeated vertex
+            assert P is not W or 20489 in exact              # the h = 0 cap, unless rotated

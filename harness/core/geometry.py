@@ -49,10 +49,13 @@ def edge_face_counts(F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def warm() -> None:
-    """Load (or compile) the compiled edge extraction once, e.g. in a driver before it forks."""
+    """Load (or compile) the compiled edge extraction and face screen once, e.g. in a driver
+    before it forks."""
     from ._edges_kernel import edges_and_counts, fan_counts
+    from ._faces_kernel import near_degenerate
     edges_and_counts(np.array([[0, 1, 2]], dtype=np.int64), 3)
     fan_counts(np.array([[0, 1, 2]], dtype=np.int64), 3)
+    near_degenerate(np.eye(3), np.array([[0, 1, 2]], dtype=np.int64), 1e-5)
 
 
 def unique_edges(F: np.ndarray) -> np.ndarray:
@@ -199,9 +202,27 @@ def vertex_components(F: np.ndarray, n: int) -> np.ndarray:
 def zero_area_faces(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     """Indices of faces with zero area by the cross product or by Kahan's Heron formula on the
     edge lengths (a numerically flat face can have a cross-product double area of 1e-20 and a
-    Heron area of exactly 0, which is how libigl measures it)."""
+    Heron area of exactly 0, which is how libigl measures it).
+
+    From `COMPILED_EDGES_FROM` faces, a compiled screen first keeps the faces whose cross product
+    is at most 1e-5 of their longest squared edge L^2 (`_faces_kernel.near_degenerate`), and both
+    measures are taken on those only; the result is the same. Outside the screen the height over
+    the longest edge exceeds 1e-5 L, so the cross product (error ~1e-16 L^2) is far from 0, and
+    so is Heron's area: its least stable factor, ``y + z - x`` for the longest edge x, is at least
+    2 h^2 / L = 2e-10 L there, against rounding in the lengths of ~1e-15 L.
+    """
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    if F.shape[0] >= COMPILED_EDGES_FROM:
+        from ._faces_kernel import near_degenerate
+        cand = near_degenerate(np.ascontiguousarray(V), np.ascontiguousarray(F), 1e-5)
+        return cand[_zero_area(V, F[cand])]
+    return np.flatnonzero(_zero_area(V, F))
+
+
+def _zero_area(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     heron = cotangents_from_lengths(edge_lengths(V, F))[1]
-    return np.flatnonzero((double_areas(V, F) == 0) | ~(heron > 0))
+    return (double_areas(V, F) == 0) | ~(heron > 0)
 
 
 # ----------------------------------------------------------------------------- whole meshes
