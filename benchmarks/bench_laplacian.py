@@ -12,13 +12,15 @@ Contenders
 - libigl:  ``igl.cotmatrix(V, F)`` + ``igl.massmatrix(V, F, MASSMATRIX_TYPE_VORONOI)``
 - scratch: ``methods.scratch.laplacians.cotan(V, F, mass="voronoi")`` (the registered
   method's function, no argument validation; at this size one compiled assembly writes the
-  CSR rows and the Voronoi areas directly, `operators.cotan_laplacian`)
+  CSR rows and the Voronoi areas directly, `operators.cotan_laplacian`, into arrays numpy
+  allocates: with transparent huge pages set to ``madvise`` or ``always``, as printed below,
+  first touching them costs a fraction of 4 KiB-page faults)
 - scratch (registered): ``methods.get("scratch.cotan")(V, F)``, the same plus the
-  interface's argument validation (informational)
+  interface's argument validation: what a run times
 - re-assembly: ``CotanPattern(F, n)`` built once, then ``pattern.assemble(V)`` (numeric pass
   only, for the same connectivity with new positions: smoothing iterations, noise sweeps)
 
-Targets: scratch <= 0.15x libigl; re-assembly on fixed connectivity <= 0.10x libigl.
+Targets: scratch and registered <= 0.15x libigl; re-assembly on fixed connectivity <= 0.10x libigl.
 The results are checked against libigl (1e-10 relative) before timing.
 """
 from __future__ import annotations
@@ -44,6 +46,15 @@ def _version(dist: str) -> str:
         return "?"
 
 
+def _thp() -> str:
+    try:
+        text = Path("/sys/kernel/mm/transparent_hugepage/enabled").read_text()
+    except OSError:
+        return "unknown"
+    chosen = [w.strip("[]") for w in text.split() if w.startswith("[")]
+    return chosen[0] if chosen else text.strip()
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--subdivisions", type=int, default=8)
@@ -62,7 +73,7 @@ def main(argv=None) -> int:
     print(f"mesh: icosphere({args.subdivisions}) {n:,} vertices, {F.shape[0]:,} faces")
     print(f"python {platform.python_version()}, numpy {np.__version__}, libigl "
           f"{_version('libigl')}, cpus {os.cpu_count()}, "
-          f"load average {os.getloadavg()[0]:.2f} (at start)")
+          f"load average {os.getloadavg()[0]:.2f} (at start), transparent huge pages: {_thp()}")
 
     def run_igl():
         return igl.cotmatrix(V, F), igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI)
@@ -123,10 +134,11 @@ def main(argv=None) -> int:
         r = [a / b for a, b in zip(wall[k], wall["libigl"])]
         ratio[k] = statistics.median(r)
         print(f"  {k:12s} {ratio[k]:.3f}x ({min(r):.3f}-{max(r):.3f})")
-    print(f"\nload average {os.getloadavg()[0]:.2f} (at end); targets: scratch <= 0.15x, "
+    print(f"\nload average {os.getloadavg()[0]:.2f} (at end); targets: scratch and registered <= 0.15x, "
           f"re-assembly <= 0.10x libigl")
-    print(f"scratch: {'met' if ratio['scratch'] <= 0.15 else 'NOT met'}; "
-          f"re-assembly: {'met' if ratio['re-assembly'] <= 0.10 else 'NOT met'}")
+    verdict = {k: "met" if ratio[k] <= goal else "NOT met"
+               for k, goal in (("scratch", 0.15), ("registered", 0.15), ("re-assembly", 0.10))}
+    print("; ".join(f"{k}: {v}" for k, v in verdict.items()))
     return 0
 
 

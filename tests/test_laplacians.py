@@ -279,3 +279,11 @@ def test_zero_area_faces_screen_keeps_every_degenerate_face():
             assert np.array_equal(got, exact), (scale, offset, got, exact)
             assert {20491, 20492} <= set(exact.tolist())    # the duplicate and the repeated vertex
             assert P is not W or 20489 in exact              # the h = 0 cap, unless rotated
+    wrapped = F.copy()
+    wrapped[-1, 0] -= V.shape[0]                             # -1 style indices read as numpy does
+    assert np.array_equal(g.zero_area_faces(V, wrapped), g.zero_area_faces(V, F))
+    for bad in (V.shape[0], -V.shape[0] - 1, 2**40):        # the screen reads V unchecked: refuse first
+        F_bad = F.copy()
+        F_bad[-1, 2] = bad
+        with pytest.raises(IndexError, match="out of bounds"):
+            g.zero_area_faces(V, F_bad)

@@ -210,10 +210,20 @@ def zero_area_faces(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     the longest edge exceeds 1e-5 L, so the cross product (error ~1e-16 L^2) is far from 0, and
     so is Heron's area: its least stable factor, ``y + z - x`` for the longest edge x, is at least
     2 h^2 / L = 2e-10 L there, against rounding in the lengths of ~1e-15 L.
+
+    Both are measured in float64 (``V`` is converted). A face index outside [-n, n) is an
+    IndexError, as in numpy indexing.
     """
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
-    if F.shape[0] >= COMPILED_EDGES_FROM:
+    n = V.shape[0]
+    shaped = F.ndim == 2 and F.shape[1] == 3 and V.ndim == 2 and V.shape[1] == 3
+    if shaped and F.shape[0] >= COMPILED_EDGES_FROM:
+        lo, hi = int(F.min()), int(F.max())
+        if lo < -n or hi >= n:          # the compiled screen reads V unchecked
+            raise IndexError(f"face index {lo if lo < -n else hi} is out of bounds for {n} vertices")
+        if lo < 0:
+            F = np.where(F < 0, F + n, F)
         from ._faces_kernel import near_degenerate
         cand = near_degenerate(np.ascontiguousarray(V), np.ascontiguousarray(F), 1e-5)
         return cand[_zero_area(V, F[cand])]

@@ -319,9 +319,10 @@ def _sweep_kernel(V, F0, n, want_mass, first, pstart, F, pcol, pval, area, uptr,
     columns summed; corner areas are added on the way. Edges with equal ends (degenerate faces)
     are skipped: their weight is zero and the diagonal is recomputed anyway.
 
-    Work arrays come from the caller (`cotan_laplacian`): ``first``, ``pstart`` (n + 1), ``lcnt``
-    and ``area`` (n) zeroed; ``F`` (m, 3), ``pcol``, ``pval`` (m), ``uptr`` (n + 1), ``ucol``,
-    ``uval`` (3m) uninitialised. Requires 6m + n < 2^31 (int32 counters).
+    Work arrays come from the caller (`_single_pass`): ``first``, ``pstart`` (n + 1), ``lcnt`` (n)
+    and ``area`` (n, or 0 when not ``want_mass``) zeroed; ``F`` (m, 3), ``pcol``, ``pval`` (m: a
+    face has at most one edge away from its smallest vertex), ``uptr`` (n + 1), ``ucol``, ``uval``
+    (3m) uninitialised. Requires 6m + n < 2^31 (int32 counters).
     """
     m = F0.shape[0]
     bad = 0
