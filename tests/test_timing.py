@@ -180,3 +180,30 @@ def test_a_run_leaves_the_callers_thread_pools_as_they_were(tmp_path, executor):
                 workers=max(2, os.cpu_count() or 1), executor=executor)
     after = {p["filepath"]: p["num_threads"] for p in threadpoolctl.threadpool_info()}
     assert before and {k: after[k] for k in before} == before
+
+
+def test_timed_calls_do_not_reuse_a_previous_calls_symbolic_analysis(monkeypatch):
+    """The solvers' pattern-keyed symbolic analyses are dropped before the cold call and every
+    sample: a sample of an implicit step pays for its ordering like a first call on the mesh
+    (it used to inherit the cold call's, about half of libigl.implicit's time at 86k faces)."""
+    from harness import runner
+    from harness.config import load_config
+    from harness.core import solvers
+    seen = []
+    real = solvers.factorize
+
+    def spy(A, *a, **k):
+        seen.append(len(solvers._SYMBOLIC))
+        return real(A, *a, **k)
+    monkeypatch.setattr(solvers, "factorize", spy)
+    cfg = load_config({"name": "t", "repeats": 3, "time_budget": 0, "meshes": ["knight"],
+                       "noise": [{"model": "gaussian_normal", "levels": [0.2]}],
+                       "tasks": {"smoothing": {"methods": [
+                           {"name": "scratch.implicit", "params": {"iterations": 2, "solver": "scipy"}},
+                           {"name": "libigl.implicit", "params": {"iterations": 2, "solver": "scipy"}}]}}})
+    for case in cfg.cases:
+        seen.clear()
+        row, _ = runner.run_case(case)
+        assert row["status"] == "ok", row["error"]
+        assert row["repeats"] == 3 and len(seen) >= 4, seen
+        assert seen.count(0) == 4, seen        # one fresh start per call: the cold call and 3 samples
