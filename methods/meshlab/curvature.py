@@ -34,8 +34,8 @@ def _quality(V, ms) -> np.ndarray:
 def discrete_curvature(V, F):
     """Gaussian and mean curvature from MeshLab's discrete operators (module docstring)."""
     out = {}
+    ms = _meshset(V, F)                  # one mesh: the filter writes quality only
     for q, kind in (("K", "Gaussian Curvature"), ("H", "Mean Curvature")):
-        ms = _meshset(V, F)
         ms.compute_scalar_by_discrete_curvature_per_vertex(curvaturetype=kind)
         out[q] = _quality(V, ms)
     return CurvatureResult(K=out["K"], H=out["H"])
@@ -53,8 +53,8 @@ def principal_curvature(V, F, *, method="Quadric Fitting", scale=10.0):
     """Principal curvatures from MeshLab's principal-directions filter (module docstring)."""
     import pymeshlab
     vals = []
+    ms = _meshset(V, F)                  # one mesh: the filter writes directions and quality only
     for kind in ("Min Curvature", "Max Curvature"):
-        ms = _meshset(V, F)
         ms.compute_curvature_principal_directions_per_vertex(method=method, curvcolormethod=kind,
                                                              scale=pymeshlab.PercentageValue(float(scale)),
                                                              autoclean=False)

@@ -55,10 +55,16 @@ def _meshset(V: np.ndarray, F: np.ndarray):
     """A MeshSet holding the referenced vertices only (some filters refuse meshes that are
     not compact), each tagged with its caller index."""
     import pymeshlab
-    used, Fc = np.unique(F, return_inverse=True)
-    Fc = Fc.reshape(F.shape).astype(np.int32)
-    m = pymeshlab.Mesh(vertex_matrix=V[used], face_matrix=Fc)
-    m.add_vertex_custom_scalar_attribute(used.astype(np.float64), _INDEX)
+    n = V.shape[0]
+    used = np.zeros(n, dtype=bool)
+    used[F.ravel()] = True
+    if used.all():                       # the usual case: no compaction, indices as they are
+        Vm, Fc, index = V, F.astype(np.int32), np.arange(n, dtype=np.float64)
+    else:
+        keep, Fc = np.unique(F, return_inverse=True)
+        Vm, Fc, index = V[keep], Fc.reshape(F.shape).astype(np.int32), keep.astype(np.float64)
+    m = pymeshlab.Mesh(vertex_matrix=Vm, face_matrix=Fc)
+    m.add_vertex_custom_scalar_attribute(index, _INDEX)
     ms = pymeshlab.MeshSet()
     ms.add_mesh(m)
     return ms
@@ -70,8 +76,11 @@ def _result(V: np.ndarray, ms) -> np.ndarray:
     P = np.asarray(m.vertex_matrix(), dtype=np.float64)
     idx = np.asarray(m.vertex_custom_scalar_attribute_array(_INDEX))
     ii = np.rint(idx).astype(np.int64)
+    n = V.shape[0]
+    if len(ii) == len(P) == n and np.array_equal(idx, np.arange(n, dtype=np.float64)):
+        return np.array(P, dtype=np.float64, order="C")      # every vertex, in the caller's order
     if (len(ii) != len(P) or np.any(np.abs(idx - ii) > 0) or ii.min(initial=0) < 0
-            or ii.max(initial=-1) >= V.shape[0] or len(np.unique(ii)) != len(ii)):
+            or ii.max(initial=-1) >= n or np.bincount(ii, minlength=n).max(initial=0) > 1):
         raise RuntimeError("pymeshlab lost the vertex index attribute; cannot map vertices back")
     out = V.copy()
     out[ii] = P

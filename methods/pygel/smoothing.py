@@ -55,12 +55,24 @@ def build_manifold(V: np.ndarray, F: np.ndarray):
     whose positions equal the input's. This is exact even where distinct input vertices share
     a position (UV seams). Only if the faces cannot be aligned (PyGEL dropped or reoriented
     some) does it fall back to matching exact coordinates.
+
+    First, the cheap case: when matching exact coordinates pairs input vertices one to one with
+    all of the manifold's vertices, every referenced input vertex among them, that pairing is
+    the map (no two of those vertices share a position, so it is the one the faces give); the
+    faces are read back (an OFF round trip, the slow part) only otherwise.
     """
     from pygel3d import hmesh
 
     from methods.pygel import triangles
     m = hmesh.Manifold.from_triangles(V, F)
     P0 = np.array(m.positions(), dtype=np.float64, copy=True)
+    index = match_rows(V, P0)
+    hit = index[index >= 0]
+    used = np.zeros(len(V), dtype=bool)
+    used[F.ravel()] = True
+    if (hit.size == len(P0) and (index[used] >= 0).all()
+            and np.bincount(hit, minlength=len(P0)).max(initial=0) <= 1):
+        return m, index
     try:
         G = triangles(m)
     except RuntimeError:
@@ -103,7 +115,9 @@ def laplacian(V, F, *, step=0.25, iterations=10):
     ``scratch.explicit``'s uniform step).
     """
     from pygel3d import hmesh
-    n_used = np.unique(F).size
+    used = np.zeros(len(V), dtype=bool)
+    used[F.ravel()] = True
+    n_used = int(used.sum())
     if n_used < MIN_VERTICES_LAPLACIAN:
         raise ValueError(f"pygel.laplacian: PyGEL3D's laplacian_smooth dies with SIGFPE on meshes with "
                          f"fewer than {MIN_VERTICES_LAPLACIAN} vertices (this one has {n_used}); refused")
