@@ -10,7 +10,7 @@ For each installed backend of ``harness.core.solvers`` it times, in one process:
   cost of a first step;
 * ``warm``: numeric factorization + solve of a second matrix with the same pattern (different
   values: ``h`` scaled by 1.01) with the cached symbolic analysis, the cost of every later
-  step with ``reassemble: true`` and of repeats of the same case.
+  step with ``reassemble: true`` within one call (a run clears the cache before every timed call).
 
 Baselines (not backends of the harness): ``splu_mmd_sym`` (plain ``splu`` with
 ``permc_spec="MMD_AT_PLUS_A"``, symmetric mode: the floor the pure-scipy path must beat),

@@ -21,10 +21,10 @@ Timing protocol (the method call alone; metrics are not timed):
    (``times``, a JSON list, seconds) and summarised as median ``time_s``, quartiles
    ``time_q1_s``/``time_q3_s``, ``time_min_s``/``time_max_s``; ``repeats`` is the number taken;
    before each sample, the harness's own caches of earlier inputs are dropped (`forget_inputs`)
-   and freed heap memory is returned to the OS (glibc's ``malloc_trim``), so every sample
-   starts as a first call does in a fresh process with its code loaded: it pays for the
-   memory it touches (otherwise only the first sample, trimmed for the memory measurement,
-   would, 1.0-1.24x slower than the rest at 86k faces);
+   the previous sample's result is freed, and freed heap memory is returned to the OS (glibc's
+   ``malloc_trim``; other allocators' pools, e.g. MKL's, keep theirs), so every sample pays
+   for the heap memory it touches (otherwise only the first sample, trimmed for the memory
+   measurement, would, 1.0-1.24x slower than the rest at 86k faces);
    each sample's process CPU time (all threads of the process) is kept too (``cpu_times``,
    median ``time_cpu_s``), and ``others_cpu`` is the number of cores other processes kept busy
    on average during the samples (``/proc/stat``, steal included, minus this process; blank off
@@ -317,6 +317,7 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
         busy0, own0, wall0 = _machine_busy_s(), time.process_time(), time.perf_counter()
         while len(times) < case.repeats or (spent < case.time_budget and len(times) < MAX_SAMPLES):
             V_arg, F_arg = inp.V.copy(), inp.F.copy()   # a method that writes into its input spoils nothing
+            result = None                               # the previous result is freed here, untimed
             forget_inputs()
             _trim_heap()                                # every sample starts from the same heap state
             first = not times

@@ -283,6 +283,9 @@ class _PardisoSymbolic:
         self.solver._call_pardiso(U, np.zeros((U.shape[0], 1)))
 
     def free(self):
+        """Release the handle (evicted or `clear_cache`); a Factor still holding it analyses again."""
+        self.owner = None
+        self.freed = True
         try:
             self.solver.free_memory(everything=True)
         except Exception:  # already released; nothing else to do
@@ -313,6 +316,8 @@ class _PardisoFactor(Factor):
 
     def solve(self, B):
         B = np.asarray(B, dtype=np.float64)
+        if getattr(self._sym, "freed", False):       # its handle was released since: analyse again
+            self._sym = _PardisoSymbolic(self._U)
         if getattr(self._sym, "owner", None) is not self:
             self._numeric()
         s = self._sym.solver
