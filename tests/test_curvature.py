@@ -118,3 +118,18 @@ def test_the_task_runs_through_the_pipeline(tmp_path):
     saddle = df[df["mesh"].str.startswith("saddle")].set_index("method")
     assert saddle.loc["scratch.quadric_fit", "K_boundary_max"] >= 0 and np.isnan(saddle.loc["scratch.quadric_fit", "gauss_bonnet_error"])
     assert "Curvature" in (tmp_path / "report.html").read_text()
+
+
+def test_meshlab_principal_curvature_accepts_every_declared_method(tmp_path):
+    """Each ``method`` choice the adapter declares is a label the installed PyMeshLab accepts
+    ("Pseudoinverse Quadric Fitting" was declared and failed on every mesh). Through a run: in
+    pytest's captured output PyMeshLab's fitting aborts the process."""
+    m = methods.get("meshlab.principal_curvature")
+    if not m.is_available:
+        pytest.skip("pymeshlab unavailable")
+    choices = list(m.params["method"].choices)
+    cfg = {"name": "pc", "meshes": ["knight"], "time_budget": 0,
+           "tasks": {"curvature": {"methods": [{"name": m.name, "params": {"method": choices}}]}}}
+    df = run(cfg, out=tmp_path / "run", quiet=True)["curvature"]
+    assert len(df) == len(choices)
+    assert (df["status"] == "ok").all(), df[["params", "error"]].to_string()

@@ -6,8 +6,8 @@ angle defect and cotangent mean curvature over mixed Voronoi areas); pointwise v
 sphere with outward normals, as the task's (checked in tests on a sphere and a torus).
 ``meshlab.principal_curvature``: ``compute_curvature_principal_directions_per_vertex`` with the
 chosen ``method`` (VCGLib's quadric fitting, Taubin's approximation, PCA, normal cycles or
-pseudo-inverse quadric fitting) and neighbourhood ``scale`` (percent of the bounding-box
-diagonal), reading its two principal values through ``curvcolormethod`` ``Min Curvature`` and
+scale-dependent quadric fitting: the labels PyMeshLab 2025.7 accepts) and neighbourhood
+``scale`` (percent of the bounding-box diagonal), reading its two principal values through ``curvcolormethod`` ``Min Curvature`` and
 ``Max Curvature`` (VCGLib's labels do not follow the sign order: the adapter sorts them,
 ``k1 >= k2``). MeshLab holds vertex quality in single precision.
 """
@@ -42,7 +42,7 @@ def discrete_curvature(V, F):
 
 
 _METHODS = ("Quadric Fitting", "Taubin approximation", "Principal Component Analysis", "Normal Cycles",
-            "Pseudoinverse Quadric Fitting")
+            "Scale Dependent Quadric Fitting")
 
 
 @register("meshlab.principal_curvature", task="curvature", library="pymeshlab", requires=("pymeshlab",),
