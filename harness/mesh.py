@@ -20,7 +20,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from .core.geometry import COMPILED_EDGES_FROM, edge_face_counts, mean_edge_length  # noqa: F401
+from .core.geometry import COMPILED_EDGES_FROM, edge_face_counts, mean_edge_length, referenced  # noqa: F401
 from .errors import InvalidMeshError
 
 SUPPORTED = (".obj", ".off", ".ply", ".stl")
@@ -361,8 +361,7 @@ def validate(V, F, name: str = "", repair: bool = True) -> Mesh:
                 F = F[np.sort(first)]
         if len(F) == 0:
             raise InvalidMeshError(f"{label}no valid face left after removing degenerate faces")
-        used = np.zeros(len(V), bool)
-        used[F.ravel()] = True
+        used = referenced(F, len(V))
         if not used.all():
             notes.append(f"removed {int((~used).sum())} unreferenced vertex/vertices")
             vmap = np.flatnonzero(used)

@@ -20,7 +20,7 @@ Timing protocol (the method call alone; metrics are not timed):
    ``time_budget_s`` (at most ``MAX_SAMPLES``), like ``timeit``'s autorange; every sample is kept
    (``times``, a JSON list, seconds) and summarised as median ``time_s``, quartiles
    ``time_q1_s``/``time_q3_s``, ``time_min_s``/``time_max_s``; ``repeats`` is the number taken;
-   before each sample, the harness's own caches of earlier inputs are dropped (`forget_inputs`)
+   before each sample, the harness's own caches of earlier inputs are dropped (`forget_inputs`),
    the previous sample's result is freed, and freed heap memory is returned to the OS (glibc's
    ``malloc_trim``; other allocators' pools, e.g. MKL's, keep theirs), so every sample pays
    for the heap memory it touches (otherwise only the first sample, trimmed for the memory

@@ -4,6 +4,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from harness.core.geometry import referenced
 from methods import LaplacianResult, Param, register
 
 
@@ -44,8 +45,7 @@ def tufted(V, F, *, mollify_factor=1e-5):
     import robust_laplacian
     L, M = robust_laplacian.mesh_laplacian(V, F, mollify_factor=float(mollify_factor))
     W = -sp.csr_matrix(L)
-    used = np.zeros(V.shape[0], dtype=bool)
-    used[F.ravel()] = True
+    used = referenced(F, V.shape[0])
     if not used.all():
         W = (W + sp.diags(np.where(used, 0.0, -W.diagonal()))).tocsr()
         W.eliminate_zeros()

@@ -238,13 +238,19 @@ def _zero_area(V: np.ndarray, F: np.ndarray) -> np.ndarray:
 # ----------------------------------------------------------------------------- whole meshes
 
 
+def referenced(F: np.ndarray, n: int) -> np.ndarray:
+    """Boolean mask (n,) of the vertices some face uses."""
+    used = np.zeros(int(n), dtype=bool)
+    used[np.asarray(F).ravel()] = True
+    return used
+
+
 def compact(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Drop unreferenced vertices and reindex the faces: ``(V, F)`` as float64 (k, 3) and int64
     (l, 3); kept vertices stay in their original order."""
     V = np.ascontiguousarray(V, dtype=np.float64).reshape(-1, 3)
     F = np.ascontiguousarray(F, dtype=np.int64).reshape(-1, 3)
-    used = np.zeros(V.shape[0], dtype=bool)
-    used[F.ravel()] = True
+    used = referenced(F, V.shape[0])
     remap = np.cumsum(used) - 1
     return V[used], remap[F]
 

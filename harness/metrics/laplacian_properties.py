@@ -81,7 +81,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
-from ..core.geometry import edge_face_counts
+from ..core.geometry import edge_face_counts, referenced
 
 SYM_TOL = 1e-10
 ZERO_TOL = 1e-12
@@ -158,8 +158,7 @@ def laplacian_properties(W, M, V, F, planar: bool | None = None) -> dict:
     out["POS"] = n_neg == 0
 
     # ---- linear precision on planar meshes
-    used = np.zeros(n, bool)
-    used[F.ravel()] = True
+    used = referenced(F, n)
     P = V[used]
     lo, hi = P.min(0), P.max(0)
     diag = float(np.linalg.norm(hi - lo))

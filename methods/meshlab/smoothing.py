@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from harness.core.geometry import referenced
 from methods import Param, SmoothingResult, register
 
 _INDEX = "_shootout_index"
@@ -56,9 +57,7 @@ def _meshset(V: np.ndarray, F: np.ndarray):
     not compact), each tagged with its caller index."""
     import pymeshlab
     n = V.shape[0]
-    used = np.zeros(n, dtype=bool)
-    used[F.ravel()] = True
-    if used.all():                       # the usual case: no compaction, indices as they are
+    if referenced(F, n).all():           # the usual case: no compaction, indices as they are
         Vm, Fc, index = V, F.astype(np.int32), np.arange(n, dtype=np.float64)
     else:
         keep, Fc = np.unique(F, return_inverse=True)

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from harness.core.geometry import referenced
 from methods import Param, SmoothingResult, register
 
 
@@ -68,8 +69,7 @@ def build_manifold(V: np.ndarray, F: np.ndarray):
     P0 = np.array(m.positions(), dtype=np.float64, copy=True)
     index = match_rows(V, P0)
     hit = index[index >= 0]
-    used = np.zeros(len(V), dtype=bool)
-    used[F.ravel()] = True
+    used = referenced(F, len(V))
     if (hit.size == len(P0) and (index[used] >= 0).all()
             and np.bincount(hit, minlength=len(P0)).max(initial=0) <= 1):
         return m, index
@@ -115,9 +115,7 @@ def laplacian(V, F, *, step=0.25, iterations=10):
     ``scratch.explicit``'s uniform step).
     """
     from pygel3d import hmesh
-    used = np.zeros(len(V), dtype=bool)
-    used[F.ravel()] = True
-    n_used = int(used.sum())
+    n_used = int(referenced(F, len(V)).sum())
     if n_used < MIN_VERTICES_LAPLACIAN:
         raise ValueError(f"pygel.laplacian: PyGEL3D's laplacian_smooth dies with SIGFPE on meshes with "
                          f"fewer than {MIN_VERTICES_LAPLACIAN} vertices (this one has {n_used}); refused")
