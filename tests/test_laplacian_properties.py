@@ -265,17 +265,97 @@ def test_uniform_is_linear_precise_on_a_regular_grid():
 
 
 def test_large_mesh_psd_certificate_without_factorisation(monkeypatch):
-    """Above EIG_MAX_N the PSD column comes from diagonal dominance (exact), never a guess."""
+    """Above EIG_MAX_N the PSD column comes from the exact certificates (diagonal dominance,
+    triangle split), never a guess: a graph Laplacian and a cotangent Laplacian with negative
+    weights are certified, an indefinite matrix is left blank."""
     import harness.metrics.laplacian_properties as lp
     from harness.datasets import icosphere, plane_nondelaunay
     from methods.scratch.operators import cotan_weights, uniform_weights
     monkeypatch.setattr(lp, "EIG_MAX_N", 10)
+    monkeypatch.setattr(lp, "_ldlt", None)                       # never reached
     V, F = icosphere(2)
     out = lp.laplacian_properties(uniform_weights(F, len(V)), None, V, F)
     assert out["psd"] is True and out["min_eig"] == 0.0          # graph Laplacian: certified
     V, F = plane_nondelaunay(200, 0, 0.3)
-    out = lp.laplacian_properties(cotan_weights(V, F), None, V, F)
-    assert out["POS"] is False and out["psd"] is None and out["min_eig"] is None   # not measured
+    W = cotan_weights(V, F)
+    out = lp.laplacian_properties(W, None, V, F)
+    assert out["POS"] is False and out["psd"] is True and out["min_eig"] == 0.0   # triangle split
+    W = W.tolil()
+    W[3, 3] += 1.0                                               # -W gains a negative eigenvalue
+    out = lp.laplacian_properties(W.tocsr(), None, V, F)
+    assert out["psd"] is None and out["min_eig"] is None         # not measured
+
+
+def _certified(W, V, F):
+    import harness.metrics.laplacian_properties as lp
+    S = (-(W + W.T) * 0.5).tocsr()
+    S.eliminate_zeros()
+    return lp._certificate(S, V, F)
+
+
+@pytest.mark.parametrize("mesh", ["bunny", "knight", "camelhead", "woody", "fandisk"])
+@pytest.mark.parametrize("name", ["scratch.cotan", "libigl.cotan", "scratch.cotan_normalized", "scratch.uniform",
+                                  "scratch.intrinsic_delaunay", "robust.tufted"])
+def test_certificates_agree_with_the_factorisation(monkeypatch, name, mesh):
+    """On closed, open and obtuse meshes and on a noisy copy, the cheap certificates give the
+    (psd, min_eig) the LDL^T inertia and shift-invert Lanczos give, within min_eig's tolerance
+    (1e-10); the cotangent Laplacians (negative weights) are certified by the triangle split
+    (cotan_normalized through its symmetric S = D W), the intrinsic ones by dominance."""
+    import harness.metrics.laplacian_properties as lp
+    from harness import datasets
+    from harness.noise import apply_noise
+    m = datasets.load(mesh).clean
+    method = methods.get(name)
+    if method.unavailable_reason():
+        pytest.skip(method.unavailable_reason())
+    noisy = apply_noise(m.V, m.F, "gaussian_normal", 0.5, 0, mesh_key=mesh)
+    for V in (m.V, noisy):
+        W = method(V, m.F).W
+        fast = laplacian_properties(W, None, V, m.F)
+        with monkeypatch.context() as mp:
+            mp.setattr(lp, "_certificate", lambda S, V, F: (None, False))
+            slow = laplacian_properties(W, None, V, m.F)
+        assert fast["psd"] is slow["psd"] is True
+        assert abs(fast["min_eig"] - slow["min_eig"]) <= 1e-10 and abs(slow["min_eig"]) <= 1e-10
+        if name in ("scratch.cotan", "libigl.cotan", "scratch.uniform"):     # symmetric, on the mesh's edges
+            assert _certified(W, V, m.F) == (True, True) and fast["min_eig"] == 0.0
+
+
+def test_triangle_split_never_certifies_an_indefinite_matrix():
+    """Cotangent weights of small meshes with random symmetric perturbations (edge weights
+    made negative, diagonal shifts from 1e-13 to 1e-3 of the scale): whenever the triangle
+    split says psd, the dense smallest eigenvalue is >= -1e-10 * the largest; and it does
+    certify most unperturbed and mildly perturbed cases (the test can fail both ways)."""
+    from harness.datasets import icosphere, plane_nondelaunay
+    from methods.scratch.operators import cotan_weights
+    rng = np.random.default_rng(7)
+    meshes = [icosphere(1), plane_nondelaunay(60, 1, 0.4), plane_nondelaunay(60, 2, 0.6)]
+    certified = indefinite = 0
+    for trial in range(300):
+        V, F = meshes[trial % 3]
+        V = V + rng.normal(scale=0.02, size=V.shape) * (trial % 2)
+        W = cotan_weights(V, F).tolil()
+        n = len(V)
+        kind = trial % 4
+        if kind == 1:                                             # one edge made more negative
+            i, j = F[rng.integers(len(F)), :2]
+            w = rng.uniform(0.0, 3.0) * abs(W[i, j]) + 1e-3
+            W[i, j] -= w
+            W[j, i] -= w
+            W[i, i] += w
+            W[j, j] += w
+        elif kind == 2:                                           # diagonal shift
+            d = 10.0 ** rng.uniform(-13, -3) * abs(W).max()
+            W = W + d * sp.identity(n, format="lil")          # S - d I
+        W = W.tocsr()
+        psd, _ = _certified(W, V, F)
+        ev = np.linalg.eigvalsh(-((W + W.T) / 2).toarray())
+        truly = ev.min() >= -1e-10 * np.abs(ev).max()
+        indefinite += not truly
+        if psd:
+            certified += 1
+            assert truly, (trial, ev.min() / np.abs(ev).max())
+    assert certified >= 150 and indefinite >= 60
 
 
 @pytest.mark.parametrize("name", ["scratch.mean_value", "scratch.cotan_normalized"])

@@ -31,6 +31,17 @@ and ``M`` diagonal (or None):
     exact certificate or left blank (see `_nonsymmetric_psd`): the symmetric part alone would
     call a stable operator indefinite. How the symmetric case is computed (no dense eigensolver):
 
+    0. Two cheap exact certificates come first, at any size. Diagonal dominance: if ``S`` has a
+       non-negative diagonal and ``S_ii >= sum_j |S_ij|`` to rounding (e.g. any symmetric W with
+       POS), Gershgorin gives ``psd`` True. Triangle split: ``S`` is written as a sum of 3x3
+       triangle Laplacians plus remainders, and ``lambda_min(S) >= -max_i sigma_i`` with
+       ``sigma_i`` the negative parts of the pieces at vertex i and their rounding
+       (`harness.metrics._psd_kernel`; exactly semi-definite pieces for any cotangent
+       Laplacian); ``psd`` is True when ``max sigma <= PSD_TOL * max_i S_ii`` (a lower bound of
+       the largest eigenvalue). Either certificate settles ``min_eig`` only when, moreover,
+       ``S 1 = 0`` (every row sums to zero within ``1e-10 * max |S_ii|``): then the constant
+       vector bounds it from above, so ``min_eig`` lies within ``[-PSD_TOL, 1e-10]`` and is
+       reported as 0. Otherwise the steps below run.
     1. ``lam_max = max |eig(S)|`` by ARPACK Lanczos (``eigsh``, ``which='LM'``, tol 1e-6; fast,
        extreme eigenvalue). Small Krylov spaces (``ncv=8``) are used throughout.
     2. ``A = S - sigma I`` with ``sigma = -PSD_TOL * lam_max`` is factorised as
@@ -43,13 +54,10 @@ and ``M`` diagonal (or None):
        eigenvalue is found with ``eigsh(which='SA')`` (Lanczos), falling back to LOBPCG.
     If the factorisation is not symmetric (SuperLU had to pivot off the diagonal), fails, or
     the iteration does not converge, the unmeasurable values are None (blank), never guessed.
-    Above ``EIG_MAX_N`` vertices (200k) the factorisation is not attempted (its fill grows
-    too large: see benchmarks/bench_laplacian.py). There a cheap exact certificate
-    is used instead: if ``S`` is diagonally dominant with a non-negative diagonal
-    (``S_ii >= sum_j |S_ij|`` to rounding, e.g. any symmetric W with POS), Gershgorin gives
-    ``psd`` True, and if moreover ``S 1 = 0`` (rows of S sum to zero) the constant vector is
-    in its kernel, so ``min_eig`` is exactly 0. Otherwise both are None (not measured, never
-    guessed).
+    Above ``EIG_MAX_N`` vertices (200k) steps 1-3 are not attempted (the factorisation's fill
+    grows too large: see benchmarks/bench_laplacian.py): there a matrix that a certificate of
+    step 0 finds semi-definite but whose rows do not sum to zero gets ``psd`` True and
+    ``min_eig`` None; any other gets both None (not measured, never guessed).
     Every Lanczos iteration starts from a seeded vector, so ``min_eig`` is reproducible.
 ``nnz``
     number of stored entries of ``W`` that are non-zero (explicit zeros not counted).
@@ -182,13 +190,13 @@ def laplacian_properties(W, M, V, F, planar: bool | None = None) -> dict:
 
     # ---- semi-definiteness
     if out["SYM"]:
-        out["min_eig"], out["psd"] = _min_eig(W) if n <= EIG_MAX_N else _gershgorin_certificate(W)
+        out["min_eig"], out["psd"] = _min_eig(W, V, F)
     else:
-        out["min_eig"], out["psd"] = _nonsymmetric_psd(W, n)
+        out["min_eig"], out["psd"] = _nonsymmetric_psd(W, n, V, F)
     return out
 
 
-def _nonsymmetric_psd(W, n):
+def _nonsymmetric_psd(W, n, V, F):
     """(min_eig, psd) for a non-symmetric W: psd means every eigenvalue of -W has a non-negative
     real part. Two exact certificates, else (None, None):
 
@@ -203,7 +211,7 @@ def _nonsymmetric_psd(W, n):
     if d is not None:
         S = sp.diags(d) @ W
         S = ((S + S.T) * 0.5).tocsr()
-        return _min_eig(S) if n <= EIG_MAX_N else _gershgorin_certificate(S)
+        return _min_eig(S, V, F)
     A = (-W).tocsr()
     diag = A.diagonal()
     off = np.asarray(abs(A).sum(axis=1)).ravel() - np.abs(diag)
@@ -307,19 +315,31 @@ def _operator_symmetric(W, M, rows, cols, vals):
     return bool(err <= SYM_TOL)
 
 
-def _gershgorin_certificate(W):
-    """(min_eig, psd) from diagonal dominance of S = -(W + W^T)/2, or (None, None)."""
-    S = (-(W + W.T) * 0.5).tocsr()
+def _certificate(S, V, F):
+    """Step 0 of the module docstring for ``S`` (CSR, symmetric, explicit zeros removed):
+    ``(psd, rows_sum_to_zero)``, ``psd`` True when diagonal dominance or the triangle split
+    proves ``lambda_min(S) >= -PSD_TOL * lambda_max(S)``, else None."""
     d = S.diagonal()
-    absrow = np.asarray(abs(S).sum(axis=1)).ravel() - np.abs(d)
     scale = float(np.abs(d).max()) if d.size else 0.0
-    if scale == 0.0:
-        return 0.0, True
-    tol = 1e-12 * scale
-    if not (np.all(d >= -tol) and np.all(d - absrow >= -tol * np.maximum(1.0, absrow / scale))):
-        return None, None
+    if scale == 0.0 or not np.isfinite(S.data).all():
+        return None, False
     rowsum = np.abs(np.asarray(S.sum(axis=1)).ravel()).max()
-    return (0.0 if rowsum <= 1e-10 * scale else None), True
+    zero_rows = bool(rowsum <= 1e-10 * scale)
+    absrow = np.asarray(abs(S).sum(axis=1)).ravel() - np.abs(d)
+    tol = 1e-12 * scale
+    if np.all(d >= -tol) and np.all(d - absrow >= -tol * np.maximum(1.0, absrow / scale)):
+        return True, zero_rows
+    dmax = float(d.max())
+    if dmax <= 0.0 or len(F) == 0:
+        return None, zero_rows
+    from ._psd_kernel import face_split_bound
+    S = S.tocsr()
+    if not S.has_sorted_indices:
+        S = S.sorted_indices()
+    sigma, _ = face_split_bound(S.indptr.astype(np.int64, copy=False), S.indices.astype(np.int64, copy=False),
+                                S.data, np.ascontiguousarray(V, dtype=np.float64),
+                                np.ascontiguousarray(F, dtype=np.int64))
+    return (True if float(sigma.max()) <= PSD_TOL * dmax else None), zero_rows
 
 
 def _v0(n):
@@ -350,13 +370,19 @@ def _ldlt(A):
     return lu.solve, lu.U.diagonal()
 
 
-def _min_eig(W):
+def _min_eig(W, V, F):
     """(min_eig relative, psd) of S = -(W + W^T)/2; None where not measurable."""
     n = W.shape[0]
-    S = (-(W + W.T) * 0.5).tocsc()
+    S = (-(W + W.T) * 0.5).tocsr()
     S.eliminate_zeros()
     if S.nnz == 0:
         return 0.0, True
+    psd, zero_rows = _certificate(S, V, F)
+    if psd and zero_rows:
+        return 0.0, True
+    if n > EIG_MAX_N:
+        return None, psd
+    S = S.tocsc()
     if n < 3:  # ARPACK needs k < n; tiny matrices are done densely
         ev = np.linalg.eigvalsh(S.toarray())
         lam = np.abs(ev).max()
