@@ -132,6 +132,36 @@ def test_compiled_hierarchy_equals_libigl_distances():
         assert np.abs(hinted - ref).max() <= 1e-15 * diag
 
 
+@pytest.mark.parametrize("level", [0.3, 3.0, 30.0])
+def test_displaced_surface_reuses_the_tree_and_gives_the_same_distances(level):
+    """`Surface.displaced`: the clean mesh's tree with its boxes recomputed for a noisy copy (up to
+    thirty mean edge lengths of noise, where the old tree fits badly) holds every triangle in its
+    boxes, and its distances equal a freshly built surface's and libigl's (1e-15 of the diagonal)."""
+    from harness.metrics._bvh_kernel import query_many
+    from harness.noise import apply_noise
+    m = datasets.load("armadillo").clean
+    V = apply_noise(m.V, m.F, "gaussian_normal", level, 0)
+    D = _Surface(m.V, m.F).displaced(V)
+    Vo, Fo, B = D.bvh()
+    assert np.array_equal(Vo[Fo], V[m.F][np.argsort(D._pos)])      # the same triangles, in leaf order
+    for k in np.flatnonzero(B[:, 6] < 0):                           # every leaf's box holds its triangles
+        P = Vo[Fo[int(-1 - B[k, 6]):int(B[k, 7])]].reshape(-1, 3)
+        assert (P >= B[k, :3]).all() and (P <= B[k, 3:6]).all()
+    inner = np.flatnonzero(B[:, 6] >= 0)
+    for c in (6, 7):                                                # and every inner box its children's
+        ch = B[inner, c].astype(np.int64)
+        assert (B[ch, :3] >= B[inner, :3]).all() and (B[ch, 3:6] <= B[inner, 3:6]).all()
+    rng = np.random.default_rng(3)
+    diag = m.diagonal()
+    P = np.concatenate([sample_surface(V, m.F, 5000, 4) + rng.normal(scale=0.01 * diag, size=(5000, 3)), V])
+    ref = _Surface(V, m.F).query(P)[0]
+    fresh = query_many(P, np.full(len(P), -1, np.int64), *_Surface(V, m.F).bvh())[0]
+    d = query_many(P, np.full(len(P), -1, np.int64), *D.bvh())[0]
+    assert np.abs(d - ref).max() <= 1e-15 * diag and np.abs(d - fresh).max() <= 1e-15 * diag
+    with pytest.raises(ValueError, match="one position per vertex"):
+        _Surface(m.V, m.F).displaced(V[:-1])
+
+
 def test_corresponding_vertices_give_a_valid_tighter_bracket():
     """A smoothed mesh against its clean original (same faces): the displacement cap gives a
     bracket that overlaps the one found without it and is no wider; mismatched faces are refused."""

@@ -223,6 +223,35 @@ def build(V, F, C, order):
 
 
 @njit(cache=True)
+def refit(B, V, F):
+    """The nodes ``B`` (`build`'s packing) with every box recomputed for the vertex positions
+    ``V`` of the same triangles ``F`` (leaf order): the same tree over a displaced copy of the
+    surface. Any positions give a valid hierarchy (each box holds its triangles); the closer
+    they are to the built ones, the tighter the boxes."""
+    out = B.copy()
+    for k in range(B.shape[0] - 1, -1, -1):   # children have larger indices
+        if out[k, 6] < 0:
+            for d in range(3):
+                out[k, d] = np.inf
+                out[k, 3 + d] = -np.inf
+            for i in range(int(-1.0 - out[k, 6]), int(out[k, 7])):
+                for j in range(3):
+                    v = F[i, j]
+                    for d in range(3):
+                        x = V[v, d]
+                        if x < out[k, d]:
+                            out[k, d] = x
+                        if x > out[k, 3 + d]:
+                            out[k, 3 + d] = x
+        else:
+            a, b = int(out[k, 6]), int(out[k, 7])
+            for d in range(3):
+                out[k, d] = min(out[a, d], out[b, d])
+                out[k, 3 + d] = max(out[a, 3 + d], out[b, 3 + d])
+    return out
+
+
+@njit(cache=True)
 def centroids(V, F):
     """Centroids (m, 3) of the triangles."""
     C = np.empty((F.shape[0], 3))

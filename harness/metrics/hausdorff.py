@@ -154,7 +154,9 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
     if atol is None:
         atol = 1e-12 * max(float(np.linalg.norm(np.ptp(VA, axis=0))), float(np.linalg.norm(np.ptp(VB, axis=0))))
     deadline = time.perf_counter() + max_seconds
-    SA, SB = Surface(VA, FA), (surface_b if surface_b is not None else Surface(VB, FB))
+    SB = surface_b if surface_b is not None else Surface(VB, FB)
+    same = corresponding and VA.shape == VB.shape and np.array_equal(np.asarray(FA), SB.F)
+    SA = SB.displaced(VA) if same else Surface(VA, FA)      # same triangles: B's tree, refitted
     out = {}
     seed_ab = seed_ba = 0.0
     if n_samples:
@@ -210,3 +212,4 @@ def warm() -> None:
     V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
     F = np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]], dtype=np.int64)
     hausdorff(V, F, V * 1.1, F, n_samples=0)
+    hausdorff(V * 1.1, F, V, F, n_samples=0, corresponding=True)

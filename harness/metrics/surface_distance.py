@@ -16,6 +16,7 @@ class Surface:
         self._bvh = None
         self._nb = None
         self._pos = None
+        self._used = None
         self.count = 0
 
     def bvh(self) -> tuple:
@@ -32,6 +33,27 @@ class Surface:
             self._pos = np.empty(len(order), np.int64)
             self._pos[order] = np.arange(len(order))
         return self._bvh
+
+    def displaced(self, V: np.ndarray) -> "Surface":
+        """The `Surface` of the same triangles on other positions ``V`` of the same vertices (a
+        smoothed or noisy copy): its hierarchy is this one's tree with every box recomputed
+        (`harness.metrics._bvh_kernel.refit`; valid for any ``V``, tight for a nearby copy),
+        and it shares the face neighbours, which depend on the triangles only."""
+        from ._bvh_kernel import refit
+        V = np.ascontiguousarray(V, dtype=np.float64)
+        if V.shape != self.V.shape:
+            raise ValueError(f"displaced needs one position per vertex {self.V.shape}, got {V.shape}")
+        out = Surface(V, self.F)
+        Vo, Fo, nodes = self.bvh()
+        if getattr(self, "_used", None) is None:    # vertex of V behind each vertex of V' (older pickles lack it)
+            self._used = np.empty(len(Vo), np.int64)
+            order = np.empty(len(self._pos), np.int64)
+            order[self._pos] = np.arange(len(self._pos))
+            self._used[Fo.ravel()] = self.F[order].ravel()
+        Vd = np.ascontiguousarray(V[self._used])
+        out._bvh, out._pos, out._used = (Vd, Fo, refit(nodes, Vd, Fo)), self._pos, self._used
+        out._nb = self.neighbours()
+        return out
 
     def __getstate__(self) -> dict:
         """Pickled (e.g. kept as a per-input fact) with the hierarchy but without libigl's tree,
@@ -101,17 +123,19 @@ def point_surface_distance(P: np.ndarray, V: np.ndarray, F: np.ndarray, surface:
 
 
 def surface_distance(V: np.ndarray, F: np.ndarray, V_clean: np.ndarray, F_clean: np.ndarray,
-                     surface: Surface | None = None, d: np.ndarray | None = None) -> dict:
+                     surface: Surface | None = None, d: np.ndarray | None = None,
+                     double_areas_: np.ndarray | None = None) -> dict:
     """Distances of the result's vertices to the clean surface.
 
     ``dist_mean`` = mean_i d(v_i, S_clean). ``ev_sun`` (Sun et al. 2007) =
     sqrt( sum_i A_i d(v_i, S_clean)^2 / sum_i A_i ), A_i the barycentric area of vertex i on
     the result mesh (one third of its incident faces' areas). ``d``: those distances, when
-    already computed (e.g. by the Hausdorff bracket's vertex queries).
+    already computed (e.g. by the Hausdorff bracket's vertex queries); ``double_areas_``: the
+    result's face double areas (`harness.core.geometry.double_areas`), likewise.
     """
     if d is None:
         d = point_surface_distance(V, V_clean, F_clean, surface)
-    dbl = double_areas(V, F)
+    dbl = double_areas(V, F) if double_areas_ is None else double_areas_
     A = np.bincount(F.ravel(), weights=np.repeat(dbl / 6.0, 3), minlength=len(V))
     tot = A.sum()
     ev_sun = float(np.sqrt((A * d ** 2).sum() / tot)) if tot > 0 else float("nan")

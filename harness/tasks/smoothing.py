@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.geometry import area, edge_face_counts, volume, zero_area_faces
+from ..core.geometry import area, edge_face_counts, face_cross, face_normals, volume, zero_area_faces
 from ..errors import MethodFailed
 from ..metrics.hausdorff import hausdorff
 from ..metrics.normal_error import normal_error
@@ -52,6 +52,16 @@ def _clean_surface(inp):
     return cached_surface(inp.cache, "clean_surface", inp.clean.V, inp.F)
 
 
+def _clean_terms(inp) -> dict:
+    """The clean mesh's unit face normals, area, centroid and volume about it, once per input."""
+    if "clean_terms" not in inp.cache:
+        V_clean, F = inp.clean.V, inp.F
+        o = V_clean.mean(0)
+        inp.cache["clean_terms"] = {"normals": face_normals(V_clean, F), "area": area(V_clean, F), "centroid": o,
+                                    "volume": volume(V_clean - o, F) if _closed(inp) else None}
+    return inp.cache["clean_terms"]
+
+
 def _input_metrics(inp) -> dict:
     if "input_metrics" not in inp.cache:
         V_clean, F, diag = inp.clean.V, inp.F, inp.diag
@@ -59,7 +69,8 @@ def _input_metrics(inp) -> dict:
             "input_ev_mean": vertex_error(inp.V, V_clean)["ev_mean"] / diag,
             "input_dist_mean": surface_distance(inp.V, F, V_clean, F, d=_clean_surface(inp).corresponding_distances(
                 inp.V))["dist_mean"] / diag,
-            "input_normal_error_deg": normal_error(inp.V, V_clean, F)["normal_error_deg"]}
+            "input_normal_error_deg": normal_error(inp.V, V_clean, F, clean_normals=_clean_terms(inp)["normals"])[
+                "normal_error_deg"]}
     return dict(inp.cache["input_metrics"])
 
 
@@ -81,17 +92,20 @@ def measure(inp, result, params) -> dict:
     S = _clean_surface(inp)
     hd = hausdorff(V_out, F, V_clean, F, eps=inp.settings.get("hausdorff_eps", 1e-3), n_samples=0, surface_b=S,
                    corresponding=True, vertex_distances=True)
-    sd = surface_distance(V_out, F, V_clean, F, d=hd["vertex_distances_ab"])
+    X = face_cross(V_out, F)                     # shared by the areas and the normals
+    dbl = np.linalg.norm(X, axis=1)
+    sd = surface_distance(V_out, F, V_clean, F, d=hd["vertex_distances_ab"], double_areas_=dbl)
     row.update({"ev_mean": ve["ev_mean"] / diag, "ev_rms": ve["ev_rms"] / diag,
                 "dist_mean": sd["dist_mean"] / diag, "ev_sun": sd["ev_sun"] / diag,
                 "hausdorff": hd["hausdorff"] / diag, "hausdorff_gap": hd["hausdorff_gap"],
                 "hausdorff_upper": hd["hausdorff_upper"] / diag})
-    row.update(normal_error(V_out, V_clean, F))
-    a0 = area(V_clean, F)
-    row["area_ratio"] = area(V_out, F) / a0 if a0 > 0 else None
+    clean = _clean_terms(inp)
+    N = np.divide(X, dbl[:, None], out=np.zeros_like(X), where=dbl[:, None] > 0)
+    row.update(normal_error(V_out, V_clean, F, normals=N, clean_normals=clean["normals"]))
+    a0 = clean["area"]
+    row["area_ratio"] = float(dbl.sum() / 2) / a0 if a0 > 0 else None
     if _closed(inp):
-        o = V_clean.mean(0)                      # about the clean centroid: no cancellation far from the origin
-        v0 = volume(V_clean - o, F)
+        o, v0 = clean["centroid"], clean["volume"]   # about the clean centroid: no cancellation far from the origin
         row["volume_ratio"] = volume(V_out - o, F) / v0 if v0 != 0 else None
     row.update(triangle_quality(V_out, F))
     return row
@@ -146,6 +160,6 @@ TASK = Task(
                kind="json"),
     ),
     measure=measure, check_result=_check, output_mesh=output_mesh, view=view, view_metric="dist_mean", order=20,
-    preload=_warm_metrics, input_facts=("closed", "input_metrics", "clean_surface"),
+    preload=_warm_metrics, input_facts=("closed", "input_metrics", "clean_surface", "clean_terms"),
     invalid_when=(Invalid("diverged", "==", "diverged", value=True),
                   Invalid("dist_mean", ">", "worse than the noisy input", than="input_dist_mean")))
