@@ -321,6 +321,24 @@ def test_certificates_agree_with_the_factorisation(monkeypatch, name, mesh):
             assert _certified(W, V, m.F) == (True, True) and fast["min_eig"] == 0.0
 
 
+@pytest.mark.parametrize("scale", [1e-300, 1e-150, 1.0, 1e150, 1e155, 1e300])
+def test_triangle_split_at_extreme_scales(scale):
+    """A triangle whose weights (1, 1, -0.6) make it indefinite is never certified, however large
+    the weights (products once overflowed to NaN, and NaN was read as no negative part); a cotangent
+    Laplacian is certified at any scale (the matrix is scaled by a power of two first)."""
+    from harness.datasets import plane_nondelaunay
+    from methods.scratch.operators import cotan_weights
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.0]])
+    F = np.array([[0, 1, 2]], np.int64)
+    A = sp.csr_matrix((np.r_[1, 1, -0.6, 1, 1, -0.6] * scale, ([0, 1, 2, 1, 2, 0], [1, 2, 0, 0, 1, 2])), shape=(3, 3))
+    W = (A - sp.diags(np.asarray(A.sum(1)).ravel())).tocsr()
+    assert _certified(W, V, F)[0] is None
+    p = laplacian_properties(W, None, V, F)
+    assert p["psd"] is False and p["min_eig"] == pytest.approx(-1 / 15, rel=1e-9)
+    V, F = plane_nondelaunay(60, 1, 0.4)                       # negative weights: dominance does not apply
+    assert _certified(cotan_weights(V, F) * scale, V, F) == (True, True)
+
+
 def test_triangle_split_never_certifies_an_indefinite_matrix():
     """Cotangent weights of small meshes with random symmetric perturbations (edge weights
     made negative, diagonal shifts from 1e-13 to 1e-3 of the scale): whenever the triangle

@@ -69,6 +69,8 @@ def _neg_part(a, b, c):
     et = 3.0 * U * (abs(a) + abs(b) + abs(c))
     eq = 5.0 * U * (abs(a * b) + abs(b * c) + abs(c * a)) + 1e-300
     tlo, qlo = t - et, q - eq
+    if not (np.isfinite(tlo) and np.isfinite(qlo)):
+        return np.inf                      # overflow: nothing is proved
     if tlo >= 0.0 and qlo >= 0.0:
         return 0.0
     disc = tlo * tlo - 3.0 * qlo
@@ -78,14 +80,17 @@ def _neg_part(a, b, c):
         neg = -3.0 * qlo / (tlo + np.sqrt(disc))
     else:
         neg = np.sqrt(disc) - tlo
-    return neg * (1.0 + 16.0 * U)
+    neg *= 1.0 + 16.0 * U
+    return neg if neg >= 0.0 else np.inf   # NaN: nothing is proved
 
 
 @njit(cache=True)
 def face_split_bound(indptr, indices, data, V, F):
     """``(sigma, rowsum)`` for the symmetric ``S`` in CSR (sorted column indices) on the mesh
     ``(V, F)`` (indices in range): ``lambda_min(S) >= -max(sigma)`` (module docstring), and
-    ``rowsum`` (n,) the computed ``S 1``."""
+    ``rowsum`` (n,) the computed ``S 1``. Scale ``S`` so that its largest diagonal entry is
+    about 1 (by a power of two, exactly): products of weights must neither overflow nor reach
+    the absolute floor of the rounding bounds; an overflow makes ``sigma`` infinite."""
     n = indptr.shape[0] - 1
     m = F.shape[0]
     nnz = data.shape[0]
@@ -130,7 +135,7 @@ def face_split_bound(indptr, indices, data, V, F):
             P[p2] += w2
             Pabs[p2] += abs(w2)
         neg = _neg_part(w0, w1, w2)
-        if neg > 0.0:
+        if not neg <= 0.0:                 # NaN or inf counts against the certificate
             sigma[F[f, 0]] += neg
             sigma[F[f, 1]] += neg
             sigma[F[f, 2]] += neg

@@ -336,10 +336,11 @@ def _certificate(S, V, F):
     S = S.tocsr()
     if not S.has_sorted_indices:
         S = S.sorted_indices()
+    k = np.frexp(dmax)[1]                   # S 2^-k: diagonal near 1, scaled exactly
     sigma, _ = face_split_bound(S.indptr.astype(np.int64, copy=False), S.indices.astype(np.int64, copy=False),
-                                S.data, np.ascontiguousarray(V, dtype=np.float64),
+                                np.ldexp(S.data, -k), np.ascontiguousarray(V, dtype=np.float64),
                                 np.ascontiguousarray(F, dtype=np.int64))
-    return (True if float(sigma.max()) <= PSD_TOL * dmax else None), zero_rows
+    return (True if float(sigma.max()) <= PSD_TOL * np.ldexp(dmax, -k) else None), zero_rows
 
 
 def _v0(n):
