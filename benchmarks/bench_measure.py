@@ -1,0 +1,113 @@
+"""Benchmark: the harness's measuring of one case's output at 86k faces (part of the fixed cost
+per case), against the measuring it replaced.
+
+Run:  .venv/bin/python benchmarks/bench_measure.py [--mesh armadillo] [--repeats 9]
+
+Everything runs in one process, A and B alternating, each warm (its compiled code loaded and one
+untimed call first); per pair the ratio A / B, and the median (min-max) over the pairs.
+
+- Laplacian PSD column (`harness.metrics.laplacian_properties`, whole measure) on the W of
+  scratch.cotan, libigl.cotan, scratch.uniform and scratch.intrinsic_delaunay:
+  A = the exact certificates (diagonal dominance, triangle split) before the factorisation,
+  B = LDL^T inertia and Lanczos alone (the certificate switched off). Values are compared first:
+  the same ``psd``, ``min_eig`` within its 1e-10 tolerance.
+- Smoothing Hausdorff bracket (`harness.metrics.hausdorff`, corresponding vertices) of a
+  scratch.taubin result against the clean mesh, the clean surface's hierarchy built once:
+  A = the result's hierarchy refitted from the clean one (`Surface.displaced`), B = built afresh.
+  The brackets are compared first: each contains the other's lower bound.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+
+def _pairs(a, b, repeats):
+    a(), b()
+    out = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        a()
+        t1 = time.perf_counter()
+        b()
+        t2 = time.perf_counter()
+        out.append((t1 - t0, t2 - t1))
+    return out
+
+
+def _report(label, pairs):
+    ta, tb = [p[0] for p in pairs], [p[1] for p in pairs]
+    r = [x / y for x, y in pairs]
+    print(f"{label:48s} A {statistics.median(ta) * 1e3:7.1f} ms  B {statistics.median(tb) * 1e3:7.1f} ms  "
+          f"A/B {statistics.median(r):.3f} ({min(r):.3f}-{max(r):.3f})")
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--mesh", default="armadillo")
+    ap.add_argument("--repeats", type=int, default=9)
+    args = ap.parse_args(argv)
+    import harness.metrics.laplacian_properties as lp
+    from harness import datasets
+    from harness.metrics import surface_distance
+    from harness.metrics.hausdorff import hausdorff
+    from harness.noise import apply_noise
+    from harness.plugins import import_methods
+    methods = import_methods()
+    m = datasets.load(args.mesh).clean
+    print(f"mesh {args.mesh}: {len(m.V)} vertices, {len(m.F)} faces; load average {os.getloadavg()}")
+    real = lp._certificate
+
+    def off(S, V, F):
+        return None, False
+    for name in ("scratch.cotan", "libigl.cotan", "scratch.uniform", "scratch.intrinsic_delaunay"):
+        W = methods.get(name)(m.V, m.F).W
+
+        def a(W=W):
+            lp._certificate = real
+            return lp.laplacian_properties(W, None, m.V, m.F)
+
+        def b(W=W):
+            lp._certificate = off
+            try:
+                return lp.laplacian_properties(W, None, m.V, m.F)
+            finally:
+                lp._certificate = real
+        ra, rb = a(), b()
+        assert ra["psd"] == rb["psd"], (name, ra["psd"], rb["psd"])
+        assert abs(ra["min_eig"] - rb["min_eig"]) <= 1e-10, (name, ra["min_eig"], rb["min_eig"])
+        _report(f"laplacian_properties, {name}", _pairs(a, b, args.repeats))
+
+    V_in = apply_noise(m.V, m.F, "gaussian_normal", 0.3, 0, mesh_key=args.mesh)
+    V_out = methods.get("scratch.taubin")(V_in, m.F).V
+    S = surface_distance.Surface(m.V, m.F)
+    S.neighbours()
+    fresh = surface_distance.Surface.displaced
+
+    def rebuilt(self, V):
+        return surface_distance.Surface(V, self.F)
+
+    def run(displaced):
+        surface_distance.Surface.displaced = displaced
+        try:
+            return hausdorff(V_out, m.F, m.V, m.F, n_samples=0, surface_b=S, corresponding=True, vertex_distances=True)
+        finally:
+            surface_distance.Surface.displaced = fresh
+    ha, hb = run(fresh), run(rebuilt)
+    assert ha["hausdorff"] <= hb["hausdorff_upper"] * (1 + 1e-12) and hb["hausdorff"] <= ha["hausdorff_upper"] * (1 + 1e-12)
+    assert np.array_equal(ha["vertex_distances_ab"], hb["vertex_distances_ab"])
+    _report("smoothing Hausdorff bracket (taubin, 0.3)", _pairs(lambda: run(fresh), lambda: run(rebuilt), args.repeats))
+    print(f"load average {os.getloadavg()}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
