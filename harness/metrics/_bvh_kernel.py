@@ -149,8 +149,6 @@ def build(V, F, C, order):
     (so ``B[k, 6] < 0`` marks a leaf). Node 0 is the root."""
     m = order.size
     cap = 2 * m + 1                      # leaves hold >= 1 triangle: at most 2m - 1 nodes
-    lo = np.empty((cap, 3))
-    hi = np.empty((cap, 3))
     left = np.full(cap, -1, np.int64)
     right = np.full(cap, -1, np.int64)
     start = np.zeros(cap, np.int64)
@@ -188,38 +186,42 @@ def build(V, F, C, order):
             stack[top + 1] = n + 1
             top += 2
             n += 2
-    for k in range(n - 1, -1, -1):           # boxes bottom-up: children have larger indices
-        if left[k] < 0:
-            for d in range(3):
-                lo[k, d] = np.inf
-                hi[k, d] = -np.inf
-            for i in range(start[k], end[k]):
-                f = order[i]
-                for j in range(3):
-                    v = F[f, j]
-                    for d in range(3):
-                        x = V[v, d]
-                        if x < lo[k, d]:
-                            lo[k, d] = x
-                        if x > hi[k, d]:
-                            hi[k, d] = x
-        else:
-            a, b = left[k], right[k]
-            for d in range(3):
-                lo[k, d] = min(lo[a, d], lo[b, d])
-                hi[k, d] = max(hi[a, d], hi[b, d])
     B = np.empty((n, 8))                     # packed: one node per 64 bytes
     for k in range(n):
-        for d in range(3):
-            B[k, d] = lo[k, d]
-            B[k, 3 + d] = hi[k, d]
         if left[k] < 0:
             B[k, 6] = -1.0 - start[k]
             B[k, 7] = end[k]
         else:
             B[k, 6] = left[k]                # right[k] == left[k] + 1
             B[k, 7] = right[k]
+    _fit(B, V, F, order)
     return B
+
+
+@njit(cache=True)
+def _fit(B, V, F, order):
+    """Set every box of the packed nodes ``B`` bottom-up (children have larger indices): a leaf's
+    box holds the corners of its triangles ``F[order[start:end]]``, an inner box its children's."""
+    for k in range(B.shape[0] - 1, -1, -1):
+        if B[k, 6] < 0:
+            for d in range(3):
+                B[k, d] = np.inf
+                B[k, 3 + d] = -np.inf
+            for i in range(int(-1.0 - B[k, 6]), int(B[k, 7])):
+                f = order[i]
+                for j in range(3):
+                    v = F[f, j]
+                    for d in range(3):
+                        x = V[v, d]
+                        if x < B[k, d]:
+                            B[k, d] = x
+                        if x > B[k, 3 + d]:
+                            B[k, 3 + d] = x
+        else:
+            a, b = int(B[k, 6]), int(B[k, 7])
+            for d in range(3):
+                B[k, d] = min(B[a, d], B[b, d])
+                B[k, 3 + d] = max(B[a, 3 + d], B[b, 3 + d])
 
 
 @njit(cache=True)
@@ -229,25 +231,7 @@ def refit(B, V, F):
     surface. Any positions give a valid hierarchy (each box holds its triangles); the closer
     they are to the built ones, the tighter the boxes."""
     out = B.copy()
-    for k in range(B.shape[0] - 1, -1, -1):   # children have larger indices
-        if out[k, 6] < 0:
-            for d in range(3):
-                out[k, d] = np.inf
-                out[k, 3 + d] = -np.inf
-            for i in range(int(-1.0 - out[k, 6]), int(out[k, 7])):
-                for j in range(3):
-                    v = F[i, j]
-                    for d in range(3):
-                        x = V[v, d]
-                        if x < out[k, d]:
-                            out[k, d] = x
-                        if x > out[k, 3 + d]:
-                            out[k, 3 + d] = x
-        else:
-            a, b = int(out[k, 6]), int(out[k, 7])
-            for d in range(3):
-                out[k, d] = min(out[a, d], out[b, d])
-                out[k, 3 + d] = max(out[a, 3 + d], out[b, 3 + d])
+    _fit(out, V, F, np.arange(F.shape[0]))
     return out
 
 
