@@ -306,7 +306,7 @@ def _operator_symmetric(W, M, rows, cols, vals):
         if (zero_mass & row_nz).any() and np.any(np.abs(vals[zero_mass[rows]]) > 0):
             return None
     minv = np.divide(1.0, m, out=np.zeros_like(m), where=~zero_mass)
-    Lop = sp.csr_matrix((vals * minv[rows], (rows, cols)), shape=W.shape)
+    Lop = sp.csr_matrix((vals * minv[rows], cols, W.indptr), shape=W.shape)      # diag(minv) W, same pattern
     lmax = float(abs(Lop).max()) if Lop.nnz else 0.0
     if lmax == 0.0:
         return True
