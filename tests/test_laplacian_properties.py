@@ -300,7 +300,8 @@ def test_certificates_agree_with_the_factorisation(monkeypatch, name, mesh):
     """On closed, open and obtuse meshes and on a noisy copy, the cheap certificates give the
     (psd, min_eig) the LDL^T inertia and shift-invert Lanczos give, within min_eig's tolerance
     (1e-10); the cotangent Laplacians (negative weights) are certified by the triangle split
-    (cotan_normalized through its symmetric S = D W), the intrinsic ones by dominance."""
+    (cotan_normalized through its symmetric S = D W); the intrinsic ones (edges that are not the
+    mesh's) by dominance where their weights are positive, else by the factorisation."""
     import harness.metrics.laplacian_properties as lp
     from harness import datasets
     from harness.noise import apply_noise
