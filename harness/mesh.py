@@ -411,7 +411,7 @@ def topology(V: np.ndarray, F: np.ndarray) -> dict:
     """
     n = len(V)
     edges, counts = edge_face_counts(F)
-    used = np.flatnonzero(np.bincount(np.asarray(F).ravel(), minlength=n)) if len(F) else np.zeros(0, np.int64)
+    used = np.flatnonzero(referenced(F, n)) if len(F) else np.zeros(0, np.int64)
     bnd = edges[counts == 1]
     if len(bnd):
         Gb = sp.coo_matrix((np.ones(len(bnd)), (bnd[:, 0], bnd[:, 1])), shape=(n, n))

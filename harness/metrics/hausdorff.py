@@ -38,7 +38,7 @@ import time
 
 import numpy as np
 
-from ..core.geometry import face_around_vertex, morton_order, sample_surface
+from ..core.geometry import face_around_vertex, morton_order, referenced, sample_surface
 from .surface_distance import Surface
 
 
@@ -69,7 +69,7 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, ato
     tree = Y.bvh()
     from ._cover_bound import work
     NY, W = Y.neighbours(), work(len(tree[1]))
-    inface = np.bincount(FX.ravel(), minlength=len(VX)) > 0 if len(FX) else np.zeros(len(VX), bool)
+    inface = referenced(FX, len(VX))
     used = np.arange(len(VX)) if (all_vertices and len(tree[1])) else np.flatnonzero(inface)
     dV = np.zeros(len(VX))
     iV = np.zeros(len(VX), np.int64)
@@ -155,9 +155,10 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
     if atol is None:
         atol = 1e-12 * max(float(np.linalg.norm(np.ptp(VA, axis=0))), float(np.linalg.norm(np.ptp(VB, axis=0))))
     deadline = time.perf_counter() + max_seconds
+    if corresponding and (VA.shape != VB.shape or not np.array_equal(FA, FB)):
+        raise ValueError("corresponding=True needs the same faces on the same number of vertices")
     SB = surface_b if surface_b is not None else Surface(VB, FB)
-    same = corresponding and VA.shape == VB.shape and np.array_equal(np.asarray(FA), SB.F)
-    SA = SB.displaced(VA) if same else Surface(VA, FA)      # same triangles: B's tree, refitted
+    SA = SB.displaced(VA) if corresponding else Surface(VA, FA)      # same triangles: B's tree, refitted
     out = {}
     seed_ab = seed_ba = 0.0
     if n_samples:
@@ -173,8 +174,6 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
             out.update(surface_dist_mean=float("nan"), surface_dist_mean_se=float("nan"))
     cap_ab = cap_ba = hints = None
     if corresponding:
-        if VA.shape != VB.shape or not np.array_equal(FA, FB):
-            raise ValueError("corresponding=True needs the same faces on the same number of vertices")
         FA = np.asarray(FA, dtype=np.int64)
         disp = np.linalg.norm(VA - VB, axis=1)
         cap_ab = cap_ba = disp[FA].max(axis=1) if len(FA) else None
