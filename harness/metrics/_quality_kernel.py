@@ -1,4 +1,5 @@
-"""Compiled per-face angles and radius ratio (`harness.metrics.triangle_quality` on large meshes)."""
+"""Compiled per-face passes of the metrics: angles and radius ratio (`harness.metrics.triangle_quality`
+on large meshes) and the smoothing task's normals, areas, volume terms and normal angles."""
 from __future__ import annotations
 
 import math
@@ -50,3 +51,53 @@ def face_quality(V, F):
                 r = 1.0
         rr[f] = r
     return amin, amax, rr
+
+
+@njit(cache=True)
+def face_terms(V, F, o, C):
+    """One pass over the faces (the operations of the numpy definitions, value for value):
+
+    - ``N`` (m, 3): unit normals ``X / |X|``, ``X = (v1 - v0) x (v2 - v0)`` (zero rows where
+      ``|X| = 0``; `harness.core.geometry.face_normals`);
+    - ``dbl`` (m,): ``|X|``, twice the area;
+    - ``vol`` (m,): ``(v0 - o) . ((v1 - o) x (v2 - o))``, six times the signed volume of the
+      tetrahedron on the face and ``o`` (`harness.core.geometry.volume` of ``V - o`` sums them / 6);
+    - ``ang`` (m,) when ``C`` (m, 3) holds reference unit normals (else empty): the angle in
+      degrees ``atan2(|N x C|, N . C)``, 90 where either normal is zero
+      (`harness.metrics.normal_error`)."""
+    m = F.shape[0]
+    N = np.empty((m, 3))
+    dbl = np.empty(m)
+    vol = np.empty(m)
+    want = C.shape[0] == m
+    ang = np.empty(m if want else 0)
+    deg = 180.0 / math.pi
+    for f in range(m):
+        i0, i1, i2 = F[f, 0], F[f, 1], F[f, 2]
+        p0x, p0y, p0z = V[i0, 0], V[i0, 1], V[i0, 2]
+        ax, ay, az = V[i1, 0] - p0x, V[i1, 1] - p0y, V[i1, 2] - p0z
+        bx, by, bz = V[i2, 0] - p0x, V[i2, 1] - p0y, V[i2, 2] - p0z
+        x0 = ay * bz - az * by
+        x1 = az * bx - ax * bz
+        x2 = ax * by - ay * bx
+        r = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+        dbl[f] = r
+        if r > 0:
+            n0, n1, n2 = x0 / r, x1 / r, x2 / r
+        else:
+            n0, n1, n2 = 0.0, 0.0, 0.0
+        N[f, 0], N[f, 1], N[f, 2] = n0, n1, n2
+        q0x, q0y, q0z = p0x - o[0], p0y - o[1], p0z - o[2]
+        q1x, q1y, q1z = V[i1, 0] - o[0], V[i1, 1] - o[1], V[i1, 2] - o[2]
+        q2x, q2y, q2z = V[i2, 0] - o[0], V[i2, 1] - o[1], V[i2, 2] - o[2]
+        vol[f] = (q0x * (q1y * q2z - q1z * q2y) + q0y * (q1z * q2x - q1x * q2z)) + q0z * (q1x * q2y - q1y * q2x)
+        if want:
+            c0, c1, c2 = C[f, 0], C[f, 1], C[f, 2]
+            if math.sqrt(n0 * n0 + n1 * n1 + n2 * n2) == 0.0 or math.sqrt(c0 * c0 + c1 * c1 + c2 * c2) == 0.0:
+                ang[f] = 90.0
+            else:
+                y0 = n1 * c2 - n2 * c1
+                y1 = n2 * c0 - n0 * c2
+                y2 = n0 * c1 - n1 * c0
+                ang[f] = math.atan2(math.sqrt(y0 * y0 + y1 * y1 + y2 * y2), (n0 * c0 + n1 * c1) + n2 * c2) * deg
+    return N, dbl, vol, ang

@@ -18,4 +18,10 @@ def normal_error(V: np.ndarray, V_clean: np.ndarray, F: np.ndarray, normals: np.
     ang = np.degrees(np.arctan2(np.linalg.norm(cross_rows(N, C), axis=1), (N * C).sum(1)))
     deg = (np.linalg.norm(N, axis=1) == 0) | (np.linalg.norm(C, axis=1) == 0)
     ang[deg] = 90.0
+    return angle_summary(ang)
+
+
+def angle_summary(ang: np.ndarray) -> dict:
+    """``normal_error_deg`` and ``normal_error_rms_deg`` of the per-face angles ``ang`` (m,)
+    (degrees; e.g. `harness.metrics._quality_kernel.face_terms`)."""
     return {"normal_error_deg": float(ang.mean()), "normal_error_rms_deg": float(np.sqrt((ang ** 2).mean()))}

@@ -44,7 +44,8 @@ def _face_quality(V: np.ndarray, F: np.ndarray):
 def warm() -> None:
     """Load (or compile) the compiled pass and the Hausdorff bounds once, e.g. in a driver before
     it forks case processes (the measuring code of the tasks with an output mesh)."""
-    from ._quality_kernel import face_quality
+    from ._quality_kernel import face_quality, face_terms
     from .hausdorff import warm as warm_hausdorff
     face_quality(np.eye(3), np.array([[0, 1, 2]], dtype=np.int64))
+    face_terms(np.eye(3), np.array([[0, 1, 2]], dtype=np.int64), np.zeros(3), np.eye(3)[:1])
     warm_hausdorff()

@@ -7,10 +7,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.geometry import area, edge_face_counts, face_cross, face_normals, volume, zero_area_faces
+from ..core.geometry import edge_face_counts, zero_area_faces
 from ..errors import MethodFailed
 from ..metrics.hausdorff import hausdorff
-from ..metrics.normal_error import normal_error
+from ..metrics.normal_error import angle_summary
 from ..metrics.surface_distance import cached_surface, point_surface_distance, surface_distance
 from ..metrics.triangle_quality import triangle_quality, warm as _warm_metrics
 from ..metrics.vertex_error import vertex_error
@@ -52,25 +52,34 @@ def _clean_surface(inp):
     return cached_surface(inp.cache, "clean_surface", inp.clean.V, inp.F)
 
 
+def _face_terms(V, F, o, C=None):
+    """Unit normals, double areas, volume terms about ``o`` and (with reference normals ``C``)
+    angles to ``C`` of the faces of (V, F) (`harness.metrics._quality_kernel.face_terms`)."""
+    from ..metrics._quality_kernel import face_terms
+    return face_terms(np.ascontiguousarray(V, dtype=np.float64), np.ascontiguousarray(F, dtype=np.int64),
+                      np.asarray(o, dtype=np.float64), np.zeros((0, 3)) if C is None else C)
+
+
 def _clean_terms(inp) -> dict:
     """The clean mesh's unit face normals, area, centroid and volume about it, once per input."""
     if "clean_terms" not in inp.cache:
-        V_clean, F = inp.clean.V, inp.F
-        o = V_clean.mean(0)
-        inp.cache["clean_terms"] = {"normals": face_normals(V_clean, F), "area": area(V_clean, F), "centroid": o,
-                                    "volume": volume(V_clean - o, F) if _closed(inp) else None}
+        o = inp.clean.V.mean(0)
+        N, dbl, vol, _ = _face_terms(inp.clean.V, inp.F, o)
+        inp.cache["clean_terms"] = {"normals": N, "area": float(dbl.sum() / 2), "centroid": o,
+                                    "volume": float(vol.sum() / 6.0) if _closed(inp) else None}
     return inp.cache["clean_terms"]
 
 
 def _input_metrics(inp) -> dict:
     if "input_metrics" not in inp.cache:
         V_clean, F, diag = inp.clean.V, inp.F, inp.diag
+        clean = _clean_terms(inp)
+        _, dbl, _, ang = _face_terms(inp.V, F, clean["centroid"], clean["normals"])
+        d = _clean_surface(inp).corresponding_distances(inp.V)
         inp.cache["input_metrics"] = {
             "input_ev_mean": vertex_error(inp.V, V_clean)["ev_mean"] / diag,
-            "input_dist_mean": surface_distance(inp.V, F, V_clean, F, d=_clean_surface(inp).corresponding_distances(
-                inp.V))["dist_mean"] / diag,
-            "input_normal_error_deg": normal_error(inp.V, V_clean, F, clean_normals=_clean_terms(inp)["normals"])[
-                "normal_error_deg"]}
+            "input_dist_mean": surface_distance(inp.V, F, V_clean, F, d=d, double_areas_=dbl)["dist_mean"] / diag,
+            "input_normal_error_deg": angle_summary(ang)["normal_error_deg"]}
     return dict(inp.cache["input_metrics"])
 
 
@@ -92,21 +101,19 @@ def measure(inp, result, params) -> dict:
     S = _clean_surface(inp)
     hd = hausdorff(V_out, F, V_clean, F, eps=inp.settings.get("hausdorff_eps", 1e-3), n_samples=0, surface_b=S,
                    corresponding=True, vertex_distances=True)
-    X = face_cross(V_out, F)                     # shared by the areas and the normals
-    dbl = np.linalg.norm(X, axis=1)
+    clean = _clean_terms(inp)
+    _, dbl, vol, ang = _face_terms(V_out, F, clean["centroid"], clean["normals"])
     sd = surface_distance(V_out, F, V_clean, F, d=hd["vertex_distances_ab"], double_areas_=dbl)
     row.update({"ev_mean": ve["ev_mean"] / diag, "ev_rms": ve["ev_rms"] / diag,
                 "dist_mean": sd["dist_mean"] / diag, "ev_sun": sd["ev_sun"] / diag,
                 "hausdorff": hd["hausdorff"] / diag, "hausdorff_gap": hd["hausdorff_gap"],
                 "hausdorff_upper": hd["hausdorff_upper"] / diag})
-    clean = _clean_terms(inp)
-    N = np.divide(X, dbl[:, None], out=np.zeros_like(X), where=dbl[:, None] > 0)
-    row.update(normal_error(V_out, V_clean, F, normals=N, clean_normals=clean["normals"]))
+    row.update(angle_summary(ang))
     a0 = clean["area"]
     row["area_ratio"] = float(dbl.sum() / 2) / a0 if a0 > 0 else None
     if _closed(inp):
         o, v0 = clean["centroid"], clean["volume"]   # about the clean centroid: no cancellation far from the origin
-        row["volume_ratio"] = volume(V_out - o, F) / v0 if v0 != 0 else None
+        row["volume_ratio"] = float(vol.sum() / 6.0) / v0 if v0 != 0 else None
     row.update(triangle_quality(V_out, F))
     return row
 
