@@ -22,8 +22,11 @@ import os
 import pickle
 import secrets
 import shutil
+import struct
 import tempfile
 from pathlib import Path
+
+import numpy as np
 
 _DIR: str | None = None       # this session's store; forked case processes inherit it
 
@@ -87,6 +90,59 @@ def _fact_path(p: Path, key, suffix: str = ".pkl") -> Path:
     return p.with_name(p.stem + "-" + hashlib.sha1(repr(key).encode()).hexdigest()[:20] + suffix)
 
 
+_MAGIC = b"SHOOTIS1"
+_ALIGN = 64                   # each array's bytes start on a multiple of this in the file
+
+
+def _aligned(pos: int) -> int:
+    return -(-pos // _ALIGN) * _ALIGN
+
+
+def _encode(obj) -> tuple[list, int]:
+    """The pieces of a fact's file and its size: `_MAGIC`, the pickle's length and its
+    out-of-band buffer sizes, the pickle (protocol 5), then the contiguous arrays' bytes
+    written directly from their memory (no serialised copy), each aligned to `_ALIGN`."""
+    raws = []
+
+    def out_of_band(buf):
+        try:
+            raws.append(buf.raw())
+        except BufferError:                  # not contiguous: in the pickle stream
+            return True
+        return False
+
+    head = pickle.dumps(obj, protocol=5, buffer_callback=out_of_band)
+    pieces = [_MAGIC + struct.pack(f"<QQ{len(raws)}Q", len(head), len(raws), *(r.nbytes for r in raws)), head]
+    pos = sum(len(x) for x in pieces)
+    for r in raws:
+        pad = _aligned(pos) - pos
+        pieces += [b"\0" * pad, r]
+        pos += pad + r.nbytes
+    return pieces, pos
+
+
+def _decode(path: str):
+    """The object of an `_encode`d file; its arrays are views of one buffer read from it."""
+    with open(path, "rb") as fh:
+        size = os.fstat(fh.fileno()).st_size
+        data = np.empty(size, np.uint8)          # writeable, aligned, not zero-filled
+        if fh.readinto(data) != size or data[:8].tobytes() != _MAGIC:
+            raise ValueError("not a fact file")
+    hl, n = struct.unpack_from("<QQ", data, 8)
+    sizes = struct.unpack_from(f"<{n}Q", data, 24)
+    mv = memoryview(data)
+    pos = 24 + 8 * n
+    head, pos = mv[pos:pos + hl], pos + hl
+    buffers = []
+    for s in sizes:
+        pos = _aligned(pos)
+        buffers.append(mv[pos:pos + s])
+        pos += s
+    if pos != size:
+        raise ValueError("a torn fact file")
+    return pickle.loads(head, buffers=buffers)
+
+
 def load(case, names) -> dict:
     """The stored facts of the case's input among ``names`` (a key or a tuple key's first item)."""
     p = _path(case) if names else None
@@ -99,8 +155,7 @@ def load(case, names) -> dict:
         return {}
     for path in entries:
         try:
-            with open(path, "rb") as fh:
-                key, value = pickle.load(fh)     # written by this session's own cases only
+            key, value = _decode(path)           # written by this session's own cases only
         except Exception:  # noqa: BLE001 - a torn or concurrent write is a miss
             continue
         if _wanted(key, names):
@@ -123,13 +178,14 @@ def save(case, cache: dict, names) -> None:
             continue
         tmp = None
         try:
-            blob = pickle.dumps((key, value), protocol=pickle.HIGHEST_PROTOCOL)
-            if not _room(p.parent, len(blob)):
+            pieces, size = _encode((key, value))
+            if not _room(p.parent, size):
                 skip.touch()
                 continue
             fd, tmp = tempfile.mkstemp(dir=p.parent, suffix=".tmp")
             with os.fdopen(fd, "wb") as fh:
-                fh.write(blob)
+                for piece in pieces:
+                    fh.write(piece)
             os.replace(tmp, path)
         except Exception:  # noqa: BLE001 - a full disk or a vanished store only costs the reuse
             if tmp is not None:

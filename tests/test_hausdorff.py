@@ -230,3 +230,24 @@ def test_the_hierarchys_numba_cache_is_dropped_when_cover_bound_changes(tmp_path
     assert not drop_stale_cache(here) and (cache / "_bvh_kernel._upper-324.py311.nbi").exists()
     dep.write_text("# bound v2\n")
     assert drop_stale_cache(here) and not (cache / "_bvh_kernel._upper-324.py311.nbi").exists()
+
+
+def test_surface_b_keeps_its_samples_through_a_pickle_with_the_same_result(simplified):
+    """B's samples are drawn once per `Surface` (memoised, and kept when the surface is pickled
+    as a per-input fact): a second bracket through the same or an unpickled surface, and one
+    through a fresh surface, give the same values bit for bit; the samples are
+    `sample_surface`'s."""
+    import pickle
+    from harness.core.geometry import morton_order
+    r, clean = simplified["scratch.qem"]
+    V, F, Vo, Fo = clean.V, clean.F, r.V, r.F
+    S = _Surface(V, F)
+    first = hausdorff(Vo, Fo, V, F, surface_b=S, n_samples=5000, seed=3)
+    P, order = S.samples(5000, 4)
+    assert np.array_equal(P, sample_surface(V, F, 5000, 4)) and np.array_equal(order, morton_order(P))
+    assert S.samples(5000, 4)[0] is P                            # memoised
+    again = pickle.loads(pickle.dumps(S))
+    assert again.samples(5000, 4)[0] is not P and np.array_equal(again.samples(5000, 4)[0], P)
+    for other in (S, again, _Surface(V, F)):
+        assert hausdorff(Vo, Fo, V, F, surface_b=other, n_samples=5000, seed=3) == first
+    assert S.samples(100, 4)[0].shape == (100, 3)                # another size: drawn anew

@@ -107,12 +107,12 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, ato
             "points": int(state[1]), "rounds": rounds, "vertex_distances": dV}
 
 
-def _in_spatial_order(P: np.ndarray, Y: Surface) -> np.ndarray:
-    """Distances (k,) of the points P (k, 3) to Y, queried along a Morton curve (neighbouring
-    queries read neighbouring nodes, each starting from the previous point's closest face),
-    returned in the order of P."""
+def _in_spatial_order(P: np.ndarray, Y: Surface, order: np.ndarray | None = None) -> np.ndarray:
+    """Distances (k,) of the points P (k, 3) to Y, queried along a Morton curve (``order``, when
+    known; neighbouring queries read neighbouring nodes, each starting from the previous
+    point's closest face), returned in the order of P."""
     from ._bvh_kernel import query_many
-    order = morton_order(P)
+    order = morton_order(P) if order is None else order
     d = np.empty(len(P))
     d[order] = query_many(np.ascontiguousarray(P[order]), np.full(len(P), -1, np.int64), *Y.bvh())[0]
     Y.count += len(P)
@@ -137,7 +137,7 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
     were taken, a valid but uninformative lower bound).
 
     ``surface_b``: a prebuilt `Surface` of (VB, FB) to reuse (e.g. the clean mesh's, shared by
-    every metric of a case). ``corresponding``: A and B have the same faces on corresponding
+    every metric of a case; it also keeps B's samples, `Surface.samples`). ``corresponding``: A and B have the same faces on corresponding
     vertices (a smoothed mesh and its clean original); then the barycentric map of each
     triangle onto its twin bounds its distance to the other surface by its corners' largest
     displacement ``max_i |a_i - b_i|`` (the norm is convex), which closes most triangles
@@ -163,8 +163,9 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
     seed_ab = seed_ba = 0.0
     if n_samples:
         # the distances are exact in any order; a spatial one is faster
-        PA, PB = sample_surface(VA, FA, n_samples, seed), sample_surface(VB, FB, n_samples, seed + 1)
-        dab, dba = _in_spatial_order(PA, SB), _in_spatial_order(PB, SA)
+        PA = sample_surface(VA, FA, n_samples, seed)
+        PB, order_b = SB.samples(n_samples, seed + 1)          # drawn once per surface_b
+        dab, dba = _in_spatial_order(PA, SB), _in_spatial_order(PB, SA, order_b)
         seed_ab = float(dab.max()) if dab.size else 0.0        # no samples on a zero-area surface
         seed_ba = float(dba.max()) if dba.size else 0.0
         if dab.size and dba.size:

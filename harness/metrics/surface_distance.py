@@ -17,6 +17,7 @@ class Surface:
         self._nb = None
         self._pos = None
         self._used = None
+        self._samples = None
         self.count = 0
 
     def bvh(self) -> tuple:
@@ -54,6 +55,18 @@ class Surface:
         out._bvh, out._pos, out._used = (Vd, Fo, refit(nodes, Vd, Fo)), self._pos, self._used
         out._nb = self.neighbours()
         return out
+
+    def samples(self, n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
+        """``(P, order)``: ``n`` area-uniform random points of the surface
+        (`harness.core.geometry.sample_surface` with ``seed``) and their order along a Morton
+        curve; memoised, so a surface kept per input draws its samples once."""
+        key = (int(n), int(seed))
+        got = getattr(self, "_samples", None)             # older pickles lack it
+        if got is None or got[0] != key:
+            from ..core.geometry import morton_order, sample_surface
+            P = sample_surface(self.V, self.F, n, seed)
+            got = self._samples = (key, P, morton_order(P))
+        return got[1], got[2]
 
     def __getstate__(self) -> dict:
         """Pickled (e.g. kept as a per-input fact) with the hierarchy but without libigl's tree,
