@@ -16,7 +16,8 @@ Contenders
   allocates: with transparent huge pages set to ``madvise`` or ``always``, as printed below,
   first touching them costs a fraction of 4 KiB-page faults)
 - scratch (registered): ``methods.get("scratch.cotan")(V, F)``, the same plus the
-  interface's argument validation: what a run times
+  interface's argument checks and result validation: the public Python call (a run times the
+  function alone and runs those checks untimed)
 - re-assembly: ``CotanPattern(F, n)`` built once, then ``pattern.assemble(V)`` (numeric pass
   only, for the same connectivity with new positions: smoothing iterations, noise sweeps)
 

@@ -307,24 +307,27 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
         loaded = _loaded_objects()
         with warnings.catch_warnings(record=True) as said:
             warnings.simplefilter("always")
+            run, finish = method.bind(inp.V.copy(), inp.F.copy(), **case.params)   # checks: untimed
             forget_inputs()
             t0 = time.perf_counter()
-            method(inp.V.copy(), inp.F.copy(), **case.params)      # cold call: same code path, own input
+            cold_result = run()                                     # cold call: same code path, own input
             cold = time.perf_counter() - t0
+            finish(cold_result)
+            del cold_result
         if case.threads and (loaded is None or _loaded_objects() != loaded):
             limiters.append(limit_threads(case.threads))    # pools the cold call loaded
         times, cpu, result, spent = [], [], None, 0.0
         busy0, own0, wall0 = _machine_busy_s(), time.process_time(), time.perf_counter()
         while len(times) < case.repeats or (spent < case.time_budget and len(times) < MAX_SAMPLES):
-            V_arg, F_arg = inp.V.copy(), inp.F.copy()   # a method that writes into its input spoils nothing
             result = None                               # the previous result is freed here, untimed
-            forget_inputs()
+            run, finish = method.bind(inp.V.copy(), inp.F.copy(), **case.params)  # a method that writes
+            forget_inputs()                                                       # into its input spoils nothing
             _trim_heap()                                # every sample starts from the same heap state
             first = not times
             if first:
                 rss0, reset = _status_kib("VmRSS"), _reset_peak()
             c0, t0 = time.process_time(), time.perf_counter()
-            result = method(V_arg, F_arg, **case.params)
+            result = run()
             times.append(time.perf_counter() - t0)
             cpu.append(time.process_time() - c0)
             spent += times[-1]
@@ -332,6 +335,7 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
                 hwm = _status_kib("VmHWM")
                 if reset and rss0 is not None and hwm is not None:
                     row["method_mem_mb"] = round(max(hwm - rss0, 0) / 1024.0, 2)
+            result = finish(result)                     # validated, untimed
         busy1, own1, wall1 = _machine_busy_s(), time.process_time(), time.perf_counter()
         row.update(timing_columns(times, cold, cpu))
         if busy0 is not None and busy1 is not None and wall1 - wall0 >= 0.2:   # /proc/stat counts 10 ms ticks

@@ -224,3 +224,34 @@ def test_every_sample_starts_from_a_trimmed_heap(monkeypatch):
     row, _ = runner.run_case(cfg.cases[0])
     assert row["status"] == "ok" and row["repeats"] == 4
     assert len(calls) == 4
+
+
+def test_the_harness_checks_are_not_timed_as_the_method(monkeypatch):
+    """A sample times the adapter alone: the mesh checks before it and the result's validation
+    after it (here made to take 30 ms each) are outside every timed call, the cold one included;
+    the validation still runs on every call's result."""
+    import methods.base
+    from harness import runner, tasks
+    from harness.config import load_config
+    task = tasks.get("laplacian")
+    slow_checks, validated = [], []
+    real_check, real_validate = methods.base.check_arrays, task.validate_result
+
+    def check(V, F):
+        time.sleep(0.03)
+        slow_checks.append(1)
+        return real_check(V, F)
+
+    def validate(name, result, V, F):
+        time.sleep(0.03)
+        validated.append(1)
+        return real_validate(name, result, V, F)
+    monkeypatch.setattr(methods.base, "check_arrays", check)
+    monkeypatch.setattr(type(task), "validate_result", lambda self, *a: validate(*a))
+    cfg = load_config({"name": "t", "repeats": 3, "time_budget": 0, "meshes": ["knight"],
+                       "noise": [{"model": "gaussian_normal", "levels": [0.2]}],
+                       "tasks": {"laplacian": {"methods": ["scratch.uniform"]}}})
+    row, _ = runner.run_case(cfg.cases[0])
+    assert row["status"] == "ok" and row["repeats"] == 3
+    assert len(slow_checks) == 4 and len(validated) == 4               # the cold call and 3 samples
+    assert max(json.loads(row["times"]) + [row["time_cold_s"]]) < 0.03, row["times"]
