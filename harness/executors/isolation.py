@@ -101,6 +101,24 @@ def _isolate(stderr_path: str | None) -> None:
         pass
 
 
+@contextlib.contextmanager
+def _heap_frozen():
+    """The driver's objects frozen (`gc.freeze`) while a case process forks from it. The child
+    inherits them in the permanent generation, so its garbage collector never traverses them:
+    a full collection in the child (it can come at any allocation, e.g. an import) would
+    otherwise write to every inherited object and copy the driver's whole heap page by page
+    (about 40 MB, 75 ms here). The driver unfreezes at once; an existing freeze is left alone."""
+    import gc
+    if gc.get_freeze_count():
+        yield
+        return
+    gc.freeze()
+    try:
+        yield
+    finally:
+        gc.unfreeze()
+
+
 def _child(conn, case, want_meshes, own_reader_fd=None, want_view=False, stderr_path=None):
     _isolate(stderr_path)
     _die_with_driver(conn, own_reader_fd)
@@ -148,7 +166,8 @@ class _Job:
         self.proc = ctx.Process(target=_child, args=(send, case, want_meshes, own, want_view, self.stderr_path),
                                 daemon=True)
         self.t0 = time.perf_counter()
-        self.proc.start()
+        with _heap_frozen():
+            self.proc.start()
         send.close()
 
     @property
