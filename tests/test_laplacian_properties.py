@@ -405,3 +405,21 @@ def test_nonsymmetric_operator_with_a_negative_real_eigenvalue_is_not_psd():
     props = laplacian_properties(W, None, V, F)
     assert np.linalg.eigvals(-W.toarray()).real.min() < 0
     assert props["SYM"] is False and props["psd"] is False
+
+
+def test_mesh_terms_are_computed_once_per_mesh_and_change_nothing(monkeypatch):
+    """The edge keys of F go into the ``mesh`` dict on the first call and are reused by the
+    next Laplacians of the same mesh; every property equals a call without the dict (open
+    camelhead, with cotangent, uniform and the non-symmetric normalised cotangent)."""
+    from harness import datasets
+    from harness.metrics import laplacian_properties as lp
+    m = datasets.load("camelhead").clean
+    calls = []
+    real = lp._edge_keys
+    monkeypatch.setattr(lp, "_edge_keys", lambda F, n: calls.append(n) or real(F, n))
+    shared = {}
+    for name in ("scratch.cotan", "scratch.uniform", "scratch.cotan_normalized"):
+        r = methods.get(name)(m.V, m.F)
+        got = lp.laplacian_properties(r.W, r.M, m.V, m.F, mesh=shared)
+        assert got == lp.laplacian_properties(r.W, r.M, m.V, m.F), name
+    assert len(calls) == 1 + 3 and "edge_keys" in shared      # once for the shared dict, once per plain call

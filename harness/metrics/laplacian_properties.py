@@ -102,7 +102,7 @@ COLUMNS = ("sym_error", "loc_violations", "lin_error", "neg_weights", "min_eig",
            "SYM", "LOC", "LIN", "POS", "operator_symmetric")
 
 
-def laplacian_properties(W, M, V, F, planar: bool | None = None) -> dict:
+def laplacian_properties(W, M, V, F, planar: bool | None = None, mesh: dict | None = None) -> dict:
     """Measure SYM, LOC, LIN, POS, PSD and pointwise symmetry of a Laplacian.
 
     Parameters
@@ -117,6 +117,9 @@ def laplacian_properties(W, M, V, F, planar: bool | None = None) -> dict:
         Triangles of the input mesh (define the edges for LOC and the boundary for LIN).
     planar : bool or None
         True/False to force; None detects planarity (see module docstring).
+    mesh : dict or None
+        Terms of F alone (the sorted directed edge keys), kept in this dict: pass the same dict
+        for every Laplacian of one mesh (e.g. a per-input fact) and they are computed once.
 
     Returns
     -------
@@ -143,7 +146,10 @@ def laplacian_properties(W, M, V, F, planar: bool | None = None) -> dict:
     wmax = float(np.abs(vals[np.isfinite(vals)]).max()) if vals.size and np.isfinite(vals).any() else 0.0
     out["nnz"] = int(np.count_nonzero(vals))
     significant = ~np.isfinite(vals) | (np.abs(vals) > ZERO_TOL * wmax)
-    edge_keys = _edge_keys(F, n)
+    if mesh is None or "edge_keys" not in mesh:
+        mesh = {} if mesh is None else mesh
+        mesh["edge_keys"] = _edge_keys(F, n)
+    edge_keys = mesh["edge_keys"]
     cand = offd & significant
     keys = rows[cand] * np.int64(n) + cols[cand]
     out["loc_violations"] = int(np.count_nonzero(~_isin_sorted(keys, edge_keys)))
@@ -154,7 +160,8 @@ def laplacian_properties(W, M, V, F, planar: bool | None = None) -> dict:
         return out
 
     # ---- symmetry of the weights
-    D = W - W.T
+    WT = W.T.tocsr()                         # the transpose once, for SYM, the operator and S
+    D = W - WT
     out["sym_error"] = float(abs(D).max()) / wmax if D.nnz else 0.0
     out["SYM"] = out["sym_error"] <= SYM_TOL
 
@@ -186,11 +193,11 @@ def laplacian_properties(W, M, V, F, planar: bool | None = None) -> dict:
                 out["LIN"] = out["lin_error"] <= LIN_TOL
 
     # ---- pointwise operator symmetry
-    out["operator_symmetric"] = _operator_symmetric(W, M, rows, cols, vals)
+    out["operator_symmetric"] = _operator_symmetric(W, M, rows, cols, vals, WT)
 
     # ---- semi-definiteness
     if out["SYM"]:
-        out["min_eig"], out["psd"] = _min_eig(W, V, F)
+        out["min_eig"], out["psd"] = _min_eig(W, V, F, WT)
     else:
         out["min_eig"], out["psd"] = _nonsymmetric_psd(W, n, V, F)
     return out
@@ -293,7 +300,7 @@ def _boundary_vertices(F: np.ndarray, n: int) -> np.ndarray:
     return out
 
 
-def _operator_symmetric(W, M, rows, cols, vals):
+def _operator_symmetric(W, M, rows, cols, vals, WT):
     if M is None:
         m = np.ones(W.shape[0])
     else:
@@ -310,7 +317,8 @@ def _operator_symmetric(W, M, rows, cols, vals):
     lmax = float(abs(Lop).max()) if Lop.nnz else 0.0
     if lmax == 0.0:
         return True
-    D = Lop - Lop.T
+    LopT = sp.csr_matrix((WT.data * minv[WT.indices], WT.indices, WT.indptr), shape=W.shape)   # (M^-1 W)^T
+    D = Lop - LopT
     err = float(abs(D).max()) / lmax if D.nnz else 0.0
     return bool(err <= SYM_TOL)
 
@@ -371,10 +379,11 @@ def _ldlt(A):
     return lu.solve, lu.U.diagonal()
 
 
-def _min_eig(W, V, F):
-    """(min_eig relative, psd) of S = -(W + W^T)/2; None where not measurable."""
+def _min_eig(W, V, F, WT=None):
+    """(min_eig relative, psd) of S = -(W + W^T)/2 (``WT``: W^T in CSR, when known); None where
+    not measurable."""
     n = W.shape[0]
-    S = (-(W + W.T) * 0.5).tocsr()
+    S = (-(W + (W.T if WT is None else WT)) * 0.5).tocsr()
     S.eliminate_zeros()
     if S.nnz == 0:
         return 0.0, True
