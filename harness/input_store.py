@@ -129,13 +129,17 @@ def _decode(path: str):
         if fh.readinto(data) != size or data[:8].tobytes() != _MAGIC:
             raise ValueError("not a fact file")
     hl, n = struct.unpack_from("<QQ", data, 8)
+    pos = 24 + 8 * n
+    if pos + hl > size:
+        raise ValueError("a torn fact file")
     sizes = struct.unpack_from(f"<{n}Q", data, 24)
     mv = memoryview(data)
-    pos = 24 + 8 * n
     head, pos = mv[pos:pos + hl], pos + hl
     buffers = []
     for s in sizes:
         pos = _aligned(pos)
+        if pos + s > size:
+            raise ValueError("a torn fact file")
         buffers.append(mv[pos:pos + s])
         pos += s
     if pos != size:

@@ -114,6 +114,8 @@ def test_fact_files_hold_arrays_out_of_band_aligned_and_a_torn_file_is_a_miss():
         assert got["f"].flags.f_contiguous and got["c"].flags.c_contiguous
         (path,) = [f for f in Path(input_store._DIR).iterdir() if f.suffix == ".pkl"]
         whole = path.read_bytes()
-        for bad in (whole[:-3], whole + b"\0"):
+        import struct
+        huge = len(whole) // 8 - 3                   # a corrupt count that still fits the file
+        for bad in (whole[:-3], whole + b"\0", whole[:16] + struct.pack("<Q", huge) + whole[24:]):
             path.write_bytes(bad)
             assert input_store.load(case, ("x",)) == {}

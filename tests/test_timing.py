@@ -258,10 +258,10 @@ def test_the_harness_checks_are_not_timed_as_the_method(monkeypatch):
 
 
 def test_a_case_process_inherits_the_drivers_objects_frozen(monkeypatch):
-    """The driver's objects are in the permanent generation when a case process forks (its
-    garbage collector never walks them, so it never copies the driver's heap pages: an import
-    in a case cost 75 ms more in the runs where a collection fell into it), and the driver
-    unfreezes them at once."""
+    """A case process moves the objects it inherits to the permanent generation before anything
+    else (its garbage collector never walks them, so it never copies the driver's heap pages:
+    an import in a case cost 75 ms more in the runs where a collection fell into it); the
+    driver's own collector is untouched (nothing frozen there)."""
     import gc
     from harness.config import load_config
     from harness.executors import isolation
