@@ -137,8 +137,9 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
     were taken, a valid but uninformative lower bound).
 
     ``surface_b``: a prebuilt `Surface` of (VB, FB) to reuse (e.g. the clean mesh's, shared by
-    every metric of a case; it also keeps B's samples, `Surface.samples`). ``corresponding``: A and B have the same faces on corresponding
-    vertices (a smoothed mesh and its clean original); then the barycentric map of each
+    every metric of a case; it also keeps B's samples, `Surface.samples`). ``corresponding``: A
+    and B have the same faces on corresponding vertices (a smoothed mesh and its clean
+    original); then the barycentric map of each
     triangle onto its twin bounds its distance to the other surface by its corners' largest
     displacement ``max_i |a_i - b_i|`` (the norm is convex), which closes most triangles
     without a query.

@@ -112,7 +112,7 @@ def measure(inp, result, params) -> dict:
     a0 = clean["area"]
     row["area_ratio"] = float(dbl.sum() / 2) / a0 if a0 > 0 else None
     if _closed(inp):
-        o, v0 = clean["centroid"], clean["volume"]   # about the clean centroid: no cancellation far from the origin
+        v0 = clean["volume"]        # both about the clean centroid: no cancellation far from the origin
         row["volume_ratio"] = float(vol.sum() / 6.0) / v0 if v0 != 0 else None
     row.update(triangle_quality(V_out, F))
     return row
