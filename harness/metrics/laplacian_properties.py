@@ -146,8 +146,8 @@ def laplacian_properties(W, M, V, F, planar: bool | None = None, mesh: dict | No
     wmax = float(np.abs(vals[np.isfinite(vals)]).max()) if vals.size and np.isfinite(vals).any() else 0.0
     out["nnz"] = int(np.count_nonzero(vals))
     significant = ~np.isfinite(vals) | (np.abs(vals) > ZERO_TOL * wmax)
-    if mesh is None or "edge_keys" not in mesh:
-        mesh = {} if mesh is None else mesh
+    mesh = {} if mesh is None else mesh
+    if "edge_keys" not in mesh:
         mesh["edge_keys"] = _edge_keys(F, n)
     edge_keys = mesh["edge_keys"]
     cand = offd & significant

@@ -4,17 +4,13 @@ import numpy as np
 from harness.core.geometry import cross_rows, face_normals
 
 
-def normal_error(V: np.ndarray, V_clean: np.ndarray, F: np.ndarray, normals: np.ndarray | None = None,
-                 clean_normals: np.ndarray | None = None) -> dict:
+def normal_error(V: np.ndarray, V_clean: np.ndarray, F: np.ndarray) -> dict:
     """``normal_error_deg`` = mean_f angle(n_f, n_f^clean), ``normal_error_rms_deg`` = RMS of it.
 
     Angles via atan2(|n x m|, n . m), accurate near 0 and 180 degrees. Degenerate faces
-    (zero normal on either side) count as 90 degrees. ``normals``/``clean_normals``: the unit
-    face normals (m, 3) of either side (`harness.core.geometry.face_normals`), when already
-    computed.
+    (zero normal on either side) count as 90 degrees.
     """
-    N = face_normals(V, F) if normals is None else normals
-    C = face_normals(V_clean, F) if clean_normals is None else clean_normals
+    N, C = face_normals(V, F), face_normals(V_clean, F)
     ang = np.degrees(np.arctan2(np.linalg.norm(cross_rows(N, C), axis=1), (N * C).sum(1)))
     deg = (np.linalg.norm(N, axis=1) == 0) | (np.linalg.norm(C, axis=1) == 0)
     ang[deg] = 90.0
