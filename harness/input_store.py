@@ -5,9 +5,9 @@ mesh's topology, the noisy input's own metrics, an exact geodesic reference) wou
 recomputed by each method's case. A task names such entries in ``Task.input_facts``: values that
 depend on the case's input alone (mesh, noise model, level, seed, fraction and the measuring
 settings), never on the method or its result. After a case, the runner stores those entries in
-a private directory of the session (`session`: an unguessable name, created with mode 0700 on
-the first store and removed at the session's end; known to this process and its forked case
-processes only, never through the environment); later cases of the same task and input load
+a private directory of the session (`session`: an unguessable name, mode 0700, removed at the
+session's end or, after a driver that was killed, by the next session's `sweep`; known to this
+process and its forked case processes only, never through the environment); later cases of the same task and input load
 them before measuring. Each fact is its own file; the store holds at most `MAX_BYTES` in all,
 and a fact at most a quarter of the free space: one that does not fit is recomputed by each
 case instead of kept. Computing a fact stays in the case
@@ -28,22 +28,109 @@ from pathlib import Path
 
 import numpy as np
 
-_DIR: str | None = None       # this session's store; forked case processes inherit it
+try:
+    import fcntl
+except ImportError:                  # not POSIX: no locks, nothing swept
+    fcntl = None
+
+_DIR: str | None = None       # this session's private directory; forked case processes inherit it
+_LOCK: int | None = None      # the descriptor holding the session's lock (the driver's copy)
+PREFIX = "shootout-session-"
+LOCK_NAME = "lock"
 
 
 @contextlib.contextmanager
 def session():
-    """A private store for the cases run inside the block (in this process and its forks)."""
-    global _DIR
+    """A private directory for the cases run inside the block (in this process and its forks):
+    their input store and the case processes' stderr files (`private_dir`).
+
+    It is made with mode 0700 under an unguessable name and removed at the block's end. While
+    the block runs, this process holds an exclusive ``flock`` on its ``lock`` file; the kernel
+    drops it when the process dies, however it dies, so a later session removes the directory
+    of one whose driver was killed (`sweep`)."""
+    global _DIR, _LOCK
     if _DIR is not None:
-        yield                                # nested in this process: the outer store serves
+        yield                                # nested in this process: the outer directory serves
         return
-    _DIR = os.path.join(tempfile.gettempdir(), "shootout-inputs-" + secrets.token_hex(16))
+    sweep()
+    _DIR, _LOCK = _make_locked_dir()
     try:
         yield
     finally:
-        d, _DIR = _DIR, None
+        d, lock, _DIR, _LOCK = _DIR, _LOCK, None, None
         shutil.rmtree(d, ignore_errors=True)
+        if lock is not None:
+            os.close(lock)
+
+
+def _make_locked_dir() -> tuple[str, int | None]:
+    """``(path, lock descriptor)`` of a new private directory, locked before it gets its name
+    (made under a hidden name and renamed, so `sweep` never sees it unlocked). Where the temporary
+    directory is not writable the path is still returned (the store then misses) with no lock."""
+    root = tempfile.gettempdir()
+    name = os.path.join(root, PREFIX + secrets.token_hex(16))
+    hidden = os.path.join(root, "." + os.path.basename(name))
+    fd = None
+    try:
+        if fcntl is None:
+            raise OSError("no flock here")
+        os.mkdir(hidden, 0o700)
+        fd = os.open(os.path.join(hidden, LOCK_NAME), os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o600)
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        os.rename(hidden, name)
+    except OSError:
+        if fd is not None:
+            os.close(fd)
+        shutil.rmtree(hidden, ignore_errors=True)
+        return name, None
+    return name, fd
+
+
+def sweep(root: str | None = None) -> int:
+    """Remove the private directories (`session`) under ``root`` (the temporary directory) that
+    belong to this user and whose lock nobody holds: their driver died without cleaning up
+    (killed, e.g. by the out-of-memory killer). Returns how many were removed. A directory
+    without a lock file, another user's, or a symbolic link is left alone."""
+    root = root or tempfile.gettempdir()
+    removed = 0
+    if fcntl is None:
+        return 0
+    try:
+        entries = [e for e in os.scandir(root) if e.name.startswith(PREFIX)]
+    except OSError:
+        return 0
+    for e in entries:
+        try:
+            if not e.is_dir(follow_symlinks=False) or e.stat(follow_symlinks=False).st_uid != os.getuid():
+                continue
+            fd = os.open(os.path.join(e.path, LOCK_NAME), os.O_RDONLY | os.O_NOFOLLOW)
+        except OSError:
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:                      # held: its session is running
+            os.close(fd)
+            continue
+        shutil.rmtree(e.path, ignore_errors=True)
+        os.close(fd)
+        removed += 1
+    return removed
+
+
+def private_dir() -> str | None:
+    """The current session's private directory when it exists (else None: use the temporary
+    directory)."""
+    return _DIR if _DIR is not None and os.path.isdir(_DIR) else None
+
+
+def drop_lock() -> None:
+    """In a forked case process: close the inherited copy of the session's lock descriptor (the
+    lock stays with the driver; a process the method leaves behind then never holds it)."""
+    global _LOCK
+    if _LOCK is not None:
+        with contextlib.suppress(OSError):
+            os.close(_LOCK)
+        _LOCK = None
 
 
 def _path(case, create: bool = False) -> Path | None:

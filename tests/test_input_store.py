@@ -45,7 +45,7 @@ def test_the_store_is_private_to_a_session_and_removed_after_it(tmp_path, monkey
     assert not any(tmp_path.iterdir())
     with input_store.session():
         d = Path(input_store._DIR)
-        assert not d.exists()                            # created on the first store only
+        assert d.is_dir() and (d / input_store.LOCK_NAME).is_file()   # made and locked at the start
         input_store.save(case, {"x": np.arange(3), ("y", 2): "t", "z": "not declared"}, ("x", "y"))
         assert (d.stat().st_mode & 0o777) == 0o700 and d.parent != tmp_path
         got = input_store.load(case, ("x", "y", "z"))
@@ -56,7 +56,7 @@ def test_the_store_is_private_to_a_session_and_removed_after_it(tmp_path, monkey
         # another namespace: neither sees these facts
         assert input_store.load(dataclasses.replace(case, mesh_key="other"), ("x",)) == {}
         assert input_store.load(dataclasses.replace(case, task="simplification"), ("x",)) == {}
-        for f in d.iterdir():                            # a torn file is a miss, not an error
+        for f in d.glob("*.pkl"):                        # a torn file is a miss, not an error
             f.write_bytes(b"\x80garbage")
         assert input_store.load(case, ("x",)) == {}
         with input_store.session():                      # nested: the same store
@@ -119,3 +119,54 @@ def test_fact_files_hold_arrays_out_of_band_aligned_and_a_torn_file_is_a_miss():
         for bad in (whole[:-3], whole + b"\0", whole[:16] + struct.pack("<Q", huge) + whole[24:]):
             path.write_bytes(bad)
             assert input_store.load(case, ("x",)) == {}
+
+
+_HOLDER = """
+import sys, time
+sys.path.insert(0, sys.argv[1])
+from harness import input_store
+with input_store.session():
+    print(input_store.private_dir(), flush=True)
+    time.sleep(60)
+"""
+
+
+def test_a_killed_sessions_private_directory_is_swept_and_a_live_one_is_not(tmp_path):
+    """A driver killed with SIGKILL cannot remove its private directory (input store, stderr
+    files); the next session removes it, because nobody holds its lock any more. A running
+    session's directory, held by its lock, is never touched."""
+    import signal
+    import subprocess
+    import sys
+    root = str(Path(__file__).resolve().parents[1])
+    procs = [subprocess.Popen([sys.executable, "-c", _HOLDER, root], stdout=subprocess.PIPE, text=True)
+             for _ in range(2)]
+    try:
+        killed, live = (Path(p.stdout.readline().strip()) for p in procs)
+        assert killed.is_dir() and live.is_dir() and killed != live
+        (killed / "facts.pkl").write_bytes(b"x" * 1000)
+        procs[0].send_signal(signal.SIGKILL)
+        procs[0].wait()
+        assert killed.is_dir()                            # left behind by the killed driver
+        with input_store.session():                       # a new session sweeps first
+            mine = Path(input_store.private_dir())
+            assert not killed.exists() and live.is_dir()
+            assert input_store.sweep() == 0 and mine.is_dir()   # its own lock holds too
+        assert not mine.exists()
+    finally:
+        for p in procs:
+            p.kill()
+            p.wait()
+        input_store.sweep()                               # this test leaves nothing behind
+
+
+def test_case_stderr_files_live_in_the_private_directory():
+    """A case process's stderr file is made in the session's private directory, so a killed
+    driver's are swept with it."""
+    from harness.executors.isolation import _Job
+    case = load_config(CFG).cases[0]
+    with input_store.session():
+        job = _Job(case, False)
+        assert Path(job.stderr_path).parent == Path(input_store.private_dir())
+        row, _ = job.collect()
+        assert row["status"] == "ok" and not Path(job.stderr_path).exists()

@@ -6,6 +6,7 @@ import io
 import os
 import signal
 import subprocess
+import tempfile
 import sys
 import time
 from pathlib import Path
@@ -18,6 +19,7 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 import harness  # noqa: E402
+from harness import input_store  # noqa: E402
 from harness.config import load_config  # noqa: E402
 from harness.results import RunFolder, columns, load_csv  # noqa: E402
 
@@ -164,6 +166,8 @@ def test_case_processes_die_with_a_killed_driver(tmp_path):
                                                {"name": "crashy.slow", "params": {"seconds": [1000.0]}}]}}}
     cfg_path = tmp_path / "o.yaml"
     cfg_path.write_text(yaml.safe_dump(cfg))
+    private = lambda: set(Path(tempfile.gettempdir()).glob(input_store.PREFIX + "*"))   # noqa: E731
+    before = private()
     proc = start(cfg_path, tmp_path / "out", "--workers", "2")
     driver = psutil.Process(proc.pid)
     t0 = time.time()
@@ -180,9 +184,16 @@ def test_case_processes_die_with_a_killed_driver(tmp_path):
         while _alive(kids) and time.time() - t0 < 10:
             time.sleep(0.1)
         assert not _alive(kids), "case processes outlived the killed driver"
+        # its private directory (input store, the cases' stderr files) stays behind until a
+        # later session sweeps it, since nobody holds its lock any more
+        left = private() - before
+        assert left and all(any(d.glob("shootout-case-*.err")) for d in left)
+        input_store.sweep()
+        assert not any(d.exists() for d in left)
     finally:
         for pid in _alive(kids):                   # never leave them behind, even when failing
             os.kill(pid, signal.SIGKILL)
+        input_store.sweep()
 
 
 def test_resume_keeps_the_first_session_and_says_what_it_skipped(tmp_path):

@@ -11,8 +11,9 @@ What a method may do, and what it costs:
   exits silently), and every process of the case is killed when the case ends, because each
   case runs in its own session and process group (``os.setsid``), killed as a group;
 - signal its process group (``os.killpg(0, ...)``): reaches only its own case;
-- print: the case's stdout goes to /dev/null and its stderr to a temporary file whose last lines
-  are quoted in the row of a case that died;
+- print: the case's stdout goes to /dev/null and its stderr to a temporary file (in the session's
+  private directory, `harness.input_store.session`) whose last lines are quoted in the row of a
+  case that died;
 - SIGINT (Ctrl-C) is ignored by case processes and always reaches the driver: signals are blocked
   while a case is forked and registered, so an interrupt cannot be lost inside the fork.
 """
@@ -28,6 +29,7 @@ import tempfile
 import threading
 import time
 
+from .. import input_store
 from ..config import Case
 from ..runner import base_row, run_case
 
@@ -109,6 +111,7 @@ def _child(conn, case, want_meshes, own_reader_fd=None, want_view=False, stderr_
     # otherwise write to every inherited object and copy the driver's heap page by page
     # (about 40 MB, 75 ms here). The driver's own collector is left as it was.
     gc.freeze()
+    input_store.drop_lock()
     _isolate(stderr_path)
     _die_with_driver(conn, own_reader_fd)
     pid = os.getpid()
@@ -149,7 +152,9 @@ class _Job:
         ctx = _context()
         self.case = case
         self.conn, send = ctx.Pipe(duplex=False)
-        fd, self.stderr_path = tempfile.mkstemp(prefix="shootout-case-", suffix=".err")
+        fd, self.stderr_path = tempfile.mkstemp(prefix="shootout-case-", suffix=".err",
+                                                dir=input_store.private_dir())   # swept with it
+
         os.close(fd)
         own = self.conn.fileno() if ctx.get_start_method() == "fork" else None   # inherited copy
         self.proc = ctx.Process(target=_child, args=(send, case, want_meshes, own, want_view, self.stderr_path),
