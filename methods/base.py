@@ -67,6 +67,7 @@ class Method:
     cite: str = ""
     expected_failures: dict = field(default_factory=dict, compare=False)
     extra: str = ""             # optional-dependency extra that installs its library ("" = default install)
+    precheck: Callable | None = field(default=None, repr=False, compare=False)
 
     @property
     def backend(self) -> str:
@@ -124,12 +125,15 @@ class Method:
         return full
 
     def bind(self, V, F, **params) -> tuple[Callable[[], object], Callable[[object], object]]:
-        """The call in two parts, ``(run, finish)``: the mesh checked (`check_arrays`) and the
-        parameters resolved (and prepared by the task) now; ``run()`` calls the adapter alone,
+        """The call in two parts, ``(run, finish)``: the mesh checked (`check_arrays`, then the
+        method's own ``precheck`` of input its library cannot take) and the parameters resolved
+        (and prepared by the task) now; ``run()`` calls the adapter alone,
         ``finish(result)`` validates and normalises what it returned (the task's
         ``validate_result``). ``method(V, F, **params)`` is ``finish(run())``; the runner times
         ``run()`` only, so the harness's checks are never part of a method's time."""
         V, F = check_arrays(V, F)
+        if self.precheck is not None:
+            self.precheck(V, F, self.name)
         full = self.resolve_params(params)
         task = _tasks.get(self.task)
         if task.prepare is not None:

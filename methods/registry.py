@@ -27,7 +27,7 @@ BROKEN: dict[str, str] = {}
 
 def register(name: str, *, task: str, library: str, params: dict | None = None,
              requires: tuple | list | None = None, doc: str | None = None, cite: str = "",
-             expected_failures: dict | None = None, extra: str = ""):
+             expected_failures: dict | None = None, extra: str = "", precheck=None):
     """Decorator registering ``func(V, F, **params)`` as method ``name``.
 
     ``params`` maps each parameter name to its default or to a `Param` (bounds, choices).
@@ -38,6 +38,9 @@ def register(name: str, *, task: str, library: str, params: dict | None = None,
     ``expected_failures``: ``{check name: why}`` for conformance checks (`methods.checks`) the
     method is known to fail. ``extra``: the optional-dependency extra of mesh-shootout that
     installs its library (not in the default install; without it the method is unavailable).
+    ``precheck(V, F, name)``: raises ValueError for an input the library cannot take (e.g.
+    zero-area faces for libigl's cotangents); run with the harness's own checks, untimed, before
+    every call, so a method's time is its library's alone.
     """
     if task not in _tasks.names():
         raise ValueError(f"register({name!r}): task must be one of {_tasks.names()}, got {task!r}")
@@ -55,7 +58,8 @@ def register(name: str, *, task: str, library: str, params: dict | None = None,
         _REGISTRY[name] = Method(name=name, task=task, library=library, func=func,
                                  params=declared, requires=tuple(requires or ()),
                                  doc=(doc or (func.__doc__ or "")).strip(), cite=cite,
-                                 expected_failures=dict(expected_failures or {}), extra=extra)
+                                 expected_failures=dict(expected_failures or {}), extra=extra,
+                                 precheck=precheck)
         return func
 
     return deco

@@ -257,6 +257,30 @@ def test_the_harness_checks_are_not_timed_as_the_method(monkeypatch):
     assert max(json.loads(row["times"]) + [row["time_cold_s"]]) < 0.03, row["times"]
 
 
+def test_a_methods_precheck_runs_before_every_call_untimed(monkeypatch):
+    """An adapter's ``precheck`` (libigl's zero-area screen) runs with the harness's checks
+    before the cold call and every sample, outside the timed call (here made to take 30 ms)."""
+    import dataclasses
+
+    import methods
+    from harness import runner
+    from harness.config import load_config
+    from methods import registry
+    real = methods.get("libigl.cotan")
+    seen = []
+
+    def slow(V, F, name):
+        time.sleep(0.03)
+        seen.append(name)
+        return real.precheck(V, F, name)
+    monkeypatch.setitem(registry._REGISTRY, "libigl.cotan", dataclasses.replace(real, precheck=slow))
+    cfg = load_config({"name": "t", "repeats": 3, "time_budget": 0, "meshes": ["knight"],
+                       "tasks": {"laplacian": {"methods": ["libigl.cotan"]}}})
+    row, _ = runner.run_case(cfg.cases[0])
+    assert row["status"] == "ok" and seen == ["libigl.cotan"] * 4
+    assert max(json.loads(row["times"]) + [row["time_cold_s"]]) < 0.03, row["times"]
+
+
 def test_a_case_process_inherits_the_drivers_objects_frozen(monkeypatch):
     """A case process moves the objects it inherits to the permanent generation before anything
     else (its garbage collector never walks them, so it never copies the driver's heap pages:

@@ -6,6 +6,7 @@ import numpy as np
 def reject_zero_area(V: np.ndarray, F: np.ndarray, name: str) -> None:
     """Raise ValueError naming the zero-area faces, on which libigl's cotangent weights are
     inf/NaN (it divides by the double area); our scratch operators skip such faces instead.
+    The libigl adapters declare it as their ``precheck`` (run untimed before every call).
 
     A face counts as zero-area when either its cross product or, as libigl computes it,
     Kahan's Heron formula on its edge lengths gives 0 (a numerically flat face can have a
@@ -21,7 +22,7 @@ def reject_zero_area(V: np.ndarray, F: np.ndarray, name: str) -> None:
 def check_finite(A, V: np.ndarray, F: np.ndarray, name: str) -> None:
     """Raise ValueError naming the faces when a libigl matrix came back with inf/NaN entries."""
     import scipy.sparse as sp
-    data = sp.csr_matrix(A).data
+    data = A.data if sp.issparse(A) else np.asarray(A)        # any sparse format: no conversion
     if np.isfinite(data).all():
         return
     import igl

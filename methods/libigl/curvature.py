@@ -18,11 +18,11 @@ from methods import CurvatureResult, Param, register
 from methods.libigl import reject_zero_area
 
 
-@register("libigl.gaussian_curvature", task="curvature", library="libigl", requires=("igl",))
+@register("libigl.gaussian_curvature", task="curvature", library="libigl", requires=("igl",),
+          precheck=reject_zero_area)
 def gaussian_curvature(V, F):
     """``igl.gaussian_curvature(V, F) / diag(igl.massmatrix(V, F, VORONOI))`` (module docstring)."""
     import igl
-    reject_zero_area(V, F, "libigl.gaussian_curvature")
     k = np.asarray(igl.gaussian_curvature(V, F), dtype=np.float64)
     A = np.asarray(igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI).diagonal(), dtype=np.float64)
     A = np.pad(A, (0, len(V) - len(A)), constant_values=1.0)

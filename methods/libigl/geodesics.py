@@ -38,11 +38,11 @@ def exact_geodesic(V, F, *, sources):
           params={"t_factor": Param("t_factor", 1.0, "float", low=1e-4, high=1e4,
                                     doc="t = t_factor * (mean edge length)^2"),
                   "laplacian": Param("laplacian", "cotan", choices=("cotan", "intrinsic_delaunay"),
-                                     doc="data.use_intrinsic_delaunay")})
+                                     doc="data.use_intrinsic_delaunay")},
+          precheck=reject_zero_area)
 def heat(V, F, *, sources, t_factor=1.0, laplacian="cotan"):
     """libigl's heat method (module docstring); one precomputation for all sources."""
     import igl
-    reject_zero_area(V, F, "libigl.heat")
     t0 = time.perf_counter()
     data = igl.HeatGeodesicsData()
     data.use_intrinsic_delaunay = laplacian == "intrinsic_delaunay"

@@ -10,7 +10,6 @@ the faces behind any non-finite entry libigl still returns (`methods.libigl.chec
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 
 from methods import LaplacianResult, Param, register
 from methods.libigl import check_finite, reject_zero_area
@@ -25,7 +24,7 @@ def _igl_mass(igl, V, F, mass):
         return None
     kind = {"barycentric": igl.MASSMATRIX_TYPE_BARYCENTRIC,
             "voronoi": igl.MASSMATRIX_TYPE_VORONOI}[mass]
-    M = sp.csr_matrix(igl.massmatrix(V, F, kind))
+    M = igl.massmatrix(V, F, kind)               # as libigl returns it: the task converts, untimed
     n = V.shape[0]
     if M.shape[0] < n:  # libigl sizes M by max(F) + 1: pad trailing unreferenced vertices
         M.resize((n, n))
@@ -33,7 +32,7 @@ def _igl_mass(igl, V, F, mass):
 
 
 @register("libigl.cotan", task="laplacian", library="libigl", params={"mass": _MASS},
-          requires=("igl",))
+          requires=("igl",), precheck=reject_zero_area)
 def cotan(V, F, *, mass="voronoi"):
     """libigl cotangent Laplacian ``igl.cotmatrix(V, F)`` and ``igl.massmatrix(V, F, type)``.
 
@@ -50,14 +49,13 @@ def cotan(V, F, *, mass="voronoi"):
         ``W_ij = (cot a_ij + cot b_ij) / 2`` (Pinkall & Polthier 1993), ``M`` diagonal areas.
     """
     import igl
-    reject_zero_area(V, F, "libigl.cotan")
-    W = sp.csr_matrix(igl.cotmatrix(V, F))
+    W = igl.cotmatrix(V, F)
     check_finite(W, V, F, "libigl.cotan")
     return LaplacianResult(W=W, M=_igl_mass(igl, V, F, mass))
 
 
 @register("libigl.intrinsic_delaunay", task="laplacian", library="libigl",
-          params={"mass": _MASS}, requires=("igl",))
+          params={"mass": _MASS}, requires=("igl",), precheck=reject_zero_area)   # NaN, or std::bad_alloc
 def intrinsic_delaunay(V, F, *, mass="voronoi"):
     """libigl's cotangent Laplacian of the intrinsic Delaunay triangulation.
 
@@ -77,9 +75,7 @@ def intrinsic_delaunay(V, F, *, mass="voronoi"):
         non-negative (POS), but between vertices that need not share a mesh edge (no LOC).
     """
     import igl
-    reject_zero_area(V, F, "libigl.intrinsic_delaunay")   # libigl: NaN, or std::bad_alloc
-    L, l_int, F_int = igl.intrinsic_delaunay_cotmatrix(V, F)
-    W = sp.csr_matrix(L)
+    W, l_int, F_int = igl.intrinsic_delaunay_cotmatrix(V, F)
     n = V.shape[0]
     if W.shape[0] < n:  # libigl sizes W by max(F) + 1: pad trailing unreferenced vertices
         W.resize((n, n))
@@ -87,8 +83,7 @@ def intrinsic_delaunay(V, F, *, mass="voronoi"):
     if mass != "none":
         kind = {"barycentric": igl.MASSMATRIX_TYPE_BARYCENTRIC,
                 "voronoi": igl.MASSMATRIX_TYPE_VORONOI}[mass]
-        M = sp.csr_matrix(igl.massmatrix_intrinsic(np.ascontiguousarray(l_int),
-                                                   np.ascontiguousarray(F_int), kind))
+        M = igl.massmatrix_intrinsic(np.ascontiguousarray(l_int), np.ascontiguousarray(F_int), kind)
         if M.shape[0] < n:  # trailing unreferenced vertices
             M.resize((n, n))
     return LaplacianResult(W=W, M=M)

@@ -2,12 +2,12 @@
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 
 from methods import SpectrumResult, register
+from methods.libigl import reject_zero_area
 
 
-@register("libigl.eigsh", task="spectrum", library="libigl", requires=("igl",),
+@register("libigl.eigsh", task="spectrum", library="libigl", requires=("igl",), precheck=reject_zero_area,
           cite="the plain pipeline: igl.cotmatrix + igl.massmatrix(VORONOI) + scipy eigsh(sigma)")
 def libigl_eigsh(V, F, *, k=20):
     """What a user would write: libigl's cotangent matrix and Voronoi mass, scipy's ``eigsh`` in
@@ -16,11 +16,9 @@ def libigl_eigsh(V, F, *, k=20):
     import igl
     from scipy.sparse.linalg import eigsh
 
-    from methods.libigl import reject_zero_area
     from methods.scratch.spectrum import inversion_shift
-    reject_zero_area(V, F, "libigl.eigsh")
-    W = sp.csr_matrix(igl.cotmatrix(V, F))
-    M = sp.csr_matrix(igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI))
+    W = igl.cotmatrix(V, F)
+    M = igl.massmatrix(V, F, igl.MASSMATRIX_TYPE_VORONOI)
     k = int(min(k, len(V) - 1))
     lam, X = eigsh(-W, k=k, M=M, sigma=inversion_shift(W, M), which="LM", v0=np.random.default_rng(0).standard_normal(len(V)))
     order = np.argsort(lam)
