@@ -31,20 +31,51 @@ from harness.core.geometry import referenced
 from methods import Param, SmoothingResult, register
 
 
-def _row_keys(X: np.ndarray) -> np.ndarray:
+def _row_bits(X: np.ndarray) -> np.ndarray:
+    """Rows of ``X`` (k, 3) as their 64-bit patterns (k, 3), -0.0 read as 0.0."""
     X = np.ascontiguousarray(X, dtype=np.float64) + 0.0   # -0.0 -> 0.0: keys compare values
-    return X.view(np.dtype((np.void, 24))).ravel()
+    return X.view(np.uint64).reshape(-1, 3)
+
+
+def _row_hash(bits: np.ndarray) -> np.ndarray:
+    with np.errstate(over="ignore"):
+        h = bits[:, 0] * np.uint64(0x9E3779B97F4A7C15)
+        h ^= bits[:, 1] * np.uint64(0xC2B2AE3D27D4EB4F)
+        h ^= bits[:, 2] * np.uint64(0x165667B19E3779F9)
+        h ^= h >> np.uint64(31)
+    return h
 
 
 def match_rows(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """For each row of ``A`` the index of a bit-identical row of ``B``, or -1."""
-    a, b = _row_keys(A), _row_keys(B)
-    order = np.argsort(b, kind="stable")
-    bs = b[order]
-    pos = np.searchsorted(bs, a)
-    pos = np.minimum(pos, len(bs) - 1)
-    hit = bs[pos] == a
-    return np.where(hit, order[pos], -1)
+    """For each row of ``A`` the index of a bit-identical row of ``B`` (one of them where ``B``
+    repeats a row), or -1.
+
+    Rows are looked up by a 64-bit hash of their bits (integer sorts) and every hit is verified
+    bit for bit; a row whose hash meets an unequal row of ``B`` (a collision) is looked up again
+    by exact comparison among the rows of that hash."""
+    a, b = _row_bits(A), _row_bits(B)
+    ha, hb = _row_hash(a), _row_hash(b)
+    out = np.full(len(a), -1, np.int64)
+    if not len(hb):
+        return out
+    order = np.argsort(hb)
+    hs = hb[order]
+    qa = np.argsort(ha)                   # queries in order: each search starts from the last
+    pos = np.empty(len(a), np.int64)
+    pos[qa] = np.minimum(np.searchsorted(hs, ha[qa]), len(hs) - 1)
+    cand = order[pos]
+    same_hash = hs[pos] == ha
+    exact = same_hash & (b[cand] == a).all(axis=1)
+    out[exact] = cand[exact]
+    doubt = np.flatnonzero(same_hash & ~exact)
+    if doubt.size:                        # rare: exact lookup among the rows of equal hash
+        for i in doubt:
+            lo, hi = np.searchsorted(hs, ha[i], "left"), np.searchsorted(hs, ha[i], "right")
+            rows = order[lo:hi]
+            eq = rows[(b[rows] == a[i]).all(axis=1)]
+            if eq.size:
+                out[i] = eq[0]
+    return out
 
 
 def build_manifold(V: np.ndarray, F: np.ndarray):
