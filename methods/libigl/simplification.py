@@ -8,7 +8,6 @@ from __future__ import annotations
 import numpy as np
 
 from methods import SimplificationResult, register
-from harness.core.geometry import compact
 
 
 @register("libigl.qslim", task="simplification", library="libigl", params={},
@@ -30,12 +29,11 @@ def qslim(V, F, *, target_faces):
     Returns
     -------
     SimplificationResult
-        Compacted.
+        As the library returns it; the task drops unreferenced vertices (untimed).
     """
     import igl
 
     U, G, _, _ = igl.qslim(V, F.astype(np.int32), int(target_faces))
-    U, G = compact(U, G)
     return SimplificationResult(V=U, F=G)
 
 
@@ -56,10 +54,9 @@ def decimate(V, F, *, target_faces):
     Returns
     -------
     SimplificationResult
-        Compacted.
+        As the library returns it; the task drops unreferenced vertices (untimed).
     """
     import igl
 
     U, G, _, _ = igl.decimate(V, F.astype(np.int32), int(target_faces))
-    U, G = compact(U, G)
     return SimplificationResult(V=U, F=G)

