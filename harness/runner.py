@@ -279,7 +279,8 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
     Returns ``(row, extras)``. ``extras["meshes"]`` maps file names to ``(V, F, quality, comment)``
     for the driver to write (`saved_meshes`, when ``want_meshes`` and the task has an output mesh);
     ``extras["view"]`` holds the task's view meshes (``want_view``); ``extras["case_wall_s"]`` the
-    wall time of this call (loading, noise, cold call, samples, measuring).
+    wall time of this call (loading, noise, cold call, samples, measuring) and, for an ok case,
+    ``extras["measure_s"]`` that of the task's measuring of the result.
     """
     row = base_row(case)
     extras: dict = {}
@@ -341,7 +342,9 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
         if busy0 is not None and busy1 is not None and wall1 - wall0 >= 0.2:   # /proc/stat counts 10 ms ticks
             others = max(0.0, (busy1 - busy0) - (own1 - own0)) / (wall1 - wall0)
             row["others_cpu"] = round(min(others, float(os.cpu_count() or 1)), 3)
+        t_measure = time.perf_counter()
         row.update(task.measure(inp, result, full))
+        extras["measure_s"] = time.perf_counter() - t_measure
         input_store.save(case, inp.cache, task.input_facts)
         if want_meshes and task.output_mesh is not None:
             extras["meshes"] = saved_meshes(case, task, inp, result)

@@ -153,9 +153,10 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
         lock.close()
 
 
-def _fixed_cost(row: dict, extras: dict) -> tuple[float, float] | None:
-    """``(fixed, method)`` seconds of an ok case: ``method`` its timed samples plus the cold call,
-    ``fixed`` the rest of its wall time (imports, loading, noise, measuring)."""
+def _fixed_cost(row: dict, extras: dict) -> tuple[float, float, float] | None:
+    """``(fixed, method, measuring)`` seconds of an ok case: ``method`` its timed samples plus the
+    cold call, ``fixed`` the rest of its wall time (imports, loading, noise, measuring), and
+    ``measuring`` the part of ``fixed`` spent measuring the result (0 where unknown)."""
     wall = extras.get("case_wall_s")
     if wall is None or row.get("status") != "ok":
         return None
@@ -163,7 +164,7 @@ def _fixed_cost(row: dict, extras: dict) -> tuple[float, float] | None:
         method = sum(json.loads(row.get("times") or "[]")) + float(row.get("time_cold_s") or 0.0)
     except (TypeError, ValueError):
         return None
-    return max(0.0, wall - method), method
+    return max(0.0, wall - method), method, float(extras.get("measure_s") or 0.0)
 
 
 def _results_config(source):
@@ -311,7 +312,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
               file=sys.stderr, flush=True)
         bar = _progress(len(cfg.cases), len(done))
     counts: dict[str, int] = {}
-    overhead: list[tuple[float, float]] = []
+    overhead: list[tuple[float, float, float]] = []
     t0 = time.perf_counter()
     extra_cases: list = []
     try:
@@ -361,17 +362,19 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
                    "command": " ".join(sys.argv), "status": meta["status"], "resumed_ok_cases": len(done),
                    "status_counts": counts, "load_average": meta["load_average"]}
         if overhead:
-            fixed = [f for f, _ in overhead]
-            spent = sum(m for _, m in overhead)
-            shares = [f / m for f, m in overhead if m > 0]
+            fixed = [f for f, _, _ in overhead]
+            spent = sum(m for _, m, _ in overhead)
+            shares = [f / m for f, m, _ in overhead if m > 0]
             meta["fixed_cost_per_case_s"] = {
                 "mean": round(sum(fixed) / len(fixed), 4), "max": round(max(fixed), 4), "cases": len(fixed),
+                "measuring_mean": round(sum(g for _, _, g in overhead) / len(overhead), 4),
                 "share_of_method_time": round(sum(fixed) / spent, 4) if spent > 0 else None,
                 "median_case_share": round(statistics.median(shares), 4) if shares else None,
                 "definition": "wall time of the case call in its process minus its timed samples and cold call "
                               "(imports, mesh loading, noise, measuring; not the fork itself); ok cases of this session; "
                               "share_of_method_time: the cases' summed fixed cost over their summed method time "
-                              "(samples + cold call); median_case_share: the median of that ratio per case"}
+                              "(samples + cold call); median_case_share: the median of that ratio per case; "
+                              "measuring_mean: the part of the mean spent measuring the results (the task's metrics)"}
         meta.update(finished=session["finished"], status_counts=folder.status_counts(),
                     status_counts_this_session=counts, sessions=prev_sessions + [session],
                     wall_s=round(wall + sum(x.get("wall_s") or 0 for x in prev_sessions), 3))

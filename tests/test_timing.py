@@ -65,6 +65,7 @@ def test_protocol_columns(tmp_path):
     assert fixed["share_of_method_time"] == pytest.approx(fixed["mean"] * fixed["cases"] / spent,
                                                          abs=5e-5 * fixed["cases"] / spent + 1e-4)   # mean rounded
     assert 0 <= fixed["median_case_share"]
+    assert 0 < fixed["measuring_mean"] <= fixed["mean"]          # every ok case measured its result
     mem = pd.read_csv(out / "laplacian.csv")["method_mem_mb"]
     if Path("/proc/self/clear_refs").exists():
         assert mem.notna().all() and (mem >= 0).all()
