@@ -244,3 +244,34 @@ def test_worse_than_the_input_needs_more_than_the_metrics_tolerance():
                        "input_dist_mean": [0.00265, 0.0, 0.005, 0.00265]})
     why = L.validity(get("smoothing").spec(), df).tolist()
     assert why == ["", "", "worse than the noisy input", ""], why
+
+
+def test_pygel_vertex_map_matches_rows_bit_for_bit(monkeypatch):
+    """`match_rows` names, for each row, the first bit-identical row of the other array (-0.0 is
+    0.0), else -1; the same with every hash colliding; integer coordinates (whose bits differ
+    in their high bits only) hash apart."""
+    from methods.pygel import smoothing as S
+
+    def brute(A, B):
+        A, B = A + 0.0, B + 0.0
+        out = np.full(len(A), -1)
+        for i, row in enumerate(A):
+            hit = np.flatnonzero((B.view(np.uint64) == row.view(np.uint64)).all(axis=1))
+            out[i] = hit[0] if hit.size else -1
+        return out
+    rng = np.random.default_rng(1)
+    cases = []
+    for _ in range(60):
+        n = int(rng.integers(1, 40))
+        B = rng.integers(-2, 3, size=(n, 3)).astype(float) * rng.choice([1.0, 0.5, -0.0])
+        A = np.vstack([B[rng.permutation(n)], rng.integers(-3, 4, size=(int(rng.integers(0, 8)), 3)) * 1.0])
+        A[rng.random(len(A)) < 0.2] *= -0.0
+        cases.append((A, B))
+    for A, B in cases:
+        assert np.array_equal(S.match_rows(A, B), brute(A, B))
+    assert np.array_equal(S.match_rows(np.zeros((2, 3)), np.zeros((0, 3))), [-1, -1])
+    g = np.stack(np.meshgrid(*[np.arange(40.0)] * 3, indexing="ij"), -1).reshape(-1, 3)
+    assert len(np.unique(S._row_hash(S._row_bits(g)))) == len(g)
+    monkeypatch.setattr(S, "_row_hash", lambda bits: np.zeros(len(bits), np.uint64))
+    for A, B in cases[:20]:
+        assert np.array_equal(S.match_rows(A, B), brute(A, B))

@@ -37,17 +37,27 @@ def _row_bits(X: np.ndarray) -> np.ndarray:
     return X.view(np.uint64).reshape(-1, 3)
 
 
+def _mix(x: np.ndarray) -> np.ndarray:
+    """splitmix64's finalizer: every input bit moves about half of the output bits."""
+    x = x ^ (x >> np.uint64(30))
+    x = x * np.uint64(0xBF58476D1CE4E5B9)
+    x ^= x >> np.uint64(27)
+    x *= np.uint64(0x94D049BB133111EB)
+    x ^= x >> np.uint64(31)
+    return x
+
+
 def _row_hash(bits: np.ndarray) -> np.ndarray:
+    """64-bit hash of each row's three bit patterns, chained through `_mix` (coordinates with
+    short mantissas, e.g. integers, differ in their high bits only)."""
     with np.errstate(over="ignore"):
-        h = bits[:, 0] * np.uint64(0x9E3779B97F4A7C15)
-        h ^= bits[:, 1] * np.uint64(0xC2B2AE3D27D4EB4F)
-        h ^= bits[:, 2] * np.uint64(0x165667B19E3779F9)
-        h ^= h >> np.uint64(31)
-    return h
+        h = _mix(bits[:, 0] + np.uint64(0x9E3779B97F4A7C15))
+        h = _mix(h ^ bits[:, 1])
+        return _mix(h ^ bits[:, 2])
 
 
 def match_rows(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """For each row of ``A`` the index of a bit-identical row of ``B`` (one of them where ``B``
+    """For each row of ``A`` the index of a bit-identical row of ``B`` (the first where ``B``
     repeats a row), or -1.
 
     Rows are looked up by a 64-bit hash of their bits (integer sorts) and every hit is verified
@@ -60,10 +70,12 @@ def match_rows(A: np.ndarray, B: np.ndarray) -> np.ndarray:
         return out
     order = np.argsort(hb)
     hs = hb[order]
+    start = np.r_[True, hs[1:] != hs[:-1]]
+    first = np.minimum.reduceat(order, np.flatnonzero(start))    # smallest index of each hash
     qa = np.argsort(ha)                   # queries in order: each search starts from the last
     pos = np.empty(len(a), np.int64)
     pos[qa] = np.minimum(np.searchsorted(hs, ha[qa]), len(hs) - 1)
-    cand = order[pos]
+    cand = first[np.cumsum(start)[pos] - 1]
     same_hash = hs[pos] == ha
     exact = same_hash & (b[cand] == a).all(axis=1)
     out[exact] = cand[exact]
@@ -74,7 +86,7 @@ def match_rows(A: np.ndarray, B: np.ndarray) -> np.ndarray:
             rows = order[lo:hi]
             eq = rows[(b[rows] == a[i]).all(axis=1)]
             if eq.size:
-                out[i] = eq[0]
+                out[i] = eq.min()
     return out
 
 
