@@ -8,6 +8,7 @@ entry-point group ``mesh_shootout.methods`` or a module named under ``plugins:``
 from __future__ import annotations
 
 import difflib
+import functools
 import importlib
 import pkgutil
 from importlib.metadata import entry_points
@@ -40,7 +41,9 @@ def register(name: str, *, task: str, library: str, params: dict | None = None,
     installs its library (not in the default install; without it the method is unavailable).
     ``precheck(V, F, name)``: raises ValueError for an input the library cannot take (e.g.
     zero-area faces for libigl's cotangents); run with the harness's own checks, untimed, before
-    every call, so a method's time is its library's alone.
+    every call, so a method's time is its library's alone. The decorator then returns the
+    function wrapped so that a direct call screens too (``Method.func`` stays the bare function,
+    which the runner times).
     """
     if task not in _tasks.names():
         raise ValueError(f"register({name!r}): task must be one of {_tasks.names()}, got {task!r}")
@@ -60,7 +63,14 @@ def register(name: str, *, task: str, library: str, params: dict | None = None,
                                  doc=(doc or (func.__doc__ or "")).strip(), cite=cite,
                                  expected_failures=dict(expected_failures or {}), extra=extra,
                                  precheck=precheck)
-        return func
+        if precheck is None:
+            return func
+
+        @functools.wraps(func)
+        def checked(V, F, *args, **kwargs):          # a direct call of the function screens too
+            precheck(V, F, name)
+            return func(V, F, *args, **kwargs)
+        return checked
 
     return deco
 

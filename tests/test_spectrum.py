@@ -208,5 +208,8 @@ def test_a_numerically_flat_face_is_a_clear_error():
     for name in ("scratch.spectrum", "libigl.eigsh"):
         with pytest.raises(ValueError, match="zero-area face"):
             methods.get(name)(mesh.V, mesh.F, k=10)
+    with pytest.raises(ValueError, match="1 vertices no face uses"):     # libigl sizes by F
+        V0, F0, _ = sphere(3)
+        methods.get("libigl.eigsh")(np.vstack([V0, [[9.0, 9, 9]]]), F0, k=10)
     lam = methods.get("scratch.spectrum")(mesh.V, mesh.F, k=10, operator="tufted").values
     assert abs(lam[0]) < 1e-6 and lam[1] > 1.0

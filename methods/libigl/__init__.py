@@ -19,6 +19,18 @@ def reject_zero_area(V: np.ndarray, F: np.ndarray, name: str) -> None:
                          "libigl's cotangent weights are undefined there")
 
 
+def reject_zero_area_or_unreferenced(V: np.ndarray, F: np.ndarray, name: str) -> None:
+    """`reject_zero_area`, and a ValueError for vertices no face uses (libigl sizes its matrices
+    by the largest index in F, and its heat precomputation fails or crashes on them); a run's
+    inputs never have them (they are dropped when the mesh is loaded)."""
+    reject_zero_area(V, F, name)
+    from harness.core.geometry import referenced
+    unused = np.flatnonzero(~referenced(np.asarray(F), len(V)))
+    if unused.size:
+        raise ValueError(f"{name}: {unused.size} vertices no face uses (first: {unused[:5].tolist()}); "
+                         "drop them first (harness.core.geometry.compact)")
+
+
 def check_finite(A, V: np.ndarray, F: np.ndarray, name: str) -> None:
     """Raise ValueError naming the faces when a libigl matrix came back with inf/NaN entries."""
     import scipy.sparse as sp

@@ -17,7 +17,7 @@ import numpy as np
 
 from harness.core.geometry import mean_edge_length
 from methods import GeodesicResult, Param, register
-from methods.libigl import reject_zero_area
+from methods.libigl import reject_zero_area_or_unreferenced
 
 
 @register("libigl.exact_geodesic", task="geodesics", library="libigl", requires=("igl",),
@@ -39,7 +39,7 @@ def exact_geodesic(V, F, *, sources):
                                     doc="t = t_factor * (mean edge length)^2"),
                   "laplacian": Param("laplacian", "cotan", choices=("cotan", "intrinsic_delaunay"),
                                      doc="data.use_intrinsic_delaunay")},
-          precheck=reject_zero_area)
+          precheck=reject_zero_area_or_unreferenced)
 def heat(V, F, *, sources, t_factor=1.0, laplacian="cotan"):
     """libigl's heat method (module docstring); one precomputation for all sources."""
     import igl

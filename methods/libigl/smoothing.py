@@ -10,13 +10,14 @@ from methods.vocabulary import solver_param
 
 
 def _igl_operator(P, F):
-    """``(W, m)`` from ``igl.cotmatrix`` and the diagonal of ``igl.massmatrix(VORONOI)``.
+    """``(W, m)`` from ``igl.cotmatrix`` and the diagonal of ``igl.massmatrix(VORONOI)``. The
+    input is screened for zero-area faces before the call (``precheck``); a face that a
+    reassembly step flattens makes `check_finite` name it.
 
     A zero mass (isolated vertex, whose ``W`` row is empty too) is set to 1 so the system
     stays positive definite and the vertex stays put, as in ``scratch.implicit``.
     """
     import igl
-    reject_zero_area(P, F, "libigl.implicit")
     W = igl.cotmatrix(P, F).tocsr()
     check_finite(W, P, F, "libigl.implicit")
     n = P.shape[0]
@@ -35,7 +36,7 @@ def _mean_edge_length(V, F) -> float:
     return float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean())
 
 
-@register("libigl.implicit", task="smoothing", library="libigl", requires=("igl",),
+@register("libigl.implicit", task="smoothing", library="libigl", requires=("igl",), precheck=reject_zero_area,
           params={"step": Param("step", 1.0, "float", low=0.0,
                                 doc="dimensionless step: h = step * (mean edge length)^2"),
                   "iterations": Param("iterations", 1, "int", low=0, high=10000,
