@@ -22,6 +22,7 @@ import os
 import pickle
 import secrets
 import shutil
+import socket
 import struct
 import tempfile
 from pathlib import Path
@@ -77,6 +78,7 @@ def _make_locked_dir() -> tuple[str, int | None]:
         os.mkdir(hidden, 0o700)
         fd = os.open(os.path.join(hidden, LOCK_NAME), os.O_RDWR | os.O_CREAT | os.O_EXCL, 0o600)
         fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        os.write(fd, _host())
         os.rename(hidden, name)
     except OSError:
         if fd is not None:
@@ -86,11 +88,23 @@ def _make_locked_dir() -> tuple[str, int | None]:
     return name, fd
 
 
+def _host() -> bytes:
+    """This machine's identity (host name and boot id), written into a session's lock file: a
+    temporary directory shared between machines holds locks this one cannot see."""
+    try:
+        with open("/proc/sys/kernel/random/boot_id", "rb") as fh:
+            boot = fh.read().strip()
+    except OSError:
+        boot = b""
+    return socket.gethostname().encode() + b"\n" + boot + b"\n"
+
+
 def sweep(root: str | None = None) -> int:
     """Remove the private directories (`session`) under ``root`` (the temporary directory) that
-    belong to this user and whose lock nobody holds: their driver died without cleaning up
-    (killed, e.g. by the out-of-memory killer). Returns how many were removed. A directory
-    without a lock file, another user's, or a symbolic link is left alone."""
+    belong to this user, were made on this machine since its last boot, and whose lock nobody
+    holds: their driver died without cleaning up (killed, e.g. by the out-of-memory killer).
+    Returns how many were removed. A directory without a lock file, another user's or another
+    machine's, or a symbolic link, is left alone, as is any whose lock cannot be tested."""
     root = root or tempfile.gettempdir()
     removed = 0
     if fcntl is None:
@@ -103,12 +117,14 @@ def sweep(root: str | None = None) -> int:
         try:
             if not e.is_dir(follow_symlinks=False) or e.stat(follow_symlinks=False).st_uid != os.getuid():
                 continue
-            fd = os.open(os.path.join(e.path, LOCK_NAME), os.O_RDONLY | os.O_NOFOLLOW)
+            fd = os.open(os.path.join(e.path, LOCK_NAME), os.O_RDWR | os.O_NOFOLLOW)   # writable: NFS locks
         except OSError:
             continue
         try:
+            if os.read(fd, 4096) != _host():
+                raise OSError("made on another machine")
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:                      # held: its session is running
+        except OSError:                      # held (its session is running), or not ours to judge
             os.close(fd)
             continue
         shutil.rmtree(e.path, ignore_errors=True)

@@ -131,33 +131,40 @@ with input_store.session():
 """
 
 
-def test_a_killed_sessions_private_directory_is_swept_and_a_live_one_is_not(tmp_path):
+def test_a_killed_sessions_private_directory_is_swept_and_a_live_one_is_not(tmp_path, monkeypatch):
     """A driver killed with SIGKILL cannot remove its private directory (input store, stderr
     files); the next session removes it, because nobody holds its lock any more. A running
     session's directory, held by its lock, is never touched."""
     import signal
     import subprocess
     import sys
+    import os
+    import tempfile
     root = str(Path(__file__).resolve().parents[1])
-    procs = [subprocess.Popen([sys.executable, "-c", _HOLDER, root], stdout=subprocess.PIPE, text=True)
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))      # this test's own temporary directory
+    env = {**os.environ, "TMPDIR": str(tmp_path)}
+    procs = [subprocess.Popen([sys.executable, "-c", _HOLDER, root], stdout=subprocess.PIPE, text=True, env=env)
              for _ in range(2)]
     try:
         killed, live = (Path(p.stdout.readline().strip()) for p in procs)
-        assert killed.is_dir() and live.is_dir() and killed != live
+        assert killed.parent == live.parent == tmp_path and killed != live
         (killed / "facts.pkl").write_bytes(b"x" * 1000)
         procs[0].send_signal(signal.SIGKILL)
         procs[0].wait()
         assert killed.is_dir()                            # left behind by the killed driver
+        foreign = tmp_path / (input_store.PREFIX + "made-elsewhere")   # another machine's: its lock
+        foreign.mkdir()                                                # is not ours to test
+        (foreign / input_store.LOCK_NAME).write_bytes(b"otherhost\n0000\n")
         with input_store.session():                       # a new session sweeps first
             mine = Path(input_store.private_dir())
-            assert not killed.exists() and live.is_dir()
+            assert not killed.exists() and live.is_dir() and foreign.is_dir()
             assert input_store.sweep() == 0 and mine.is_dir()   # its own lock holds too
         assert not mine.exists()
     finally:
         for p in procs:
             p.kill()
             p.wait()
-        input_store.sweep()                               # this test leaves nothing behind
+        input_store.sweep(str(tmp_path))                  # this test leaves nothing behind
 
 
 def test_case_stderr_files_live_in_the_private_directory():

@@ -6,7 +6,6 @@ import io
 import os
 import signal
 import subprocess
-import tempfile
 import sys
 import time
 from pathlib import Path
@@ -59,9 +58,10 @@ def strict_rows(path: Path, task: str) -> list[dict]:
     return [dict(zip(rows[0], r)) for r in rows[1:]]
 
 
-def start(cfg_path, out, *extra):
+def start(cfg_path, out, *extra, tmpdir=None):
+    env = env_with_root() if tmpdir is None else {**env_with_root(), "TMPDIR": str(tmpdir)}
     return subprocess.Popen([str(SHOOTOUT), "run", str(cfg_path), "--out", str(out), "--quiet", *extra],
-                            env=env_with_root(), start_new_session=True,
+                            env=env, start_new_session=True,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
@@ -166,9 +166,9 @@ def test_case_processes_die_with_a_killed_driver(tmp_path):
                                                {"name": "crashy.slow", "params": {"seconds": [1000.0]}}]}}}
     cfg_path = tmp_path / "o.yaml"
     cfg_path.write_text(yaml.safe_dump(cfg))
-    private = lambda: set(Path(tempfile.gettempdir()).glob(input_store.PREFIX + "*"))   # noqa: E731
-    before = private()
-    proc = start(cfg_path, tmp_path / "out", "--workers", "2")
+    tmp = tmp_path / "tmp"                        # the driver's own temporary directory
+    tmp.mkdir()
+    proc = start(cfg_path, tmp_path / "out", "--workers", "2", tmpdir=tmp)
     driver = psutil.Process(proc.pid)
     t0 = time.time()
     kids = []
@@ -186,14 +186,12 @@ def test_case_processes_die_with_a_killed_driver(tmp_path):
         assert not _alive(kids), "case processes outlived the killed driver"
         # its private directory (input store, the cases' stderr files) stays behind until a
         # later session sweeps it, since nobody holds its lock any more
-        left = private() - before
-        assert left and all(any(d.glob("shootout-case-*.err")) for d in left)
-        input_store.sweep()
-        assert not any(d.exists() for d in left)
+        (left,) = tmp.glob(input_store.PREFIX + "*")
+        assert len(list(left.glob("shootout-case-*.err"))) == 2
+        assert input_store.sweep(str(tmp)) == 1 and not any(tmp.iterdir())
     finally:
         for pid in _alive(kids):                   # never leave them behind, even when failing
             os.kill(pid, signal.SIGKILL)
-        input_store.sweep()
 
 
 def test_resume_keeps_the_first_session_and_says_what_it_skipped(tmp_path):

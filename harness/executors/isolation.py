@@ -152,8 +152,11 @@ class _Job:
         ctx = _context()
         self.case = case
         self.conn, send = ctx.Pipe(duplex=False)
-        fd, self.stderr_path = tempfile.mkstemp(prefix="shootout-case-", suffix=".err",
-                                                dir=input_store.private_dir())   # swept with it
+        try:
+            fd, self.stderr_path = tempfile.mkstemp(prefix="shootout-case-", suffix=".err",
+                                                    dir=input_store.private_dir())   # swept with it
+        except OSError:                       # the private directory went away: the plain one
+            fd, self.stderr_path = tempfile.mkstemp(prefix="shootout-case-", suffix=".err")
 
         os.close(fd)
         own = self.conn.fileno() if ctx.get_start_method() == "fork" else None   # inherited copy
