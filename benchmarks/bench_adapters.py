@@ -14,7 +14,7 @@ seeded source vertex, one source). B does none of the adapter's by-design extras
 finiteness checks, dtype conversions, compaction, mapping vertices back to the input order, K/H
 from k1/k2); a screen the adapter declares as ``precheck`` (libigl's zero-area faces) runs in
 ``bind``, untimed, as in the runner. Both run warm in one process: one untimed call each (whose outputs are the ones
-compared), then A B A B ... for the pairs; ``time.perf_counter`` around the call only. Per adapter:
+compared), then the pairs in alternating order (A B, B A, A B, ...); ``time.perf_counter`` around the call only. Per adapter:
 the median, min and max of the per-pair ratio A/B and the median times; ``os.getloadavg()`` at
 start and end. Pairs: ``--pairs`` (default 7), fewer (at least 3) where the timed pairs pass
 ``--budget`` seconds (default 30) per adapter first (on armadillo libigl.exact_geodesic, ~15 s a
@@ -37,7 +37,8 @@ Expected differences, stated per row: ``lbar`` (mean length of the unique edges)
 ``igl.avg_edge_length`` in B (libigl.heat, libigl.implicit, meshlab.scale_dependent) and from
 trimesh's ``edges_unique_length`` (trimesh.curvature_measure), the adapters compute it with numpy:
 the last bits of ``h`` may differ (tolerance 1e-12). libigl.implicit: the adapter factors with the
-harness's PARDISO settings (SPD, upper triangle, nested dissection) where B calls
+harness's automatic solver choice (printed at the end: PARDISO with SPD settings, upper triangle
+and nested dissection on armadillo; qdldl on small meshes such as bunny) where B calls
 ``pypardiso.spsolve`` (its defaults, real nonsymmetric): equal to solver precision (1e-9);
 pypardiso's stored factorization is freed before every B call (untimed), as the runner clears the
 adapter's. PyGEL has no bulk face accessor: pygel.qem's B reads faces through an ``off_save``
@@ -405,7 +406,7 @@ CASES = {
     "libigl.exact_geodesic": (p_exact_geodesic, c_geo, EXACT, None, ""),
     "libigl.eigsh": (p_eigsh, c_spectrum, 1e-8, None, "ARPACK shift-invert, same v0 and sigma"),
     "libigl.implicit": (p_implicit, c_smooth, 1e-9, _free_pardiso,
-                        "B: pypardiso.spsolve defaults vs harness PARDISO SPD settings"),
+                        "A: the harness's automatic solver (named below), B: pypardiso.spsolve defaults"),
     "potpourri3d.heat": (p_pp3d_heat, c_geo, EXACT, None, ""),
     "pygeodesic.exact": (p_pygeodesic, c_geo, EXACT, None, ""),
     "robust.tufted": (p_robust, c_robust, EXACT, None, ""),
@@ -458,12 +459,15 @@ def _bench(method, case, V, F, pairs, budget, min_pairs):
     del r, R, out
     ta, tb = [], []
     while len(ta) < pairs and not (len(ta) >= min_pairs and sum(ta) + sum(tb) > budget):
-        t, r, _ = run_a()
-        ta.append(t)
-        del r
-        t, out = run_b()
-        tb.append(t)
-        del out
+        for side in ("ab" if len(ta) % 2 == 0 else "ba"):      # A B, B A, A B, ...: no order effect
+            if side == "a":
+                t, r, _ = run_a()
+                ta.append(t)
+                del r
+            else:
+                t, out = run_b()
+                tb.append(t)
+                del out
     ratios = [a / b for a, b in zip(ta, tb)]
     return dict(n=len(ta), ta=statistics.median(ta), tb=statistics.median(tb), r=statistics.median(ratios),
                 rmin=min(ratios), rmax=max(ratios), diff=diff, what=what, tol=tol, note=note)
