@@ -7,12 +7,12 @@ depend on the case's input alone (mesh, noise model, level, seed, fraction and t
 settings), never on the method or its result. After a case, the runner stores those entries in
 a private directory of the session (`session`: an unguessable name, mode 0700, removed at the
 session's end or, after a driver that was killed, by the next session's `sweep`; known to this
-process and its forked case processes only, never through the environment); later cases of the same task and input load
-them before measuring. Each fact is its own file; the store holds at most `MAX_BYTES` in all,
-and a fact at most a quarter of the free space: one that does not fit is recomputed by each
-case instead of kept. Computing a fact stays in the case
-process, so a mesh that crashes a measurement costs that case's row, never the driver. A missing,
-unreadable or concurrently written store is a cache miss, not an error.
+process and its forked case processes only, never through the environment); later cases of the
+same task and input load them before measuring. Each fact is its own file; the store holds at
+most `MAX_BYTES` in all, and a fact at most a quarter of the free space: one that does not fit
+is recomputed by each case instead of kept. Computing a fact stays in the case process, so a
+mesh that crashes a measurement costs that case's row, never the driver. A missing, unreadable
+or concurrently written store is a cache miss, not an error.
 """
 from __future__ import annotations
 

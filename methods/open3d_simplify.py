@@ -26,6 +26,6 @@ def qem(V, F, *, target_faces):
     mesh = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(np.ascontiguousarray(V, dtype=np.float64)),
                                      o3d.utility.Vector3iVector(np.ascontiguousarray(F, dtype=np.int32)))
     out = mesh.simplify_quadric_decimation(target_number_of_triangles=int(target_faces))
-    Vo = np.asarray(out.vertices, dtype=np.float64)
+    Vo = np.array(out.vertices, dtype=np.float64)      # a copy: no view of memory that `out` owns
     Fo = np.asarray(out.triangles, dtype=np.int64).reshape(-1, 3)
     return SimplificationResult(V=Vo, F=Fo)

@@ -157,7 +157,6 @@ class _Job:
                                                     dir=input_store.private_dir())   # swept with it
         except OSError:                       # the private directory went away: the plain one
             fd, self.stderr_path = tempfile.mkstemp(prefix="shootout-case-", suffix=".err")
-
         os.close(fd)
         own = self.conn.fileno() if ctx.get_start_method() == "fork" else None   # inherited copy
         self.proc = ctx.Process(target=_child, args=(send, case, want_meshes, own, want_view, self.stderr_path),

@@ -36,7 +36,8 @@ def _mean_edge_length(V, F) -> float:
     return float(np.linalg.norm(V[E[:, 0]] - V[E[:, 1]], axis=1).mean())
 
 
-@register("libigl.implicit", task="smoothing", library="libigl", requires=("igl",), precheck=reject_zero_area,
+@register("libigl.implicit", task="smoothing", library="libigl", requires=("igl",),
+          precheck=reject_zero_area,
           params={"step": Param("step", 1.0, "float", low=0.0,
                                 doc="dimensionless step: h = step * (mean edge length)^2"),
                   "iterations": Param("iterations", 1, "int", low=0, high=10000,
