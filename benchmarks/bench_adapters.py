@@ -50,7 +50,6 @@ open3d.qem needs the optional ``open3d`` extra: skipped when it does not import.
 from __future__ import annotations
 
 import argparse
-import ctypes
 import os
 import statistics
 import sys
@@ -64,14 +63,6 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 SLOW = ("libigl.exact_geodesic", "trimesh.curvature_measure")   # skipped by --quick unless --only
 EXACT = 1e-12          # same library, same call: identical up to the last bits of a derived scale
-
-
-def _trim_heap() -> None:
-    """glibc ``malloc_trim(0)``, as the runner does before each timed call."""
-    try:
-        ctypes.CDLL("libc.so.6").malloc_trim(0)
-    except (OSError, AttributeError):
-        pass
 
 
 # ------------------------------------------------------------------------------ plain pipelines
@@ -431,7 +422,7 @@ def _setup(method, V, F) -> _Setup:
 
 
 def _bench(method, case, V, F, pairs, budget, min_pairs):
-    from harness.runner import forget_inputs
+    from harness.runner import _trim_heap, forget_inputs     # the runner's own steps before a call
     plain, compare, tol, before, note = case
     p = _setup(method, V, F)
 

@@ -113,6 +113,7 @@ def sweep(root: str | None = None) -> int:
         entries = [e for e in os.scandir(root) if e.name.startswith(PREFIX)]
     except OSError:
         return 0
+    host = _host()
     for e in entries:
         try:
             if not e.is_dir(follow_symlinks=False) or e.stat(follow_symlinks=False).st_uid != os.getuid():
@@ -121,7 +122,7 @@ def sweep(root: str | None = None) -> int:
         except OSError:
             continue
         try:
-            if os.read(fd, 4096) != _host():
+            if os.read(fd, 4096) != host:
                 raise OSError("made on another machine")
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:                      # held (its session is running), or not ours to judge
