@@ -7,6 +7,8 @@ entry-point group ``mesh_shootout.methods`` or a module named under ``plugins:``
 """
 from __future__ import annotations
 
+import dataclasses
+
 import difflib
 import functools
 import importlib
@@ -56,7 +58,9 @@ def register(name: str, *, task: str, library: str, params: dict | None = None,
                              f"(by {_REGISTRY[name].func.__module__})")
         declared = {}
         for k, v in (params or {}).items():
-            declared[k] = v if isinstance(v, Param) else Param(k, v)
+            # a shared Param (e.g. `methods.vocabulary.solver_param`) takes the key it is declared
+            # under: listings, errors and the run's rows all name the parameter the user passes
+            declared[k] = (v if v.name == k else dataclasses.replace(v, name=k)) if isinstance(v, Param) else Param(k, v)
         declared = {**_tasks.get(task).params, **declared}
         _REGISTRY[name] = Method(name=name, task=task, library=library, func=func,
                                  params=declared, requires=tuple(requires or ()),

@@ -27,6 +27,16 @@ def test_registry_has_the_promised_methods():
         assert n in names
 
 
+def test_every_parameter_is_named_by_its_key():
+    """`shootout methods`, errors and rows name a parameter by what the user passes: a shared
+    Param declared under another key (``linear_solver: solver_param()``) takes that key."""
+    wrong = {(m.name, k, p.name) for m in ALL for k, p in m.params.items() if p.name != k}
+    assert not wrong, wrong
+    m = methods.get("scratch.spectrum")
+    with pytest.raises(Exception, match="linear_solver"):
+        m.resolve_params({"linear_solver": "no-such-solver"})
+
+
 @pytest.mark.parametrize("m", BUILTIN, ids=[m.name for m in BUILTIN])
 def test_builtin_is_available(m):
     # make test installs every backend, so no built-in may be unavailable here
