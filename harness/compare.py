@@ -31,12 +31,15 @@ each metric's ``better`` direction and ``rel``/``abs`` tolerance, recorded in ru
   inconclusive, never as regressions. B's samples are first divided by the run's drift (the
   median over all cases of the ratio of median times: a machine busier during one run slows
   every case alike; ``--absolute-time`` turns this off). Load from other processes during a
-  whole sample window stretches every sample, the fastest included; so between two runs with
-  one worker each (a case then runs alone, and ``others_cpu`` is load from outside the run), where
-  both rows say how many cores other processes kept busy during their samples, a wall-time
-  regression (improvement) is only inconclusive when B's (A's) machine was busier by
-  ``BUSY_CORES`` (0.5) or more and the median process CPU time (``cpu_times``) did not grow
-  (shrink) by ``time_factor`` as well. On an equally quiet machine a wall-time change counts
+  whole sample window stretches every sample, the fastest included; so where both rows say how
+  many cores other processes kept busy during their samples (``others_cpu``: outside load, and
+  with several workers the case's siblings in the same run, which compete for the same cores),
+  a wall-time regression (improvement) is only inconclusive when the median process CPU time
+  (``cpu_times``) did not grow (shrink) by ``time_factor`` as well and B's (A's) machine was
+  busier by ``BUSY_CORES`` (0.5) or more, or so short of free cores (the core count minus
+  ``others_cpu``, against the cores the process used on the other run) that this shortage
+  alone, with the CPU-time ratio, accounts for all but ``time_factor`` of the wall-time ratio
+  (`load_stretch`; both runs on machines with the same core count). On an equally quiet machine a wall-time change counts
   whatever its CPU time does (sleeps, I/O, lost parallelism and work in other processes are
   not in a process's CPU time). Rows without samples fall back to: median
   over ``time_factor`` x A's, fastest B repeat slower than slowest A repeat, > 1 ms;
@@ -242,20 +245,53 @@ def busier(ra: dict, rb: dict) -> float | None:
     return None if a is None or b is None else b - a
 
 
-def _load_explains(ra: dict, rb: dict, verdict: str, factor: float) -> bool:
-    """The slower run's machine was busier with other processes by ``BUSY_CORES`` or more, and the
-    CPU time did not move by ``factor`` the same way."""
+def load_stretch(fast: dict, slow: dict, cores: int | None) -> float | None:
+    """How much the other processes' load alone stretches the slower row's wall time: the
+    faster row's process used ``u = CPU / wall`` cores (median sample); the slower row's
+    machine had ``cores - others_cpu`` cores free, so a process needing ``u`` runs about
+    ``u / free`` times slower there (at least 1), relative to the same stretch on the faster
+    row's machine. None when the core count, the CPU times or ``others_cpu`` are missing."""
+    import numpy as np
+    if not cores:
+        return None
+    ca, wa = time_samples(fast, "cpu_times"), time_samples(fast)
+    oa, ob = _num(fast.get("others_cpu")), _num(slow.get("others_cpu"))
+    if not ca or not wa or oa is None or ob is None or np.median(wa) <= 0:
+        return None
+    u = float(np.median(ca) / np.median(wa))
+    return max(1.0, u / max(cores - ob, 1e-3)) / max(1.0, u / max(cores - oa, 1e-3))
+
+
+def _load_explains(ra: dict, rb: dict, verdict: str, factor: float, cores: int | None = None,
+                   ratio: float | None = None) -> bool:
+    """The CPU time did not move by ``factor`` the same way as the wall time, and the slower
+    run's machine was busier with other processes: by ``BUSY_CORES`` or more, or (``cores``
+    known) so short of free cores that the load alone stretches the wall time by `load_stretch`
+    and the wall-time ``ratio`` B/A, divided by that stretch and the CPU-time ratio, no longer
+    exceeds ``factor``."""
     d = busier(ra, rb)
     if d is None:
         return False
     c = cpu_ratio(ra, rb)
     if verdict == "regression":
-        return d >= BUSY_CORES and not (c is not None and c > factor)
-    return -d >= BUSY_CORES and not (c is not None and c < 1 / factor)
+        if c is not None and c > factor:
+            return False
+        if d >= BUSY_CORES:
+            return True
+        s = load_stretch(ra, rb, cores)
+        return bool(s and s > 1.0 and ratio and c and ratio / (s * c) <= factor)
+    if c is not None and c < 1 / factor:
+        return False
+    if -d >= BUSY_CORES:
+        return True
+    s = load_stretch(rb, ra, cores)
+    return bool(s and s > 1.0 and ratio and c and (1.0 / ratio) / (s / c) <= factor)
 
 
-def judge_time(ra: dict, rb: dict, factor: float = TIME_FACTOR, drift: float = 1.0, load_rule: bool = True) -> str:
-    """'regression' | 'improvement' | 'inconclusive' | 'same' (see the module docstring)."""
+def judge_time(ra: dict, rb: dict, factor: float = TIME_FACTOR, drift: float = 1.0, load_rule: bool = True,
+               cores: int | None = None) -> str:
+    """'regression' | 'improvement' | 'inconclusive' | 'same' (see the module docstring);
+    ``cores``: the machine's core count (`load_stretch`), when known."""
     eff = time_effect(ra, rb, drift)
     if eff is not None:
         if not eff["conclusive"]:
@@ -266,7 +302,7 @@ def judge_time(ra: dict, rb: dict, factor: float = TIME_FACTOR, drift: float = 1
             verdict = "regression"
         if eff["p_faster"] < ALPHA and hi < 1 / factor and eff["min_ratio"] < 1 / factor and -eff["diff"] > TIME_FLOOR_S:
             verdict = "improvement"
-        if verdict != "same" and load_rule and _load_explains(ra, rb, verdict, factor):
+        if verdict != "same" and load_rule and _load_explains(ra, rb, verdict, factor, cores, eff["ratio"]):
             return "inconclusive"
         return verdict
     a, b = _num(ra.get("time_s")), _num(rb.get("time_s"))
@@ -327,13 +363,13 @@ def _label(r: dict) -> str:
 
 
 def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FACTOR, rules=None,
-                 absolute_time: bool = False, load_rule: bool = True) -> dict:
+                 absolute_time: bool = False, load_rule: bool = True, cores: int | None = None) -> dict:
     """Every change between two runs' rows: ``{"changes": [...], "only_a": [...], "only_b": [...], ...}``.
 
     ``rules``: ``{task: {metric: Rule}}`` from the runs' task declarations (default: the known tasks).
     Times are judged relative to the whole run's drift (`run_drift`) unless ``absolute_time``;
     ``load_rule``: the other processes' load may make a time change inconclusive (`judge_time`;
-    `compare_runs` sets it only when both runs had one worker, whose cases run alone).
+    ``cores``, the core count both runs' machines share, also lets a shortage of free cores do so).
     """
     changes, input_changes = [], []
     drift = run_drift(rows_a, rows_b)
@@ -348,7 +384,7 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
             changes.append({**base, "metric": "status", "a": sa, "b": sb, "verdict": verdict,
                             "note": str(rb.get("error") or "")[:200]})
         if sa == "ok" and sb == "ok" and time_factor:
-            v = judge_time(ra, rb, time_factor, used_drift, load_rule)
+            v = judge_time(ra, rb, time_factor, used_drift, load_rule, cores)
             a, b = _num(ra.get("time_s")), _num(rb.get("time_s"))
             if a is not None and b is not None and a != b:
                 changes.append({**base, "metric": "time_s", "a": a, "b": b,
@@ -443,9 +479,8 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
     meta_a = RunFolder(run_a).read_run_json() or {}
     meta_b = RunFolder(run_b).read_run_json() or {}
     rules = {**rules_from_specs(meta_a.get("tasks")), **rules_from_specs(meta_b.get("tasks"))}
-    one_worker = all(m.get("workers") == 1 and m.get("executor", "local") in ("local", "serial")
-                     for m in (meta_a, meta_b))
-    res = compare_rows(ra, rb, time_factor, rules, absolute_time, load_rule=one_worker)
+    ca, cb = ((m.get("machine") or {}).get("cpu_count") for m in (meta_a, meta_b))
+    res = compare_rows(ra, rb, time_factor, rules, absolute_time, cores=ca if ca == cb else None)
     changes = _sorted(res["changes"])
     regress = [c for c in changes if c["verdict"] == "regression"]
     shown = [c for c in changes if c["verdict"] not in ("within tolerance", "info", "inconclusive")]

@@ -188,8 +188,46 @@ def test_wall_time_on_a_busier_machine_without_cpu_time_is_inconclusive():
     assert judge_time(row([4 * t for t in base], base, 0.1), row(same, same, 0.1)) == "improvement"
     assert judge_time(row(base, base, 0.1), row(same, same, 1.5)) == "same"
     assert judge_time(_row(base), row(slow, same, 1.5)) == "regression"       # A stored no load: as before
-    # with several workers a case's siblings are part of others_cpu: the rule is off
     assert judge_time(row(base, base, 0.1), row(slow, same, 1.5), load_rule=False) == "regression"
+    # less than half a core busier, but the slower run's machine had too few free cores
+    twice = [2.3 * t for t in same]
+    assert judge_time(row(base, base, 0.98), row(twice, same, 1.465)) == "regression"       # core count unknown
+    assert judge_time(row(base, base, 0.98), row(twice, same, 1.465), cores=2) == "inconclusive"
+    assert judge_time(row(base, base, 0.98), row(twice, same, 1.465), cores=8) == "regression"  # cores to spare
+    assert judge_time(row(base, base, 0.98), row(slow, same, 1.465), cores=2) == "regression"   # 4x: more than load
+    assert judge_time(row(twice, same, 1.465), row(base, base, 0.98), cores=2) == "inconclusive"  # improvement
+
+
+def test_two_worker_runs_excuse_a_wall_time_change_that_load_explains(run_a, tmp_path):
+    """Between two runs with two workers (siblings count as other processes), a case whose wall
+    time doubled while its CPU time did not, on a machine busier by half a core or more, is
+    inconclusive, not a regression (a rerun of the same code under an outside load); with the
+    CPU time doubled too it is a regression."""
+    a, b = copy(run_a, tmp_path, "a2"), copy(run_a, tmp_path, "b2")
+    for d in (a, b):
+        meta = json.loads((d / "run.json").read_text())
+        meta["workers"] = 2
+        meta.setdefault("machine", {})["cpu_count"] = 2
+        (d / "run.json").write_text(json.dumps(meta))
+
+    def busy(others, wall=1.0, cpu=1.0):
+        def fn(rows):
+            r = rows[0]
+            n = len(json.loads(r["times"]))
+            t = [0.02 * wall * (1 + 0.01 * i) for i in range(max(n, 12))]
+            c = [0.02 * cpu * (1 + 0.01 * i) for i in range(len(t))]
+            r.update(times=json.dumps(t), time_s=str(sorted(t)[len(t) // 2]), time_min_s=str(min(t)),
+                     time_max_s=str(max(t)), cpu_times=json.dumps(c), others_cpu=str(others))
+        return fn
+    # measured between two runs of the same code: B's machine had 0.49 core more load, which left
+    # the single-threaded case 0.535 of a core (2 - 1.465): 1.87x slower from the load alone
+    edit(a / "laplacian.csv", busy(0.978))
+    edit(b / "laplacian.csv", busy(1.465, wall=2.3, cpu=1.1))
+    code, out = run_compare(a, b)
+    assert code == 0 and "inconclusive" in out, out
+    edit(b / "laplacian.csv", busy(1.465, wall=2.3, cpu=2.3))
+    code, out = run_compare(a, b)
+    assert code == 1 and any(ln.startswith("REGRESSION") and "time_s" in ln for ln in out.splitlines()), out
 
 
 def test_rules():
