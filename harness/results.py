@@ -18,6 +18,7 @@ from __future__ import annotations
 import csv
 import errno
 import fcntl
+import glob
 import io
 import json
 import os
@@ -66,6 +67,18 @@ def format_row(task: str, row: dict) -> str:
     return buf.getvalue()
 
 
+REPORT_FILES = ("report.html", "leaderboard.csv", "leaderboard.md", "leaderboard.tex", "winners.csv",
+                "winners.md", "winners.tex")
+
+
+def _is_ours(data) -> bool:
+    """A run.json this project wrote: an object with the keys every run and eval writes (a run
+    also its config hash), not merely any JSON object another tool left under that name."""
+    if not isinstance(data, dict) or not {"started", "status", "versions"} <= set(data):
+        return False
+    return data.get("kind") == "eval" or "config_hash" in data
+
+
 class RunFolder:
     """Files of one run: ``<task>.csv``, ``run.json``, ``report.html``, ``meshes/``."""
 
@@ -80,15 +93,17 @@ class RunFolder:
         return self.path / "run.json"
 
     def read_run_json(self) -> dict | None:
-        """The run's metadata; None when missing or unreadable (see `run_json_state`)."""
+        """The run's metadata; None when missing, unreadable or not one this project wrote (see
+        `run_json_state`)."""
         try:
             data = json.loads(self.run_json.read_text())
         except (OSError, ValueError):
             return None
-        return data if isinstance(data, dict) else None
+        return data if _is_ours(data) else None
 
     def run_json_state(self) -> str:
-        """``missing``, ``ok`` or ``corrupt``."""
+        """``missing``, ``ok`` (a run.json this project wrote) or ``corrupt`` (unreadable, or
+        another tool's: nothing in the folder is then taken for ours)."""
         if not self.run_json.exists():
             return "missing"
         return "ok" if self.read_run_json() is not None else "corrupt"
@@ -122,10 +137,19 @@ class RunFolder:
         return fh
 
     def foreign_files(self) -> list[str]:
-        """Task CSVs present without a readable run.json: files this project cannot prove it wrote."""
+        """Files with the names of a run's outputs (task CSVs, run.json, reports, leaderboard and
+        winners tables, ``views/``, ``tune/``) present without a run.json of ours: files this
+        project cannot prove it wrote, which a run would overwrite or delete. (``meshes/`` may
+        hold the user's meshes: a run only ever removes the files its manifest lists.)"""
         if self.run_json_state() == "ok":
             return []
-        return [self.csv_path(t).name for t in tasks.names() if self.csv_path(t).exists()]
+        names = [self.csv_path(t).name for t in tasks.names()] + ["run.json", *REPORT_FILES]
+        found = [n for n in names if (self.path / n).exists()]
+        for d in ("views", "tune"):
+            p = self.path / d
+            if p.exists() and (not p.is_dir() or any(p.iterdir())):
+                found.append(d + "/")
+        return found
 
     def save_mesh(self, name: str, write) -> Path:
         """Write ``meshes/<name>`` atomically (``write(fh)``), listed in the manifest first."""
@@ -146,11 +170,18 @@ class RunFolder:
             return set()
 
     def remove_temporaries(self) -> None:
-        """Leftover ``.*.tmp`` files of ours (a write interrupted by a full disk or a kill)."""
-        for d in (self.path, self.path / "meshes", self.path / "views"):
-            if d.is_dir():
-                for f in d.glob(".*.tmp"):
-                    f.unlink(missing_ok=True)
+        """Leftover temporary files of ours (`atomic_write`'s ``.<name>.*.tmp``, from a write
+        interrupted by a full disk or a kill): those of the run's own file names at the top and
+        of the meshes its manifest lists, and any in ``views/`` of a folder whose run.json is ours."""
+        names = [self.csv_path(t).name for t in tasks.names()] + ["run.json", *REPORT_FILES]
+        where = [(self.path, n) for n in names] + [(self.path / "meshes", Path(n).name) for n in self.written_meshes()]
+        for d, n in where:
+            for f in d.glob(f".{glob.escape(n)}.*.tmp"):
+                f.unlink(missing_ok=True)
+        vdir = self.path / "views"
+        if vdir.is_dir() and self.run_json_state() == "ok":
+            for f in vdir.glob(".*.tmp"):
+                f.unlink(missing_ok=True)
 
     def read_rows(self, task: str) -> list[dict]:
         """Complete rows of a task CSV as dicts of strings (a torn last line is dropped)."""
@@ -171,19 +202,21 @@ class RunFolder:
         if ours:
             for task in tasks.names():
                 self.csv_path(task).unlink(missing_ok=True)
-            for name in ("report.html", "leaderboard.csv", "leaderboard.md", "leaderboard.tex", "winners.csv",
-                         "winners.md", "winners.tex"):
+            for name in REPORT_FILES:
                 (self.path / name).unlink(missing_ok=True)
             vdir = self.path / "views"
             if vdir.is_dir():
                 for f in vdir.glob("*.json"):
                     f.unlink()
+            for task in tasks.names():                   # a tuned run's training rows
+                (self.path / "tune" / task_file(task)).unlink(missing_ok=True)
+        self.remove_temporaries()                # first: the manifest names the meshes' temporaries
         mdir = self.path / "meshes"
         for name in self.written_meshes():
-            (mdir / name).unlink(missing_ok=True)
+            (mdir / Path(name).name).unlink(missing_ok=True)
         (mdir / MANIFEST).unlink(missing_ok=True)
-        self.remove_temporaries()
-        self.run_json.unlink(missing_ok=True)
+        if ours:
+            self.run_json.unlink(missing_ok=True)
 
     def status_counts(self) -> dict:
         """Rows per status over all task CSVs."""

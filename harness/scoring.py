@@ -8,6 +8,8 @@ mesh after the documented repairs); a simplification result is compared as a sur
 """
 from __future__ import annotations
 
+import re
+
 import json
 import sys
 from pathlib import Path
@@ -80,6 +82,15 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
     and write one run folder at ``out`` with its report."""
     from . import datasets
     from .report import build_report
+    from .session import _check_out, _foreign
+    out = Path(out)
+    folder = RunFolder(out)
+    _check_out(out)
+    if folder.foreign_files():                   # nothing of the user's is replaced or deleted
+        raise _foreign(out, folder)
+    if not isinstance(hausdorff_samples, int) or isinstance(hausdorff_samples, bool) \
+            or not 0 <= hausdorff_samples <= 10_000_000:
+        raise ShootoutError(f"--hausdorff-samples: expected an integer in [0, 10,000,000], got {hausdorff_samples!r}")
     for e in entries:
         for p in [e["file"], e["clean"]] + ([e["noisy"]] if e.get("noisy") else []):
             if not Path(p).is_file():
@@ -112,20 +123,24 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
                "error": ("input repaired: " + "; ".join(cmesh.repairs)) if cmesh.repairs else ""}
         row.update(evaluate(V, r.F, cmesh.V, cmesh.F, task=t, V_noisy=V_in, hausdorff_samples=hausdorff_samples))
         rows_by_task.setdefault(t, []).append(row)
-    folder = RunFolder(out)
-    folder.path.mkdir(parents=True, exist_ok=True)
-    for t, rows in rows_by_task.items():
-        folder.csv_path(t).unlink(missing_ok=True)
-        for row in rows:
-            folder.append(t, row)
-    folder.write_run_json({
-        "name": Path(out).name, "kind": "eval", "config": config or {},
-        "started": now_iso(), "finished": now_iso(), "status": "finished", "executor": "eval", "workers": 1,
-        "n_cases": len(entries), "versions": package_versions(), "git_commit": git_commit(),
-        "machine": machine_info(), "command": " ".join(sys.argv),
-        "tasks": {t: tasks.get(t).spec() for t in rows_by_task}})
-    build_report(out)
-    return folder.frames()
+    lock = folder.lock()                         # one writer per folder, as for a run
+    try:
+        if folder.foreign_files():
+            raise _foreign(out, folder)
+        folder.reset()                           # a previous run or eval here: replaced as a whole
+        for t, rows in rows_by_task.items():
+            for row in rows:
+                folder.append(t, row)
+        folder.write_run_json({
+            "name": out.name, "kind": "eval", "config": config or {},
+            "started": now_iso(), "finished": now_iso(), "status": "finished", "executor": "eval", "workers": 1,
+            "n_cases": len(entries), "versions": package_versions(), "git_commit": git_commit(),
+            "machine": machine_info(), "command": " ".join(sys.argv),
+            "tasks": {t: tasks.get(t).spec() for t in rows_by_task}})
+        build_report(out)
+        return folder.frames()
+    finally:
+        lock.close()
 
 
 RESULTS_KEYS = {"file", "clean", "noisy", "label", "task"}
@@ -139,6 +154,9 @@ def results_config(raw: dict, base_dir: Path) -> tuple[list[dict], int]:
     P = []
     for k in sorted(set(raw) - {"name", "results", "hausdorff_samples"}):
         P.append(f"{k}: unknown key in a results config; expected name, results, hausdorff_samples")
+    name = raw.get("name", "eval")
+    if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,99}", name) or ".." in name:
+        P.append(f"name: expected letters, digits, '_', '-' or '.' (a folder name under results/), got {name!r}"[:200])
     hs = raw.get("hausdorff_samples", 20000)
     if not isinstance(hs, int) or isinstance(hs, bool) or not 0 <= hs <= 10_000_000:
         P.append(f"hausdorff_samples: expected an integer in [0, 10,000,000], got {hs!r}"[:200])

@@ -121,7 +121,6 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
         from .scoring import eval_entries, results_config
         entries, hs = results_config(raw[0], raw[1])
         out_dir = Path(out) if out else Path("results") / str(raw[0].get("name") or "eval")
-        _check_out(out_dir)
         return eval_entries(entries, out_dir, hs, raw[0])
     cfg: Config = config_or_path if isinstance(config_or_path, Config) else load_config(config_or_path)
     out_dir = Path(out) if out else Path("results") / cfg.name
@@ -133,6 +132,8 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
     cases = [dataclasses.replace(c, threads=threads) for c in cfg.cases]
     done: set[str] = set()
     _check_out(out_dir)
+    if not resume and folder.foreign_files():       # refused before the folder or its lock is made
+        raise _foreign(out_dir, folder)
     # before anything is written: an unreachable Dask scheduler is exit 2 with the folder untouched
     ex = make_executor(executor, workers, timeout, scheduler)
     try:
@@ -220,6 +221,12 @@ def _write_status_in_place(folder, status: str) -> None:
         pass
 
 
+def _foreign(out_dir: Path, folder: RunFolder) -> ShootoutError:
+    """The refusal of a folder holding files of a run's names without a run.json of ours."""
+    return ShootoutError(f"--out {out_dir}: holds {', '.join(folder.foreign_files())} and no run.json written by mesh-shootout; "
+                         "these may be your files: choose another --out, or remove them")
+
+
 def _check_out(out_dir: Path) -> None:
     """``--out`` must be a folder we can write, or creatable in one (exit 2 before anything is written)."""
     if out_dir.exists() and not out_dir.is_dir():
@@ -257,13 +264,13 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
                 "(cases, repeats, hausdorff_samples or hausdorff_eps differ); run without --resume to start over, "
                 "or use a new --out folder")
     elif folder.foreign_files():
-        raise ShootoutError(f"--out {out_dir}: holds {', '.join(folder.foreign_files())} but no run.json of ours; "
-                            "these may be your files: choose another --out, or remove them")
+        raise _foreign(out_dir, folder)
     try:
         if resume:
             done = folder.keep_ok_rows()
             if cfg.save_meshes:              # an ok row whose saved mesh is missing or torn runs again
-                done = {cid for cid in done if _mesh_ok(out_dir / "meshes" / f"{cid}.ply")}
+                meshed = {c.case_id for c in cfg.cases if tasks.get(c.task).output_mesh is not None}
+                done = {cid for cid in done if cid not in meshed or _mesh_ok(out_dir / "meshes" / f"{cid}.ply")}
                 folder.drop_rows(lambda r: r["case_id"] not in done)
             folder.remove_temporaries()
             cases = [c for c in cases if c.case_id not in done]

@@ -93,3 +93,37 @@ def test_a_simplified_mesh_on_the_clean_vertex_buffer_is_scored_as_simplificatio
     assert not (tmp_path / "o" / "smoothing.csv").exists()
     assert cli(["eval", str(tmp_path / "half.obj"), "--clean", str(tmp_path / "clean.obj"),
                 "--out", str(tmp_path / "o2"), "--task", "smoothing"]) == 2
+
+
+def test_eval_keeps_a_users_files_and_replaces_a_run_as_a_whole(tmp_path):
+    """eval writes a run folder like a run: into a folder of someone else's files (a CSV with a
+    task's name, another tool's run.json) it is refused with exit 2 and nothing changes; into a
+    finished run folder it replaces that run as a whole (no rows of the old run left behind); a
+    results config's name cannot leave results/; a negative --hausdorff-samples is exit 2."""
+    import igl
+    from harness import datasets
+    m = datasets.load("knight").clean
+    igl.write_triangle_mesh(str(tmp_path / "clean.obj"), m.V, m.F)
+    igl.write_triangle_mesh(str(tmp_path / "half.obj"), m.V, m.F[: len(m.F) // 2])
+    args = ["eval", str(tmp_path / "half.obj"), "--clean", str(tmp_path / "clean.obj"), "--hausdorff-samples", "500"]
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "simplification.csv").write_text("my,data\n1,2\n")
+    (mine / "run.json").write_text('{"tool": "other"}')
+    before = {p.name: p.read_bytes() for p in mine.iterdir()}
+    assert cli([*args, "--out", str(mine)]) == 2
+    assert {p.name: p.read_bytes() for p in mine.iterdir()} == before
+    run = tmp_path / "run"
+    harness.run({"name": "r", "time_budget": 0, "hausdorff_samples": 200, "meshes": ["knight"],
+                 "tasks": {"smoothing": {"methods": ["scratch.taubin"]},
+                           "simplification": {"methods": ["scratch.qem"], "params": {"target_ratio": 0.5}}}},
+                out=run, quiet=True, workers=1)
+    assert cli([*args, "--out", str(run)]) == 0
+    assert not (run / "smoothing.csv").exists() and len(pd.read_csv(run / "simplification.csv")) == 1
+    assert json.loads((run / "run.json").read_text())["kind"] == "eval"
+    assert cli([*args[:-2], "--hausdorff-samples", "-5", "--out", str(tmp_path / "neg")]) == 2
+    assert not (tmp_path / "neg").exists()
+    cfg = tmp_path / "res.yaml"
+    cfg.write_text(json.dumps({"name": "../escape", "results": [{"file": str(tmp_path / "half.obj"),
+                                                                  "clean": str(tmp_path / "clean.obj")}]}))
+    assert cli(["run", str(cfg)]) == 2 and not (tmp_path.parent / "escape").exists()

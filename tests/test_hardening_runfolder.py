@@ -229,3 +229,39 @@ def test_obj_faces_separated_by_tabs_or_indented(tmp_path):
     p = tmp_path / "t.obj"
     p.write_text("v 0 0 0\n\tv 1 0 0\nv\t0 1 0\n  v 1 1 0\n  f 1 2 3\nf\t2\t4\t3\n")
     assert read_mesh(p).F.shape == (2, 3)
+
+
+def test_a_fresh_run_refuses_a_folder_of_someone_elses_outputs(tmp_path):
+    """A folder without a run.json of ours that holds files with a run's output names (a report,
+    a leaderboard, views, or another tool's run.json next to task CSVs) is refused with exit 2,
+    before the folder or its lock is touched; the files stay byte for byte."""
+    cfg = write_cfg(tmp_path / "c.yaml", SMALL)
+    a, b, c = tmp_path / "a", tmp_path / "b", tmp_path / "c"
+    for d in (a, b, c):
+        d.mkdir()
+    (a / "report.html").write_text("<html>mine</html>")
+    (a / "winners.csv").write_text("mine\n")
+    (a / ".draft.tmp").write_text("precious")
+    (a / "views").mkdir()
+    (a / "views" / "mine.json").write_text("{}")
+    (b / "run.json").write_text('{"tool": "other"}')
+    (b / "spectrum.csv").write_text("id,val\n1,2\n")
+    (c / "run.json").write_text("[1, 2, 3]")
+    for d in (a, b, c):
+        before = {p.relative_to(d): p.read_bytes() for p in d.rglob("*") if p.is_file()}
+        r = cli(["run", cfg, "--out", d])
+        assert r.returncode == 2 and "written by mesh-shootout" in r.stderr, r.stderr
+        assert {p.relative_to(d): p.read_bytes() for p in d.rglob("*") if p.is_file()} == before
+
+
+def test_resume_with_saved_meshes_keeps_cases_of_tasks_without_an_output_mesh(tmp_path):
+    """save_meshes: a Laplacian case has no output mesh, so resuming a finished run keeps it
+    (it was re-run because its missing mesh file counted as torn)."""
+    cfg = write_cfg(tmp_path / "c.yaml", {**SMALL, "save_meshes": True,
+                                          "tasks": {"laplacian": {"methods": ["scratch.cotan"]},
+                                                    "smoothing": {"methods": ["scratch.taubin"]}}})
+    assert cli(["run", cfg, "--out", tmp_path / "o"]).returncode == 0
+    before = (tmp_path / "o" / "laplacian.csv").read_bytes()
+    r = cli(["run", cfg, "--out", tmp_path / "o", "--resume"])
+    assert r.returncode == 0 and "0 to run" in r.stderr, r.stderr
+    assert (tmp_path / "o" / "laplacian.csv").read_bytes() == before
