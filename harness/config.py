@@ -238,9 +238,11 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
     for i, mod in enumerate(plugins if not early_problems else []):
         try:
             methods.load_plugins([mod])
-        except Exception as exc:       # any failure of a user's module is a config problem
+        except (Exception, SystemExit) as exc:       # any failure of a user's module is a config problem
             plugin_failed = True
-            P.append(f"plugins[{i}]: cannot import {yaml_input.short(mod)} ({type(exc).__name__}: {exc})")
+            why = (f"it called sys.exit({yaml_input.short(exc.code)}) on import" if isinstance(exc, SystemExit)
+                   else f"{type(exc).__name__}: {exc}")
+            P.append(f"plugins[{i}]: cannot import {yaml_input.short(mod)} ({why})")
     methods.load_plugins([])
 
     tasks = _check_tasks(raw.get("tasks"), P, skip_unknown=plugin_failed)
@@ -259,6 +261,10 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
                                   "narrow its parameter lists"])
     unique = expand_cases(meshes, noises, tasks, *common)
     if tune is not None:
+        nt = _count_cases(tune.train, noises, tune.n_training_settings())
+        if nt > MAX_CASES:
+            raise ConfigError(label, [f"tune: the training grid expands to {nt:,} cases, more than {MAX_CASES:,}: "
+                                      "lower tune.budget, or use fewer tune.train meshes or parameter values"])
         tune.common = common
         tune.noises = noises
         tune.cases = expand_cases(tune.train, noises, tune.grid_tasks(), *common)
@@ -487,6 +493,10 @@ def _check_tasks(tasks, P: list, skip_unknown: bool = False) -> dict:
                 for val in values:
                     for prob in meth.param_problems({k: val}):
                         P.append(f"{src}: {prob}")
+            size = math.prod(len(v) if isinstance(v, list) else 1 for v in params.values())
+            if size > MAX_CASES:             # refused before the product is built in memory
+                P.append(f"{mat}: its parameter lists expand to {size:,} settings, more than {MAX_CASES:,} cases")
+                continue
             entries.append((mname, [_resolved(meth, g) for g in _grid(params)]))
         out[task] = entries
     return out

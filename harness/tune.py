@@ -48,11 +48,13 @@ class TuneSpec:
         """Parameter overrides tried for ``method``: {} (the defaults) first, then the grid or a sample."""
         ranges = self.params[method]
         keys = sorted(ranges)
-        grid = [dict(zip(keys, combo)) for combo in itertools.product(*(ranges[k] for k in keys))]
-        if len(grid) > self.budget - 1:
+        total = math.prod(len(ranges[k]) for k in keys)
+        if total > self.budget - 1:          # a seeded sample of the product's positions, never the whole product
             rng = np.random.default_rng(self.seed)
-            pick = sorted(rng.choice(len(grid), size=max(self.budget - 1, 0), replace=False).tolist())
-            grid = [grid[i] for i in pick]
+            pick = sorted(rng.choice(total, size=max(self.budget - 1, 0), replace=False).tolist())
+            grid = [_nth_combination(ranges, keys, i) for i in pick]
+        else:
+            grid = [dict(zip(keys, combo)) for combo in itertools.product(*(ranges[k] for k in keys))]
         import methods
         meth = methods.get(method)
         base = self.configured[method][1][0] if self.configured[method][1] else {}
@@ -62,6 +64,15 @@ class TuneSpec:
             if key not in seen:
                 seen.add(key)
                 out.append(g)
+        return out
+
+    def n_training_settings(self) -> dict:
+        """``{task: [(method, range(n))]}``: how many training settings each method gets (what
+        `grid_tasks` would list), without building them, for the case count."""
+        out: dict = {}
+        for m in self.params:
+            task, base = self.configured[m]
+            out.setdefault(task, []).append((m, range(len(self.candidates(m)) * len(base))))
         return out
 
     def grid_tasks(self) -> dict:
@@ -74,6 +85,19 @@ class TuneSpec:
             grid = [meth.with_defaults({**b, **c}) for c in self.candidates(m) for b in base]
             out.setdefault(task, []).append((m, grid))
         return out
+
+
+def _nth_combination(ranges: dict, keys: list, i: int) -> dict:
+    """The ``i``-th element of ``itertools.product(*(ranges[k] for k in keys))`` (the last key
+    varies fastest), as a dict."""
+    out = {}
+    for k in reversed(keys):
+        i, j = divmod(i, len(ranges[k]))
+        out[k] = ranges[k][j]
+    return {k: out[k] for k in keys}
+
+
+MAX_SETTINGS = 10 ** 15      # a tune.params product above this is refused (sampled positions fit int64)
 
 
 def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | None:
@@ -119,6 +143,10 @@ def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | 
                 P.extend(f"{at}.{k}: {b}" for b in (bad or ["empty list of values"]))
                 continue
             ok[k] = vals
+        size = math.prod(len(v) for v in ok.values())
+        if size > MAX_SETTINGS:
+            P.append(f"{at}: its value lists expand to {size:.3g} settings, more than {MAX_SETTINGS:.0e}")
+            continue
         out_params[m] = ok
         from . import tasks as _tasks
         spec = _tasks.get(configured[m][0])

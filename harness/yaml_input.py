@@ -1,4 +1,4 @@
-"""YAML from untrusted configs: safe types only, and no alias bomb.
+"""YAML from untrusted configs: safe types only, no duplicate keys, and no alias bomb.
 
 ``yaml.safe_load`` builds shared nodes for aliases, but anything that walks the result (validation,
 JSON for run.json, an error message) expands them: a few hundred bytes of nested aliases expand to
@@ -46,14 +46,40 @@ def _expanded_size(node, memo: dict, stack: set) -> int:
     return n
 
 
+def _duplicate_keys(node, out: list, done: set) -> None:
+    """Messages for every key that appears twice in one mapping (the last would silently win: a
+    whole task or setting lost), walking each node once."""
+    if id(node) in done:
+        return
+    done.add(id(node))
+    if isinstance(node, yaml.MappingNode):
+        seen: dict = {}
+        for k, v in node.value:
+            if isinstance(k, yaml.ScalarNode) and k.tag != "tag:yaml.org,2002:merge":
+                if k.value in seen:
+                    out.append(f"duplicate key {k.value!r} at line {k.start_mark.line + 1} (first at line "
+                               f"{seen[k.value] + 1})")
+                else:
+                    seen[k.value] = k.start_mark.line
+            _duplicate_keys(v, out, done)
+    elif isinstance(node, yaml.SequenceNode):
+        for v in node.value:
+            _duplicate_keys(v, out, done)
+
+
 def load(text: str):
-    """The document's data (safe types only); `yaml.YAMLError` for bombs and syntax errors."""
+    """The document's data (safe types only); `yaml.YAMLError` for bombs, duplicate keys in a
+    mapping and syntax errors."""
     loader = _Loader(text)
     try:
         node = loader.get_single_node()
         if node is None:
             return None
         _expanded_size(node, {}, set())
+        dup: list = []
+        _duplicate_keys(node, dup, set())
+        if dup:
+            raise yaml.YAMLError("; ".join(dup) + ": each key may appear once in a mapping")
         return loader.construct_document(node)
     finally:
         loader.dispose()

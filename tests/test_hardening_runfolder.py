@@ -265,3 +265,41 @@ def test_resume_with_saved_meshes_keeps_cases_of_tasks_without_an_output_mesh(tm
     r = cli(["run", cfg, "--out", tmp_path / "o", "--resume"])
     assert r.returncode == 0 and "0 to run" in r.stderr, r.stderr
     assert (tmp_path / "o" / "laplacian.csv").read_bytes() == before
+
+
+def test_grids_too_large_duplicate_keys_and_exiting_plugins_are_config_errors(tmp_path):
+    """Each is exit 2 with the problem named and nothing written, quickly and in little memory:
+    a 27M-setting parameter grid (it was built in memory before the case limit was checked), a
+    tune grid over the case limit, duplicate keys (the last silently won: a whole task lost), a
+    plugin that calls sys.exit at import (exit 0 with nothing run). A 10^12-setting tune product
+    is sampled, never built."""
+    big = {**SMALL, "tasks": {"smoothing": {"methods": [{"name": "scratch.explicit", "params": {
+        "iterations": list(range(1, 301)), "step": [0.1 + i * 1e-3 for i in range(300)],
+        "self_weight": [i * 1e-3 for i in range(300)]}}]}}}
+    text = ("name: dup\nmeshes: [knight]\ntasks:\n  laplacian: {methods: [scratch.cotan]}\n"
+            "tasks:\n  smoothing: {methods: [scratch.taubin]}\nrepeats: 1\nrepeats: 2\n")
+    (tmp_path / "exitplug.py").write_text("import sys\nsys.exit(0)\n")
+    cases = {"big": (json.dumps(big), "27,000,000 settings"),
+             "dup": (text, "duplicate key 'tasks' at line 5 (first at line 3); duplicate key 'repeats'"),
+             "plug": (json.dumps({**SMALL, "plugins": ["exitplug"]}), "called sys.exit(0) on import")}
+    for name, (body, needle) in cases.items():
+        (tmp_path / f"{name}.yaml").write_text(body)
+        r = cli(["run", tmp_path / f"{name}.yaml", "--out", tmp_path / name], cwd=tmp_path,
+                PYTHONPATH=f"{ROOT}:{tmp_path}")
+        assert r.returncode == 2 and needle in r.stderr, (name, r.stderr)
+        assert not (tmp_path / name).exists()
+    from harness.config import load_config
+    from harness.errors import ConfigError
+    tune = {**SMALL, "tasks": {"smoothing": {"methods": ["scratch.explicit"]}},
+            "tune": {"metric": "ev_rms", "train": ["knight"], "budget": 1000,
+                     "params": {"scratch.explicit": {"step": [0.01 * i for i in range(1, 101)],
+                                                     "iterations": list(range(1, 101))}}},
+            "noise": [{"model": "gaussian_normal", "levels": [0.1, 0.2, 0.3]}] * 40}
+    with pytest.raises(ConfigError, match="training grid expands to"):
+        load_config(tune)
+    huge = {**tune, "noise": [{"model": "gaussian_normal", "levels": [0.3]}],
+            "tune": {**tune["tune"], "budget": 5, "params": {"scratch.explicit": {
+                "step": [0.001 * i for i in range(1, 1001)], "iterations": list(range(1, 1001)),
+                "self_weight": [0.001 * i for i in range(1000)], "boundary": ["free", "fixed", "curve"]}}}}
+    cfg = load_config(huge)
+    assert 2 <= len(cfg.tune.cases) <= 5

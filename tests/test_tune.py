@@ -51,3 +51,15 @@ def test_tune_section_is_validated_with_key_paths():
     msg = str(e.value)
     for needle in ("tune.bogus", "tune.budget", "tune.params.scratch.nothing", "tune.params.scratch.implicit.step"):
         assert needle in msg, msg
+
+
+def test_sampled_settings_are_the_products_positions():
+    """A tune grid larger than the budget is sampled by position in the product, never built:
+    position i decodes to the product's i-th element (the last key fastest), so the choice is
+    the one the whole product gave."""
+    import itertools
+    from harness.tune import _nth_combination
+    ranges = {"a": [1, 2, 3], "b": list("xyzw"), "c": [0.1, 0.2]}
+    keys = sorted(ranges)
+    grid = [dict(zip(keys, c)) for c in itertools.product(*(ranges[k] for k in keys))]
+    assert [_nth_combination(ranges, keys, i) for i in range(len(grid))] == grid
