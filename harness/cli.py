@@ -64,6 +64,28 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
+def _check_output_file(path, flag: str, protect=()) -> None:
+    """An output file named on the command line can be written: not a folder, not one of the
+    ``protect``ed inputs (e.g. the config being run), under a writable folder (missing folders
+    are made). Checked before any work, so a typo costs exit 2, not a finished run."""
+    if path is None:
+        return
+    p = Path(path)
+    if p.is_dir():
+        raise ShootoutError(f"{flag} {path}: is a folder; give a file name")
+    for q in protect:
+        try:
+            if q is not None and Path(q).exists() and p.exists() and p.resolve() == Path(q).resolve():
+                raise ShootoutError(f"{flag} {path}: is an input of this command; writing it would overwrite it")
+        except OSError:
+            pass
+    d = p.resolve().parent
+    while not d.exists():
+        d = d.parent
+    if not d.is_dir() or not os.access(d, os.W_OK | os.X_OK):
+        raise ShootoutError(f"{flag} {path}: {d} is not a writable folder")
+
+
 def _cmd_run(a) -> int:
     from .config import load_config
     if a.workers is not None and a.workers < 1:
@@ -74,6 +96,7 @@ def _cmd_run(a) -> int:
         raise ShootoutError("--executor dask needs --scheduler tcp://HOST:PORT")
     if a.timeout is not None and not a.timeout < float("inf"):
         raise ShootoutError(f"--timeout: expected a finite number of seconds, got {a.timeout}")
+    _check_output_file(a.export_benchmark_json, "--export-benchmark-json", protect=[a.config])
     from .session import _results_config, run
     if _results_config(Path(a.config)) is not None:          # results: score files made elsewhere
         frames = run(Path(a.config), out=a.out)
@@ -180,8 +203,9 @@ def _cmd_compare(a) -> int:
     for d in (a.run_a, a.run_b):
         if not Path(d).is_dir():
             raise ShootoutError(f"compare: {d} is not a run folder")
-    if a.time_factor is not None and a.time_factor <= 1:
-        raise ShootoutError(f"--time-factor: expected a number > 1, got {a.time_factor}")
+    if a.time_factor is not None and not 1 < a.time_factor < float("inf"):
+        raise ShootoutError(f"--time-factor: expected a finite number > 1, got {a.time_factor}")
+    _check_output_file(a.html, "--html")
     factor = None if a.no_time else (a.time_factor or TIME_FACTOR)
     return compare_runs(a.run_a, a.run_b, html_out=a.html, time_factor=factor, absolute_time=a.absolute_time)
 

@@ -518,6 +518,7 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
         print(f"new in B: {len(res['only_b'])} case(s), e.g. " + ", ".join(_label(rb[c]) for c in res["only_b"][:3]),
               file=out)
     if html_out:
+        Path(html_out).parent.mkdir(parents=True, exist_ok=True)
         Path(html_out).write_text(_html(run_a, run_b, res, changes, time_factor), encoding="utf-8")
         print(f"HTML diff: {html_out}", file=out)
     return 1 if regress else 0

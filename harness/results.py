@@ -116,8 +116,12 @@ class RunFolder:
 
     def lock(self):
         """Take the folder's exclusive lock (held until the returned file is closed or the process
-        ends); `ShootoutError` naming the holder's pid when another run holds it."""
-        self.path.mkdir(parents=True, exist_ok=True)
+        ends); `ShootoutError` naming the holder's pid when another run holds it, or saying why the
+        folder cannot be made."""
+        try:
+            self.path.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise ShootoutError(f"--out {self.path}: cannot make this folder ({exc.strerror or exc})") from None
         fh = open(self.path / ".shootout.lock", "a+")
         try:
             fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)

@@ -288,7 +288,10 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         command = prev_meta.get("command") or command
         prev_sessions = prev_meta.get("sessions") or [
             {k: prev_meta.get(k) for k in ("started", "finished", "wall_s", "command", "status")}]
-    meta = {"name": cfg.name, "config_source": cfg.source, "config": cfg.raw, "config_hash": chash,
+    src = Path(cfg.source) if cfg.source and cfg.source != "<config>" else None
+    meta = {"name": cfg.name, "config_source": cfg.source,
+            "config_dir": str(src.resolve().parent) if src is not None and src.is_file() else str(Path.cwd()),
+            "config": cfg.raw, "config_hash": chash,
             "started": started, "finished": None, "status": "running", "executor": executor,
             "scheduler": scheduler, "workers": workers, "timeout_s": timeout,
             "n_cases": len(cfg.cases), "resumed_ok_cases": len(done),
@@ -454,8 +457,11 @@ def recompute_views(run_dir) -> int:
     meta = folder.read_run_json()
     if not meta or not isinstance(meta.get("config"), dict):
         raise ShootoutError(f"{run_dir}: no run.json with a config to rebuild the cases from")
-    src = meta.get("config_source")
-    base = Path(src).parent if src and Path(src).parent.is_dir() else Path.cwd()
+    src, where = meta.get("config_source"), meta.get("config_dir")
+    if where and Path(where).is_dir():               # relative mesh files resolve where the run did
+        base = Path(where)
+    else:
+        base = Path(src).parent if src and Path(src).parent.is_dir() else Path.cwd()
     cfg = load_config(meta["config"], base_dir=base.resolve())
     views = compute_views({c.case_id: c for c in cfg.cases}, folder.frames(), cfg.report)
     folder.write_views(views)

@@ -295,3 +295,19 @@ def test_time_can_be_left_out(run_a, tmp_path):
     assert run_compare(run_a, b)[0] == 1
     code, out = run_compare(run_a, b, time_factor=None)
     assert code == 0 and "time not compared" in out
+
+
+def test_output_files_are_checked_before_any_work(run_a, tmp_path):
+    """--html on a folder and --time-factor nan are exit 2 (a traceback was exit 1, which CI reads
+    as a regression; nan silently turned the time gate off); --export-benchmark-json naming a
+    folder or the config being run is refused before the run."""
+    assert cli(["compare", str(run_a), str(run_a), "--html", str(tmp_path)]) == 2
+    assert cli(["compare", str(run_a), str(run_a), "--time-factor", "nan"]) == 2
+    assert cli(["compare", str(run_a), str(run_a), "--html", str(tmp_path / "new" / "d.html")]) == 0
+    assert (tmp_path / "new" / "d.html").is_file()
+    cfg = tmp_path / "c.json"
+    cfg.write_text(json.dumps(SMALL))
+    before = cfg.read_bytes()
+    for target in (tmp_path, cfg):
+        assert cli(["run", str(cfg), "--out", str(tmp_path / "o"), "--export-benchmark-json", str(target)]) == 2
+    assert cfg.read_bytes() == before and not (tmp_path / "o").exists()

@@ -303,3 +303,20 @@ def test_grids_too_large_duplicate_keys_and_exiting_plugins_are_config_errors(tm
                 "self_weight": [0.001 * i for i in range(1000)], "boundary": ["free", "fixed", "curve"]}}}}
     cfg = load_config(huge)
     assert 2 <= len(cfg.tune.cases) <= 5
+
+
+def test_views_rebuild_from_another_directory_and_out_that_cannot_be_made(tmp_path):
+    """`shootout views` finds a config's relative mesh files from any working directory (they
+    resolve where the run's config was), and an --out that cannot be made is exit 2 with a
+    message, not a traceback."""
+    proj = tmp_path / "proj"
+    (proj / "meshes").mkdir(parents=True)
+    shutil.copy(ROOT / "harness/data/meshes/woody.obj", proj / "meshes" / "scan.obj")
+    cfg = write_cfg(proj / "c.yaml", {**SMALL, "meshes": [{"file": "meshes/scan.obj"}]})
+    assert cli(["run", "c.yaml", "--out", tmp_path / "o"], cwd=proj).returncode == 0
+    (tmp_path / "elsewhere").mkdir()
+    r = cli(["views", tmp_path / "o"], cwd=tmp_path / "elsewhere")
+    assert r.returncode == 0, r.stderr
+    r = cli(["run", cfg, "--out", "/proc/no-such-folder/o"])
+    assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
+    assert "cannot make this folder" in r.stderr or "not writable" in r.stderr, r.stderr
