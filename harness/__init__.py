@@ -25,7 +25,12 @@ def load_run(run_dir):
 
     import pandas as pd
 
+    from pathlib import Path
+
+    from .errors import ShootoutError
     from .results import RunFolder
+    if not Path(run_dir).is_dir():
+        raise ShootoutError(f"{run_dir}: no such run folder")
     frames = RunFolder(run_dir).frames()
     if not frames:
         return pd.DataFrame()

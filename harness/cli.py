@@ -88,14 +88,8 @@ def _check_output_file(path, flag: str, protect=()) -> None:
 
 def _cmd_run(a) -> int:
     from .config import load_config
-    if a.workers is not None and a.workers < 1:
-        raise ShootoutError(f"--workers: expected an integer >= 1, got {a.workers}")
-    if a.timeout is not None and not a.timeout > 0:
-        raise ShootoutError(f"--timeout: expected seconds > 0, got {a.timeout}")
-    if a.executor == "dask" and not a.scheduler:
-        raise ShootoutError("--executor dask needs --scheduler tcp://HOST:PORT")
-    if a.timeout is not None and not a.timeout < float("inf"):
-        raise ShootoutError(f"--timeout: expected a finite number of seconds, got {a.timeout}")
+    from .session import check_run_args
+    check_run_args(a.workers, a.timeout, a.executor, a.scheduler)
     _check_output_file(a.export_benchmark_json, "--export-benchmark-json", protect=[a.config])
     from .session import _results_config, run
     if _results_config(Path(a.config)) is not None:          # results: score files made elsewhere

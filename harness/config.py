@@ -168,7 +168,10 @@ def load_config(source, base_dir: Path | None = None) -> Config:
             if not p.is_file():
                 raise ConfigError(label, [f"config file not found: {p}"])
             base_dir = base_dir or p.parent
-            text = p.read_text()
+            try:
+                text = p.read_text()
+            except UnicodeDecodeError as exc:
+                raise ConfigError(label, [f"not valid YAML: {exc}".replace("\n", " ")]) from None
         else:
             text = str(source)
         try:

@@ -112,10 +112,26 @@ def task_specs(cfg: Config) -> dict:
     return {t: tasks.get(t).spec() for t in used}
 
 
+def check_run_args(workers, timeout, executor, scheduler) -> None:
+    """The run's settings (the CLI's flags, `run`'s arguments): `ShootoutError` (exit 2) naming
+    the first that is wrong."""
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+        raise ShootoutError(f"--workers: expected an integer >= 1, got {workers!r}")
+    if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, (int, float))
+                                or not 0 < timeout < float("inf")):
+        raise ShootoutError(f"--timeout: expected a finite number of seconds > 0, got {timeout!r}")
+    if executor not in ("local", "serial", "dask"):
+        raise ShootoutError(f"--executor: expected local, serial or dask, got {executor!r}")
+    if executor == "dask" and not scheduler:
+        raise ShootoutError("--executor dask needs --scheduler tcp://HOST:PORT")
+
+
 def run(config_or_path, out=None, workers=None, executor="local", scheduler=None, resume=False,
         timeout=None, quiet=True, export_benchmark_json=None):
     """Run a config (a `Config`, a path, YAML text or a dict) end to end; returns
-    ``{task: DataFrame}`` of the rows in the run folder."""
+    ``{task: DataFrame}`` of the rows in the run folder. Bad arguments are a `ShootoutError`
+    before anything is written."""
+    check_run_args(workers, timeout, executor, scheduler)
     raw = _results_config(config_or_path)
     if raw is not None:                  # a results: config scores files made elsewhere (shootout eval)
         from .scoring import eval_entries, results_config

@@ -320,3 +320,22 @@ def test_views_rebuild_from_another_directory_and_out_that_cannot_be_made(tmp_pa
     r = cli(["run", cfg, "--out", "/proc/no-such-folder/o"])
     assert r.returncode == 2 and "Traceback" not in r.stderr, r.stderr
     assert "cannot make this folder" in r.stderr or "not writable" in r.stderr, r.stderr
+
+
+def test_the_python_api_checks_what_the_cli_checks(tmp_path):
+    """harness.run refuses what the CLI refuses, before writing anything (a timeout of -1 made
+    every case a 'timeout' row; an unknown executor ran locally); load_run of a missing folder
+    is an error, not an empty table; a config file that is not UTF-8 is a config error."""
+    import harness
+    from harness.errors import ConfigError, ShootoutError
+    for kw in ({"timeout": -1}, {"timeout": 0}, {"timeout": float("nan")}, {"executor": "bogus"},
+               {"workers": -2}, {"workers": 1.5}, {"executor": "dask"}):
+        with pytest.raises(ShootoutError):
+            harness.run(SMALL, out=tmp_path / "o", **kw)
+        assert not (tmp_path / "o").exists()
+    with pytest.raises(ShootoutError, match="no such run folder"):
+        harness.load_run(tmp_path / "typo")
+    bad = tmp_path / "latin1.yaml"
+    bad.write_bytes("name: caf\xe9\n".encode("latin-1"))
+    with pytest.raises(ConfigError, match="not valid YAML"):
+        harness.run(str(bad), out=tmp_path / "o")

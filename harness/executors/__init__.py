@@ -24,7 +24,10 @@ class Executor(Protocol):
 
 
 def make_executor(kind: str, workers: int, timeout: float | None, scheduler=None) -> Executor:
-    """Executor by name: ``local`` (default), ``serial`` or ``dask``."""
+    """Executor by name: ``local`` (default), ``serial`` or ``dask``; `ShootoutError` for another."""
+    if kind not in ("local", "serial", "dask"):
+        from ..errors import ShootoutError
+        raise ShootoutError(f"executor: expected local, serial or dask, got {kind!r}")
     if kind == "serial":
         from .local import SerialExecutor
         return SerialExecutor()
