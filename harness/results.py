@@ -25,6 +25,7 @@ import os
 import tempfile
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from . import tasks
@@ -332,7 +333,32 @@ def load_csv(path) -> pd.DataFrame:
                      keep_default_na=False, na_values=[""], true_values=["true"], false_values=["false"])
     if "error" in df:
         df["error"] = df["error"].fillna("")
+    _check_numbers(Path(path), df)
     return df
+
+
+NUMERIC_COMMON = ("n_vertices", "n_faces", "noise_level", "seed", "time_s", "time_min_s", "time_max_s", "time_q1_s",
+                  "time_q3_s", "time_cold_s", "repeats", "time_cpu_s", "others_cpu", "method_mem_mb", "peak_rss_mb")
+
+
+def _check_numbers(path: Path, df: pd.DataFrame) -> None:
+    """`ShootoutError` naming the first cell of a number column (the common timing and size
+    columns, a task's float and int metrics) that holds something else: a hand-edited or
+    foreign file, which would otherwise fail deep in the report."""
+    try:
+        spec = tasks.get(path.stem)
+    except (KeyError, ValueError):
+        spec = None
+    cols = list(NUMERIC_COMMON) + ([m.name for m in spec.metrics if m.kind in ("float", "int")] if spec else [])
+    for c in cols:
+        if c not in df or pd.api.types.is_numeric_dtype(df[c]):
+            continue
+        vals = df[c]
+        bad = pd.to_numeric(vals, errors="coerce").isna() & vals.notna()
+        if bad.any():
+            i = int(np.flatnonzero(bad.to_numpy())[0])
+            raise ShootoutError(f"{path}: damaged CSV: column {c} holds {str(vals.iloc[i])[:40]!r} on line {i + 2}, "
+                                "expected a number")
 
 
 def _checked_csv_text(path: Path) -> str:

@@ -183,7 +183,7 @@ def test_out_on_a_file_or_a_read_only_place_and_a_huge_face_index(tmp_path, tiny
     assert r.returncode == 2 and "noisy.obj" in r.stderr and "Traceback" not in r.stderr
 
 
-@pytest.mark.parametrize("damage", ["ragged", "quote", "binary", "empty", "torn"])
+@pytest.mark.parametrize("damage", ["ragged", "quote", "binary", "empty", "torn", "text_in_a_number"])
 def test_damaged_csvs_are_a_message_not_a_traceback_or_a_false_regression(tmp_path, damage):
     cfg = write_cfg(tmp_path / "c.yaml", SMALL)
     a, b = tmp_path / "a", tmp_path / "b"
@@ -199,6 +199,14 @@ def test_damaged_csvs_are_a_message_not_a_traceback_or_a_false_regression(tmp_pa
         p.write_bytes(p.read_bytes() + b"\x00\xff\xfe junk\n")
     elif damage == "empty":
         p.write_text("")
+    elif damage == "text_in_a_number":               # a hand-edited cell of a metric column
+        import csv
+        import io
+        rows = list(csv.reader(io.StringIO(text)))
+        rows[1][rows[0].index("ev_rms")] = "notanumber"
+        buf = io.StringIO()
+        csv.writer(buf, lineterminator="\n").writerows(rows)
+        p.write_text(buf.getvalue())
     else:                                             # a torn last line: half of a real row
         last = text.splitlines()[-1]
         p.write_text(text + last[: len(last) // 2])
@@ -210,6 +218,8 @@ def test_damaged_csvs_are_a_message_not_a_traceback_or_a_false_regression(tmp_pa
         assert r.returncode == 2 and "smoothing.csv" in r.stderr, r.stderr
     r = cli(["report", b])
     assert "Traceback" not in r.stderr and r.returncode in (0, 2)
+    if damage == "text_in_a_number":
+        assert r.returncode == 2 and "column ev_rms holds 'notanumber' on line 2" in r.stderr, r.stderr
 
 
 def test_files_follow_the_umask(tmp_path):
