@@ -275,3 +275,21 @@ def test_pygel_vertex_map_matches_rows_bit_for_bit(monkeypatch):
     monkeypatch.setattr(S, "_row_hash", lambda bits: np.zeros(len(bits), np.uint64))
     for A, B in cases[:20]:
         assert np.array_equal(S.match_rows(A, B), brute(A, B))
+
+
+def test_volume_ratio_needs_a_consistently_oriented_closed_mesh():
+    """The signed volume is the enclosed one only when every edge has two faces traversing it in
+    opposite directions: with half the faces of a sphere flipped it read -23.5 on an ok row; now
+    it is blank there and on an open mesh, and 1.03^3 for a sphere scaled by 1.03."""
+    import harness
+    from harness.datasets import icosphere, load
+    V, F0 = icosphere(3)
+    good = harness.evaluate(V * 1.03, F0, V, F0, task="smoothing", hausdorff_samples=0)
+    assert good["volume_ratio"] == pytest.approx(1.03 ** 3, rel=1e-3)
+    F = F0.copy()
+    F[::2] = F[::2, ::-1]
+    mixed = harness.evaluate(V * 1.03, F, V, F, task="smoothing", hausdorff_samples=0)
+    assert mixed.get("volume_ratio") is None
+    w = load("woody").clean
+    open_ = harness.evaluate(w.V, w.F, w.V, w.F, task="smoothing", hausdorff_samples=0)
+    assert open_.get("volume_ratio") is None

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.geometry import edge_face_counts, zero_area_faces
+from ..core.geometry import zero_area_faces
 from ..errors import MethodFailed
 from ..metrics.hausdorff import hausdorff
 from ..metrics.normal_error import angle_summary
@@ -42,8 +42,15 @@ def diverged(V_out: np.ndarray, V_in: np.ndarray) -> bool:
 
 
 def _closed(inp) -> bool:
+    """The clean mesh bounds a volume: every edge has exactly two faces, which traverse it in
+    opposite directions (closed, edge-manifold, consistently oriented), so the signed volume
+    is the enclosed one."""
     if "closed" not in inp.cache:
-        inp.cache["closed"] = not (edge_face_counts(inp.clean.F)[1] == 1).any()
+        F = np.asarray(inp.clean.F, dtype=np.int64)
+        n = np.int64(len(inp.clean.V))
+        a, b = F.ravel(), F[:, [1, 2, 0]].ravel()
+        d, r = np.sort(a * n + b), np.sort(b * n + a)
+        inp.cache["closed"] = bool(d.size and np.array_equal(d, r) and (d[1:] != d[:-1]).all())
     return inp.cache["closed"]
 
 
@@ -152,7 +159,8 @@ TASK = Task(
         Metric("hausdorff_upper", "info", "certified upper bound of the Hausdorff distance", **_LEN),
         Metric("normal_error_deg", "lower", "mean angle between result and clean face normals", rank=True, **_DEG),
         Metric("normal_error_rms_deg", "lower", "RMS angle between result and clean face normals", **_DEG),
-        Metric("volume_ratio", "one", "enclosed volume / clean volume (closed meshes)", rel=0.01, abs=1e-4),
+        Metric("volume_ratio", "one", "enclosed volume / clean volume (closed, consistently oriented clean "
+               "meshes; blank otherwise)", rel=0.01, abs=1e-4),
         Metric("area_ratio", "one", "surface area / clean area", rel=0.01, abs=1e-4),
         Metric("min_angle", "higher", "smallest triangle angle", unit="deg", rel=0.01, abs=0.01),
         Metric("max_angle", "lower", "largest triangle angle", unit="deg", rel=0.01, abs=0.01),
