@@ -70,6 +70,18 @@ def test_a_flood_of_output_with_stdout_piped_to_head(tmp_path):
     assert (df["status"] == "ok").all(), df[["method", "error"]]
 
 
+def test_a_flood_of_stderr_is_cut_back_to_its_tail(tmp_path):
+    """A case's stderr file is kept under 16 MiB while it runs (a method wrote 315 MB in 5 s to
+    the temporary directory, which can fill a machine's disk): the method waits for its own
+    stderr file to shrink and raises if it never does."""
+    cfg = _cfg(tmp_path, ["hostile.stderr_flood"])
+    r = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(tmp_path / "o"), "--quiet"],
+                       cwd=ROOT, env=_env(tmp_path), capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    df = pd.read_csv(tmp_path / "o" / "smoothing.csv")
+    assert (df["status"] == "ok").all(), df[["method", "error"]]
+
+
 def test_wrong_result_types_are_error_rows_naming_what_came_back(tmp_path):
     cfg = _cfg(tmp_path, ["hostile.complex", "hostile.strings", "hostile.bools", "hostile.lists"])
     r = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(tmp_path / "o"), "--quiet"],

@@ -300,7 +300,13 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
                                 stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
                                 stderr=subprocess.PIPE, env=env)
         err_chunks: list[bytes] = []
-        reader = threading.Thread(target=lambda: err_chunks.append(proc.stderr.read()), daemon=True)
+
+        def keep_tail():                 # a flood of output keeps only its last 64 KiB in memory
+            kept = b""
+            for chunk in iter(lambda: proc.stderr.read1(1 << 16), b""):
+                kept = (kept + chunk)[-(1 << 16):]
+            err_chunks.append(kept)
+        reader = threading.Thread(target=keep_tail, daemon=True)
         reader.start()
         try:
             proc.stdin.write(pickle.dumps((case, want_meshes), protocol=pickle.HIGHEST_PROTOCOL))

@@ -13,7 +13,9 @@ What a method may do, and what it costs:
 - signal its process group (``os.killpg(0, ...)``): reaches only its own case;
 - print: the case's stdout goes to /dev/null and its stderr to a temporary file (in the session's
   private directory, `harness.input_store.session`) whose last lines are quoted in the row of a
-  case that died;
+  case that died; the driver keeps that file under ``STDERR_MAX`` bytes while the case runs
+  (`_Job.keep_tail`: past it, only the last ``STDERR_TAIL`` bytes are kept), so a flood of output
+  cannot fill the disk;
 - SIGINT (Ctrl-C) is ignored by case processes and always reaches the driver: signals are blocked
   while a case is forked and registered, so an interrupt cannot be lost inside the fork.
 """
@@ -32,6 +34,10 @@ import time
 from .. import input_store
 from ..config import Case
 from ..runner import base_row, run_case
+
+
+STDERR_MAX = 16 << 20          # a case's stderr file is cut back to its tail past this size
+STDERR_TAIL = 64 << 10
 
 
 def _context():
@@ -97,7 +103,8 @@ def _isolate(stderr_path: str | None) -> None:
         os.dup2(devnull, 1)
         os.close(devnull)
         if stderr_path:
-            err = os.open(stderr_path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+            # appending: when the driver cuts the file back to its tail, writes continue after it
+            err = os.open(stderr_path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC | os.O_APPEND, 0o600)
             os.dup2(err, 2)
             os.close(err)
     except OSError:
@@ -172,6 +179,26 @@ class _Job:
     def ended(self) -> bool:
         """The case process has exited (its exit status is known)."""
         return self.proc.exitcode is not None
+
+    def keep_tail(self, limit: int = STDERR_MAX, tail: int = STDERR_TAIL) -> None:
+        """Cut the case's stderr file back to its last ``tail`` bytes once it exceeds ``limit``
+        (the case appends, so it writes on after the kept tail); lines written in between are
+        lost, which only a flood of output can notice."""
+        try:
+            if os.path.getsize(self.stderr_path) <= limit:
+                return
+            fd = os.open(self.stderr_path, os.O_RDWR)
+            try:
+                size = os.fstat(fd).st_size
+                os.lseek(fd, max(0, size - tail), os.SEEK_SET)
+                kept = os.read(fd, tail)
+                os.ftruncate(fd, 0)
+                os.lseek(fd, 0, os.SEEK_SET)
+                os.write(fd, f"[{size - len(kept)} bytes of earlier output dropped]\n".encode() + kept)
+            finally:
+                os.close(fd)
+        except OSError:
+            pass
 
     def _kill_group(self) -> None:
         """Kill every process left in the case's process group (its own session)."""
@@ -251,6 +278,7 @@ def run_isolated(case: Case, timeout: float | None = None, want_meshes: bool = F
                 return job.kill_timeout(timeout)
             if mp_wait([job.conn, job.sentinel], 0.5 if left is None else min(0.5, left)) or job.ended():
                 return job.collect()
+            job.keep_tail()
     except BaseException:
         job.abort()
         raise

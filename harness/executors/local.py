@@ -72,6 +72,8 @@ class LocalExecutor:
                     wait_s = min(wait_s, max(0.0, min(j.t0 + self.timeout - now for j in running)))
                 ready = set(mp_wait([j.conn for j in running] + [j.sentinel for j in running], timeout=wait_s))
                 check_interrupt()
+                for job in running:
+                    job.keep_tail()
                 for job in [j for j in running if j.conn in ready or j.sentinel in ready or j.ended()]:
                     running.remove(job)
                     row, extras = job.collect()

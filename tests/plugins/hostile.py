@@ -77,3 +77,23 @@ def bool_result(V, F):
 def list_result(V, F):
     """Returns a Python list."""
     return SmoothingResult(V=V.tolist())
+
+
+_FLOODED = []
+
+
+@register("hostile.stderr_flood", task="smoothing", library="hostile")
+def stderr_flood(V, F):
+    """Writes 40 MB to stderr (once per process), then waits up to 20 s for the driver to cut its
+    stderr file back below 17 MB; raises if it never does (a flood would fill the disk)."""
+    if not _FLOODED:
+        _FLOODED.append(1)
+        chunk = b"y" * (1 << 20)
+        for _ in range(40):
+            os.write(2, chunk)
+        t0 = time.time()
+        while os.fstat(2).st_size > 17 << 20:
+            if time.time() - t0 > 20:
+                raise RuntimeError(f"stderr file still {os.fstat(2).st_size} bytes")
+            time.sleep(0.05)
+    return SmoothingResult(V=V.copy())
