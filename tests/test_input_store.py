@@ -19,8 +19,8 @@ CFG = {"name": "store", "repeats": 1, "time_budget": 0, "meshes": ["bunny"],
 def test_facts_are_computed_once_per_input_and_equal_a_fresh_computation(tmp_path, monkeypatch):
     from harness.tasks import smoothing
     calls = []
-    real = smoothing.edge_face_counts                 # only the "closed" fact calls it
-    monkeypatch.setattr(smoothing, "edge_face_counts", lambda F: calls.append(len(F)) or real(F))
+    real = smoothing.bounds_volume                    # only the "closed" fact calls it
+    monkeypatch.setattr(smoothing, "bounds_volume", lambda F, n: calls.append(len(F)) or real(F, n))
     frames = harness.run(CFG, out=tmp_path / "r", executor="serial", quiet=True)
     rows = frames["smoothing"]
     assert (rows["status"] == "ok").all() and len(rows) == 4

@@ -41,16 +41,20 @@ def diverged(V_out: np.ndarray, V_in: np.ndarray) -> bool:
     return bool((np.abs(V_out - c) > 100 * half).any())
 
 
+def bounds_volume(F, n: int) -> bool:
+    """Every edge of the triangles ``F`` (on ``n`` vertices) has exactly two faces, which traverse
+    it in opposite directions (closed, edge-manifold, consistently oriented): the signed volume
+    is then the enclosed one."""
+    F = np.asarray(F, dtype=np.int64)
+    a, b = F.ravel(), F[:, [1, 2, 0]].ravel()
+    d, r = np.sort(a * np.int64(n) + b), np.sort(b * np.int64(n) + a)
+    return bool(d.size and np.array_equal(d, r) and (d[1:] != d[:-1]).all())
+
+
 def _closed(inp) -> bool:
-    """The clean mesh bounds a volume: every edge has exactly two faces, which traverse it in
-    opposite directions (closed, edge-manifold, consistently oriented), so the signed volume
-    is the enclosed one."""
+    """`bounds_volume` of the clean mesh, once per input."""
     if "closed" not in inp.cache:
-        F = np.asarray(inp.clean.F, dtype=np.int64)
-        n = np.int64(len(inp.clean.V))
-        a, b = F.ravel(), F[:, [1, 2, 0]].ravel()
-        d, r = np.sort(a * n + b), np.sort(b * n + a)
-        inp.cache["closed"] = bool(d.size and np.array_equal(d, r) and (d[1:] != d[:-1]).all())
+        inp.cache["closed"] = bounds_volume(inp.clean.F, len(inp.clean.V))
     return inp.cache["closed"]
 
 
