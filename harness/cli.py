@@ -99,6 +99,9 @@ def _cmd_run(a) -> int:
         print(f"eval: {n} result(s) scored; report: {out / 'report.html'}")
         return 0
     cfg = load_config(Path(a.config))
+    if a.executor == "local":                 # this process is ours: orphans of cases come here to die
+        from .executors import isolation, local
+        local.REAP = isolation.become_subreaper()
     frames = run(cfg, out=a.out, workers=a.workers, executor=a.executor, scheduler=a.scheduler,
                  resume=a.resume, timeout=a.timeout, quiet=a.quiet,
                  export_benchmark_json=a.export_benchmark_json)

@@ -70,6 +70,23 @@ def test_a_flood_of_output_with_stdout_piped_to_head(tmp_path):
     assert (df["status"] == "ok").all(), df[["method", "error"]]
 
 
+def test_a_grandchild_that_leaves_the_process_group_dies_with_its_case(tmp_path):
+    """setsid and a double fork took a method's process out of the case's process group; it ran
+    on after the run (it wrote a file 20 s later). The case process, a child subreaper, kills it
+    at the end of the case; when the case crashes first, the ``shootout`` driver (a subreaper)
+    kills it."""
+    cfg = _cfg(tmp_path, [{"name": "hostile.escape", "params": {"crash": [False, True]}}])
+    r = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(tmp_path / "o"), "--quiet"],
+                       cwd=ROOT, env=_env(tmp_path), capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    pids = [int(p.read_text()) for p in tmp_path.glob("escaped-*.pid")]
+    assert len(pids) >= 2, pids
+    time.sleep(0.5)
+    assert not [p for p in pids if _alive(p)], pids
+    df = pd.read_csv(tmp_path / "o" / "smoothing.csv")
+    assert sorted(df["status"]) == ["error", "ok"], df[["params", "status", "error"]]
+
+
 def test_a_flood_of_stderr_is_cut_back_to_its_tail(tmp_path):
     """A case's stderr file is kept under 16 MiB while it runs (a method wrote 315 MB in 5 s to
     the temporary directory, which can fill a machine's disk): the method waits for its own

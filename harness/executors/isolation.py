@@ -9,7 +9,12 @@ What a method may do, and what it costs:
 - crash, abort, hang or exhaust memory: one row (the signal named, or ``timeout``);
 - fork: only the case process's own result counts (a forked copy returning from the method
   exits silently), and every process of the case is killed when the case ends, because each
-  case runs in its own session and process group (``os.setsid``), killed as a group;
+  case runs in its own session and process group (``os.setsid``), killed as a group; a
+  descendant that leaves the group (``setsid`` and a double fork) is re-parented to the case
+  process (a Linux child subreaper), which kills it at the end of the case; when the case
+  process itself dies first, such orphans go to the nearest subreaper above it: the ``shootout``
+  command's driver is one (`become_subreaper`) and kills every child of its own that is not a
+  running case (`reap_strays`);
 - signal its process group (``os.killpg(0, ...)``): reaches only its own case;
 - print: the case's stdout goes to /dev/null and its stderr to a temporary file (in the session's
   private directory, `harness.input_store.session`) whose last lines are quoted in the row of a
@@ -88,6 +93,71 @@ def signals_blocked():
         signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
+PR_SET_CHILD_SUBREAPER = 36
+
+
+def become_subreaper() -> bool:
+    """Make this process a child subreaper (Linux): orphaned descendants are re-parented to it
+    instead of init, even after they left its session. False where unsupported."""
+    try:
+        import ctypes
+        libc = ctypes.CDLL(None, use_errno=True)
+        return libc.prctl(PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0) == 0
+    except (OSError, AttributeError):
+        return False
+
+
+def _children(pid: int) -> list[int]:
+    """Pids whose parent is ``pid`` (from /proc: each thread's ``children`` list where the kernel
+    has it, else every process's parent; [] without /proc)."""
+    try:
+        tids = os.listdir(f"/proc/{pid}/task")
+        kids: set[int] = set()
+        for t in tids:
+            with open(f"/proc/{pid}/task/{t}/children") as fh:
+                kids.update(int(x) for x in fh.read().split())
+        return sorted(kids)
+    except (OSError, ValueError):
+        pass
+    out = []
+    try:
+        names = os.listdir("/proc")
+    except OSError:
+        return out
+    for name in names:
+        if not name.isdigit():
+            continue
+        try:
+            with open(f"/proc/{name}/stat", "rb") as fh:
+                stat = fh.read()
+        except OSError:
+            continue
+        fields = stat[stat.rfind(b")") + 2:].split()     # after the command name, which may hold spaces
+        if len(fields) > 1 and int(fields[1]) == pid:
+            out.append(int(name))
+    return out
+
+
+def reap_strays(keep=(), rounds: int = 20) -> int:
+    """Kill and reap every child of this process that is not in ``keep`` (running cases): the
+    orphaned descendants of cases that escaped their process group, re-parented here because
+    this process is a subreaper. Their own children come here in turn as they die, so this
+    repeats until none is left (at most ``rounds`` times). Returns how many were killed."""
+    me, keep, n = os.getpid(), set(keep), 0
+    for _ in range(rounds):
+        strays = [c for c in _children(me) if c not in keep]
+        if not strays:
+            break
+        for c in strays:
+            with contextlib.suppress(OSError):
+                os.kill(c, signal.SIGKILL)
+        for c in strays:
+            with contextlib.suppress(OSError):
+                os.waitpid(c, 0)
+        n += len(strays)
+    return n
+
+
 def _isolate(stderr_path: str | None) -> None:
     """In the child: own session and process group, no SIGINT, output away from the driver's."""
     try:
@@ -122,6 +192,7 @@ def _child(conn, case, want_meshes, own_reader_fd=None, want_view=False, stderr_
     _isolate(stderr_path)
     _die_with_driver(conn, own_reader_fd)
     pid = os.getpid()
+    become_subreaper()                    # descendants that leave the process group come back here
     try:
         result = run_case(case, want_meshes=want_meshes, want_view=want_view)
         if os.getpid() != pid:            # a copy the method forked: only the case process answers
@@ -131,6 +202,7 @@ def _child(conn, case, want_meshes, own_reader_fd=None, want_view=False, stderr_
         if os.getpid() != pid:
             os._exit(0)
         conn.close()
+        reap_strays()                     # every process the case left behind, in or out of its group
 
 
 def _tail(path: str | None, n: int = 3) -> str:

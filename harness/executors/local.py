@@ -14,7 +14,9 @@ from multiprocessing.connection import wait as mp_wait
 from .. import input_store
 from ..errors import check_interrupt
 from ..runner import release_thread_pools, run_case
-from .isolation import _Job, signals_blocked
+from .isolation import _Job, reap_strays, signals_blocked
+
+REAP = False      # the driver is a child subreaper (the ``shootout`` command): kill orphans cases leave
 
 
 POLL_S = 0.5
@@ -77,16 +79,22 @@ class LocalExecutor:
                 for job in [j for j in running if j.conn in ready or j.sentinel in ready or j.ended()]:
                     running.remove(job)
                     row, extras = job.collect()
+                    if REAP:
+                        reap_strays(j.proc.pid for j in running)
                     yield job.case, row, extras
                 if self.timeout is not None:
                     now = time.perf_counter()
                     for job in [j for j in running if now - j.t0 >= self.timeout]:
                         running.remove(job)
                         row, extras = job.kill_timeout(self.timeout)
+                        if REAP:
+                            reap_strays(j.proc.pid for j in running)
                         yield job.case, row, extras
         finally:
             for job in running:                # interrupted: leave no orphan behind
                 job.abort()
+            if REAP:
+                reap_strays()
             store.__exit__(None, None, None)
             release_thread_pools()
 

@@ -97,3 +97,24 @@ def stderr_flood(V, F):
                 raise RuntimeError(f"stderr file still {os.fstat(2).st_size} bytes")
             time.sleep(0.05)
     return SmoothingResult(V=V.copy())
+
+
+@register("hostile.escape", task="smoothing", library="hostile", params={"crash": False})
+def escape(V, F, *, crash=False):
+    """Leaves a grandchild in a session of its own (setsid and a double fork: out of the case's
+    process group), which records its pid and sleeps; then returns, or (``crash``) segfaults."""
+    if os.fork() == 0:
+        os.setsid()
+        if os.fork() == 0:
+            with open(os.path.join(MARK, f"escaped-{os.getpid()}.pid"), "w") as fh:
+                fh.write(str(os.getpid()))
+            time.sleep(60)
+            os._exit(0)
+        os._exit(0)
+    time.sleep(0.3)
+    if crash:
+        import ctypes
+        import faulthandler
+        faulthandler.disable()
+        ctypes.string_at(0)
+    return SmoothingResult(V=V.copy())
