@@ -302,13 +302,22 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
     if prev_meta and prev_meta.get("started"):
         started = prev_meta["started"]
         command = prev_meta.get("command") or command
-        prev_sessions = prev_meta.get("sessions") or [
-            {k: prev_meta.get(k) for k in ("started", "finished", "wall_s", "command", "status")}]
+        prev_sessions = list(prev_meta.get("sessions") or [])
+        if not prev_sessions or prev_meta.get("status") == "running":
+            # the last session never wrote its own record: its driver was killed (we hold the
+            # folder's lock, so none runs); when it ran and how long are what run.json kept
+            prev_sessions.append({"started": prev_meta.get("session_started") or prev_meta.get("started"),
+                                  "finished": prev_meta.get("finished"), "wall_s": prev_meta.get("wall_s")
+                                  if prev_meta.get("status") != "running" else None,
+                                  "command": prev_meta.get("session_command") or prev_meta.get("command"),
+                                  "status": "killed" if prev_meta.get("status") == "running"
+                                  else prev_meta.get("status")})
     src = Path(cfg.source) if cfg.source and cfg.source != "<config>" else None
     meta = {"name": cfg.name, "config_source": cfg.source,
             "config_dir": str(src.resolve().parent) if src is not None and src.is_file() else str(Path.cwd()),
             "config": cfg.raw, "config_hash": chash,
-            "started": started, "finished": None, "status": "running", "executor": executor,
+            "started": started, "session_started": session_started, "session_command": " ".join(sys.argv),
+            "finished": None, "status": "running", "executor": executor,
             "scheduler": scheduler, "workers": workers, "timeout_s": timeout,
             "n_cases": len(cfg.cases), "resumed_ok_cases": len(done),
             "versions": package_versions(), "git_commit": git_commit(), "machine": machine_info(),
@@ -322,6 +331,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
                                    "BLAS/OpenMP pools limited to threads_per_case (by the local driver before "
                                    "it forks, inherited; else in the case; in the case for libraries loaded since)"}}
     meta["load_average"] = [_load()]
+    meta["sessions"] = prev_sessions          # kept if this session's driver is killed
     if resume:
         meta["resumed_at"] = now_iso()
     if executor == "dask":       # the cluster's worker threads, not --workers

@@ -113,6 +113,9 @@ def test_sigkill_mid_run_then_resume(tmp_path):
     assert statuses == {"crashy.slow": {"ok"}, "crashy.raises": {"error"}, "scratch.explicit": {"ok"}}
     meta = RunFolder(out).read_run_json()
     assert meta["status"] == "finished" and meta["resumed_ok_cases"] == len(ok_before)
+    killed, resumed = meta["sessions"]                   # the killed session is on record, as killed
+    assert killed["status"] == "killed" and killed["wall_s"] is None and resumed["status"] == "finished"
+    assert meta["wall_s"] == resumed["wall_s"]
 
 
 def test_resume_with_a_changed_config_is_refused(tmp_path):
