@@ -34,12 +34,14 @@ each metric's ``better`` direction and ``rel``/``abs`` tolerance, recorded in ru
   whole sample window stretches every sample, the fastest included; so where both rows say how
   many cores other processes kept busy during their samples (``others_cpu``: outside load, and
   with several workers the case's siblings in the same run, which compete for the same cores),
-  a wall-time regression (improvement) is only inconclusive when the median process CPU time
-  (``cpu_times``) did not grow (shrink) by ``time_factor`` as well and B's (A's) machine was
-  busier by ``BUSY_CORES`` (0.5) or more, or so short of free cores (the core count minus
-  ``others_cpu``, against the cores the process used on the other run) that this shortage
-  alone, with the CPU-time ratio, accounts for all but ``time_factor`` of the wall-time ratio
-  (`load_stretch`; both runs on machines with the same core count). On an equally quiet machine a wall-time change counts
+  a wall-time regression (improvement) is inconclusive when B's (A's) machine was
+  oversubscribed during its samples (fewer free cores, the core count minus ``others_cpu``,
+  than the process used in the other run: its samples waited for a core, a sub-millisecond one
+  a whole time slice, and its CPU time itself grows under shared caches and hyperthreads, by
+  1.95x measured here) unless the median process CPU time (``cpu_times``) grew (shrank) by more
+  than ``CONTENDED_CPU`` (2) x ``time_factor``; or when it was busier by ``BUSY_CORES`` (0.5)
+  or more and the CPU time did not grow (shrink) by ``time_factor`` as well (both runs on
+  machines with the same core count). On an equally quiet machine a wall-time change counts
   whatever its CPU time does (sleeps, I/O, lost parallelism and work in other processes are
   not in a process's CPU time). Rows without samples fall back to: median
   over ``time_factor`` x A's, fastest B repeat slower than slowest A repeat, > 1 ms;
@@ -67,6 +69,7 @@ from .schema import number as _num
 TIME_FACTOR = 1.5
 TIME_FLOOR_S = 1e-3
 BUSY_CORES = 0.5
+CONTENDED_CPU = 2.0     # CPU time of the same work on an oversubscribed machine grows up to this (shared caches, hyperthreads)
 
 
 @dataclass(frozen=True)
@@ -245,53 +248,42 @@ def busier(ra: dict, rb: dict) -> float | None:
     return None if a is None or b is None else b - a
 
 
-def load_stretch(fast: dict, slow: dict, cores: int | None) -> float | None:
-    """How much the other processes' load alone stretches the slower row's wall time: the
-    faster row's process used ``u = CPU / wall`` cores (median sample); the slower row's
-    machine had ``cores - others_cpu`` cores free, so a process needing ``u`` runs about
-    ``u / free`` times slower there (at least 1), relative to the same stretch on the faster
-    row's machine. None when the core count, the CPU times or ``others_cpu`` are missing."""
+def oversubscribed(fast: dict, slow: dict, cores: int | None) -> bool:
+    """The slower row's samples waited for a core: its machine had fewer free cores (``cores -
+    others_cpu``) than the faster row's process used (``CPU / wall``, median sample). False when
+    the core count, the CPU times or ``others_cpu`` are missing."""
     import numpy as np
     if not cores:
-        return None
+        return False
     ca, wa = time_samples(fast, "cpu_times"), time_samples(fast)
-    oa, ob = _num(fast.get("others_cpu")), _num(slow.get("others_cpu"))
-    if not ca or not wa or oa is None or ob is None or np.median(wa) <= 0:
-        return None
-    u = float(np.median(ca) / np.median(wa))
-    return max(1.0, u / max(cores - ob, 1e-3)) / max(1.0, u / max(cores - oa, 1e-3))
+    ob = _num(slow.get("others_cpu"))
+    if not ca or not wa or ob is None or np.median(wa) <= 0:
+        return False
+    return cores - ob < float(np.median(ca) / np.median(wa))
 
 
-def _load_explains(ra: dict, rb: dict, verdict: str, factor: float, cores: int | None = None,
-                   ratio: float | None = None) -> bool:
-    """The CPU time did not move by ``factor`` the same way as the wall time, and the slower
-    run's machine was busier with other processes: by ``BUSY_CORES`` or more, or (``cores``
-    known) so short of free cores that the load alone stretches the wall time by `load_stretch`
-    and the wall-time ``ratio`` B/A, divided by that stretch and the CPU-time ratio, no longer
-    exceeds ``factor``."""
+def _load_explains(ra: dict, rb: dict, verdict: str, factor: float, cores: int | None = None) -> bool:
+    """Whether other processes' load explains a wall-time change (module docstring): the slower
+    run's machine was oversubscribed during its samples (`oversubscribed`) and its CPU time did
+    not grow by more than ``CONTENDED_CPU`` x ``factor``; or it was busier by ``BUSY_CORES`` or
+    more and its CPU time did not grow by ``factor``."""
     d = busier(ra, rb)
     if d is None:
         return False
     c = cpu_ratio(ra, rb)
-    if verdict == "regression":
-        if c is not None and c > factor:
-            return False
-        if d >= BUSY_CORES:
-            return True
-        s = load_stretch(ra, rb, cores)
-        return bool(s and s > 1.0 and ratio and c and ratio / (s * c) <= factor)
-    if c is not None and c < 1 / factor:
+    slow, fast = (rb, ra) if verdict == "regression" else (ra, rb)
+    grew = None if c is None else (c if verdict == "regression" else (1.0 / c if c > 0 else math.inf))
+    if oversubscribed(fast, slow, cores):
+        return not (grew is not None and grew > CONTENDED_CPU * factor)
+    if grew is not None and grew > factor:
         return False
-    if -d >= BUSY_CORES:
-        return True
-    s = load_stretch(rb, ra, cores)
-    return bool(s and s > 1.0 and ratio and c and (1.0 / ratio) / (s / c) <= factor)
+    return (d if verdict == "regression" else -d) >= BUSY_CORES
 
 
 def judge_time(ra: dict, rb: dict, factor: float = TIME_FACTOR, drift: float = 1.0, load_rule: bool = True,
                cores: int | None = None) -> str:
     """'regression' | 'improvement' | 'inconclusive' | 'same' (see the module docstring);
-    ``cores``: the machine's core count (`load_stretch`), when known."""
+    ``cores``: the machine's core count (`oversubscribed`), when known."""
     eff = time_effect(ra, rb, drift)
     if eff is not None:
         if not eff["conclusive"]:
@@ -302,7 +294,7 @@ def judge_time(ra: dict, rb: dict, factor: float = TIME_FACTOR, drift: float = 1
             verdict = "regression"
         if eff["p_faster"] < ALPHA and hi < 1 / factor and eff["min_ratio"] < 1 / factor and -eff["diff"] > TIME_FLOOR_S:
             verdict = "improvement"
-        if verdict != "same" and load_rule and _load_explains(ra, rb, verdict, factor, cores, eff["ratio"]):
+        if verdict != "same" and load_rule and _load_explains(ra, rb, verdict, factor, cores):
             return "inconclusive"
         return verdict
     a, b = _num(ra.get("time_s")), _num(rb.get("time_s"))
@@ -369,7 +361,7 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
     ``rules``: ``{task: {metric: Rule}}`` from the runs' task declarations (default: the known tasks).
     Times are judged relative to the whole run's drift (`run_drift`) unless ``absolute_time``;
     ``load_rule``: the other processes' load may make a time change inconclusive (`judge_time`;
-    ``cores``, the core count both runs' machines share, also lets a shortage of free cores do so).
+    ``cores``, the core count both runs' machines share, lets an oversubscribed machine do so).
     """
     changes, input_changes = [], []
     drift = run_drift(rows_a, rows_b)
