@@ -35,8 +35,9 @@ each metric's ``better`` direction and ``rel``/``abs`` tolerance, recorded in ru
   many cores other processes kept busy during their samples (``others_cpu``: outside load, and
   with several workers the case's siblings in the same run, which compete for the same cores),
   a wall-time regression (improvement) is inconclusive when B's (A's) machine was
-  oversubscribed during its samples (fewer free cores, the core count minus ``others_cpu``,
-  than the process used in the other run: its samples waited for a core, a sub-millisecond one
+  oversubscribed during its samples (free cores, the core count minus ``others_cpu``, short of
+  what the process used in the other run by more than ``OVERSUBSCRIBED`` (1.25)x: its samples
+  waited for a core, a sub-millisecond one
   a whole time slice, and its CPU time itself grows under shared caches and hyperthreads, by
   1.95x measured here) unless the median process CPU time (``cpu_times``) grew (shrank) by more
   than ``CONTENDED_CPU`` (2) x ``time_factor``; or when it was busier by ``BUSY_CORES`` (0.5)
@@ -69,6 +70,7 @@ from .schema import number as _num
 TIME_FACTOR = 1.5
 TIME_FLOOR_S = 1e-3
 BUSY_CORES = 0.5
+OVERSUBSCRIBED = 1.25   # free cores this many times short of what a case used: its samples waited
 CONTENDED_CPU = 2.0     # CPU time of the same work on an oversubscribed machine grows up to this (shared caches, hyperthreads)
 
 
@@ -250,8 +252,10 @@ def busier(ra: dict, rb: dict) -> float | None:
 
 def oversubscribed(fast: dict, slow: dict, cores: int | None) -> bool:
     """The slower row's samples waited for a core: its machine had fewer free cores (``cores -
-    others_cpu``) than the faster row's process used (``CPU / wall``, median sample). False when
-    the core count, the CPU times or ``others_cpu`` are missing."""
+    others_cpu``) than ``1 / OVERSUBSCRIBED`` (80%) of what the faster row's process used (``CPU /
+    wall``, median sample), so the load alone stretched them by more than 1.25x (a case beside
+    one busy sibling on two cores, with about one core free, is not). False when the core count,
+    the CPU times or ``others_cpu`` are missing."""
     import numpy as np
     if not cores:
         return False
@@ -259,7 +263,7 @@ def oversubscribed(fast: dict, slow: dict, cores: int | None) -> bool:
     ob = _num(slow.get("others_cpu"))
     if not ca or not wa or ob is None or np.median(wa) <= 0:
         return False
-    return cores - ob < float(np.median(ca) / np.median(wa))
+    return (cores - ob) * OVERSUBSCRIBED < float(np.median(ca) / np.median(wa))
 
 
 def _load_explains(ra: dict, rb: dict, verdict: str, factor: float, cores: int | None = None) -> bool:

@@ -199,6 +199,9 @@ def test_wall_time_on_a_busier_machine_without_cpu_time_is_inconclusive():
     assert judge_time(row(base, base, 1.6), row([17 * t for t in same], [1.95 * t for t in same], 1.9),
                       cores=2) == "inconclusive"
     assert judge_time(row(base, base, 0.98), row(slow, slow, 1.465), cores=2) == "regression"   # 4x the CPU time
+    # beside one busy sibling on two cores about one core is free: not oversubscribed, so 2x the
+    # CPU time with 4x the wall time is a regression
+    assert judge_time(row(base, base, 1.0), row(slow, [2 * t for t in same], 1.05), cores=2) == "regression"
     assert judge_time(row(twice, same, 1.465), row(base, base, 0.98), cores=2) == "inconclusive"  # improvement
 
 
