@@ -191,7 +191,9 @@ def _cmd_eval(a) -> int:
     frames = eval_files(a.clean, a.results, a.out, noisy=a.noisy, task=a.task, labels=a.label,
                         hausdorff_samples=a.hausdorff_samples)
     n = sum(len(df) for df in frames.values())
-    print(f"eval: {n} result(s) scored; report: {Path(a.out) / 'report.html'}")
+    bad = sum(int((df["status"] != "ok").sum()) for df in frames.values() if "status" in df)
+    print(f"eval: {n} result(s) scored" + (f", {bad} of them error rows (see their error column)" if bad else "")
+          + f"; report: {Path(a.out) / 'report.html'}")
     return 0
 
 

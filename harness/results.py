@@ -156,6 +156,11 @@ class RunFolder:
                 found.append(d + "/")
         return found
 
+    def foreign_error(self) -> ShootoutError:
+        """The refusal of this folder when `foreign_files` lists anything (exit 2)."""
+        return ShootoutError(f"--out {self.path}: holds {', '.join(self.foreign_files())} and no run.json written by "
+                             "mesh-shootout; these may be your files: choose another --out, or remove them")
+
     def save_mesh(self, name: str, write) -> Path:
         """Write ``meshes/<name>`` atomically (``write(fh)``), listed in the manifest first."""
         mdir = self.path / "meshes"
@@ -320,6 +325,26 @@ class RunFolder:
                 cid = str(e.get("case_id", "?")) if isinstance(e, dict) else "?"
                 out.append({"case_id": cid, "why": "", "error": f"view file unreadable ({type(exc).__name__})"})
         return out
+
+
+def check_out_dir(out_dir: Path) -> None:
+    """``--out`` must be a folder we can write, or creatable in one (exit 2 before anything is written)."""
+    out_dir = Path(out_dir)
+    if out_dir.exists() and not out_dir.is_dir():
+        raise ShootoutError(f"--out {out_dir}: exists and is not a folder")
+    p = out_dir.resolve()
+    while not p.exists():
+        p = p.parent
+    if not p.is_dir():
+        raise ShootoutError(f"--out {out_dir}: {p} is not a folder")
+    if not os.access(p, os.W_OK | os.X_OK):
+        raise ShootoutError(f"--out {out_dir}: {p} is not writable")
+    try:
+        st = os.statvfs(p)
+        if st.f_flag & os.ST_RDONLY:
+            raise ShootoutError(f"--out {out_dir}: {p} is on a read-only file system")
+    except (OSError, AttributeError):
+        pass
 
 
 def load_csv(path) -> pd.DataFrame:

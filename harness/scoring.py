@@ -20,7 +20,7 @@ from . import tasks
 from .errors import ShootoutError
 from .mesh import Mesh, read_mesh, validate
 from .provenance import git_commit, machine_info, now_iso, package_versions
-from .results import RunFolder
+from .results import RunFolder, check_out_dir
 from .tasks.base import CaseInput
 
 
@@ -82,12 +82,11 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
     and write one run folder at ``out`` with its report."""
     from . import datasets
     from .report import build_report
-    from .session import _check_out, _foreign
     out = Path(out)
     folder = RunFolder(out)
-    _check_out(out)
+    check_out_dir(out)
     if folder.foreign_files():                   # nothing of the user's is replaced or deleted
-        raise _foreign(out, folder)
+        raise folder.foreign_error()
     if not isinstance(hausdorff_samples, int) or isinstance(hausdorff_samples, bool) \
             or not 0 <= hausdorff_samples <= 10_000_000:
         raise ShootoutError(f"--hausdorff-samples: expected an integer in [0, 10,000,000], got {hausdorff_samples!r}")
@@ -108,25 +107,30 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
             else:
                 cleans[key] = (read_mesh(clean), None, len(raw.V), len(raw.F))
         cmesh, V_in, n_raw, m_raw = cleans[key]
-        r = read_mesh(rp, repair=False)
-        same_faces = len(r.F) in (cmesh.n_faces, m_raw)
-        t = e.get("task") or ("smoothing" if len(r.V) in (cmesh.n_vertices, n_raw) and same_faces
-                              else "simplification")
-        if t == "smoothing" and not same_faces:
-            raise ShootoutError(f"{rp.name}: {len(r.F)} faces, but the clean mesh has {cmesh.n_faces}: a smoothing "
-                                "result keeps the clean mesh's faces (use --task simplification to compare surfaces)")
-        V = _in_clean_order(r, cmesh, n_raw, rp) if t == "smoothing" else r.V
-        row = {"case_id": f"eval{i:04d}", "task": t, "mesh": cmesh.name, "n_vertices": cmesh.n_vertices,
-               "n_faces": cmesh.n_faces, "noise_model": "given" if noisy else "none", "noise_level": None,
-               "seed": None, "method": e.get("label") or rp.stem, "library": "external",
+        row = {"case_id": f"eval{i:04d}", "task": e.get("task") or "smoothing", "mesh": cmesh.name,
+               "n_vertices": cmesh.n_vertices, "n_faces": cmesh.n_faces, "noise_model": "given" if noisy else "none",
+               "noise_level": None, "seed": None, "method": e.get("label") or rp.stem, "library": "external",
                "params": json.dumps({"file": str(rp)}), "status": "ok",
                "error": ("input repaired: " + "; ".join(cmesh.repairs)) if cmesh.repairs else ""}
-        row.update(evaluate(V, r.F, cmesh.V, cmesh.F, task=t, V_noisy=V_in, hausdorff_samples=hausdorff_samples))
-        rows_by_task.setdefault(t, []).append(row)
+        try:                                     # a bad result file costs its row, as a crashing method does
+            r = read_mesh(rp, repair=False)
+            same_faces = len(r.F) in (cmesh.n_faces, m_raw)
+            t = row["task"] = e.get("task") or ("smoothing" if len(r.V) in (cmesh.n_vertices, n_raw) and same_faces
+                                                else "simplification")
+            if t == "smoothing" and not same_faces:
+                raise ShootoutError(f"{rp.name}: {len(r.F)} faces, but the clean mesh has {cmesh.n_faces}: a "
+                                    "smoothing result keeps the clean mesh's faces (use --task simplification to "
+                                    "compare surfaces)")
+            V = _in_clean_order(r, cmesh, n_raw, rp) if t == "smoothing" else r.V
+            row.update(evaluate(V, r.F, cmesh.V, cmesh.F, task=t, V_noisy=V_in, hausdorff_samples=hausdorff_samples))
+        except Exception as exc:  # noqa: BLE001 - any failure scoring one file is that file's error row
+            row.update(status="error", error=(f"{type(exc).__name__}: {exc}" if not isinstance(exc, ShootoutError)
+                                              else str(exc))[:2000])
+        rows_by_task.setdefault(row["task"], []).append(row)
     lock = folder.lock()                         # one writer per folder, as for a run
     try:
         if folder.foreign_files():
-            raise _foreign(out, folder)
+            raise folder.foreign_error()
         folder.reset()                           # a previous run or eval here: replaced as a whole
         for t, rows in rows_by_task.items():
             for row in rows:

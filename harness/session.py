@@ -18,7 +18,7 @@ from .errors import ShootoutError, check_interrupt
 from .executors import make_executor
 from .mesh import write_ply
 from .provenance import git_commit, machine_info, now_iso, package_versions
-from .results import RunFolder
+from .results import RunFolder, check_out_dir
 
 
 def config_hash(cfg: Config) -> str:
@@ -147,9 +147,9 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
     threads = 1 if executor == "dask" else max(1, (os.cpu_count() or 1) // workers)
     cases = [dataclasses.replace(c, threads=threads) for c in cfg.cases]
     done: set[str] = set()
-    _check_out(out_dir)
+    check_out_dir(out_dir)
     if not resume and folder.foreign_files():       # refused before the folder or its lock is made
-        raise _foreign(out_dir, folder)
+        raise folder.foreign_error()
     # before anything is written: an unreachable Dask scheduler is exit 2 with the folder untouched
     ex = make_executor(executor, workers, timeout, scheduler)
     try:
@@ -237,31 +237,6 @@ def _write_status_in_place(folder, status: str) -> None:
         pass
 
 
-def _foreign(out_dir: Path, folder: RunFolder) -> ShootoutError:
-    """The refusal of a folder holding files of a run's names without a run.json of ours."""
-    return ShootoutError(f"--out {out_dir}: holds {', '.join(folder.foreign_files())} and no run.json written by mesh-shootout; "
-                         "these may be your files: choose another --out, or remove them")
-
-
-def _check_out(out_dir: Path) -> None:
-    """``--out`` must be a folder we can write, or creatable in one (exit 2 before anything is written)."""
-    if out_dir.exists() and not out_dir.is_dir():
-        raise ShootoutError(f"--out {out_dir}: exists and is not a folder")
-    p = out_dir.resolve()
-    while not p.exists():
-        p = p.parent
-    if not p.is_dir():
-        raise ShootoutError(f"--out {out_dir}: {p} is not a folder")
-    if not os.access(p, os.W_OK | os.X_OK):
-        raise ShootoutError(f"--out {out_dir}: {p} is not writable")
-    try:
-        st = os.statvfs(p)
-        if st.f_flag & os.ST_RDONLY:
-            raise ShootoutError(f"--out {out_dir}: {p} is on a read-only file system")
-    except (OSError, AttributeError):
-        pass
-
-
 def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, executor, scheduler, resume, quiet,
                 export_benchmark_json, ex):
     done: set[str] = set()
@@ -280,7 +255,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
                 "(cases, repeats, hausdorff_samples or hausdorff_eps differ); run without --resume to start over, "
                 "or use a new --out folder")
     elif folder.foreign_files():
-        raise _foreign(out_dir, folder)
+        raise folder.foreign_error()
     try:
         if resume:
             done = folder.keep_ok_rows()

@@ -91,8 +91,12 @@ def test_a_simplified_mesh_on_the_clean_vertex_buffer_is_scored_as_simplificatio
     row = pd.read_csv(tmp_path / "o" / "simplification.csv").iloc[0]
     assert row["out_faces"] == len(m.F) // 2 and row["hausdorff"] > 0.01
     assert not (tmp_path / "o" / "smoothing.csv").exists()
-    assert cli(["eval", str(tmp_path / "half.obj"), "--clean", str(tmp_path / "clean.obj"),
-                "--out", str(tmp_path / "o2"), "--task", "smoothing"]) == 2
+    (tmp_path / "torn.obj").write_text("v 0 0 0\nv 1 0\nf 1 2 3\n")
+    assert cli(["eval", str(tmp_path / "half.obj"), str(tmp_path / "torn.obj"), str(tmp_path / "clean.obj"),
+                "--clean", str(tmp_path / "clean.obj"), "--out", str(tmp_path / "o2"), "--task", "smoothing"]) == 0
+    df = pd.read_csv(tmp_path / "o2" / "smoothing.csv")       # each bad file is its own error row
+    assert df["status"].tolist() == ["error", "error", "ok"], df[["method", "status", "error"]]
+    assert "a smoothing result keeps the clean mesh's faces" in df["error"][0] and "torn" in df["method"][1]
 
 
 def test_eval_keeps_a_users_files_and_replaces_a_run_as_a_whole(tmp_path):

@@ -128,7 +128,7 @@ def test_a_yaml_alias_bomb_is_refused_quickly_with_a_short_message(tmp_path, whe
     ({"tasks": {"smoothing": {"methods": [{"name": "scratch.explicit",
                                            "params": {"iterations": list(range(1000)),
                                                       "step": [0.1 * i for i in range(1, 1001)]}}]}}},
-     "expands to 1,000,000 cases"),
+     "expand to 1,000,000 settings"),
     ({"report": {"colour": "red"}}, "report.colour"),
 ])
 def test_documented_bounds(tmp_path, patch, needle):
