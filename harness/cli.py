@@ -64,10 +64,12 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-def _check_output_file(path, flag: str, protect=()) -> None:
+def _check_output_file(path, flag: str, protect=(), run_dirs=()) -> None:
     """An output file named on the command line can be written: not a folder, not one of the
-    ``protect``ed inputs (e.g. the config being run), under a writable folder (missing folders
-    are made). Checked before any work, so a typo costs exit 2, not a finished run."""
+    ``protect``ed inputs (e.g. the config being run), not an existing file or a run's own file
+    name inside one of the ``run_dirs`` (the runs compared, the run folder written), under a
+    writable folder (missing folders are made). Checked before any work, so a typo costs exit
+    2, not a finished run or an overwritten input."""
     if path is None:
         return
     p = Path(path)
@@ -79,6 +81,10 @@ def _check_output_file(path, flag: str, protect=()) -> None:
                 raise ShootoutError(f"{flag} {path}: is an input of this command; writing it would overwrite it")
         except OSError:
             pass
+    from .results import run_file_names
+    for d in run_dirs:
+        if d is not None and p.resolve().parent == Path(d).resolve() and (p.exists() or p.name in run_file_names()):
+            raise ShootoutError(f"{flag} {path}: is a file of the run folder {d}; writing it would overwrite it")
     d = p.resolve().parent
     while not d.exists():
         d = d.parent
@@ -99,12 +105,19 @@ def _cmd_run(a) -> int:
         print(f"eval: {n} result(s) scored; report: {out / 'report.html'}")
         return 0
     cfg = load_config(Path(a.config))
-    if a.executor == "local":                 # this process is ours: orphans of cases come here to die
-        from .executors import isolation, local
-        local.REAP = isolation.become_subreaper()
-    frames = run(cfg, out=a.out, workers=a.workers, executor=a.executor, scheduler=a.scheduler,
-                 resume=a.resume, timeout=a.timeout, quiet=a.quiet,
-                 export_benchmark_json=a.export_benchmark_json)
+    _check_output_file(a.export_benchmark_json, "--export-benchmark-json",
+                       run_dirs=(Path(a.out) if a.out else Path("results") / cfg.name,))
+    from .executors import isolation, local
+    reap = a.executor == "local" and a.command_process   # this process is ours: orphans of cases die here
+    local.REAP = reap and isolation.become_subreaper()
+    try:
+        frames = run(cfg, out=a.out, workers=a.workers, executor=a.executor, scheduler=a.scheduler,
+                     resume=a.resume, timeout=a.timeout, quiet=a.quiet,
+                     export_benchmark_json=a.export_benchmark_json)
+    finally:
+        if local.REAP:
+            local.REAP = False
+            isolation.become_subreaper(False)
     out = Path(a.out) if a.out else Path("results") / cfg.name
     total = {}
     for df in frames.values():
@@ -204,7 +217,7 @@ def _cmd_compare(a) -> int:
             raise ShootoutError(f"compare: {d} is not a run folder")
     if a.time_factor is not None and not 1 < a.time_factor < float("inf"):
         raise ShootoutError(f"--time-factor: expected a finite number > 1, got {a.time_factor}")
-    _check_output_file(a.html, "--html")
+    _check_output_file(a.html, "--html", run_dirs=(a.run_a, a.run_b))
     factor = None if a.no_time else (a.time_factor or TIME_FACTOR)
     return compare_runs(a.run_a, a.run_b, html_out=a.html, time_factor=factor, absolute_time=a.absolute_time)
 
@@ -238,6 +251,7 @@ def main(argv=None) -> int:
 def _main(argv) -> int:
     from .errors import interrupt_seen
     args = _parser().parse_args(argv)
+    args.command_process = argv is None          # the `shootout` command itself, not a call from Python
     handler = {"run": _cmd_run, "methods": _cmd_methods, "datasets": _cmd_datasets,
                "report": _cmd_report, "views": _cmd_views, "eval": _cmd_eval,
                "compare": _cmd_compare}[args.command]

@@ -34,15 +34,15 @@ each metric's ``better`` direction and ``rel``/``abs`` tolerance, recorded in ru
   whole sample window stretches every sample, the fastest included; so where both rows say how
   many cores other processes kept busy during their samples (``others_cpu``: outside load, and
   with several workers the case's siblings in the same run, which compete for the same cores),
-  a wall-time regression (improvement) is inconclusive when B's (A's) machine was
-  oversubscribed during its samples (free cores, the core count minus ``others_cpu``, short of
-  what the process used in the other run by more than ``OVERSUBSCRIBED`` (1.25)x: its samples
-  waited for a core, a sub-millisecond one
-  a whole time slice, and its CPU time itself grows under shared caches and hyperthreads, by
-  1.95x measured here) unless the median process CPU time (``cpu_times``) grew (shrank) by more
-  than ``CONTENDED_CPU`` (2) x ``time_factor``; or when it was busier by ``BUSY_CORES`` (0.5)
-  or more and the CPU time did not grow (shrink) by ``time_factor`` as well (both runs on
-  machines with the same core count). On an equally quiet machine a wall-time change counts
+  a wall-time regression (improvement) is inconclusive when the load stretched B's (A's)
+  samples ``OVERSUBSCRIBED`` (1.25) times or more beyond the other run's (a process using ``u``
+  cores on a machine with ``free`` = core count - ``others_cpu`` runs ``max(1, u / free)``
+  times slower: it waits for a core, a sub-millisecond sample a whole time slice, and its CPU
+  time itself grows under shared caches and hyperthreads, by 1.95x measured here), unless the
+  median process CPU time (``cpu_times``) grew (shrank) by more than ``CONTENDED_CPU`` (2) x
+  ``time_factor``; or when B's (A's) machine was busier by ``BUSY_CORES`` (0.5) or more and the
+  CPU time did not grow (shrink) by ``time_factor`` as well (both runs on machines with the
+  same core count). Under equal load nothing is excused. On an equally quiet machine a wall-time change counts
   whatever its CPU time does (sleeps, I/O, lost parallelism and work in other processes are
   not in a process's CPU time). Rows without samples fall back to: median
   over ``time_factor`` x A's, fastest B repeat slower than slowest A repeat, > 1 ms;
@@ -70,7 +70,7 @@ from .schema import number as _num
 TIME_FACTOR = 1.5
 TIME_FLOOR_S = 1e-3
 BUSY_CORES = 0.5
-OVERSUBSCRIBED = 1.25   # free cores this many times short of what a case used: its samples waited
+OVERSUBSCRIBED = 1.25   # the load stretched the slower run's samples this much more than the faster's
 CONTENDED_CPU = 2.0     # CPU time of the same work on an oversubscribed machine grows up to this (shared caches, hyperthreads)
 
 
@@ -250,34 +250,37 @@ def busier(ra: dict, rb: dict) -> float | None:
     return None if a is None or b is None else b - a
 
 
-def oversubscribed(fast: dict, slow: dict, cores: int | None) -> bool:
-    """The slower row's samples waited for a core: its machine had fewer free cores (``cores -
-    others_cpu``) than ``1 / OVERSUBSCRIBED`` (80%) of what the faster row's process used (``CPU /
-    wall``, median sample), so the load alone stretched them by more than 1.25x (a case beside
-    one busy sibling on two cores, with about one core free, is not). False when the core count,
-    the CPU times or ``others_cpu`` are missing."""
+def load_stretch(fast: dict, slow: dict, cores: int | None) -> float | None:
+    """How much more the other processes' load stretched the slower row's samples than the
+    faster row's: a process using ``u = CPU / wall`` cores (the faster row's median sample) on a
+    machine with ``free = cores - others_cpu`` cores free runs about ``max(1, u / free)`` times
+    slower; the ratio of that for the slower row to that for the faster. 1 under equal load;
+    None when the core count, the CPU times or ``others_cpu`` are missing."""
     import numpy as np
     if not cores:
-        return False
+        return None
     ca, wa = time_samples(fast, "cpu_times"), time_samples(fast)
-    ob = _num(slow.get("others_cpu"))
-    if not ca or not wa or ob is None or np.median(wa) <= 0:
-        return False
-    return (cores - ob) * OVERSUBSCRIBED < float(np.median(ca) / np.median(wa))
+    of, os_ = _num(fast.get("others_cpu")), _num(slow.get("others_cpu"))
+    if not ca or not wa or of is None or os_ is None or np.median(wa) <= 0:
+        return None
+    u = float(np.median(ca) / np.median(wa))
+    return max(1.0, u / max(cores - os_, 1e-3)) / max(1.0, u / max(cores - of, 1e-3))
 
 
 def _load_explains(ra: dict, rb: dict, verdict: str, factor: float, cores: int | None = None) -> bool:
-    """Whether other processes' load explains a wall-time change (module docstring): the slower
-    run's machine was oversubscribed during its samples (`oversubscribed`) and its CPU time did
-    not grow by more than ``CONTENDED_CPU`` x ``factor``; or it was busier by ``BUSY_CORES`` or
-    more and its CPU time did not grow by ``factor``."""
+    """Whether other processes' load explains a wall-time change (module docstring): the load
+    stretched the slower run's samples ``OVERSUBSCRIBED`` (1.25) times or more beyond the faster
+    run's (`load_stretch`) and the CPU time did not grow by more than ``CONTENDED_CPU`` x
+    ``factor``; or the slower run's machine was busier by ``BUSY_CORES`` or more and the CPU time
+    did not grow by ``factor``."""
     d = busier(ra, rb)
     if d is None:
         return False
     c = cpu_ratio(ra, rb)
     slow, fast = (rb, ra) if verdict == "regression" else (ra, rb)
     grew = None if c is None else (c if verdict == "regression" else (1.0 / c if c > 0 else math.inf))
-    if oversubscribed(fast, slow, cores):
+    stretch = load_stretch(fast, slow, cores)
+    if stretch is not None and stretch >= OVERSUBSCRIBED:
         return not (grew is not None and grew > CONTENDED_CPU * factor)
     if grew is not None and grew > factor:
         return False
@@ -287,7 +290,7 @@ def _load_explains(ra: dict, rb: dict, verdict: str, factor: float, cores: int |
 def judge_time(ra: dict, rb: dict, factor: float = TIME_FACTOR, drift: float = 1.0, load_rule: bool = True,
                cores: int | None = None) -> str:
     """'regression' | 'improvement' | 'inconclusive' | 'same' (see the module docstring);
-    ``cores``: the machine's core count (`oversubscribed`), when known."""
+    ``cores``: the machine's core count (`load_stretch`), when known."""
     eff = time_effect(ra, rb, drift)
     if eff is not None:
         if not eff["conclusive"]:
@@ -365,7 +368,7 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
     ``rules``: ``{task: {metric: Rule}}`` from the runs' task declarations (default: the known tasks).
     Times are judged relative to the whole run's drift (`run_drift`) unless ``absolute_time``;
     ``load_rule``: the other processes' load may make a time change inconclusive (`judge_time`;
-    ``cores``, the core count both runs' machines share, lets an oversubscribed machine do so).
+    ``cores``, the core count both runs' machines share, lets `load_stretch` do so).
     """
     changes, input_changes = [], []
     drift = run_drift(rows_a, rows_b)

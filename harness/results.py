@@ -22,6 +22,7 @@ import glob
 import io
 import json
 import os
+import re
 import tempfile
 from pathlib import Path
 
@@ -68,8 +69,14 @@ def format_row(task: str, row: dict) -> str:
     return buf.getvalue()
 
 
+_TEMP = re.compile(r"\.[a-z0-9_]{8}\.tmp")      # what `atomic_write`'s mkstemp appends to ".<name>"
 REPORT_FILES = ("report.html", "leaderboard.csv", "leaderboard.md", "leaderboard.tex", "winners.csv",
                 "winners.md", "winners.tex")
+
+
+def run_file_names() -> list[str]:
+    """The names of the files a run writes at the top of its folder."""
+    return [task_file(t) for t in tasks.names()] + ["run.json", ".shootout.lock", *REPORT_FILES]
 
 
 def _is_ours(data) -> bool:
@@ -187,7 +194,8 @@ class RunFolder:
         where = [(self.path, n) for n in names] + [(self.path / "meshes", Path(n).name) for n in self.written_meshes()]
         for d, n in where:
             for f in d.glob(f".{glob.escape(n)}.*.tmp"):
-                f.unlink(missing_ok=True)
+                if _TEMP.fullmatch(f.name[len(n) + 1:]):           # exactly `atomic_write`'s name
+                    f.unlink(missing_ok=True)
         vdir = self.path / "views"
         if vdir.is_dir() and self.run_json_state() == "ok":
             for f in vdir.glob(".*.tmp"):

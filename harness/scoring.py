@@ -127,6 +127,16 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
             row.update(status="error", error=(f"{type(exc).__name__}: {exc}" if not isinstance(exc, ShootoutError)
                                               else str(exc))[:2000])
         rows_by_task.setdefault(row["task"], []).append(row)
+    scored = {r["task"] for rows in rows_by_task.values() for r in rows if r["status"] == "ok"}
+    if len(scored) == 1:              # a file that could not be read goes beside the others it was scored with
+        (t,) = scored
+        for other in [k for k in rows_by_task if k != t]:
+            moved = [r for r in rows_by_task[other] if r["status"] != "ok" and not entries[int(r["case_id"][4:])].get("task")]
+            rows_by_task[other] = [r for r in rows_by_task[other] if r not in moved]
+            for r in moved:
+                r["task"] = t
+            rows_by_task[t] = sorted(rows_by_task[t] + moved, key=lambda r: r["case_id"])
+        rows_by_task = {k: v for k, v in rows_by_task.items() if v}
     lock = folder.lock()                         # one writer per folder, as for a run
     try:
         if folder.foreign_files():

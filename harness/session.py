@@ -115,9 +115,10 @@ def task_specs(cfg: Config) -> dict:
 def check_run_args(workers, timeout, executor, scheduler) -> None:
     """The run's settings (the CLI's flags, `run`'s arguments): `ShootoutError` (exit 2) naming
     the first that is wrong."""
-    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+    import numbers
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, numbers.Integral) or workers < 1):
         raise ShootoutError(f"--workers: expected an integer >= 1, got {workers!r}")
-    if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, (int, float))
+    if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, numbers.Real)
                                 or not 0 < timeout < float("inf")):
         raise ShootoutError(f"--timeout: expected a finite number of seconds > 0, got {timeout!r}")
     if executor not in ("local", "serial", "dask"):

@@ -199,6 +199,14 @@ def test_wall_time_on_a_busier_machine_without_cpu_time_is_inconclusive():
     assert judge_time(row(base, base, 1.6), row([17 * t for t in same], [1.95 * t for t in same], 1.9),
                       cores=2) == "inconclusive"
     assert judge_time(row(base, base, 0.98), row(slow, slow, 1.465), cores=2) == "regression"   # 4x the CPU time
+    # under equal load nothing is excused: 2.5x the wall and CPU time, two workers with a quarter
+    # core of outside load in both runs, or one worker whose case uses 1.7 cores, 0.7 busy in both
+    more = [2.5 * t for t in same]
+    assert judge_time(row(base, base, 1.25), row(more, more, 1.25), cores=2) == "regression"
+    assert judge_time(row(base, [1.7 * t for t in base], 0.7), row(more, [1.7 * t for t in more], 0.7),
+                      cores=2) == "regression"
+    assert judge_time(row(more, more, 1.25), row(base, base, 1.25), cores=2) == "improvement"
+    assert judge_time(row(base, base, 1.4), row(more, more, 1.25), cores=2) == "regression"   # B less loaded
     # beside one busy sibling on two cores about one core is free: not oversubscribed, so 2x the
     # CPU time with 4x the wall time is a regression
     assert judge_time(row(base, base, 1.0), row(slow, [2 * t for t in same], 1.05), cores=2) == "regression"
@@ -309,6 +317,9 @@ def test_output_files_are_checked_before_any_work(run_a, tmp_path):
     as a regression; nan silently turned the time gate off); --export-benchmark-json naming a
     folder or the config being run is refused before the run."""
     assert cli(["compare", str(run_a), str(run_a), "--html", str(tmp_path)]) == 2
+    before = (run_a / "smoothing.csv").read_bytes()
+    assert cli(["compare", str(run_a), str(run_a), "--html", str(run_a / "smoothing.csv")]) == 2
+    assert (run_a / "smoothing.csv").read_bytes() == before
     assert cli(["compare", str(run_a), str(run_a), "--time-factor", "nan"]) == 2
     assert cli(["compare", str(run_a), str(run_a), "--html", str(tmp_path / "new" / "d.html")]) == 0
     assert (tmp_path / "new" / "d.html").is_file()

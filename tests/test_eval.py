@@ -53,7 +53,8 @@ def test_evaluate_from_python_and_errors(tmp_path):
     (tmp_path / "small.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
     code = cli(["eval", str(tmp_path / "small.obj"), "--clean", str(PAIR / "Original.obj"), "--out",
                 str(tmp_path / "o"), "--task", "smoothing"])
-    assert code == 2
+    row = pd.read_csv(tmp_path / "o" / "smoothing.csv").iloc[0]             # the file's own error row
+    assert code == 0 and row["status"] == "error" and "keeps the clean mesh's" in row["error"], row["error"]
 
 
 def test_a_results_config_gives_the_same_numbers(run_with_meshes, tmp_path):
@@ -97,9 +98,13 @@ def test_a_simplified_mesh_on_the_clean_vertex_buffer_is_scored_as_simplificatio
     df = pd.read_csv(tmp_path / "o2" / "smoothing.csv")       # each bad file is its own error row
     assert df["status"].tolist() == ["error", "error", "ok"], df[["method", "status", "error"]]
     assert "a smoothing result keeps the clean mesh's faces" in df["error"][0] and "torn" in df["method"][1]
+    assert cli(["eval", str(tmp_path / "half.obj"), str(tmp_path / "torn.obj"), "--clean", str(tmp_path / "clean.obj"),
+                "--out", str(tmp_path / "o3")]) == 0       # unreadable: filed beside the file scored with it
+    assert not (tmp_path / "o3" / "smoothing.csv").exists()
+    assert pd.read_csv(tmp_path / "o3" / "simplification.csv")["status"].tolist() == ["ok", "error"]
 
 
-def test_eval_keeps_a_users_files_and_replaces_a_run_as_a_whole(tmp_path):
+def test_eval_keeps_a_users_files_and_replaces_a_run_as_a_whole(tmp_path, monkeypatch):
     """eval writes a run folder like a run: into a folder of someone else's files (a CSV with a
     task's name, another tool's run.json) it is refused with exit 2 and nothing changes; into a
     finished run folder it replaces that run as a whole (no rows of the old run left behind); a
@@ -130,4 +135,7 @@ def test_eval_keeps_a_users_files_and_replaces_a_run_as_a_whole(tmp_path):
     cfg = tmp_path / "res.yaml"
     cfg.write_text(json.dumps({"name": "../escape", "results": [{"file": str(tmp_path / "half.obj"),
                                                                   "clean": str(tmp_path / "clean.obj")}]}))
-    assert cli(["run", str(cfg)]) == 2 and not (tmp_path.parent / "escape").exists()
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)                    # the default folder would be work/results/../escape
+    assert cli(["run", str(cfg)]) == 2 and not (work / "escape").exists() and not (work / "results").exists()

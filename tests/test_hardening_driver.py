@@ -87,6 +87,26 @@ def test_a_grandchild_that_leaves_the_process_group_dies_with_its_case(tmp_path)
     assert sorted(df["status"]) == ["error", "ok"], df[["params", "status", "error"]]
 
 
+def test_a_run_from_python_never_kills_the_callers_own_children(tmp_path):
+    """Only the `shootout` command's own process reaps orphans: harness.cli.main called from
+    Python, and harness.run after it, leave the caller's children (a server, a Dask worker)
+    alone, and the caller is not left a subreaper."""
+    import harness
+    from harness.cli import main
+    from harness.executors import local
+    cfg = _cfg(tmp_path, ["scratch.explicit"])
+    cfg.write_text(json.dumps({**json.loads(cfg.read_text()), "plugins": []}))
+    mine = subprocess.Popen(["sleep", "60"])
+    try:
+        assert main(["run", str(cfg), "--out", str(tmp_path / "a"), "--quiet"]) == 0
+        assert not local.REAP
+        harness.run(cfg, out=tmp_path / "b", quiet=True)
+        assert mine.poll() is None and _alive(mine.pid)
+    finally:
+        mine.kill()
+        mine.wait()
+
+
 def test_a_flood_of_stderr_is_cut_back_to_its_tail(tmp_path):
     """A case's stderr file is kept under 16 MiB while it runs (a method wrote 315 MB in 5 s to
     the temporary directory, which can fill a machine's disk): the method waits for its own

@@ -349,3 +349,15 @@ def test_the_python_api_checks_what_the_cli_checks(tmp_path):
     bad.write_bytes("name: caf\xe9\n".encode("latin-1"))
     with pytest.raises(ConfigError, match="not valid YAML"):
         harness.run(str(bad), out=tmp_path / "o")
+
+
+def test_a_rerun_removes_only_its_own_temporaries(tmp_path):
+    """Leftover temporaries are removed only in `atomic_write`'s exact form (``.<name>.<8
+    characters>.tmp``): a user's ``.report.html.orig.tmp`` beside a run survives a rerun."""
+    cfg = write_cfg(tmp_path / "c.yaml", SMALL)
+    out = tmp_path / "o"
+    assert cli(["run", cfg, "--out", out]).returncode == 0
+    (out / ".report.html.orig.tmp").write_text("mine")
+    (out / ".run.json.abcd1234.tmp").write_text("a leftover of ours")
+    assert cli(["run", cfg, "--out", out]).returncode == 0
+    assert (out / ".report.html.orig.tmp").read_text() == "mine" and not (out / ".run.json.abcd1234.tmp").exists()

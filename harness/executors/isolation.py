@@ -13,8 +13,8 @@ What a method may do, and what it costs:
   descendant that leaves the group (``setsid`` and a double fork) is re-parented to the case
   process (a Linux child subreaper), which kills it at the end of the case; when the case
   process itself dies first, such orphans go to the nearest subreaper above it: the ``shootout``
-  command's driver is one (`become_subreaper`) and kills every child of its own that is not a
-  running case (`reap_strays`);
+  command's driver is one while it runs its cases (`become_subreaper`) and kills every child
+  of its own that is neither a running case nor one it had before (`reap_strays`);
 - signal its process group (``os.killpg(0, ...)``): reaches only its own case;
 - print: the case's stdout goes to /dev/null and its stderr to a temporary file (in the session's
   private directory, `harness.input_store.session`) whose last lines are quoted in the row of a
@@ -96,13 +96,14 @@ def signals_blocked():
 PR_SET_CHILD_SUBREAPER = 36
 
 
-def become_subreaper() -> bool:
-    """Make this process a child subreaper (Linux): orphaned descendants are re-parented to it
-    instead of init, even after they left its session. False where unsupported."""
+def become_subreaper(on: bool = True) -> bool:
+    """Make this process a child subreaper (Linux; ``on=False`` undoes it): orphaned descendants
+    are re-parented to it instead of init, even after they left its session. False where
+    unsupported."""
     try:
         import ctypes
         libc = ctypes.CDLL(None, use_errno=True)
-        return libc.prctl(PR_SET_CHILD_SUBREAPER, 1, 0, 0, 0) == 0
+        return libc.prctl(PR_SET_CHILD_SUBREAPER, int(on), 0, 0, 0) == 0
     except (OSError, AttributeError):
         return False
 
@@ -138,11 +139,13 @@ def _children(pid: int) -> list[int]:
     return out
 
 
-def reap_strays(keep=(), rounds: int = 20) -> int:
-    """Kill and reap every child of this process that is not in ``keep`` (running cases): the
-    orphaned descendants of cases that escaped their process group, re-parented here because
-    this process is a subreaper. Their own children come here in turn as they die, so this
-    repeats until none is left (at most ``rounds`` times). Returns how many were killed."""
+def reap_strays(keep=(), rounds: int = 20, wait_s: float = 2.0) -> int:
+    """Kill and reap every child of this process that is not in ``keep`` (running cases, and
+    children this process had before its cases): the orphaned descendants of cases that
+    escaped their process group, re-parented here because this process is a subreaper. Their
+    own children come here in turn as they die, so this repeats until none is left (at most
+    ``rounds`` times); each round waits at most ``wait_s`` for the killed to be reaped (one
+    stuck in uninterruptible sleep is left to init). Returns how many were killed."""
     me, keep, n = os.getpid(), set(keep), 0
     for _ in range(rounds):
         strays = [c for c in _children(me) if c not in keep]
@@ -151,10 +154,18 @@ def reap_strays(keep=(), rounds: int = 20) -> int:
         for c in strays:
             with contextlib.suppress(OSError):
                 os.kill(c, signal.SIGKILL)
-        for c in strays:
-            with contextlib.suppress(OSError):
-                os.waitpid(c, 0)
+        left, t_end = set(strays), time.monotonic() + wait_s
+        while left and time.monotonic() < t_end:
+            for c in list(left):
+                try:
+                    if os.waitpid(c, os.WNOHANG)[0]:
+                        left.discard(c)
+                except ChildProcessError:
+                    left.discard(c)
+            if left:
+                time.sleep(0.01)
         n += len(strays)
+        keep |= left                                 # not reaped in time: not ours to wait for
     return n
 
 

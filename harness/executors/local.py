@@ -8,13 +8,14 @@ the forking process, and no re-import of the user's ``__main__`` (scripts need n
 """
 from __future__ import annotations
 
+import os
 import time
 from multiprocessing.connection import wait as mp_wait
 
 from .. import input_store
 from ..errors import check_interrupt
 from ..runner import release_thread_pools, run_case
-from .isolation import _Job, reap_strays, signals_blocked
+from .isolation import _children, _Job, reap_strays, signals_blocked
 
 REAP = False      # the driver is a child subreaper (the ``shootout`` command): kill orphans cases leave
 
@@ -58,6 +59,7 @@ class LocalExecutor:
         _preload_tasks(todo)
         todo.reverse()
         running: list[_Job] = []
+        before = set(_children(os.getpid())) if REAP else set()     # the driver's own children stay
         store = input_store.session()
         store.__enter__()
         try:
@@ -80,7 +82,7 @@ class LocalExecutor:
                     running.remove(job)
                     row, extras = job.collect()
                     if REAP:
-                        reap_strays(j.proc.pid for j in running)
+                        reap_strays(before | {j.proc.pid for j in running})
                     yield job.case, row, extras
                 if self.timeout is not None:
                     now = time.perf_counter()
@@ -88,13 +90,13 @@ class LocalExecutor:
                         running.remove(job)
                         row, extras = job.kill_timeout(self.timeout)
                         if REAP:
-                            reap_strays(j.proc.pid for j in running)
+                            reap_strays(before | {j.proc.pid for j in running})
                         yield job.case, row, extras
         finally:
             for job in running:                # interrupted: leave no orphan behind
                 job.abort()
             if REAP:
-                reap_strays()
+                reap_strays(before)
             store.__exit__(None, None, None)
             release_thread_pools()
 

@@ -103,15 +103,19 @@ def stderr_flood(V, F):
 def escape(V, F, *, crash=False):
     """Leaves a grandchild in a session of its own (setsid and a double fork: out of the case's
     process group), which records its pid and sleeps; then returns, or (``crash``) segfaults."""
+    r, w = os.pipe()
     if os.fork() == 0:
         os.setsid()
         if os.fork() == 0:
             with open(os.path.join(MARK, f"escaped-{os.getpid()}.pid"), "w") as fh:
                 fh.write(str(os.getpid()))
+            os.write(w, b"x")                        # the pid file is written: the method may go on
             time.sleep(60)
             os._exit(0)
         os._exit(0)
-    time.sleep(0.3)
+    os.close(w)
+    os.read(r, 1)
+    os.close(r)
     if crash:
         import ctypes
         import faulthandler
