@@ -279,9 +279,13 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         started = prev_meta["started"]
         command = prev_meta.get("command") or command
         prev_sessions = list(prev_meta.get("sessions") or [])
-        if not prev_sessions or prev_meta.get("status") == "running":
+        last = prev_meta.get("session_started")
+        unrecorded = (not any(x.get("started") == last for x in prev_sessions) if last
+                      else not prev_sessions or prev_meta.get("status") == "running")
+        if unrecorded:
             # the last session never wrote its own record: its driver was killed (we hold the
-            # folder's lock, so none runs); when it ran and how long are what run.json kept
+            # folder's lock, so none runs) or its last write failed (a full disk); when it ran
+            # and how long are what run.json kept
             prev_sessions.append({"started": prev_meta.get("session_started") or prev_meta.get("started"),
                                   "finished": prev_meta.get("finished"), "wall_s": prev_meta.get("wall_s")
                                   if prev_meta.get("status") != "running" else None,

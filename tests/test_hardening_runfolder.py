@@ -101,7 +101,9 @@ def test_disk_full_is_one_message_an_interrupted_run_and_resumable(tmp_path, tin
     subprocess.run(["mount", "-o", "remount,size=20m", str(tiny_disk)], check=True)
     r = cli(["run", cfg, "--out", out, "--resume"])
     assert r.returncode == 0, r.stderr
-    assert json.loads((out / "run.json").read_text())["status"] == "finished"
+    meta = json.loads((out / "run.json").read_text())
+    assert meta["status"] == "finished"
+    assert [x["status"] for x in meta["sessions"]] == ["interrupted", "finished"]   # the full-disk session on record
     assert len(pd.read_csv(out / "smoothing.csv")) == 4
 
 
