@@ -46,9 +46,11 @@ def _expanded_size(node, memo: dict, stack: set) -> int:
     return n
 
 
-def _duplicate_keys(node, out: list, done: set) -> None:
+def _duplicate_keys(node, out: list, done: set, construct) -> None:
     """Messages for every key that appears twice in one mapping (the last would silently win: a
-    whole task or setting lost), walking each node once."""
+    whole task or setting lost), walking each node once. Keys compare as the values they load
+    as (``construct``), as the loaded dict would: ``1``, ``1.0`` and ``0x1`` are the same key,
+    ``1`` and ``"1"`` are not."""
     if id(node) in done:
         return
     done.add(id(node))
@@ -56,15 +58,20 @@ def _duplicate_keys(node, out: list, done: set) -> None:
         seen: dict = {}
         for k, v in node.value:
             if isinstance(k, yaml.ScalarNode) and k.tag != "tag:yaml.org,2002:merge":
-                if k.value in seen:
+                try:
+                    key = ("value", construct(k))     # equal as loaded (1, 1.0, 0x1, true): one dict key
+                    hash(key)
+                except Exception:  # noqa: BLE001 - a key that does not load is reported when the document is built
+                    key = ("text", k.value)
+                if key in seen:
                     out.append(f"duplicate key {k.value!r} at line {k.start_mark.line + 1} (first at line "
-                               f"{seen[k.value] + 1})")
+                               f"{seen[key] + 1})")
                 else:
-                    seen[k.value] = k.start_mark.line
-            _duplicate_keys(v, out, done)
+                    seen[key] = k.start_mark.line
+            _duplicate_keys(v, out, done, construct)
     elif isinstance(node, yaml.SequenceNode):
         for v in node.value:
-            _duplicate_keys(v, out, done)
+            _duplicate_keys(v, out, done, construct)
 
 
 def load(text: str):
@@ -77,7 +84,7 @@ def load(text: str):
             return None
         _expanded_size(node, {}, set())
         dup: list = []
-        _duplicate_keys(node, dup, set())
+        _duplicate_keys(node, dup, set(), loader.construct_object)
         if dup:
             raise yaml.YAMLError("; ".join(dup) + ": each key may appear once in a mapping")
         return loader.construct_document(node)

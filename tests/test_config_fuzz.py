@@ -232,3 +232,16 @@ def test_falsy_values_of_the_wrong_type_are_rejected(slot, value):
 @pytest.mark.parametrize("value", [float("nan"), float("inf"), float("-inf")])
 def test_non_finite_timeout_in_config_is_rejected(value):
     assert_rejected(*run_cli(yaml.safe_dump({**BASE, "timeout": value})))
+
+
+def test_duplicate_keys_compare_as_loaded():
+    """A key given twice (as the loaded dict would see it) is an error listing each repeat with
+    its line; keys that load differently (1 and "1") are two keys."""
+    import yaml
+    from harness import yaml_input
+    with pytest.raises(yaml.YAMLError, match=r"duplicate key '0x1' at line 2 \(first at line 1\)"):
+        yaml_input.load("1: x\n0x1: y\n")
+    with pytest.raises(yaml.YAMLError, match=r"duplicate key '~' at line 2.*duplicate key 'b' at line 3"):
+        yaml_input.load("null: 1\n~: 2\nc: {b: 1, b: 2}\n")
+    assert yaml_input.load("1: x\n'1': y\n") == {1: "x", "1": "y"}
+    assert yaml_input.load("x: &a {k: 1}\ny: *a\n<<: {z: 1}\n") == {"x": {"k": 1}, "y": {"k": 1}, "z": 1}
