@@ -93,7 +93,8 @@ class HeatSolver:
         use_d = boundary in ("dirichlet", "average") and bnd.any()
         self.neumann = factorize(Q, solver) if use_n else None
         self.free = np.flatnonzero(~bnd)
-        self.dirichlet = factorize(Q[self.free][:, self.free].tocsr(), solver) if use_d else None
+        self.use_d = use_d            # every vertex on the boundary: the Dirichlet solution is u = 0
+        self.dirichlet = factorize(Q[self.free][:, self.free].tocsr(), solver) if use_d and self.free.size else None
         self.boundary = bnd if boundary == "dirichlet" else None
         self.comp = vertex_components(F, n)
         pinned = np.zeros(n, bool)
@@ -108,9 +109,10 @@ class HeatSolver:
         parts = []
         if self.neumann is not None:
             parts.append(self.neumann.solve(delta))
-        if self.dirichlet is not None:
+        if self.use_d:
             ud = np.zeros(self.n)
-            ud[self.free] = self.dirichlet.solve(delta[self.free])
+            if self.dirichlet is not None:
+                ud[self.free] = self.dirichlet.solve(delta[self.free])
             parts.append(ud)
         return sum(parts) / len(parts)
 
