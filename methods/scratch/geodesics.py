@@ -132,7 +132,24 @@ class HeatSolver:
         return phi
 
 
-@register("scratch.heat", task="geodesics", library="scratch",
+def reject_massless_vertices(V: np.ndarray, F: np.ndarray, name: str) -> None:
+    """ValueError naming the vertices whose every face has zero area: the operators skip such
+    faces, so these vertices get no mass and an empty row, and the heat step's system is
+    singular there. A zero-area face beside sound ones is fine."""
+    from harness.core.geometry import referenced, zero_area_faces
+    F = np.asarray(F)
+    bad = zero_area_faces(V, F)
+    if not bad.size:
+        return
+    keep = np.ones(len(F), bool)
+    keep[bad] = False
+    lone = np.flatnonzero(referenced(F, len(V)) & ~referenced(F[keep], len(V)))
+    if lone.size:
+        raise ValueError(f"{name}: {lone.size} vertices lie only on zero-area faces (first: {lone[:5].tolist()}); "
+                         "they have no mass, and the heat step is singular there")
+
+
+@register("scratch.heat", task="geodesics", library="scratch", precheck=reject_massless_vertices,
           cite="Crane, Weischedel, Wardetzky, Geodesics in heat, ACM TOG 32(5), 2013",
           params={"t_factor": Param("t_factor", 1.0, "float", low=1e-4, high=1e4,
                                     doc="heat time t = t_factor * (mean edge length)^2 (the paper's m)"),
