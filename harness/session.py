@@ -7,6 +7,7 @@ import errno
 import hashlib
 import json
 import os
+import secrets
 import statistics
 import sys
 import time
@@ -272,6 +273,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         ex.close()
         raise
     started = session_started = now_iso()
+    session_id = secrets.token_hex(8)         # names this session's record in run.json (times are to the second)
     command = " ".join(sys.argv)
     prev_meta = folder.read_run_json() if resume else None
     prev_sessions: list = []
@@ -279,14 +281,18 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         started = prev_meta["started"]
         command = prev_meta.get("command") or command
         prev_sessions = list(prev_meta.get("sessions") or [])
-        last = prev_meta.get("session_started")
-        unrecorded = (not any(x.get("started") == last for x in prev_sessions) if last
-                      else not prev_sessions or prev_meta.get("status") == "running")
+        last_id, last = prev_meta.get("session_id"), prev_meta.get("session_started")
+        if last_id:
+            unrecorded = not any(x.get("id") == last_id for x in prev_sessions)
+        elif last:                         # run.json before session ids: start times (to the second)
+            unrecorded = not any(x.get("started") == last for x in prev_sessions)
+        else:
+            unrecorded = not prev_sessions or prev_meta.get("status") == "running"
         if unrecorded:
             # the last session never wrote its own record: its driver was killed (we hold the
             # folder's lock, so none runs) or its last write failed (a full disk); when it ran
             # and how long are what run.json kept
-            prev_sessions.append({"started": prev_meta.get("session_started") or prev_meta.get("started"),
+            prev_sessions.append({"id": last_id, "started": prev_meta.get("session_started") or prev_meta.get("started"),
                                   "finished": prev_meta.get("finished"), "wall_s": prev_meta.get("wall_s")
                                   if prev_meta.get("status") != "running" else None,
                                   "command": prev_meta.get("session_command") or prev_meta.get("command"),
@@ -296,7 +302,8 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
     meta = {"name": cfg.name, "config_source": cfg.source,
             "config_dir": str(src.resolve().parent) if src is not None and src.is_file() else str(Path.cwd()),
             "config": cfg.raw, "config_hash": chash,
-            "started": started, "session_started": session_started, "session_command": " ".join(sys.argv),
+            "started": started, "session_started": session_started, "session_id": session_id,
+            "session_command": " ".join(sys.argv),
             "finished": None, "status": "running", "executor": executor,
             "scheduler": scheduler, "workers": workers, "timeout_s": timeout,
             "n_cases": len(cfg.cases), "resumed_ok_cases": len(done),
@@ -374,7 +381,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         ex.close()
         meta["load_average"] = meta["load_average"][:1] + [_load()]
         wall = round(time.perf_counter() - t0, 3)
-        session = {"started": session_started, "finished": now_iso(), "wall_s": wall,
+        session = {"id": session_id, "started": session_started, "finished": now_iso(), "wall_s": wall,
                    "command": " ".join(sys.argv), "status": meta["status"], "resumed_ok_cases": len(done),
                    "status_counts": counts, "load_average": meta["load_average"]}
         if overhead:

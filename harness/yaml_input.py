@@ -74,9 +74,18 @@ def _duplicate_keys(node, out: list, done: set, construct) -> None:
             _duplicate_keys(v, out, done, construct)
 
 
+def _key_value(k):
+    """What a scalar key loads as, built on a throwaway constructor (a failure leaves no state
+    in the document's own loader); a ``=`` key (the value tag) is the string ``=``, as the
+    mapping's constructor makes it."""
+    if k.tag == "tag:yaml.org,2002:value":
+        return k.value
+    return yaml.constructor.SafeConstructor().construct_object(k)
+
+
 def load(text: str):
     """The document's data (safe types only); `yaml.YAMLError` for bombs, duplicate keys in a
-    mapping and syntax errors."""
+    mapping, syntax errors and values their tag cannot read (``!!int abc``)."""
     loader = _Loader(text)
     try:
         node = loader.get_single_node()
@@ -84,10 +93,13 @@ def load(text: str):
             return None
         _expanded_size(node, {}, set())
         dup: list = []
-        _duplicate_keys(node, dup, set(), loader.construct_object)
+        _duplicate_keys(node, dup, set(), _key_value)
         if dup:
             raise yaml.YAMLError("; ".join(dup) + ": each key may appear once in a mapping")
-        return loader.construct_document(node)
+        try:
+            return loader.construct_document(node)
+        except (ValueError, KeyError, TypeError) as exc:     # e.g. `!!int abc`, `!!bool maybe`
+            raise yaml.YAMLError(f"a value cannot be read as its tag says ({type(exc).__name__}: {exc})") from None
     finally:
         loader.dispose()
 

@@ -244,4 +244,9 @@ def test_duplicate_keys_compare_as_loaded():
     with pytest.raises(yaml.YAMLError, match=r"duplicate key '~' at line 2.*duplicate key 'b' at line 3"):
         yaml_input.load("null: 1\n~: 2\nc: {b: 1, b: 2}\n")
     assert yaml_input.load("1: x\n'1': y\n") == {1: "x", "1": "y"}
+    assert yaml_input.load("=: 1\n") == {"=": 1}                  # as safe_load: the key check builds nothing
+    with pytest.raises(yaml.YAMLError, match="could not determine a constructor for the tag '!foo'"):
+        yaml_input.load("!foo extra: 1\n")
+    with pytest.raises(yaml.YAMLError, match="cannot be read as its tag says"):     # was a ValueError traceback
+        yaml_input.load("time_budget: !!int abc\n")
     assert yaml_input.load("x: &a {k: 1}\ny: *a\n<<: {z: 1}\n") == {"x": {"k": 1}, "y": {"k": 1}, "z": 1}

@@ -169,16 +169,20 @@ def test_scratch_heat_with_every_vertex_on_the_boundary():
 
 def test_scratch_heat_names_vertices_that_lie_only_on_zero_area_faces():
     """A triangle with three collinear corners of its own beside a sound mesh: its vertices have
-    no mass (the operators skip zero-area faces) and the heat system is singular; the error
-    names them (it was a factorization's 'Error in computing elimination tree'). A zero-area
-    face beside sound faces is fine."""
+    no mass in the cotan and intrinsic Delaunay triangulations and the heat system is singular;
+    the error names them (it was a factorization's 'Error in computing elimination tree'). The
+    tufted cover's mollification gives them area: they are unreachable from the sphere. A
+    zero-area face beside sound faces is fine."""
     from harness.datasets import icosphere
     V, F = icosphere(2)
     n = len(V)
     V2 = np.vstack([V, [[3.0, 0, 0], [4.0, 0, 0], [5.0, 0, 0]]])
     F2 = np.vstack([F, [[n, n + 1, n + 2]]])
-    with pytest.raises(ValueError, match=rf"3 vertices lie only on zero-area faces \(first: \[{n}, {n + 1}, {n + 2}\]\)"):
-        methods.get("scratch.heat")(V2, F2, sources=1)
+    for lap in ("cotan", "intrinsic_delaunay"):
+        with pytest.raises(ValueError, match=rf"3 vertices lie only on zero-area faces \(first: \[{n}, {n + 1}, {n + 2}\]\)"):
+            methods.get("scratch.heat")(V2, F2, sources=1, laplacian=lap)
+    D = methods.get("scratch.heat")(V2, F2, sources=1, laplacian="tufted").D     # mollified: some area, unreachable
+    assert np.isfinite(D[:, :n]).all() and np.isinf(D[:, n:]).all()
     W = V.copy()
     W[F[0, 2]] = (W[F[0, 0]] + W[F[0, 1]]) / 2
     assert np.isfinite(methods.get("scratch.heat")(W, F, sources=1).D).all()

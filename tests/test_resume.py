@@ -219,3 +219,23 @@ def test_resume_keeps_the_first_session_and_says_what_it_skipped(tmp_path):
     assert len(s) == 2 and s[0]["started"] == first["started"] and "--resume" in s[1]["command"]
     assert s[1]["resumed_ok_cases"] == 2 and s[1]["status"] == "finished"
     assert abs(meta["wall_s"] - (s[0]["wall_s"] + s[1]["wall_s"])) < 1e-6
+
+
+def test_a_killed_session_started_in_the_same_second_is_still_recorded(tmp_path):
+    """Sessions are matched by an id, not by their start time (to the second): a session killed
+    within the second of the one before it was left out of the record. Its state is made here
+    from a finished run.json as a killed driver leaves it (status running, its own id and start
+    time, no record of its own)."""
+    import json
+    cfg = slow_config(seconds=(0.0,))
+    out = tmp_path / "out"
+    harness.run(cfg, out=out, workers=1)
+    meta = json.loads((out / "run.json").read_text())
+    (first,) = meta["sessions"]
+    assert first["id"] and first["id"] == meta["session_id"]
+    meta.update(status="running", session_id="feedfacefeedface", session_started=first["started"])
+    (out / "run.json").write_text(json.dumps(meta))
+    harness.run(cfg, out=out, workers=1, resume=True)
+    sessions = json.loads((out / "run.json").read_text())["sessions"]
+    assert [(s["id"], s["status"]) for s in sessions[:2]] == [(first["id"], "finished"), ("feedfacefeedface", "killed")]
+    assert len(sessions) == 3 and sessions[2]["status"] == "finished"

@@ -30,7 +30,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from harness.core.geometry import (boundary_vertices, cotangents_from_lengths, edge_lengths, mean_edge_length,
-                                   vertex_components)
+                                   referenced, vertex_components)
 from harness.core.solvers import factorize
 from methods import GeodesicResult, Param, register
 from methods.scratch import operators as op
@@ -86,6 +86,10 @@ class HeatSolver:
         n = len(V)
         self.n = n
         self.l, self.F, W, m, self.C, _ = _operators(V, F, laplacian, mass)
+        lone = np.flatnonzero(referenced(np.asarray(F), n) & ~(m > 0))
+        if lone.size:          # only on zero-area faces of the triangulation used: an empty row, a singular step
+            raise ValueError(f"{lone.size} vertices lie only on zero-area faces (first: {lone[:5].tolist()}): they "
+                             f"have no mass with laplacian: {laplacian}, and the heat step is singular there")
         t = float(t_factor) * mean_edge_length(V, F) ** 2
         Q = (sp.diags(m) - t * W).tocsr()
         bnd = boundary_vertices(F, n) if laplacian != "tufted" else np.zeros(n, bool)   # the cover is closed
@@ -132,24 +136,7 @@ class HeatSolver:
         return phi
 
 
-def reject_massless_vertices(V: np.ndarray, F: np.ndarray, name: str) -> None:
-    """ValueError naming the vertices whose every face has zero area: the operators skip such
-    faces, so these vertices get no mass and an empty row, and the heat step's system is
-    singular there. A zero-area face beside sound ones is fine."""
-    from harness.core.geometry import referenced, zero_area_faces
-    F = np.asarray(F)
-    bad = zero_area_faces(V, F)
-    if not bad.size:
-        return
-    keep = np.ones(len(F), bool)
-    keep[bad] = False
-    lone = np.flatnonzero(referenced(F, len(V)) & ~referenced(F[keep], len(V)))
-    if lone.size:
-        raise ValueError(f"{name}: {lone.size} vertices lie only on zero-area faces (first: {lone[:5].tolist()}); "
-                         "they have no mass, and the heat step is singular there")
-
-
-@register("scratch.heat", task="geodesics", library="scratch", precheck=reject_massless_vertices,
+@register("scratch.heat", task="geodesics", library="scratch",
           cite="Crane, Weischedel, Wardetzky, Geodesics in heat, ACM TOG 32(5), 2013",
           params={"t_factor": Param("t_factor", 1.0, "float", low=1e-4, high=1e4,
                                     doc="heat time t = t_factor * (mean edge length)^2 (the paper's m)"),
