@@ -147,6 +147,20 @@ def _grid(params: dict) -> list[dict]:
     return [dict(zip(keys, combo)) for combo in itertools.product(*vals)]
 
 
+def name_problem(name) -> str | None:
+    """What is wrong with a run's ``name`` (a folder name under results/), or None."""
+    if isinstance(name, str) and re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,99}", name) and ".." not in name:
+        return None
+    return f"expected letters, digits, '_', '-' or '.' (a folder name under results/), got {yaml_input.short(name)}"
+
+
+def samples_problem(hs) -> str | None:
+    """What is wrong with a ``hausdorff_samples`` value, or None."""
+    if _is_int(hs) and 0 <= hs <= MAX_SAMPLES:
+        return None
+    return f"expected an integer in [0, {MAX_SAMPLES:,}], got {yaml_input.short(hs)}"
+
+
 def load_config(source, base_dir: Path | None = None) -> Config:
     """Parse and validate a config given as a path, YAML text or dict."""
     label = "<config>"
@@ -191,8 +205,8 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
     _unknown_keys(raw, TOP_KEYS, "", P)
 
     name = raw.get("name", Path(label).stem if label != "<config>" else "run")
-    if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,99}", name) or ".." in name:
-        P.append(f"name: expected letters, digits, '_', '-' or '.' (a folder name under results/), got {yaml_input.short(name)}")
+    if name_problem(name):
+        P.append(f"name: {name_problem(name)}")
     repeats = raw.get("repeats", 1)
     if not _is_int(repeats) or not 1 <= repeats <= MAX_REPEATS:
         P.append(f"repeats: expected an integer in [1, {MAX_REPEATS}], got {yaml_input.short(repeats)}")
@@ -210,8 +224,8 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
         P.append(f"time_budget: expected seconds in [0, 3600], got {yaml_input.short(budget)}")
         budget = 0.25
     hs = raw.get("hausdorff_samples", 20000)
-    if not _is_int(hs) or not 0 <= hs <= MAX_SAMPLES:
-        P.append(f"hausdorff_samples: expected an integer in [0, {MAX_SAMPLES:,}], got {yaml_input.short(hs)}")
+    if samples_problem(hs):
+        P.append(f"hausdorff_samples: {samples_problem(hs)}")
     eps = raw.get("hausdorff_eps", 1e-3)
     if not _is_num(eps) or not 1e-9 <= eps <= 1:
         P.append(f"hausdorff_eps: expected a relative gap in [1e-9, 1], got {yaml_input.short(eps)}")

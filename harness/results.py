@@ -74,9 +74,15 @@ REPORT_FILES = ("report.html", "leaderboard.csv", "leaderboard.md", "leaderboard
                 "winners.md", "winners.tex")
 
 
+def output_names() -> list[str]:
+    """The files a run writes at the top of its folder and may replace or delete: task CSVs,
+    run.json, the report, leaderboard and winners tables."""
+    return [task_file(t) for t in tasks.names()] + ["run.json", *REPORT_FILES]
+
+
 def run_file_names() -> list[str]:
-    """The names of the files a run writes at the top of its folder."""
-    return [task_file(t) for t in tasks.names()] + ["run.json", ".shootout.lock", *REPORT_FILES]
+    """The names of the files a run writes at the top of its folder (`output_names` and its lock)."""
+    return output_names() + [".shootout.lock"]
 
 
 def _is_ours(data) -> bool:
@@ -155,8 +161,7 @@ class RunFolder:
         hold the user's meshes: a run only ever removes the files its manifest lists.)"""
         if self.run_json_state() == "ok":
             return []
-        names = [self.csv_path(t).name for t in tasks.names()] + ["run.json", *REPORT_FILES]
-        found = [n for n in names if (self.path / n).exists()]
+        found = [n for n in output_names() if (self.path / n).exists()]
         for d in ("views", "tune"):
             p = self.path / d
             if p.exists() and (not p.is_dir() or any(p.iterdir())):
@@ -190,8 +195,8 @@ class RunFolder:
         """Leftover temporary files of ours (`atomic_write`'s ``.<name>.*.tmp``, from a write
         interrupted by a full disk or a kill): those of the run's own file names at the top and
         of the meshes its manifest lists, and any in ``views/`` of a folder whose run.json is ours."""
-        names = [self.csv_path(t).name for t in tasks.names()] + ["run.json", *REPORT_FILES]
-        where = [(self.path, n) for n in names] + [(self.path / "meshes", Path(n).name) for n in self.written_meshes()]
+        where = [(self.path, n) for n in output_names()] + [(self.path / "meshes", Path(n).name)
+                                                              for n in self.written_meshes()]
         for d, n in where:
             for f in d.glob(f".{glob.escape(n)}.*.tmp"):
                 if _TEMP.fullmatch(f.name[len(n) + 1:]):           # exactly `atomic_write`'s name

@@ -8,8 +8,6 @@ mesh after the documented repairs); a simplification result is compared as a sur
 """
 from __future__ import annotations
 
-import re
-
 import json
 import sys
 from pathlib import Path
@@ -17,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from . import tasks
+from .config import name_problem, samples_problem
 from .errors import ShootoutError
 from .mesh import Mesh, read_mesh, validate
 from .provenance import git_commit, machine_info, now_iso, package_versions
@@ -87,14 +86,13 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
     check_out_dir(out)
     if folder.foreign_files():                   # nothing of the user's is replaced or deleted
         raise folder.foreign_error()
-    if not isinstance(hausdorff_samples, int) or isinstance(hausdorff_samples, bool) \
-            or not 0 <= hausdorff_samples <= 10_000_000:
-        raise ShootoutError(f"--hausdorff-samples: expected an integer in [0, 10,000,000], got {hausdorff_samples!r}")
+    if samples_problem(hausdorff_samples):
+        raise ShootoutError(f"--hausdorff-samples: {samples_problem(hausdorff_samples)}")
     for e in entries:
         for p in [e["file"], e["clean"]] + ([e["noisy"]] if e.get("noisy") else []):
             if not Path(p).is_file():
                 raise ShootoutError(f"{p}: no such file")
-    rows_by_task: dict[str, list] = {}
+    rows: list[tuple[dict, bool]] = []          # each file's row, and whether its task was given
     cleans: dict = {}
     for i, e in enumerate(entries):
         clean, noisy, rp = Path(e["clean"]), e.get("noisy"), Path(e["file"])
@@ -126,24 +124,22 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
         except Exception as exc:  # noqa: BLE001 - any failure scoring one file is that file's error row
             row.update(status="error", error=(f"{type(exc).__name__}: {exc}" if not isinstance(exc, ShootoutError)
                                               else str(exc))[:2000])
-        rows_by_task.setdefault(row["task"], []).append(row)
-    scored = {r["task"] for rows in rows_by_task.values() for r in rows if r["status"] == "ok"}
+        rows.append((row, bool(e.get("task"))))
+    scored = {r["task"] for r, _ in rows if r["status"] == "ok"}
     if len(scored) == 1:              # a file that could not be read goes beside the others it was scored with
-        (t,) = scored
-        for other in [k for k in rows_by_task if k != t]:
-            moved = [r for r in rows_by_task[other] if r["status"] != "ok" and not entries[int(r["case_id"][4:])].get("task")]
-            rows_by_task[other] = [r for r in rows_by_task[other] if r not in moved]
-            for r in moved:
-                r["task"] = t
-            rows_by_task[t] = sorted(rows_by_task[t] + moved, key=lambda r: r["case_id"])
-        rows_by_task = {k: v for k, v in rows_by_task.items() if v}
+        for r, asked in rows:
+            if r["status"] != "ok" and not asked:
+                r["task"] = next(iter(scored))
+    rows_by_task: dict[str, list] = {}
+    for r, _ in rows:
+        rows_by_task.setdefault(r["task"], []).append(r)
     lock = folder.lock()                         # one writer per folder, as for a run
     try:
         if folder.foreign_files():
             raise folder.foreign_error()
         folder.reset()                           # a previous run or eval here: replaced as a whole
-        for t, rows in rows_by_task.items():
-            for row in rows:
+        for t, task_rows in rows_by_task.items():
+            for row in task_rows:
                 folder.append(t, row)
         folder.write_run_json({
             "name": out.name, "kind": "eval", "config": config or {},
@@ -168,12 +164,11 @@ def results_config(raw: dict, base_dir: Path) -> tuple[list[dict], int]:
     P = []
     for k in sorted(set(raw) - {"name", "results", "hausdorff_samples"}):
         P.append(f"{k}: unknown key in a results config; expected name, results, hausdorff_samples")
-    name = raw.get("name", "eval")
-    if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,99}", name) or ".." in name:
-        P.append(f"name: expected letters, digits, '_', '-' or '.' (a folder name under results/), got {name!r}"[:200])
+    if name_problem(raw.get("name", "eval")):
+        P.append(f"name: {name_problem(raw.get('name', 'eval'))}")
     hs = raw.get("hausdorff_samples", 20000)
-    if not isinstance(hs, int) or isinstance(hs, bool) or not 0 <= hs <= 10_000_000:
-        P.append(f"hausdorff_samples: expected an integer in [0, 10,000,000], got {hs!r}"[:200])
+    if samples_problem(hs):
+        P.append(f"hausdorff_samples: {samples_problem(hs)}")
     res = raw.get("results")
     entries = []
     if not isinstance(res, list) or not res:

@@ -16,7 +16,7 @@ from pathlib import Path
 from . import tasks
 from .config import Config, load_config
 from .errors import ShootoutError, check_interrupt
-from .executors import make_executor
+from .executors import EXECUTORS, make_executor
 from .mesh import write_ply
 from .provenance import git_commit, machine_info, now_iso, package_versions
 from .results import RunFolder, check_out_dir
@@ -122,8 +122,8 @@ def check_run_args(workers, timeout, executor, scheduler) -> None:
     if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, numbers.Real)
                                 or not 0 < timeout < float("inf")):
         raise ShootoutError(f"--timeout: expected a finite number of seconds > 0, got {timeout!r}")
-    if executor not in ("local", "serial", "dask"):
-        raise ShootoutError(f"--executor: expected local, serial or dask, got {executor!r}")
+    if executor not in EXECUTORS:
+        raise ShootoutError(f"--executor: expected one of {', '.join(EXECUTORS)}, got {executor!r}")
     if executor == "dask" and not scheduler:
         raise ShootoutError("--executor dask needs --scheduler tcp://HOST:PORT")
 

@@ -22,7 +22,6 @@ vs tuned side by side. Training rows are kept in ``tune/`` inside the run folder
 """
 from __future__ import annotations
 
-import itertools
 import json
 import math
 from dataclasses import dataclass, field
@@ -49,12 +48,11 @@ class TuneSpec:
         ranges = self.params[method]
         keys = sorted(ranges)
         total = math.prod(len(ranges[k]) for k in keys)
+        pick = range(total)
         if total > self.budget - 1:          # a seeded sample of the product's positions, never the whole product
             rng = np.random.default_rng(self.seed)
             pick = sorted(rng.choice(total, size=max(self.budget - 1, 0), replace=False).tolist())
-            grid = [_nth_combination(ranges, keys, i) for i in pick]
-        else:
-            grid = [dict(zip(keys, combo)) for combo in itertools.product(*(ranges[k] for k in keys))]
+        grid = [_nth_combination(ranges, keys, i) for i in pick]
         import methods
         meth = methods.get(method)
         base = self.configured[method][1][0] if self.configured[method][1] else {}

@@ -60,6 +60,10 @@ class LocalExecutor:
         todo.reverse()
         running: list[_Job] = []
         before = set(_children(os.getpid())) if REAP else set()     # the driver's own children stay
+
+        def reap():                        # after a case ended: the orphans it left, if it crashed first
+            if REAP:
+                reap_strays(before | {j.proc.pid for j in running})
         store = input_store.session()
         store.__enter__()
         try:
@@ -81,16 +85,14 @@ class LocalExecutor:
                 for job in [j for j in running if j.conn in ready or j.sentinel in ready or j.ended()]:
                     running.remove(job)
                     row, extras = job.collect()
-                    if REAP:
-                        reap_strays(before | {j.proc.pid for j in running})
+                    reap()
                     yield job.case, row, extras
                 if self.timeout is not None:
                     now = time.perf_counter()
                     for job in [j for j in running if now - j.t0 >= self.timeout]:
                         running.remove(job)
                         row, extras = job.kill_timeout(self.timeout)
-                        if REAP:
-                            reap_strays(before | {j.proc.pid for j in running})
+                        reap()
                         yield job.case, row, extras
         finally:
             for job in running:                # interrupted: leave no orphan behind
