@@ -61,6 +61,30 @@ def test_brackets_agree_with_cascading_upper_bounds(simplified, method):
 
 
 @pytest.mark.parametrize("method", ["meshlab.qem", "scratch.qem"])
+def test_floor_closes_the_smaller_direction_and_keeps_the_symmetric_bracket(simplified, method):
+    """The direction bracketed second stops at the first one's lower bound (``floor``): its
+    upper bound is still a valid bound of its own distance (against the independent C++
+    implementation), it makes fewer queries than bracketing it alone, and the symmetric
+    bracket still holds the independent symmetric value within 1e-3."""
+    import cascading_upper_bounds as cub
+    r, clean = simplified[method]
+    A = (np.ascontiguousarray(r.V), np.ascontiguousarray(r.F, dtype=np.int32))
+    B = (np.ascontiguousarray(clean.V), np.ascontiguousarray(clean.F, dtype=np.int32))
+    exact = [cub.pompeiu_hausdorff(X[0], X[1], Y[0], Y[1], tol=1e-7)[:2] for X, Y in ((A, B), (B, A))]
+    small = int(exact[0][1] > exact[1][1])              # the direction with the smaller distance
+    X, Y = (A, B) if small == 0 else (B, A)
+    alone = one_sided(X[0], X[1].astype(np.int64), _Surface(*Y))
+    floor = max(lo for lo, _ in exact)
+    cut = one_sided(X[0], X[1].astype(np.int64), _Surface(*Y), floor=floor)
+    assert cut["certified"] and cut["upper"] <= floor * (1 + 1e-3) + 1e-15
+    assert cut["upper"] >= exact[small][0] * (1 - 1e-12) and cut["points"] < alone["points"]
+    h = hausdorff(r.V, r.F, clean.V, clean.F)
+    lo, hi = max(e[0] for e in exact), max(e[1] for e in exact)
+    assert h["hausdorff_certified"] and h["hausdorff_upper"] <= h["hausdorff"] * (1 + 1e-3) + 1e-15
+    assert h["hausdorff"] <= hi * (1 + 1e-12) and lo <= h["hausdorff_upper"] * (1 + 1e-12)
+
+
+@pytest.mark.parametrize("method", ["meshlab.qem", "scratch.qem"])
 def test_dense_sampling_never_exceeds_the_upper_bound(simplified, method):
     """200k random points plus the vertices per side: their largest distance is a lower bound,
     so it can never exceed the certified upper bound; on these meshes it also falls short of the

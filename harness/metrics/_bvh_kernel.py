@@ -418,7 +418,7 @@ def _upper(P, D, I, VY, FY, NY, B, stack, dstack, thr, state, W, seeds):
 def roots(VX, FX, dV, iV, VY, FY, B, NY, W, eps, atol, state, cap):
     """Upper bound (m,) of every triangle of X (`_upper`, and ``cap[f]``, a bound known a
     priori: when it already closes the triangle no query is made); raises the lower bound
-    state[0]."""
+    state[0]; a triangle closes at ``(1 + eps) max(state[0], state[8]) + atol`` (`best_first`)."""
     m = FX.shape[0]
     ub = np.empty(m)
     P = np.empty((3, 3))
@@ -432,7 +432,7 @@ def roots(VX, FX, dV, iV, VY, FY, B, NY, W, eps, atol, state, cap):
             v = FX[f, i]
             P[i, 0], P[i, 1], P[i, 2] = VX[v, 0], VX[v, 1], VX[v, 2]
             D[i], I[i] = dV[v], iV[v]
-        thr = (1.0 + eps) * state[0] + atol
+        thr = (1.0 + eps) * max(state[0], state[8]) + atol
         if cap[f] <= thr:
             ub[f] = max(cap[f], D[0], D[1], D[2])
         else:
@@ -474,11 +474,13 @@ def best_first(tris, ub0, VX, FX, dV, iV, VY, FY, B, NY, W, eps, atol,
                max_points, max_pops, store, state):
     """Best-first branch and bound: always split the open sub-triangle with the largest upper
     bound (a max-heap), so the lower bound rises as fast as possible and no sub-triangle is split
-    whose bound is below ``(1 + eps) L_final + atol``. ``store`` = (SP, SD, SI, SU, H, free) is
+    whose bound is below ``(1 + eps) max(L_final, floor) + atol``. ``store`` = (SP, SD, SI, SU, H, free) is
     the open set, carried between calls (``max_pops`` splits per call, so the caller can check a
     clock; ``SU`` holds the heap's keys, aligned with ``H``); ``tris``/``ub0`` (open root
     triangles) are added on the first call (``state[4] == 0``).
-    ``state``: [L, queries, settled, open, initialised, heap size, free count, done].
+    ``state``: [L, queries, settled, open, initialised, heap size, free count, done, floor]
+    (``floor``: a lower bound of the distance being certified found elsewhere, e.g. the other
+    direction of a symmetric distance; bounds within ``(1 + eps) floor + atol`` close too).
     Returns the (possibly grown) store."""
     SP, SD, SI, SU, H, free = store
     n = int(state[5])
@@ -512,7 +514,7 @@ def best_first(tris, ub0, VX, FX, dV, iV, VY, FY, B, NY, W, eps, atol,
     while n > 0 and pops < max_pops:
         s = H[0]
         u = SU[0]
-        thr = (1.0 + eps) * state[0] + atol
+        thr = (1.0 + eps) * max(state[0], state[8]) + atol
         if u <= thr:                                 # the largest open bound is closed: done
             state[2] = max(state[2], u)
             break
@@ -551,7 +553,7 @@ def best_first(tris, ub0, VX, FX, dV, iV, VY, FY, B, NY, W, eps, atol,
             state[1] += 1.0
             if MD[e] > state[0]:
                 state[0] = MD[e]
-        thr = (1.0 + eps) * state[0] + atol
+        thr = (1.0 + eps) * max(state[0], state[8]) + atol
         # children: corner ci with the midpoints of its two edges, then the middle triangle; the
         # parent's slot is reused by the last child
         for q in range(4):
@@ -567,7 +569,7 @@ def best_first(tris, ub0, VX, FX, dV, iV, VY, FY, B, NY, W, eps, atol,
                 CD[0], CD[1], CD[2] = MD[0], MD[1], MD[2]
                 CI[0], CI[1], CI[2] = MI[0], MI[1], MI[2]
             cu = _upper(CP, CD, CI, VY, FY, NY, B, stack, dstack, thr, state, W, seeds)
-            if cu <= (1.0 + eps) * state[0] + atol:
+            if cu <= (1.0 + eps) * max(state[0], state[8]) + atol:
                 state[2] = max(state[2], cu)
                 if q == 3:
                     free[nfree] = s
@@ -588,5 +590,5 @@ def best_first(tris, ub0, VX, FX, dV, iV, VY, FY, B, NY, W, eps, atol,
     state[5] = n
     state[6] = nfree
     state[3] = SU[0] if n > 0 else 0.0
-    state[7] = 1.0 if (n == 0 or SU[0] <= (1.0 + eps) * state[0] + atol) else 0.0
+    state[7] = 1.0 if (n == 0 or SU[0] <= (1.0 + eps) * max(state[0], state[8]) + atol) else 0.0
     return SP, SD, SI, SU, H, free

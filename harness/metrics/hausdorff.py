@@ -26,7 +26,10 @@ direction) or ``max_seconds`` runs out, which leaves a wider but still valid bra
 bounds are weakest where the distance is tiny against the triangles' size and the covering
 bound cannot be certified (an exact or near-exact reconstruction of a region with folds or
 gaps seen along the normal): there the budget may end the search with a wide bracket, which
-is what is known. The method
+is what is known. For the symmetric ``H`` the direction that looks larger (by its samples) is
+bracketed first; its lower bound also closes the other direction's triangles (a triangle
+whose bound is within ``(1 + eps)`` of it cannot raise ``H`` beyond the bracket), so the
+second stops as soon as it is inside the symmetric bracket. The method
 follows the bounded-error Hausdorff of Tang, Lee & Kim 2009 (interactive Hausdorff distance
 computation for general polygonal models, SIGGRAPH) with the simpler per-triangle bounds above;
 distances come from our compiled bounding-volume hierarchy (`harness.metrics._bvh_kernel`).
@@ -48,7 +51,7 @@ _Surface = Surface           # the AABB-backed surface (harness.metrics.surface_
 def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, atol: float = 0.0,
               max_points: int = 1_000_000, deadline: float = float("inf"), lower: float = 0.0,
               cap: np.ndarray | None = None, all_vertices: bool = False,
-              hints: np.ndarray | None = None) -> dict:
+              hints: np.ndarray | None = None, floor: float = 0.0) -> dict:
     """Bracket ``h(X, Y) = max_{p in X} d(p, Y)`` (module docstring), compiled: the vertices of X
     are queried, every triangle gets its upper bound (one centroid query where the corners do
     not settle it), then the open sub-triangle with the largest bound is split, best first (a
@@ -56,10 +59,13 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, ato
     `harness.metrics._bvh_kernel` hierarchy over Y), in batches of splits between which
     ``deadline`` is checked. ``lower`` may seed the lower bound with a distance already found
     at a point of X. ``hints`` (k,): for each vertex of X a face of Y (index into Y's ``F``,
-    -1 for none) near it, where its query starts.
+    -1 for none) near it, where its query starts. ``floor``: a lower bound of a larger distance
+    this one is part of (the other direction of a symmetric Hausdorff distance): sub-triangles
+    whose bound is within ``(1 + eps) max(lower, floor) + atol`` are not split further, so
+    ``upper`` stays a valid bound of ``h`` but ``lower`` may stay below ``h / (1 + eps)``.
 
     Returns ``lower``, ``upper`` (``upper >= h >= lower``), ``certified`` (the bracket met
-    ``upper <= (1 + eps) lower + atol``), ``points`` (distance queries made), ``rounds``
+    ``upper <= (1 + eps) max(lower, floor) + atol``), ``points`` (distance queries made), ``rounds``
     (batches of splits) and ``vertex_distances`` (k,) (each vertex of X to Y; with
     ``all_vertices`` also the vertices in no face, else 0 there).
     """
@@ -77,13 +83,14 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, ato
         used = used[morton_order(VX[used])]         # neighbouring queries read neighbouring nodes
         h = np.full(len(used), -1, np.int64) if hints is None else Y.leaf_faces(np.asarray(hints)[used])
         dV[used], iV[used] = K.query_many(np.ascontiguousarray(VX[used]), np.ascontiguousarray(h), *tree)
-    # state: [lower, queries, settled, open, initialised, heap size, free slots, done]
-    state = np.zeros(8)
+    # state: [lower, queries, settled, open, initialised, heap size, free slots, done, floor]
+    state = np.zeros(9)
     state[0] = max(lower, float(dV[inface].max()) if inface.any() else 0.0)
     state[1] = float(len(used))
+    state[8] = floor
     cap = np.full(len(FX), np.inf) if cap is None else np.ascontiguousarray(cap, dtype=np.float64)
     ub = K.roots(VX, FX, dV, iV, *tree, NY, W, eps, atol, state, cap)
-    thr = (1.0 + eps) * state[0] + atol
+    thr = (1.0 + eps) * max(state[0], floor) + atol
     closed = ub <= thr
     if closed.any():
         state[2] = float(ub[closed].max())
@@ -103,7 +110,7 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, ato
     low = float(state[0])
     upper = max(low, float(state[2]), float(state[3]))
     Y.count += int(state[1])
-    return {"lower": low, "upper": upper, "certified": upper <= (1.0 + eps) * low + atol,
+    return {"lower": low, "upper": upper, "certified": upper <= (1.0 + eps) * max(low, floor) + atol,
             "points": int(state[1]), "rounds": rounds, "vertex_distances": dV}
 
 
@@ -131,10 +138,13 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
     ``hausdorff_certified``: the gap met ``eps`` (relative) or ``atol`` (absolute; default
     ``1e-12`` times the larger bounding-box diagonal, for exact reconstructions) before the
     budget (``max_points`` distance queries per direction, ``max_seconds`` in all) ran out.
-    ``hausdorff_ab``/``_ba``: the one-sided lower bounds (A to B, B to A; with
-    ``corresponding``, B to A only over the triangles whose displacement cap exceeds the
-    threshold ``(1 + eps) max(lower_ab, sampled) + atol``: 0 when none does and no samples
-    were taken, a valid but uninformative lower bound).
+    ``hausdorff_ab``/``_ba``: the one-sided lower bounds (A to B, B to A). Only the symmetric
+    distance is certified: without ``corresponding`` the direction with the larger sampled
+    maximum (A to B without samples) is bracketed first and the other only until its bound is
+    within ``(1 + eps)`` times the first one's lower bound (plus ``atol``), so the other's lower
+    bound may be loose; with ``corresponding``, B to A covers only the triangles whose
+    displacement cap exceeds ``(1 + eps) max(lower_ab, sampled) + atol`` (0 when none does and
+    no samples were taken: valid but uninformative).
 
     ``surface_b``: a prebuilt `Surface` of (VB, FB) to reuse (e.g. the clean mesh's, shared by
     every metric of a case; it also keeps B's samples, `Surface.samples`). ``corresponding``: A
@@ -180,9 +190,9 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
         disp = np.linalg.norm(VA - VB, axis=1)
         cap_ab = cap_ba = disp[FA].max(axis=1) if len(FA) else None
         hints = face_around_vertex(FA, len(VA))        # on both sides
-    ab = one_sided(VA, FA, SB, eps, atol, max_points, deadline, lower=seed_ab, cap=cap_ab, all_vertices=vertex_distances,
-                   hints=hints)
     if corresponding and len(FB):
+        ab = one_sided(VA, FA, SB, eps, atol, max_points, deadline, lower=seed_ab, cap=cap_ab,
+                       all_vertices=vertex_distances, hints=hints)
         # B's triangles whose displacement cap is already within the symmetric threshold need
         # no query: only the others are bracketed
         open_ = cap_ba > (1.0 + eps) * max(ab["lower"], seed_ba) + atol
@@ -193,8 +203,16 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
         else:
             ba = {"lower": seed_ba, "upper": seed_ba, "points": 0}
         ba["upper"] = max(ba["upper"], settled)
-    else:
+    elif seed_ba > seed_ab:
+        # the direction that looks larger first; the other is only bracketed to the symmetric threshold
         ba = one_sided(VB, FB, SA, eps, atol, max_points, deadline, lower=seed_ba, cap=cap_ba, hints=hints)
+        ab = one_sided(VA, FA, SB, eps, atol, max_points, deadline, lower=seed_ab, cap=cap_ab,
+                       all_vertices=vertex_distances, hints=hints, floor=ba["lower"])
+    else:
+        ab = one_sided(VA, FA, SB, eps, atol, max_points, deadline, lower=seed_ab, cap=cap_ab,
+                       all_vertices=vertex_distances, hints=hints)
+        ba = one_sided(VB, FB, SA, eps, atol, max_points, deadline, lower=seed_ba, cap=cap_ba, hints=hints,
+                       floor=ab["lower"])
     lower = max(ab["lower"], ba["lower"])
     upper = max(ab["upper"], ba["upper"])
     gap = 0.0 if upper - lower <= atol else ((upper - lower) / lower if lower > 0 else float("inf"))
