@@ -53,6 +53,12 @@ def main(argv=None) -> int:
     t0 = time.perf_counter()
     proc = subprocess.Popen(cmd)
     driver = psutil.Process(proc.pid)
+    from harness import tasks
+    from harness.schema import task_file
+
+    def task_csvs():                              # the per-task result files (not the leaderboard or winners)
+        return [out / task_file(t) for t in tasks.names() if (out / task_file(t)).is_file()]
+
     arrivals: list[tuple[str, float]] = []        # (case_id, seconds since start) in CSV order
     seen: dict[str, int] = {}
     tree_peak = 0.0
@@ -69,7 +75,7 @@ def main(argv=None) -> int:
             tree_peak = max(tree_peak, rss / 2**20)
         except psutil.Error:
             pass
-        for csv in sorted(out.glob("*.csv")):
+        for csv in task_csvs():
             lines = csv.read_text().splitlines()[1:]
             for line in lines[seen.get(csv.name, 0):]:
                 arrivals.append((line.split(",", 1)[0], time.perf_counter() - t0))
@@ -90,7 +96,7 @@ def main(argv=None) -> int:
         prev = t
     print(f"\n{'task':13s} {'method':18s} {'mesh':26s} {'V':>8s} {'F':>9s} {'status':8s} "
           f"{'time_s':>8s} {'case_wall_s':>11s} {'peak_rss_mb':>11s}  metrics")
-    for csv in sorted(out.glob("*.csv")):
+    for csv in task_csvs():
         df = load_csv(csv)
         for _, r in df.iterrows():
             if r["task"] == "laplacian":

@@ -1,0 +1,40 @@
+"""Every shipped benchmark runs to the end on a small input and finds its outputs equal to the
+reference's (each benchmark cross-checks before it times). The ratios themselves are not tested
+here: timing belongs to the benchmarks, not to the suite."""
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+SMALL = {
+    "bench_adapters.py": ["--quick", "--pairs", "1", "--mesh", "bunny"],
+    "bench_geodesics.py": ["--subdivisions", "3", "--pairs", "1", "--sources", "1"],
+    "bench_hausdorff.py": ["--meshes", "bunny", "--pairs", "1"],
+    "bench_implicit.py": ["--subdivisions", "3"],
+    "bench_implicit_vs_user.py": ["--subdivisions", "3", "--pairs", "1"],
+    "bench_laplacian.py": ["--subdivisions", "4", "--repeats", "1"],
+    "bench_measure.py": ["--mesh", "bunny", "--repeats", "1"],
+    "bench_qem.py": ["--sizes", "200k", "--repeats", "1"],
+    "bench_spectrum.py": ["--k", "10", "--pairs", "1"],
+    "bench_uniform.py": ["--pairs", "1"],
+    "scale_run.py": ["--subdivisions", "3"],
+}
+
+
+def test_every_benchmark_is_listed():
+    assert sorted(SMALL) == sorted(p.name for p in (ROOT / "benchmarks").glob("*.py"))
+
+
+@pytest.mark.parametrize("script", sorted(SMALL))
+def test_benchmark_runs_on_a_small_input(script, tmp_path):
+    args = SMALL[script] + (["--out", str(tmp_path / "scale")] if script == "scale_run.py" else [])
+    done = subprocess.run([sys.executable, str(ROOT / "benchmarks" / script), *args], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=300)
+    out = done.stdout + done.stderr
+    assert done.returncode == 0, out[-3000:]
+    assert "MISMATCH" not in out, out[-3000:]
+    if script == "bench_adapters.py":
+        assert "outputs not matching: none" in out, out[-3000:]
