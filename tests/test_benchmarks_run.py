@@ -11,6 +11,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 SMALL = {
     "bench_adapters.py": ["--quick", "--pairs", "1", "--mesh", "bunny"],
+    "bench_fixed_floor.py": ["--repeats", "1"],
     "bench_geodesics.py": ["--subdivisions", "3", "--pairs", "1", "--sources", "1"],
     "bench_hausdorff.py": ["--meshes", "bunny", "--pairs", "1"],
     "bench_implicit.py": ["--subdivisions", "3"],
@@ -23,6 +24,16 @@ SMALL = {
     "scale_run.py": ["--subdivisions", "3"],
 }
 
+TINY = """name: floor_smoke
+meshes: [bunny]
+noise:
+  - {model: gaussian_normal, levels: [0.3]}
+tasks:
+  laplacian: {methods: [scratch.cotan]}
+  smoothing: {methods: [scratch.taubin]}
+  simplification: {methods: [fast_simplification.qem], params: {target_ratio: [0.1]}}
+"""
+
 
 def test_every_benchmark_is_listed():
     assert sorted(SMALL) == sorted(p.name for p in (ROOT / "benchmarks").glob("*.py"))
@@ -31,6 +42,9 @@ def test_every_benchmark_is_listed():
 @pytest.mark.parametrize("script", sorted(SMALL))
 def test_benchmark_runs_on_a_small_input(script, tmp_path):
     args = SMALL[script] + (["--out", str(tmp_path / "scale")] if script == "scale_run.py" else [])
+    if script == "bench_fixed_floor.py":
+        (tmp_path / "tiny.yaml").write_text(TINY)
+        args += ["--config", str(tmp_path / "tiny.yaml")]
     done = subprocess.run([sys.executable, str(ROOT / "benchmarks" / script), *args], cwd=tmp_path,
                           capture_output=True, text=True, timeout=300)
     out = done.stdout + done.stderr
@@ -38,3 +52,5 @@ def test_benchmark_runs_on_a_small_input(script, tmp_path):
     assert "MISMATCH" not in out, out[-3000:]
     if script == "bench_adapters.py":
         assert "outputs not matching: none" in out, out[-3000:]
+    if script == "bench_fixed_floor.py":
+        assert "floor share of the method time" in out, out[-3000:]
