@@ -18,7 +18,8 @@ untimed call first); per pair the ratio A / B, and the median (min-max) over the
   agree, and clean points' distances to the result are the same through either hierarchy.
 - Simplification Hausdorff bracket and the sampled mean distance (20,000 points each way) of a
   fast_simplification result at 10% against the input, its hierarchy built once: A = the sample
-  points queried along a Morton curve, B = sorted by the face they were drawn on. Compared
+  points queried along a Morton curve, B = the result's samples sorted by the face they were
+  drawn on and the input's (drawn once per surface) in their drawing order. Compared
   first: the same bracket and one-sided bounds, the mean distance to 1e-12.
 - Simplification Hausdorff bracket of fast_simplification and scratch.qem results at 10% of the
   clean mesh and of a noisy copy (gaussian_normal 0.3, the fixed-cost configs' input), with
@@ -56,7 +57,7 @@ def _pairs(a, b, repeats):
 def _report(label, pairs):
     ta, tb = [p[0] for p in pairs], [p[1] for p in pairs]
     r = [x / y for x, y in pairs]
-    print(f"{label:62s} A {statistics.median(ta) * 1e3:7.1f} ms  B {statistics.median(tb) * 1e3:7.1f} ms  "
+    print(f"{label:70s} A {statistics.median(ta) * 1e3:7.1f} ms  B {statistics.median(tb) * 1e3:7.1f} ms  "
           f"A/B {statistics.median(r):.3f} ({min(r):.3f}-{max(r):.3f})")
 
 

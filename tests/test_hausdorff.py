@@ -61,7 +61,7 @@ def test_brackets_agree_with_cascading_upper_bounds(simplified, method):
 
 
 @pytest.mark.parametrize("method", ["meshlab.qem", "scratch.qem"])
-def test_floor_closes_the_smaller_direction_and_keeps_the_symmetric_bracket(simplified, method):
+def test_floor_closes_the_smaller_direction_and_keeps_the_symmetric_bracket(simplified, method, monkeypatch):
     """The direction bracketed second stops at the first one's lower bound (``floor``): its
     upper bound is still a valid bound of its own distance (against the independent C++
     implementation), it makes fewer queries than bracketing it alone, and the symmetric
@@ -78,10 +78,57 @@ def test_floor_closes_the_smaller_direction_and_keeps_the_symmetric_bracket(simp
     cut = one_sided(X[0], X[1].astype(np.int64), _Surface(*Y), floor=floor)
     assert cut["certified"] and cut["upper"] <= floor * (1 + 1e-3) + 1e-15
     assert cut["upper"] >= exact[small][0] * (1 - 1e-12) and cut["points"] < alone["points"]
+    assert cut["lower"] <= exact[small][1] * (1 + 1e-12)        # still a lower bound of its own direction
+    import harness.metrics.hausdorff as H
+    calls, real = [], H.one_sided
+
+    def spy(*a, **k):
+        out = real(*a, **k)
+        calls.append((k.get("floor", 0.0), out["lower"]))
+        return out
+    monkeypatch.setattr(H, "one_sided", spy)
     h = hausdorff(r.V, r.F, clean.V, clean.F)
+    assert len(calls) == 2 and calls[0][0] == 0.0 and calls[1][0] == calls[0][1] > 0   # the first's lower is the floor
     lo, hi = max(e[0] for e in exact), max(e[1] for e in exact)
     assert h["hausdorff_certified"] and h["hausdorff_upper"] <= h["hausdorff"] * (1 + 1e-3) + 1e-15
     assert h["hausdorff"] <= hi * (1 + 1e-12) and lo <= h["hausdorff_upper"] * (1 + 1e-12)
+
+
+def _plane_with_hole(c, r, n_sides, half=5.0, n=41):
+    """A Delaunay grid of the square [-half, half]^2 (z = 0) with a regular ``n_sides``-gon hole
+    of circumradius ``r`` centred at ``c``."""
+    from scipy.spatial import Delaunay
+    xs = np.linspace(-half, half, n)
+    P = np.array([[x, y] for x in xs for y in xs])
+    P = P[np.linalg.norm(P - c, axis=1) > r * 1.05]
+    ang = np.arange(n_sides) * 2 * np.pi / n_sides
+    P = np.vstack([P, c + r * np.c_[np.cos(ang), np.sin(ang)]])
+    T = Delaunay(P).simplices
+    T = T[np.linalg.norm(P[T].mean(1) - c, axis=1) > r * np.cos(np.pi / n_sides) * 0.999]
+    return np.c_[P, np.zeros(len(P))], T.astype(np.int64)
+
+
+@pytest.mark.parametrize("rel", [-3e-4, 3e-4, -2e-3])
+@pytest.mark.parametrize("n_samples", [0, 20000])
+def test_near_tie_of_the_two_directions_keeps_the_symmetric_bracket(rel, n_samples):
+    """Closed forms with the two directions within eps of each other, so the floor may stop the
+    truly larger one: A is a square with a hexagon-like 24-gon hole plus a small triangle at
+    height t above it, B the full square. ``h(A, B) = t`` (the triangle), ``h(B, A) = r_in``
+    (the hole's centre to its inscribed circle's edges). The bracket must hold
+    ``max(t, r_in)``, be certified, and each one-sided value must stay a lower bound."""
+    c, r, k = np.array([0.37, -0.21]), 1.0, 24
+    VA, FA = _plane_with_hole(c, r, k)
+    r_in = r * np.cos(np.pi / k)
+    t = r_in * (1 + rel)
+    VA = np.vstack([VA, [[3.0, 3.0, t], [3.2, 3.0, t], [3.0, 3.2, t]]])
+    FA = np.vstack([FA, len(VA) - 3 + np.array([[0, 1, 2]])])
+    VB = np.array([[-5.0, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]])
+    FB = np.array([[0, 1, 2], [0, 2, 3]])
+    h = hausdorff(VA, FA, VB, FB, n_samples=n_samples)
+    H_exact = max(t, r_in)
+    assert h["hausdorff_certified"] and h["hausdorff_upper"] <= h["hausdorff"] * (1 + 1e-3) + 1e-12
+    assert h["hausdorff"] <= H_exact * (1 + 1e-12) and H_exact <= h["hausdorff_upper"] * (1 + 1e-12)
+    assert h["hausdorff_ab"] <= t * (1 + 1e-12) and h["hausdorff_ba"] <= r_in * (1 + 1e-12)
 
 
 @pytest.mark.parametrize("method", ["meshlab.qem", "scratch.qem"])

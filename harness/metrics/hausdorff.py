@@ -20,7 +20,8 @@ bracketed, ``lower <= h <= upper``:
 
 Triangles whose upper bound exceeds ``(1 + eps) * lower + atol`` are split into four (edge
 midpoints) and bounded again, the one with the largest bound first (best first), until none is
-left (the result is then certified: the true value lies in ``[lower, (1 + eps) lower + atol]``)
+left (the result is then certified: the true value lies in ``[lower, (1 + eps) lower + atol]``;
+with a ``floor``, below, ``max(lower, floor)`` takes the place of ``lower`` in the upper end)
 or the point budget (``max_points`` evaluations per
 direction) or ``max_seconds`` runs out, which leaves a wider but still valid bracket. The
 bounds are weakest where the distance is tiny against the triangles' size and the covering
@@ -141,8 +142,10 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
     ``hausdorff_ab``/``_ba``: the one-sided lower bounds (A to B, B to A). Only the symmetric
     distance is certified: without ``corresponding`` the direction with the larger sampled
     maximum (A to B without samples) is bracketed first and the other only until its bound is
-    within ``(1 + eps)`` times the first one's lower bound (plus ``atol``), so the other's lower
-    bound may be loose; with ``corresponding``, B to A covers only the triangles whose
+    within ``(1 + eps) max(its own lower bound, the first one's) + atol``, so the larger of the
+    two lower bounds is within the certified gap of ``H`` and the other may be looser than
+    ``eps`` (when the two directions are within ``eps`` of each other it may even be the truly
+    larger one); with ``corresponding``, B to A covers only the triangles whose
     displacement cap exceeds ``(1 + eps) max(lower_ab, sampled) + atol`` (0 when none does and
     no samples were taken: valid but uninformative).
 
