@@ -48,16 +48,35 @@ def test_every_benchmark_is_listed():
     assert sorted(SMALL) == shipped
 
 
-@pytest.mark.parametrize("script", sorted(SMALL))
-def test_benchmark_runs_on_a_small_input(script, tmp_path):
-    args = SMALL[script] + (["--out", str(tmp_path / "scale")] if script == "scale_run.py" else [])
+def _command(script: str, tmp: Path) -> list[str]:
+    args = SMALL[script] + (["--out", str(tmp / "scale")] if script == "scale_run.py" else [])
     if script == "bench_fixed_floor.py":
-        (tmp_path / "tiny.yaml").write_text(TINY)
-        args += ["--config", str(tmp_path / "tiny.yaml")]
-    done = subprocess.run([sys.executable, str(ROOT / "benchmarks" / script), *args], cwd=tmp_path,
-                          capture_output=True, text=True, timeout=300)
-    out = done.stdout + done.stderr
-    assert done.returncode == 0, out[-3000:]
+        (tmp / "tiny.yaml").write_text(TINY)
+        args += ["--config", str(tmp / "tiny.yaml")]
+    return [sys.executable, str(ROOT / "benchmarks" / script), *args]
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    """Every benchmark's small run, two at a time (the suite itself runs one test at a time on
+    two cores): ``{script: (exit status, output)}``."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    def one(script):
+        tmp = tmp_path_factory.mktemp(script.replace(".py", ""))
+        try:
+            done = subprocess.run(_command(script, tmp), cwd=tmp, capture_output=True, text=True, timeout=300)
+        except subprocess.TimeoutExpired as exc:
+            return None, f"timed out after {exc.timeout} s"
+        return done.returncode, done.stdout + done.stderr
+    with ThreadPoolExecutor(2) as pool:
+        return dict(zip(sorted(SMALL), pool.map(one, sorted(SMALL))))
+
+
+@pytest.mark.parametrize("script", sorted(SMALL))
+def test_benchmark_runs_on_a_small_input(script, runs):
+    code, out = runs[script]
+    assert code == 0, out[-3000:]
     assert "MISMATCH" not in out, out[-3000:]
     if script == "bench_adapters.py":
         assert "outputs not matching: none" in out, out[-3000:]
