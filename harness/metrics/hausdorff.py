@@ -193,9 +193,15 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
         disp = np.linalg.norm(VA - VB, axis=1)
         cap_ab = cap_ba = disp[FA].max(axis=1) if len(FA) else None
         hints = face_around_vertex(FA, len(VA))        # on both sides
+    def a_to_b(floor=0.0):
+        return one_sided(VA, FA, SB, eps, atol, max_points, deadline, lower=seed_ab, cap=cap_ab,
+                         all_vertices=vertex_distances, hints=hints, floor=floor)
+
+    def b_to_a(floor=0.0):
+        return one_sided(VB, FB, SA, eps, atol, max_points, deadline, lower=seed_ba, cap=cap_ba, hints=hints,
+                         floor=floor)
     if corresponding and len(FB):
-        ab = one_sided(VA, FA, SB, eps, atol, max_points, deadline, lower=seed_ab, cap=cap_ab,
-                       all_vertices=vertex_distances, hints=hints)
+        ab = a_to_b()
         # B's triangles whose displacement cap is already within the symmetric threshold need
         # no query: only the others are bracketed
         open_ = cap_ba > (1.0 + eps) * max(ab["lower"], seed_ba) + atol
@@ -208,14 +214,11 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
         ba["upper"] = max(ba["upper"], settled)
     elif seed_ba > seed_ab:
         # the direction that looks larger first; the other is only bracketed to the symmetric threshold
-        ba = one_sided(VB, FB, SA, eps, atol, max_points, deadline, lower=seed_ba, cap=cap_ba, hints=hints)
-        ab = one_sided(VA, FA, SB, eps, atol, max_points, deadline, lower=seed_ab, cap=cap_ab,
-                       all_vertices=vertex_distances, hints=hints, floor=ba["lower"])
+        ba = b_to_a()
+        ab = a_to_b(floor=ba["lower"])
     else:
-        ab = one_sided(VA, FA, SB, eps, atol, max_points, deadline, lower=seed_ab, cap=cap_ab,
-                       all_vertices=vertex_distances, hints=hints)
-        ba = one_sided(VB, FB, SA, eps, atol, max_points, deadline, lower=seed_ba, cap=cap_ba, hints=hints,
-                       floor=ab["lower"])
+        ab = a_to_b()
+        ba = b_to_a(floor=ab["lower"])
     lower = max(ab["lower"], ba["lower"])
     upper = max(ab["upper"], ba["upper"])
     gap = 0.0 if upper - lower <= atol else ((upper - lower) / lower if lower > 0 else float("inf"))
