@@ -317,8 +317,10 @@ def test_over_target_component_loss_and_inherited_nonmanifold_are_judged(tmp_pat
     over = df["out_faces"] > df["target_faces"] * 1.01 + 2
     assert (df["over_target"] == over).all() and df["over_target"].any()    # woody's locked border
     assert (df["components_change"] < 0).any()                              # the small knight is gone
-    assert (df["topology_changed"] == (df["components_change"] != 0) | (df["genus_change"] != 0)
-            | (df["boundary_loops_change"] != 0)).all()
+    man = df["manifold"].astype(bool)
+    changed = (df["components_change"] != 0) | (df["genus_change"] != 0) | (df["boundary_loops_change"] != 0)
+    assert (df["topology_changed"] == changed)[man].all()
+    assert df.loc[~man, "genus_change"].isna().all()          # no genus of a non-manifold mesh
     assert not df["manifold_lost"].any() or (df.loc[df["manifold_lost"], "manifold"] == False).all()  # noqa: E712
 
 
@@ -332,3 +334,25 @@ def test_a_methods_warning_reaches_its_row(tmp_path):
         out=tmp_path / "r", quiet=True)
     row = pd.read_csv(tmp_path / "r" / "simplification.csv").iloc[0]
     assert row["status"] == "ok" and "the method warned: RuntimeWarning: scratch.qem: stopped at" in row["error"]
+
+
+def test_genus_change_is_blank_for_a_non_manifold_output():
+    """chi = 2c - 2g - b defines the genus of a manifold mesh only: an output with an edge shared
+    by three faces gets a blank ``genus_change`` (formerly -0.5), and ``topology_changed`` still
+    sees its new boundary loop; a manifold output keeps an integer genus change."""
+    from harness.config import load_config
+    from harness.runner import prepare_input
+    from harness.tasks import simplification as simp
+    from harness import tasks
+    cfg = load_config({"meshes": ["knight"], "noise": [{"model": "none"}],
+                       "tasks": {"simplification": {"methods": ["scratch.qem"]}}})
+    inp, _ = prepare_input(cfg.cases[0])
+    V, F = inp.V, inp.F
+    a, b = F[0, 0], F[0, 1]
+    V2 = np.vstack([V, V[[a, b]].mean(0) + 0.1 * (V.max(0) - V.min(0))])
+    F2 = np.vstack([F, [[b, a, len(V)]]])                 # a third face on edge (a, b)
+    task = tasks.get("simplification")
+    out = task.measure(inp, simp.SimplificationResult(V2, F2), {"target_ratio": 1.0})
+    assert out["manifold"] is False and np.isnan(out["genus_change"]) and out["topology_changed"] is True
+    same = task.measure(inp, methods.get("scratch.qem")(V, F, target_ratio=1.0), {"target_ratio": 1.0})
+    assert same["manifold"] and same["genus_change"] == 0 and same["topology_changed"] is False

@@ -98,10 +98,12 @@ def measure(inp, result, params) -> dict:
                 "over_target": bool(len(F_out) > target + target_tolerance(target)),
                 "manifold": topo["manifold"],
                 "manifold_lost": bool(topo_in["manifold"] and not topo["manifold"]),
-                "genus_change": topo["genus"] - topo_in["genus"],
+                # the genus is defined for manifold meshes only: blank when either is not
+                "genus_change": (topo["genus"] - topo_in["genus"] if topo["manifold"] and topo_in["manifold"]
+                                 else np.nan),
                 "boundary_loops_change": topo["boundary_loops"] - topo_in["boundary_loops"],
                 "components_change": topo["components"] - topo_in["components"]})
-    row["topology_changed"] = bool(row["genus_change"] != 0 or row["boundary_loops_change"] != 0
+    row["topology_changed"] = bool(topo["euler"] != topo_in["euler"] or row["boundary_loops_change"] != 0
                                    or row["components_change"] != 0)
     q = triangle_quality(V_out, F_out)
     row.update({k: q[k] for k in ("min_angle", "radius_ratio_mean", "obtuse_fraction", "min_angle_hist")})
@@ -153,9 +155,11 @@ TASK = Task(
         Metric("manifold", "true", "output is edge- and vertex-manifold", kind="bool"),
         Metric("manifold_lost", "false", "the input was manifold and the output is not (an invalid result)",
                kind="bool"),
-        Metric("topology_changed", "false", "genus, number of boundary loops or of connected components changed",
+        Metric("topology_changed", "false", "Euler characteristic (for manifold meshes: the genus), number of "
+               "boundary loops or of connected components changed",
                kind="bool"),
-        Metric("genus_change", "info", "output genus minus input genus"),
+        Metric("genus_change", "info", "output genus minus input genus (blank unless both are manifold: "
+               "chi = 2c - 2g - b holds for manifold meshes only)"),
         Metric("boundary_loops_change", "info", "output boundary loops minus input's", kind="int"),
         Metric("components_change", "info", "output connected components minus input's", kind="int"),
         Metric("min_angle", "higher", "smallest triangle angle", unit="deg", rel=0.01, abs=0.01),
