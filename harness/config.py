@@ -24,7 +24,7 @@ from .noise import MODELS
 
 TOP_KEYS = {"name", "repeats", "save_meshes", "plugins", "seed", "meshes", "noise", "tasks",
             "timeout", "report", "hausdorff_samples", "hausdorff_eps", "time_budget", "tune"}
-TASK_KEYS = {"methods", "params"}
+TASK_KEYS = {"methods", "params", "noise"}
 REPORT_KEYS = {"views"}
 MAX_REPEATS = 1000               # minimum timed samples per case
 MAX_SAMPLES = 10_000_000         # Hausdorff area samples per side
@@ -262,7 +262,9 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
             P.append(f"plugins[{i}]: cannot import {yaml_input.short(mod)} ({why})")
     methods.load_plugins([])
 
-    tasks = _check_tasks(raw.get("tasks"), P, skip_unknown=plugin_failed)
+    task_noise: dict = {}
+    tasks = _check_tasks(raw.get("tasks"), P, skip_unknown=plugin_failed, noise=task_noise)
+    noises = {t: task_noise.get(t, noises) for t in tasks}   # each task's noise list
     tune = None
     if raw.get("tune") is not None:
         from .tune import check_tune
@@ -290,26 +292,39 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
                   report=report, source=label, tune=tune)
 
 
-def _count_cases(meshes: list, noises: list, tasks: dict) -> int:
-    per_mesh = sum(len(n.get("levels") or [0.0]) * (1 if n["model"] == "none" else n.get("seeds", 1)) for n in noises)
-    per_noise = sum(len(grid) for entries in tasks.values() for _, grid in entries)
-    return len(meshes) * per_mesh * per_noise
+def _noise_of(noises, task: str) -> list:
+    """The noise list of ``task``: ``noises`` itself, or its entry when it maps tasks to lists."""
+    return noises.get(task, []) if isinstance(noises, dict) else noises
 
 
-def expand_cases(meshes: list, noises: list, tasks: dict, seed: int, repeats: int, plugins: tuple, hs: int,
+def _count_cases(meshes: list, noises, tasks: dict) -> int:
+    def per_mesh(nl):
+        return sum(len(n.get("levels") or [0.0]) * (1 if n["model"] == "none" else n.get("seeds", 1)) for n in nl)
+    return len(meshes) * sum(per_mesh(_noise_of(noises, task)) * len(grid)
+                             for task, entries in tasks.items() for _, grid in entries)
+
+
+def expand_cases(meshes: list, noises, tasks: dict, seed: int, repeats: int, plugins: tuple, hs: int,
                  budget: float, eps: float = 1e-3) -> list:
-    """Every (mesh, noise model, level, seed, task, method, params) case, duplicates removed."""
+    """Every (mesh, noise model, level, seed, task, method, params) case, duplicates removed;
+    ``noises`` is one list for every task or a mapping task -> list."""
     cases = []
     labels = _unique_labels(meshes)
     for spec, key in zip(meshes, labels):
         ident = _identity(spec)
         is_pair = "clean" in spec or datasets.resolve_bundled(spec.get("bundled", "")) in datasets.PAIRS
-        noise_list = [("given", float("nan"), seed, 1.0)] if is_pair else [
-            (n["model"], float(lv), seed + s, float(n.get("fraction", 1.0)))
-            for n in noises for lv in (n.get("levels") or [0.0])
-            for s in range(1 if n["model"] == "none" else n.get("seeds", 1))]
-        for model, level, s, frac in noise_list:
+        given = ("given", float("nan"), seed, 1.0)          # one NaN object: tuples compare by identity first
+
+        def noise_list(task):
+            return [given] if is_pair else [
+                (n["model"], float(lv), seed + s, float(n.get("fraction", 1.0)))
+                for n in _noise_of(noises, task) for lv in (n.get("levels") or [0.0])
+                for s in range(1 if n["model"] == "none" else n.get("seeds", 1))]
+        lists = {task: noise_list(task) for task in tasks}
+        for model, level, s, frac in dict.fromkeys(x for nl in lists.values() for x in nl):
             for task, entries in tasks.items():
+                if (model, level, s, frac) not in lists[task]:
+                    continue
                 for mname, grid in entries:
                     for params in grid:
                         cid = case_id(task, ident, model, level, s, frac, mname, params)
@@ -405,13 +420,13 @@ def _check_meshes(meshes, base_dir: Path, P: list) -> list[dict]:
     return out
 
 
-def _check_noise(noise, P: list) -> list[dict]:
+def _check_noise(noise, P: list, where: str = "noise") -> list[dict]:
     out = []
     if not isinstance(noise, list) or not noise:
-        P.append("noise: expected a non-empty list of {model: ..., levels: [...]}")
+        P.append(f"{where}: expected a non-empty list of {{model: ..., levels: [...]}}")
         return out
     for i, n in enumerate(noise):
-        at = f"noise[{i}]"
+        at = f"{where}[{i}]"
         if not isinstance(n, dict):
             P.append(f"{at}: expected a mapping like {{model: gaussian_normal, levels: [0.1]}}, got {yaml_input.short(n)}")
             continue
@@ -448,7 +463,9 @@ def _check_noise(noise, P: list) -> list[dict]:
     return out
 
 
-def _check_tasks(tasks, P: list, skip_unknown: bool = False) -> dict:
+def _check_tasks(tasks, P: list, skip_unknown: bool = False, noise: dict | None = None) -> dict:
+    """``{task: [(method, [params, ...]), ...]}``; a task's own ``noise`` list (which replaces the
+    top-level one for that task) goes into ``noise`` when given."""
     from .plugins import import_methods
     methods = import_methods()
     from .tasks import names
@@ -466,6 +483,10 @@ def _check_tasks(tasks, P: list, skip_unknown: bool = False) -> dict:
             P.append(f"{at}: expected a mapping with 'methods' (and optional 'params'), got {yaml_input.short(body)}")
             continue
         _unknown_keys(body, TASK_KEYS, f"{at}.", P)
+        if "noise" in body:
+            own_noise = _check_noise(body["noise"], P, f"{at}.noise")
+            if noise is not None:
+                noise[task] = own_noise
         shared = body.get("params")
         shared = {} if shared is None else shared
         if not isinstance(shared, dict):

@@ -250,3 +250,27 @@ def test_duplicate_keys_compare_as_loaded():
     with pytest.raises(yaml.YAMLError, match="cannot be read as its tag says"):     # was a ValueError traceback
         yaml_input.load("time_budget: !!int abc\n")
     assert yaml_input.load("x: &a {k: 1}\ny: *a\n<<: {z: 1}\n") == {"x": {"k": 1}, "y": {"k": 1}, "z": 1}
+
+
+def test_a_tasks_own_noise_list_replaces_the_top_level_one():
+    """``tasks.<task>.noise`` gives that task its own noise list; other tasks keep the top-level
+    one, the shared inputs keep their case ids, and its problems carry their key path."""
+    from harness.config import load_config
+    from harness.errors import ConfigError
+    base = {"meshes": ["knight", "woody"], "noise": [{"model": "gaussian_normal", "levels": [0.3]}, {"model": "none"}],
+            "tasks": {"laplacian": {"methods": ["scratch.cotan"]}, "smoothing": {"methods": ["scratch.taubin"]}}}
+    every = load_config(base).cases
+    own = load_config({**base, "tasks": {**base["tasks"], "smoothing": {
+        "methods": ["scratch.taubin"], "noise": [{"model": "gaussian_normal", "levels": [0.3, 0.5], "seeds": 2}]}}}).cases
+    got = {(c.task, c.mesh_key, c.noise_model, c.noise_level, c.seed) for c in own}
+    assert {k for k in got if k[0] == "laplacian"} == {(c.task, c.mesh_key, c.noise_model, c.noise_level, c.seed)
+                                                       for c in every if c.task == "laplacian"}
+    assert {k[2:] for k in got if k[0] == "smoothing"} == {("gaussian_normal", lv, s) for lv in (0.3, 0.5) for s in (0, 1)}
+    assert len(own) == 2 * 2 + 2 * 4
+    shared = {c.case_id for c in every if c.task == "laplacian" or c.noise_model != "none"}
+    assert shared <= {c.case_id for c in own}                   # same input, same case id
+    with pytest.raises(ConfigError) as e:
+        load_config({**base, "tasks": {"smoothing": {"methods": ["scratch.taubin"], "noise": [{"model": "gausian"}]},
+                                       "laplacian": {"methods": ["scratch.cotan"], "noise": []}}})
+    msg = str(e.value)
+    assert "tasks.smoothing.noise[0].model" in msg and "tasks.laplacian.noise: expected a non-empty list" in msg
