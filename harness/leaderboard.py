@@ -192,14 +192,20 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
             vals, inval = cell_values(spec, df, m["name"], axis)
             for cell, v in vals.iterrows():
                 ok = v[~inval.loc[cell] & v.notna()]
+                mesh, noise, level, setting = cell.split("|", 3)
                 if ok.empty:
+                    if inval.loc[cell].any():      # every result invalid: said, not left out
+                        rows.append({"task": task, "metric": m["name"], "better": m["better"], "mesh": mesh,
+                                     "noise_model": noise, "noise_level": level,
+                                     "setting": "" if setting == "{}" else setting, "best": "", "value": None,
+                                     "tied_with_best": "", "runner_up": "", "runner_up_value": None,
+                                     "variants": int(v.notna().sum()), "invalid_excluded": int(inval.loc[cell].sum())})
                     continue
                 order = ok.sort_values(ascending=m["better"] == "lower", kind="stable")
                 sign = -1.0 if m["better"] == "higher" else 1.0
                 gid = tie_groups(sign * order.to_numpy(), *tolerance(spec, m["name"]))
                 tied = [str(x) for x in order.index[1:][gid[1:] == 0]]
                 rest = order[gid > 0]
-                mesh, noise, level, setting = cell.split("|", 3)
                 rows.append({"task": task, "metric": m["name"], "better": m["better"], "mesh": mesh,
                              "noise_model": noise, "noise_level": level, "setting": "" if setting == "{}" else setting,
                              "best": order.index[0], "value": float(order.iloc[0]), "tied_with_best": ", ".join(tied),
@@ -210,9 +216,15 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
 
 
 def _best(r) -> str:
-    """The best variant, and those tied with it."""
+    """The best variant, and those tied with it ("no valid result" where every result is invalid)."""
+    if pd.isna(r.best) or not str(r.best):
+        return "no valid result"
     tied = "" if pd.isna(r.tied_with_best) else str(r.tied_with_best)
     return f"{r.best} (tied: {tied})" if tied else str(r.best)
+
+
+def _g(x) -> str:
+    return "" if x is None or pd.isna(x) else format(x, ".4g")
 
 
 def winners_markdown(w: pd.DataFrame) -> str:
@@ -221,8 +233,8 @@ def winners_markdown(w: pd.DataFrame) -> str:
         out.append(f"### {task}: best by {metric} ({g.iloc[0].better} is better)\n\n"
                    "| mesh | noise | setting | best | value | runner-up | value | invalid excluded |\n"
                    "|---|---|---|---|---:|---|---:|---:|")
-        out += [f"| {r.mesh} | {r.noise_model} {r.noise_level} | {r.setting} | {_best(r)} | {r.value:.4g} | {r.runner_up} | "
-                f"{'' if pd.isna(r.runner_up_value) else format(r.runner_up_value, '.4g')} | {r.invalid_excluded} |"
+        out += [f"| {r.mesh} | {r.noise_model} {r.noise_level} | {r.setting} | {_best(r)} | {_g(r.value)} | {r.runner_up} | "
+                f"{_g(r.runner_up_value)} | {r.invalid_excluded} |"
                 for r in g.itertuples()]
         out.append("")
     return "\n".join(out)
@@ -234,8 +246,7 @@ def winners_latex(w: pd.DataFrame) -> str:
         out += [r"\begin{table}[t]", r"\centering", r"\begin{tabular}{llllrlr}", r"\toprule",
                 r"mesh & noise & setting & best & value & runner-up & value \\", r"\midrule"]
         out += [f"{_tex(r.mesh)} & {_tex(r.noise_model)} {_tex(r.noise_level)} & {_tex(r.setting)} & {_tex(_best(r))} & "
-                f"{r.value:.4g} & {_tex(r.runner_up)} & "
-                f"{'' if pd.isna(r.runner_up_value) else format(r.runner_up_value, '.4g')} \\\\" for r in g.itertuples()]
+                f"{_g(r.value)} & {_tex(r.runner_up)} & {_g(r.runner_up_value)} \\\\" for r in g.itertuples()]
         out += [r"\bottomrule", r"\end{tabular}",
                 f"\\caption{{{_tex(task)}: best valid method per cell by \\texttt{{{_tex(metric)}}} ({g.iloc[0].better} is "
                 f"better); invalid results excluded.}}", r"\end{table}", ""]

@@ -2,8 +2,8 @@
 stored in the run folder (``views/index.json`` plus one ``views/<case_id>.json`` per view), so
 the report only reads files.
 
-Which cases: ``report.views`` in the config (case ids), else the best and the worst ok case of
-each task that declares a ``view_metric`` (by that metric's direction). Each chosen case runs
+Which cases: ``report.views`` in the config (case ids), else the best valid and the worst ok
+case of each task that declares a ``view_metric`` (by that metric's direction). Each chosen case runs
 once more in an isolated child process (`harness.executors.isolation.run_isolated`, with a time
 budget) and its task's ``view`` gives the meshes and per-vertex values. Lengths are fractions of
 the clean mesh's bounding-box diagonal.
@@ -39,8 +39,12 @@ def choose_views(report_cfg: dict, frames) -> list[tuple[str, str]]:
         ok = df[(df["status"] == "ok") & df[metric.name].notna()]
         if not len(ok):
             continue
+        from .leaderboard import validity
         col = ok[metric.name].astype(float)
-        best, worst = (col.idxmax(), col.idxmin()) if metric.better == "higher" else (col.idxmin(), col.idxmax())
+        valid = col[validity(task.spec(), ok) == ""]     # the best is a valid result; the worst may not be
+        pick = valid if len(valid) else col
+        best = pick.idxmax() if metric.better == "higher" else pick.idxmin()
+        worst = col.idxmin() if metric.better == "higher" else col.idxmax()
         out.append((str(ok.loc[best, "case_id"]), f"best {name} case by {metric.name}"))
         if worst != best:
             out.append((str(ok.loc[worst, "case_id"]), f"worst {name} case by {metric.name}"))

@@ -168,6 +168,7 @@ def check_report_in_browser(report: Path, screenshot: Path | None = None, timeou
                     jserrors: document.querySelectorAll('.jserror').length,
                     smoothingSvgs: document.querySelectorAll('#plots-smoothing svg.chart').length,
                     groupTitles: [...document.querySelectorAll('.plotgroup h4')].map(h => h.textContent),
+                    bestRows: [...document.querySelectorAll('[id^="plots-"] table.best tr')].map(r => r.textContent),
                     height: document.documentElement.scrollHeight};
         })()""")
         if interact:
@@ -280,3 +281,35 @@ def test_generic_section_plots_parameter_sweeps_and_level_lines(tmp_path):
     assert s["view3d"] == "ready" and s["painted"] == s["canvases"] > 0
     cdp_titles = s.get("groupTitles") or []
     assert any("vs t_factor" in t for t in cdp_titles), cdp_titles
+
+
+def test_winner_tables_show_ties_and_cells_without_a_valid_result(tiny_run, tmp_path):
+    """The report's winner tables use the leaderboard's tie rule (within the metric's declared
+    tolerance of the best) and say so; a cell whose every result is invalid (smoothing a clean
+    input: nothing to denoise) is a row saying so, as in winners.md, not a missing row."""
+    import csv
+    import shutil
+
+    from harness.report.html import build_report
+    run = tmp_path / "run"
+    shutil.copytree(tiny_run, run)
+    path = run / "simplification.csv"
+    rows = list(csv.DictReader(path.open()))
+    cell = [r for r in rows if r["mesh"] == "knight" and r["noise_model"] == "none"]
+    assert len(cell) == 2                       # fast_simplification at two targets: make them one cell
+    for r in cell:                              # a copy of the method within 0.5% of its hausdorff
+        r2 = dict(r, method="copy.qem", case_id=r["case_id"][:-2] + "ff", hausdorff=repr(float(r["hausdorff"]) * 1.005))
+        rows.append(r2)
+    with path.open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]), lineterminator="\n")
+        w.writeheader()
+        w.writerows(rows)
+    build_report(run)
+    s = check_report_in_browser(run / "report.html", interact=False)
+    assert s["console_errors"] == [] and s["exceptions"] == [] and s["jserrors"] == 0
+    text = "\n".join(s["bestRows"])
+    assert "(tied: copy.qem)" in text, text
+    none = [r for r in s["bestRows"] if r.startswith("knightno noise") and "no valid result" in r]
+    assert none and "worse than the noisy input" in none[0], text
+    winners = (run / "winners.md").read_text()
+    assert "| knight | none 0.0 |" in winners and "no valid result" in winners

@@ -233,12 +233,34 @@
     plotsRendered++;
     return svg;
   }
-  function pareto(pts) { // pts [[x,y,...]]: minimal x and y; returns front sorted by x
+  // pts [[x,y,...]]: minimal x and y; returns the front sorted by x. With tol ([rel, abs], `tolOf`),
+  // a point joins the front only when it is more accurate than every faster point beyond the tolerance.
+  function pareto(pts, tol) {
     var s = pts.filter(function (p) { return isNum(p[0]) && isNum(p[1]); })
       .slice().sort(function (a, b) { return a[0] - b[0] || a[1] - b[1]; });
     var out = [], best = Infinity;
-    s.forEach(function (p) { if (p[1] < best) { out.push(p); best = p[1]; } });
+    s.forEach(function (p) {
+      if (p[1] < best && !(tol && isFinite(best) && ties(p[1], best, tol))) { out.push(p); best = p[1]; }
+    });
     return out;
+  }
+  // the compare tolerance the task declares for a metric (as the leaderboard and winners.csv use it):
+  // a value within max(rel * |best|, abs) of the best ties with it
+  function tolOf(spec, key) {
+    var m = ((spec || {}).metrics || []).filter(function (x) { return x.name === key; })[0];
+    return [m && isNum(m.rel) ? m.rel : 0.01, m && isNum(m.abs) ? m.abs : 0];
+  }
+  function ties(a, best, tol) { return Math.abs(a - best) <= Math.max(tol[0] * Math.abs(best), tol[1]); }
+  function tiedNote(names) { // ' (tied: a, b)', or ' (tied: 5 others)' with the names on hover
+    if (!names.length) return '';
+    return ' <span class="muted" title="within the metric\'s tolerance of the best: ' + esc(names.join(', ')) +
+      '">(tied: ' + (names.length <= 2 ? esc(names.join(', ')) : names.length + ' others') + ')</span>';
+  }
+  function noValidRow(rs, ncol, target) { // a cell whose every result is invalid: said, not left out
+    return el('tr', {html: '<td>' + esc(rs[0].mesh) + '</td><td>' + esc(rs[0]._noise) + '</td>' +
+      (target === undefined ? '' : '<td>' + esc(fmt(target)) + '</td>') + '<td colspan="' + ncol +
+      '" class="muted">no valid result (' + rs.length + ' invalid: ' + esc(uniq(rs.map(function (r) { return r._invalid; })).join('; ')) +
+      ')</td>'});
   }
   function legend(variants, colors, hidden, onToggle, extra) {
     var box = el('div', {'class': 'legend'});
@@ -472,14 +494,18 @@
         '<th>time</th><th>Pareto front (fastest first): method, ' + esc(key) + ', time</th></tr>';
       var anyWorse = false;
       var nInvalid = vis.filter(function (r) { return r._invalid; }).length;
-      groupBy(vis.filter(validOrShown), panelsKey).forEach(function (rs) {
+      var tol = tolOf(d.T.spec, key);
+      groupBy(vis, panelsKey).forEach(function (all) {
+        var rs = all.filter(validOrShown);
+        if (!rs.length) { bt.appendChild(noValidRow(all, 5)); return; }
         var pts = aggregate(rs, key);
         var best = pts.reduce(function (a, b) { return b[1] < a[1] ? b : a; });
+        var tied = pts.filter(function (p) { return p !== best && ties(p[1], best[1], tol); }).map(function (p) { return p[4]; });
         var inp = inKey ? mean(rs.map(function (r) { return r[inKey]; }).filter(isNum)) : null;
         if (isNum(inp) && best[1] > inp) anyWorse = true;
-        var front = pareto(pts).map(function (p) { return esc(p[4]) + ' ' + fmt(p[1], 3) + ', ' + fmtTime(p[0]); }).join('<br>');
+        var front = pareto(pts, tol).map(function (p) { return esc(p[4]) + ' ' + fmt(p[1], 3) + ', ' + fmtTime(p[0]); }).join('<br>');
         var tr = el('tr', {html: '<td>' + esc(rs[0].mesh) + '</td><td>' + esc(rs[0]._noise) + '</td><td><i style="color:' +
-          d.colors[best[4]] + '">●</i> ' + esc(best[4]) + '</td><td class="num' +
+          d.colors[best[4]] + '">●</i> ' + esc(best[4]) + tiedNote(tied) + '</td><td class="num' +
           (isNum(inp) && best[1] > inp ? ' worse" title="worse than the noisy input' : '') + '">' + fmt(best[1], 4) + '</td><td class="num">' +
           (isNum(inp) ? fmt(inp, 4) : '—') + '</td><td class="num">' + fmtTime(best[0]) + '</td><td>' + front + '</td>'});
         bt.appendChild(tr);
@@ -493,11 +519,12 @@
       // accuracy vs time
       var panels = panelGroup(plots, 'Accuracy vs time, per mesh and noise level',
         'x: median time of the method call (log); y: ' + esc(key) + ' (mean over seeds). Black-ringed points and the dashed ' +
-        'staircase are the Pareto front: no other method in the panel is both faster and more accurate. ' +
+        'staircase are the Pareto front: no other method in the panel is both faster and more accurate (beyond the ' +
+        'metric\'s tolerance, as in the winner tables). ' + (showInvalid ? '' : 'Invalid results are not plotted. ') +
         (inKey ? 'The grey dashed line is the noisy input: points above it made the mesh worse.' : ''),
         mkLeg(inKey ? ['noisy input', 'Pareto front'] : ['Pareto front']));
-      groupBy(vis, panelsKey).forEach(function (rs, title) {
-        var pts = aggregate(rs, key), front = pareto(pts);
+      groupBy(vis.filter(validOrShown), panelsKey).forEach(function (rs, title) {
+        var pts = aggregate(rs, key), front = pareto(pts, tol);
         var onFront = new Set(front);
         var series = [];
         groupBy(pts, function (p) { return p[4]; }).forEach(function (ps, v) {
@@ -511,10 +538,10 @@
 
       // error vs noise level
       var levels = uniq(vis.map(function (r) { return r.noise_level; }).filter(isNum));
-      var enPanels = panelGroup(plots, 'Error vs noise level, per mesh and noise model',
-        levels.length > 1 ? 'Mean over seeds; noise level = σ / mean edge length.' + (inKey ? ' Grey dashed: the noisy input.' : '')
-          : 'This run has a single noise level, so each line is a single point.', mkLeg(inKey ? ['noisy input'] : []));
-      groupBy(vis, function (r) { return r.mesh + ' · ' + r.noise_model; }).forEach(function (rs, title) {
+      var enPanels = levels.length > 1 ? panelGroup(plots, 'Error vs noise level, per mesh and noise model',
+        'Mean over seeds; noise level = σ / mean edge length.' + (inKey ? ' Grey dashed: the noisy input.' : ''),
+        mkLeg(inKey ? ['noisy input'] : [])) : null;       // a single level: no line to draw
+      groupBy(levels.length > 1 ? vis.filter(validOrShown) : [], function (r) { return r.mesh + ' · ' + r.noise_model; }).forEach(function (rs, title) {
         var series = [];
         var yall = [];
         groupBy(rs, function (r) { return r._variant; }).forEach(function (vr, v) {
@@ -589,7 +616,10 @@
       bt.innerHTML = '<tr><th>mesh</th><th>noise</th><th>target</th><th>most accurate</th><th>' + esc(key) +
         '</th><th>faces</th><th>time</th><th>fastest</th><th>its ' + esc(key) + '</th><th>its time</th></tr>';
       var nInvalid = vis.filter(function (r) { return r._invalid; }).length;
-      groupBy(vis.filter(validOrShown), function (r) { return r.mesh + '|' + r._noise + '|' + r._target; }).forEach(function (rows) {
+      var tol = tolOf(d.T.spec, key);
+      groupBy(vis, function (r) { return r.mesh + '|' + r._noise + '|' + r._target; }).forEach(function (all) {
+        var rows = all.filter(validOrShown);
+        if (!rows.length) { bt.appendChild(noValidRow(all, 7, all[0]._target)); return; }
         // one entry per method: mean metric and faces over seeds, median time
         var rs = [];
         groupBy(rows, function (r) { return r._variant; }).forEach(function (g, v) {
@@ -601,9 +631,10 @@
           rs.push(o);
         });
         var best = rs.reduce(function (a, b) { return b[key] < a[key] ? b : a; });
+        var tied = rs.filter(function (r) { return r !== best && ties(r[key], best[key], tol); }).map(function (r) { return r._variant; });
         var fast = rs.filter(function (r) { return isNum(r.time_s); }).reduce(function (a, b) { return b.time_s < a.time_s ? b : a; }, rs[0]);
         bt.appendChild(el('tr', {html: '<td>' + esc(best.mesh) + '</td><td>' + esc(best._noise) + '</td><td>' + esc(fmt(best._target)) +
-          '</td><td><i style="color:' + d.colors[best._variant] + '">●</i> ' + esc(best._variant) + '</td><td class="num">' + fmt(best[key], 4) +
+          '</td><td><i style="color:' + d.colors[best._variant] + '">●</i> ' + esc(best._variant) + tiedNote(tied) + '</td><td class="num">' + fmt(best[key], 4) +
           '</td><td class="num">' + best.out_faces + '</td><td class="num">' + fmtTime(best.time_s) + '</td><td>' + esc(fast._variant) +
           '</td><td class="num">' + fmt(fast[key], 4) + '</td><td class="num">' + fmtTime(fast.time_s) + '</td>'}));
       });
@@ -612,8 +643,8 @@
       plots.appendChild(invalidNote(nInvalid));
       var panels = panelGroup(plots, key + ' vs output face count, per mesh and noise level',
         'One line per method through its face targets (log–log; mean over seeds). Lower-left is better: fewer faces, ' +
-        'closer to the input. Distances are fractions of the bounding-box diagonal.', mkLeg);
-      groupBy(vis, function (r) { return r.mesh + ' · ' + r._noise; }).forEach(function (rs, title) {
+        'closer to the input. Distances are fractions of the bounding-box diagonal.' + (showInvalid ? '' : ' Invalid results are not plotted.'), mkLeg);
+      groupBy(vis.filter(validOrShown), function (r) { return r.mesh + ' · ' + r._noise; }).forEach(function (rs, title) {
         var series = [];
         groupBy(rs, function (r) { return r._variant; }).forEach(function (vr, v) {
           var pts = [];
@@ -794,7 +825,8 @@
     if (!n) return el('span');
     return el('p', {'class': 'caption', text: n + ' row(s) are not valid results (' +
       'diverged, worse than the noisy input, over the face target, non-manifold from a manifold input or topology-changing output) and are ' +
-      (showInvalid ? 'included in' : 'left out of') + ' the winners above; the checkbox at the top of the page toggles them.'});
+      (showInvalid ? 'included in' : 'left out of') + ' the winners above and the plots below; the checkbox at the top of ' +
+      'the page toggles them.'});
   }
   function cdDiagram(g) {
     // Demšar's critical-difference diagram: mean ranks on an axis, variants whose ranks differ by less than CD joined
@@ -899,8 +931,10 @@
           rs.push(o);
         });
         var best = rs.reduce(function (a, b) { return (lower ? b[key] < a[key] : b[key] > a[key]) ? b : a; });
+        var tol = tolOf(spec, key);
+        var tied = rs.filter(function (r) { return r !== best && ties(r[key], best[key], tol); }).map(function (r) { return r._variant; });
         bt.appendChild(el('tr', {html: '<td>' + esc(best.mesh) + '</td><td>' + esc(best._noise) + '</td><td><i style="color:' +
-          d.colors[best._variant] + '">●</i> ' + esc(best._variant) + '</td><td class="num">' + fmt(best[key], 4) +
+          d.colors[best._variant] + '">●</i> ' + esc(best._variant) + tiedNote(tied) + '</td><td class="num">' + fmt(best[key], 4) +
           '</td><td class="num">' + fmtTime(best.time_s) + '</td>'}));
       });
       plots.appendChild(el('h4', {text: 'Best method per mesh and noise level by ' + key + ' (mean over seeds)'}));
