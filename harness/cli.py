@@ -45,7 +45,8 @@ def _parser() -> argparse.ArgumentParser:
     ev = sub.add_parser("eval", help="score result meshes made elsewhere; writes a run folder and its report")
     ev.add_argument("results", nargs="+", metavar="RESULT", help="result mesh files (OBJ, OFF, PLY, STL)")
     ev.add_argument("--clean", required=True, help="the clean (reference) mesh")
-    ev.add_argument("--noisy", help="the noisy input the results were made from (smoothing: input_* columns)")
+    ev.add_argument("--noisy", help="the noisy input the results were made from (smoothing: the input_* columns; "
+                    "simplification: the surface a result is compared to, as in a run; without it, the clean mesh)")
     ev.add_argument("--out", required=True, help="run folder to write")
     ev.add_argument("--task", choices=["smoothing", "simplification"],
                     help="default: smoothing when a result has the clean mesh's vertex count, else simplification")

@@ -487,7 +487,7 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
     n_info = sum(c["verdict"] == "info" for c in changes)
     print(f"compare A={run_a} (baseline) B={run_b}: {res['common']} cases in both, "
           f"{len(res['only_a'])} only in A, {len(res['only_b'])} only in B", file=out)
-    for note in timing_notes(meta_a, meta_b, res):
+    for note in (timing_notes(meta_a, meta_b, res) if time_factor else []):     # --no-time: no timing notes
         print(f"note: {note}", file=out)
     if res["input_changes"]:
         n = len({c['case_id'] for c in res['input_changes']})
@@ -495,12 +495,14 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
               + ", ".join(sorted({c['metric'] for c in res['input_changes']})), file=out)
     if shown:
         w = max(12, min(90, max(len(c["case"]) for c in shown)))
-        head = f"{'verdict':11s} {'task':14s} {'case':{w}s} {'metric':22s} {'A':>11s} {'B':>11s} {'change':>9s}"
+        head = (f"{'verdict':11s} {'task':14s} {'case id':12s} {'case':{w}s} {'metric':22s} {'A':>11s} {'B':>11s} "
+                f"{'change':>9s}")
         print(head, file=out)
         print("-" * len(head), file=out)
         for c in shown[:max_lines]:
             flag = "REGRESSION" if c["verdict"] == "regression" else c["verdict"]
-            line = (f"{flag:11s} {c['task']:14s} {c['case'][:w]:{w}s} {c['metric']:22s} {_fmt(c['a']):>11s} "
+            case = c["case"] if len(c["case"]) <= w else c["case"][:w - 1] + "…"
+            line = (f"{flag:11s} {c['task']:14s} {c['case_id']:12s} {case:{w}s} {c['metric']:22s} {_fmt(c['a']):>11s} "
                     f"{_fmt(c['b']):>11s} {_change(c['a'], c['b']):>9s}")
             if c.get("note"):
                 line += f"  {c['note']}"

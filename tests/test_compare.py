@@ -329,3 +329,18 @@ def test_output_files_are_checked_before_any_work(run_a, tmp_path):
     for target in (tmp_path, cfg):
         assert cli(["run", str(cfg), "--out", str(tmp_path / "o"), "--export-benchmark-json", str(target)]) == 2
     assert cfg.read_bytes() == before and not (tmp_path / "o").exists()
+
+
+def test_the_terminal_names_each_changed_case_by_id_and_no_time_prints_no_timing_note(run_a, tmp_path):
+    """Two cases whose labels differ only past the column width stay distinguishable: every
+    change line carries its case id; ``time_factor=None`` (``--no-time``) prints no timing note."""
+    b = copy(run_a, tmp_path)
+    rows = list(csv.DictReader((b / "smoothing.csv").open()))
+    edit(b / "smoothing.csv", lambda rows: [r.update(dist_mean=str(float(r["dist_mean"]) * 1.05)) for r in rows])
+    code, out = run_compare(run_a, b)
+    assert code == 1
+    for r in rows:
+        assert any(line.startswith("REGRESSION") and r["case_id"] in line and "dist_mean" in line
+                   for line in out.splitlines()), (r["case_id"], out)
+    code, out = run_compare(run_a, b, time_factor=None)
+    assert code == 1 and not any(line.startswith("note:") for line in out.splitlines()), out
