@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from . import tasks
-from .errors import ShootoutError
+from .errors import ConfigError, ShootoutError
 
 
 class _Parser(argparse.ArgumentParser):
@@ -95,19 +95,41 @@ def _check_output_file(path, flag: str, protect=(), run_dirs=()) -> None:
 
 def _cmd_run(a) -> int:
     from .config import load_config
-    from .session import check_run_args
-    check_run_args(a.workers, a.timeout, a.executor, a.scheduler)
-    _check_output_file(a.export_benchmark_json, "--export-benchmark-json", protect=[a.config])
+    from .errors import problems_error
+    from .results import out_dir_problems
+    from .session import run_args_problems
+    P = run_args_problems(a.workers, a.timeout, a.executor, a.scheduler)   # every problem, then one message
+    try:
+        _check_output_file(a.export_benchmark_json, "--export-benchmark-json", protect=[a.config])
+    except ShootoutError as exc:
+        P.append(str(exc))
     from .session import _results_config, run
     if _results_config(Path(a.config)) is not None:          # results: score files made elsewhere
+        if P:
+            raise problems_error(P)
         frames = run(Path(a.config), out=a.out)
         n = sum(len(df) for df in frames.values())
         out = Path(a.out) if a.out else Path("results") / (_results_config(Path(a.config))[0].get("name") or "eval")
         print(f"eval: {n} result(s) scored; report: {out / 'report.html'}")
         return 0
-    cfg = load_config(Path(a.config))
-    _check_output_file(a.export_benchmark_json, "--export-benchmark-json",
-                       run_dirs=(Path(a.out) if a.out else Path("results") / cfg.name,))
+    cfg, bad_config = None, None
+    try:
+        cfg = load_config(Path(a.config))
+    except ConfigError as exc:
+        bad_config = exc
+    out_dir = Path(a.out) if a.out else Path("results") / cfg.name if cfg is not None else None
+    if out_dir is not None:
+        P += out_dir_problems(out_dir, a.resume)
+        try:
+            _check_output_file(a.export_benchmark_json, "--export-benchmark-json", run_dirs=(out_dir,))
+        except ShootoutError as exc:
+            P.append(str(exc))
+    if bad_config is not None and not P:
+        raise bad_config
+    if bad_config is not None:
+        P += [f"{bad_config.source}: {p}" for p in bad_config.problems]
+    if P:
+        raise problems_error(list(dict.fromkeys(P)))
     from .executors import isolation, local
     reap = a.executor == "local" and a.command_process   # this process is ours: orphans of cases die here
     local.REAP = reap and isolation.become_subreaper()

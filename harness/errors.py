@@ -51,3 +51,10 @@ def check_interrupt() -> None:
 
 def interrupt_seen() -> bool:
     return _INTERRUPTED
+
+
+def problems_error(problems: list[str]) -> ShootoutError:
+    """One error (exit 2) listing every problem, one per line."""
+    if len(problems) == 1:
+        return ShootoutError(problems[0])
+    return ShootoutError(f"{len(problems)} problems:\n" + "\n".join(f"  - {p}" for p in problems))

@@ -430,3 +430,16 @@ def _checked_csv_text(path: Path) -> str:
 def _atomic_json(path: Path, data) -> None:
     """Write JSON atomically (see `atomic_write`)."""
     atomic_write(path, lambda fh: json.dump(data, fh, separators=(",", ":"), allow_nan=False, default=scalar))
+
+
+def out_dir_problems(out_dir, resume: bool = False) -> list[str]:
+    """What forbids writing a run into ``out_dir`` (`check_out_dir`; another program's files
+    in a folder that is not a run folder, unless resuming)."""
+    try:
+        check_out_dir(Path(out_dir))
+        folder = RunFolder(Path(out_dir))
+        if not resume and folder.foreign_files():
+            return [str(folder.foreign_error())]
+    except ShootoutError as exc:
+        return [str(exc)]
+    return []

@@ -16,10 +16,10 @@ import numpy as np
 
 from . import tasks
 from .config import name_problem, samples_problem
-from .errors import ShootoutError
+from .errors import ShootoutError, problems_error
 from .mesh import Mesh, read_mesh, validate
 from .provenance import git_commit, machine_info, now_iso, package_versions
-from .results import RunFolder, check_out_dir
+from .results import RunFolder, out_dir_problems
 from .tasks.base import CaseInput
 
 
@@ -83,15 +83,15 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
     from .report import build_report
     out = Path(out)
     folder = RunFolder(out)
-    check_out_dir(out)
-    if folder.foreign_files():                   # nothing of the user's is replaced or deleted
-        raise folder.foreign_error()
+    P = out_dir_problems(out)                    # nothing of the user's is replaced or deleted
     if samples_problem(hausdorff_samples):
-        raise ShootoutError(f"--hausdorff-samples: {samples_problem(hausdorff_samples)}")
+        P.append(f"--hausdorff-samples: {samples_problem(hausdorff_samples)}")
     for e in entries:
         for p in [e["file"], e["clean"]] + ([e["noisy"]] if e.get("noisy") else []):
             if not Path(p).is_file():
-                raise ShootoutError(f"{p}: no such file")
+                P.append(f"{p}: no such file")
+    if P:                                        # every problem at once, nothing written
+        raise problems_error(list(dict.fromkeys(P)))
     rows: list[tuple[dict, bool]] = []          # each file's row, and whether its task was given
     cleans: dict = {}
     for i, e in enumerate(entries):

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from . import tasks
 from .config import Config, load_config
-from .errors import ShootoutError, check_interrupt
+from .errors import ShootoutError, check_interrupt, problems_error
 from .executors import EXECUTORS, make_executor
 from .mesh import write_ply
 from .provenance import git_commit, machine_info, now_iso, package_versions
@@ -113,19 +113,27 @@ def task_specs(cfg: Config) -> dict:
     return {t: tasks.get(t).spec() for t in used}
 
 
-def check_run_args(workers, timeout, executor, scheduler) -> None:
-    """The run's settings (the CLI's flags, `run`'s arguments): `ShootoutError` (exit 2) naming
-    the first that is wrong."""
+def run_args_problems(workers, timeout, executor, scheduler) -> list[str]:
+    """What is wrong with the run's settings (the CLI's flags, `run`'s arguments), every one."""
     import numbers
+    P = []
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, numbers.Integral) or workers < 1):
-        raise ShootoutError(f"--workers: expected an integer >= 1, got {workers!r}")
+        P.append(f"--workers: expected an integer >= 1, got {workers!r}")
     if timeout is not None and (isinstance(timeout, bool) or not isinstance(timeout, numbers.Real)
                                 or not 0 < timeout < float("inf")):
-        raise ShootoutError(f"--timeout: expected a finite number of seconds > 0, got {timeout!r}")
+        P.append(f"--timeout: expected a finite number of seconds > 0, got {timeout!r}")
     if executor not in EXECUTORS:
-        raise ShootoutError(f"--executor: expected one of {', '.join(EXECUTORS)}, got {executor!r}")
-    if executor == "dask" and not scheduler:
-        raise ShootoutError("--executor dask needs --scheduler tcp://HOST:PORT")
+        P.append(f"--executor: expected one of {', '.join(EXECUTORS)}, got {executor!r}")
+    elif executor == "dask" and not scheduler:
+        P.append("--executor dask needs --scheduler tcp://HOST:PORT")
+    return P
+
+
+def check_run_args(workers, timeout, executor, scheduler) -> None:
+    """The run's settings: `ShootoutError` (exit 2) listing every one that is wrong."""
+    P = run_args_problems(workers, timeout, executor, scheduler)
+    if P:
+        raise problems_error(P)
 
 
 def run(config_or_path, out=None, workers=None, executor="local", scheduler=None, resume=False,

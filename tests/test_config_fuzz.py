@@ -274,3 +274,26 @@ def test_a_tasks_own_noise_list_replaces_the_top_level_one():
                                        "laplacian": {"methods": ["scratch.cotan"], "noise": []}}})
     msg = str(e.value)
     assert "tasks.smoothing.noise[0].model" in msg and "tasks.laplacian.noise: expected a non-empty list" in msg
+
+
+def test_bad_flags_config_and_out_folder_are_one_message(tmp_path, capsys):
+    """`shootout run` lists every problem at once (flags, the config's problems with their key
+    paths, a folder holding someone's files) and writes nothing; `shootout eval` names every
+    missing file, not the first."""
+    from harness.cli import main as cli
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "smoothing.csv").write_text("mine\n")
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("meshes: [knigt]\ntasks:\n  smoothing: {methods: [scratch.taubn]}\n")
+    assert cli(["run", str(bad), "--out", str(out), "--timeout", "-3", "--workers", "0"]) == 2
+    err = capsys.readouterr().err
+    for what in ("--workers", "--timeout", "meshes[0]", "tasks.smoothing.methods[0]", "holds smoothing.csv"):
+        assert what in err, (what, err)
+    assert "5 problems" in err
+    assert sorted(p.name for p in out.iterdir()) == ["smoothing.csv"] and (out / "smoothing.csv").read_text() == "mine\n"
+    assert cli(["eval", "--clean", str(tmp_path / "nothere.obj"), str(tmp_path / "a.obj"), str(tmp_path / "b.obj"),
+                "--out", str(tmp_path / "e")]) == 2
+    err = capsys.readouterr().err
+    assert all(f"{n}: no such file" in err for n in ("nothere.obj", "a.obj", "b.obj")), err
+    assert not (tmp_path / "e").exists()
