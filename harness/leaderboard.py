@@ -331,10 +331,12 @@ def write(run_dir, frames: dict, specs: dict) -> pd.DataFrame:
     lb = leaderboard(frames, specs)
     d = Path(run_dir)
     lb.to_csv(d / "leaderboard.csv", index=False)
-    (d / "leaderboard.md").write_text(to_markdown(lb))
+    none = ("No ranking: no task of this run declares a ranking metric with results (the laplacian task reports "
+            "properties, see report.html).\n")
+    (d / "leaderboard.md").write_text(to_markdown(lb) or none)
     (d / "leaderboard.tex").write_text(to_latex(lb))
     w = winners(frames, specs)
     w.to_csv(d / "winners.csv", index=False)
-    (d / "winners.md").write_text(winners_markdown(w))
+    (d / "winners.md").write_text(winners_markdown(w) or none)
     (d / "winners.tex").write_text(winners_latex(w))
     return lb

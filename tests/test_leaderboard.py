@@ -168,3 +168,12 @@ def test_a_seed_that_failed_ranks_last_in_its_cell():
     assert w.loc["a", "best"] == "Y" and w.loc["a", "invalid_excluded"] == 1
     lbz = L.leaderboard({"curvature": df}, spec).set_index("method")     # Z never ran: left out, not
     assert "Z" not in lbz.index and lbz["mean_rank"].to_dict() == lb["mean_rank"].to_dict()   # an empty board
+
+
+def test_a_run_without_a_ranking_metric_says_so(tmp_path):
+    """A Laplacian-only run ranks nothing: its leaderboard.md and winners.md say so in a line
+    instead of being empty files."""
+    from harness.leaderboard import write
+    write(tmp_path, {}, {})
+    for name in ("leaderboard.md", "winners.md"):
+        assert (tmp_path / name).read_text().startswith("No ranking:"), name

@@ -162,6 +162,22 @@ def _tune_html(meta, frames) -> str:
             f"{''.join(body)}</table>")
 
 
+def _solver_text(solver: dict) -> str:
+    """The sparse solvers the run could use and which the automatic choice takes, in words."""
+    vers = solver.get("versions") or {}
+    inst = ", ".join(f"{n} {vers.get(n, '')}".strip() for n in solver.get("installed") or [])
+    parts = [f"automatic: {solver.get('auto_small', '?')} below {solver.get('auto_small_max_n', '?')} unknowns, "
+             f"else {solver.get('auto', '?')}"]
+    if solver.get("env_override"):
+        parts.append(f"overridden by the environment: {solver['env_override']}")
+    if inst:
+        parts.append(f"installed: {inst}")
+    used = solver.get("last_used")
+    if used:
+        parts.append("used: " + ", ".join(f"{k}: {v}" for k, v in sorted(used.items())))
+    return "; ".join(parts)
+
+
 def _header_html(meta, frames, run_dir) -> str:
     name = meta.get("name") or Path(run_dir).name
     mach = meta.get("machine") or {}
@@ -188,8 +204,8 @@ def _header_html(meta, frames, run_dir) -> str:
     key_vers = ", ".join(f"{k} {v}" for k, v in vers.items() if v)
     rows.append(("versions", _esc(key_vers)))
     solver = meta.get("solver")
-    if solver:
-        rows.append(("solvers", _esc(json.dumps(solver, default=str))))
+    if isinstance(solver, dict) and solver:
+        rows.append(("linear solvers", _esc(_solver_text(solver))))
     info = "".join(f"<tr><th>{k}</th><td>{v}</td></tr>" for k, v in rows)
     cfg = json.dumps(meta.get("config", {}), indent=2, default=str)
     return (f"<section id='overview'><h2>Run</h2><table class='info'>{info}</table>"

@@ -831,7 +831,11 @@
   function cdDiagram(g) {
     // Demšar's critical-difference diagram: mean ranks on an axis, variants whose ranks differ by less than CD joined
     var ms = g.methods.slice().sort(function (a, b) { return a.mean_rank - b.mean_rank; });
-    var k = Math.max(g.k, 2), W = 760, left = 170, right = W - 170, top = 46, rowH = 18;
+    var label = function (m) { return m.method + ' (' + fmt(m.mean_rank, 3) + ')' + (m.invalid ? ' ⚠' + m.invalid : ''); };
+    var half0 = Math.ceil(ms.length / 2), CH = 6.4;   // label margins from the longest label on each side (11 px font)
+    var wide = function (xs) { return xs.reduce(function (a, m) { return Math.max(a, label(m).length); }, 0); };
+    var left = Math.max(120, 20 + CH * wide(ms.slice(0, half0))), rm = Math.max(120, 20 + CH * wide(ms.slice(half0)));
+    var k = Math.max(g.k, 2), W = Math.round(left + 420 + rm), right = left + 420, top = 46, rowH = 18;
     var H = top + 24 + Math.ceil(ms.length / 2) * rowH + 30;
     var x = function (r) { return left + (r - 1) / (k - 1) * (right - left); };
     var svg = sv('svg', {width: W, height: H, 'class': 'chart cd', viewBox: '0 0 ' + W + ' ' + H});
@@ -850,7 +854,7 @@
       var y = top + 24 + j * rowH, xm = x(m.mean_rank), xe = onLeft ? left - 10 : right + 10;
       svg.appendChild(sv('polyline', {points: xm + ',' + top + ' ' + xm + ',' + y + ' ' + xe + ',' + y, fill: 'none', stroke: '#555'}));
       var lt = sv('text', {x: onLeft ? xe - 4 : xe + 4, y: y + 4, 'text-anchor': onLeft ? 'end' : 'start', 'font-size': 11});
-      lt.textContent = m.method + ' (' + fmt(m.mean_rank, 3) + ')' + (m.invalid ? ' ⚠' + m.invalid : '');
+      lt.textContent = label(m);
       svg.appendChild(lt);
     });
     if (isNum(g.cd)) {                      // maximal groups not significantly different: thick bars
