@@ -174,14 +174,15 @@ def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_para
 
 
 WINNER_COLUMNS = ["task", "metric", "better", "mesh", "noise_model", "noise_level", "setting", "best", "value",
-                  "tied_with_best", "runner_up", "runner_up_value", "variants", "invalid_excluded"]
+                  "tied_with_best", "runner_up", "runner_up_value", "input_value", "variants", "invalid_excluded"]
 
 
 def winners(frames: dict, specs: dict) -> pd.DataFrame:
     """Per task, ranking metric and cell: the best valid variant, the variants tied with it
     (within the metric's tolerance, `tie_groups`; ``tied_with_best``, comma-separated) and the
     runner-up, the best variant outside that tie (invalid results are excluded and counted in
-    ``invalid_excluded``)."""
+    ``invalid_excluded``); ``input_value``: the metric of the case's input where the task
+    measures it (``input_<metric>``, e.g. smoothing's noisy input), else blank."""
     rows = []
     for task, df in frames.items():
         spec = specs.get(task) or {}
@@ -190,7 +191,11 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
             if not m.get("rank") or m.get("better") not in ("lower", "higher") or m["name"] not in df or not len(df):
                 continue
             vals, inval = cell_values(spec, df, m["name"], axis)
+            given = f"input_{m['name']}"
+            inputs = cell_values(spec, df, given, axis)[0].mean(axis=1) if given in df else pd.Series(dtype=float)
             for cell, v in vals.iterrows():
+                iv = inputs.get(cell)
+                iv = None if iv is None or pd.isna(iv) else float(iv)
                 ok = v[~inval.loc[cell] & v.notna()]
                 mesh, noise, level, setting = cell.split("|", 3)
                 if ok.empty:
@@ -198,7 +203,7 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
                         rows.append({"task": task, "metric": m["name"], "better": m["better"], "mesh": mesh,
                                      "noise_model": noise, "noise_level": level,
                                      "setting": "" if setting == "{}" else setting, "best": "", "value": None,
-                                     "tied_with_best": "", "runner_up": "", "runner_up_value": None,
+                                     "tied_with_best": "", "runner_up": "", "runner_up_value": None, "input_value": iv,
                                      "variants": int(v.notna().sum()), "invalid_excluded": int(inval.loc[cell].sum())})
                     continue
                 order = ok.sort_values(ascending=m["better"] == "lower", kind="stable")
@@ -210,7 +215,7 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
                              "noise_model": noise, "noise_level": level, "setting": "" if setting == "{}" else setting,
                              "best": order.index[0], "value": float(order.iloc[0]), "tied_with_best": ", ".join(tied),
                              "runner_up": rest.index[0] if len(rest) else "",
-                             "runner_up_value": float(rest.iloc[0]) if len(rest) else None,
+                             "runner_up_value": float(rest.iloc[0]) if len(rest) else None, "input_value": iv,
                              "variants": int(v.notna().sum()), "invalid_excluded": int(inval.loc[cell].sum())})
     return pd.DataFrame(rows, columns=WINNER_COLUMNS)
 
@@ -230,12 +235,15 @@ def _g(x) -> str:
 def winners_markdown(w: pd.DataFrame) -> str:
     out = []
     for (task, metric), g in w.groupby(["task", "metric"], sort=False):
+        inp = g["input_value"].notna().any()          # the input's own value, where the task measures it
         out.append(f"### {task}: best by {metric} ({g.iloc[0].better} is better)\n\n"
-                   "| mesh | noise | setting | best | value | runner-up | value | invalid excluded |\n"
-                   "|---|---|---|---|---:|---|---:|---:|")
+                   "| mesh | noise | setting | best | value | runner-up | value |" + (" input |" if inp else "") +
+                   " invalid excluded |\n|---|---|---|---|---:|---|---:|" + ("---:|" if inp else "") + "---:|")
         out += [f"| {r.mesh} | {r.noise_model} {r.noise_level} | {r.setting} | {_best(r)} | {_g(r.value)} | {r.runner_up} | "
-                f"{_g(r.runner_up_value)} | {r.invalid_excluded} |"
+                f"{_g(r.runner_up_value)} |" + (f" {_g(r.input_value)} |" if inp else "") + f" {r.invalid_excluded} |"
                 for r in g.itertuples()]
+        if inp:
+            out.append(f"\ninput: {metric} of the case's input itself; a result worse than it made the input worse.")
         out.append("")
     return "\n".join(out)
 

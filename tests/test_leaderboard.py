@@ -177,3 +177,19 @@ def test_a_run_without_a_ranking_metric_says_so(tmp_path):
     write(tmp_path, {}, {})
     for name in ("leaderboard.md", "winners.md"):
         assert (tmp_path / name).read_text().startswith("No ranking:"), name
+
+
+def test_winners_carry_the_inputs_own_value(tiny_run):
+    """Smoothing winners show the noisy input's value of the metric (``input_value``): a winner
+    or runner-up worse than doing nothing is visible; tasks without an input value leave it blank."""
+    import pandas as pd
+    w = pd.read_csv(tiny_run / "winners.csv")
+    sm = pd.read_csv(tiny_run / "smoothing.csv")
+    rows = w[(w["task"] == "smoothing") & (w["metric"] == "ev_mean")]
+    assert len(rows)
+    for r in rows.itertuples():
+        cell = sm[(sm["mesh"] == r.mesh) & (sm["noise_model"] == r.noise_model)
+                  & (sm["noise_level"].astype(float) == float(r.noise_level))]
+        assert r.input_value == pytest.approx(cell["input_ev_mean"].mean(), rel=1e-12), r
+    assert w.loc[w["task"] == "simplification", "input_value"].isna().all()
+    assert "| input |" in (tiny_run / "winners.md").read_text()
