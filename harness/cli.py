@@ -112,7 +112,7 @@ def _cmd_run(a) -> int:
         out = Path(a.out) if a.out else Path("results") / (_results_config(Path(a.config))[0].get("name") or "eval")
         print(f"eval: {n} result(s) scored; report: {out / 'report.html'}")
         return 0
-    cfg, bad_config = None, None
+    cfg, bad_config = None, None       # loaded even when a flag is bad: its problems join the same message
     try:
         cfg = load_config(Path(a.config))
     except ConfigError as exc:

@@ -41,7 +41,7 @@ class TuneSpec:
     configured: dict                 # method -> (task, [param dicts of the run's own grid])
     cases: list = field(default_factory=list)
     common: tuple = ()
-    noises: list = field(default_factory=list)
+    noises: list | dict = field(default_factory=list)   # one list, or task -> list (harness.config)
 
     def candidates(self, method: str) -> list[dict]:
         """Parameter overrides tried for ``method``: {} (the defaults) first, then the grid or a sample."""

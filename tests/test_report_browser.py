@@ -304,12 +304,23 @@ def test_winner_tables_show_ties_and_cells_without_a_valid_result(tiny_run, tmp_
         w = csv.DictWriter(fh, fieldnames=list(rows[0]), lineterminator="\n")
         w.writeheader()
         w.writerows(rows)
+    sm = run / "smoothing.csv"                  # a cell whose every case failed: also a row saying so
+    rows = list(csv.DictReader(sm.open()))
+    for r in rows:
+        if r["mesh"] == "knight" and r["noise_level"] and float(r["noise_level"]) == 0.5:
+            r.update(status="error", error="MethodFailed: boom", dist_mean="", ev_mean="")
+    with sm.open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]), lineterminator="\n")
+        w.writeheader()
+        w.writerows(rows)
     build_report(run)
     s = check_report_in_browser(run / "report.html", interact=False)
     assert s["console_errors"] == [] and s["exceptions"] == [] and s["jserrors"] == 0
     text = "\n".join(s["bestRows"])
     assert "(tied: copy.qem)" in text, text
     none = [r for r in s["bestRows"] if r.startswith("knightno noise") and "no valid result" in r]
-    assert none and "worse than the noisy input" in none[0], text
+    assert none and "worse than the noisy input" in none[0] and "(2 invalid" in none[0], text
+    failed = [r for r in s["bestRows"] if "status error" in r]
+    assert len(failed) == 1 and failed[0].startswith("knightgaussian_normal 0.5no valid result (2 invalid"), text
     winners = (run / "winners.md").read_text()
     assert "| knight | none 0.0 |" in winners and "no valid result" in winners

@@ -259,7 +259,8 @@
   function noValidRow(rs, ncol, target) { // a cell whose every result is invalid: said, not left out
     return el('tr', {html: '<td>' + esc(rs[0].mesh) + '</td><td>' + esc(rs[0]._noise) + '</td>' +
       (target === undefined ? '' : '<td>' + esc(fmt(target)) + '</td>') + '<td colspan="' + ncol +
-      '" class="muted">no valid result (' + rs.length + ' invalid: ' + esc(uniq(rs.map(function (r) { return r._invalid; })).join('; ')) +
+      '" class="muted">no valid result (' + uniq(rs.map(function (r) { return r._variant; })).length + ' invalid: ' +
+      esc(uniq(rs.map(function (r) { return r._invalid; })).join('; ')) +
       ')</td>'});
   }
   function legend(variants, colors, hidden, onToggle, extra) {
@@ -494,10 +495,13 @@
         '<th>time</th><th>Pareto front (fastest first): method, ' + esc(key) + ', time</th></tr>';
       var anyWorse = false;
       var nInvalid = vis.filter(function (r) { return r._invalid; }).length;
-      var tol = tolOf(d.T.spec, key);
-      groupBy(vis, panelsKey).forEach(function (all) {
-        var rs = all.filter(validOrShown);
-        if (!rs.length) { bt.appendChild(noValidRow(all, 5)); return; }
+      var tol = tolOf(d.T.spec, key), visSet = new Set(vis);
+      groupBy(all, panelsKey).forEach(function (cell) {   // every row of the cell: failed, diverged and hidden too
+        var rs = cell.filter(function (r) { return visSet.has(r) && validOrShown(r); });
+        if (!rs.length) {                                 // said only when no result of the cell is valid
+          if (cell.every(function (r) { return r._invalid; })) bt.appendChild(noValidRow(cell, 5));
+          return;
+        }
         var pts = aggregate(rs, key);
         var best = pts.reduce(function (a, b) { return b[1] < a[1] ? b : a; });
         var tied = pts.filter(function (p) { return p !== best && ties(p[1], best[1], tol); }).map(function (p) { return p[4]; });
@@ -608,18 +612,20 @@
       leg.innerHTML = ''; plots.innerHTML = '';
       var mkLeg = function () { return legend(d.variants, d.colors, hidden, render); };
       var key = state.metric;
-      var ok = d.rows.filter(function (r) {
-        return r.status === 'ok' && (!state.mesh || r.mesh === state.mesh) && !hidden.has(r._variant);
-      });
+      var all = d.rows.filter(function (r) { return !state.mesh || r.mesh === state.mesh; });
+      var ok = all.filter(function (r) { return r.status === 'ok' && !hidden.has(r._variant); });
       var vis = ok.filter(function (r) { return isNum(r[key]) && isNum(r.out_faces); });
       var bt = el('table', {'class': 'best'});
       bt.innerHTML = '<tr><th>mesh</th><th>noise</th><th>target</th><th>most accurate</th><th>' + esc(key) +
         '</th><th>faces</th><th>time</th><th>fastest</th><th>its ' + esc(key) + '</th><th>its time</th></tr>';
       var nInvalid = vis.filter(function (r) { return r._invalid; }).length;
-      var tol = tolOf(d.T.spec, key);
-      groupBy(vis, function (r) { return r.mesh + '|' + r._noise + '|' + r._target; }).forEach(function (all) {
-        var rows = all.filter(validOrShown);
-        if (!rows.length) { bt.appendChild(noValidRow(all, 7, all[0]._target)); return; }
+      var tol = tolOf(d.T.spec, key), visSet = new Set(vis);
+      groupBy(all, function (r) { return r.mesh + '|' + r._noise + '|' + r._target; }).forEach(function (cell) {
+        var rows = cell.filter(function (r) { return visSet.has(r) && validOrShown(r); });
+        if (!rows.length) {                               // said only when no result of the cell is valid
+          if (cell.every(function (r) { return r._invalid; })) bt.appendChild(noValidRow(cell, 7, cell[0]._target));
+          return;
+        }
         // one entry per method: mean metric and faces over seeds, median time
         var rs = [];
         groupBy(rows, function (r) { return r._variant; }).forEach(function (g, v) {
@@ -825,7 +831,7 @@
     if (!n) return el('span');
     return el('p', {'class': 'caption', text: n + ' row(s) are not valid results (' +
       'diverged, worse than the noisy input, over the face target, non-manifold from a manifold input or topology-changing output) and are ' +
-      (showInvalid ? 'included in' : 'left out of') + ' the winners above and the plots below; the checkbox at the top of ' +
+      (showInvalid ? 'included in' : 'left out of') + ' the winners above and the accuracy plots below; the checkbox at the top of ' +
       'the page toggles them.'});
   }
   function cdDiagram(g) {
@@ -921,7 +927,8 @@
       var m = metrics.filter(function (x) { return x.name === key; })[0];
       var lower = m.better === 'lower';
       var vis = d.rows.filter(function (r) {
-        return r.status === 'ok' && isNum(r[key]) && (!state.mesh || r.mesh === state.mesh) && !hidden.has(r._variant);
+        return r.status === 'ok' && isNum(r[key]) && (!state.mesh || r.mesh === state.mesh) && !hidden.has(r._variant) &&
+          validOrShown(r);
       });
       var bt = el('table', {'class': 'best'});
       bt.innerHTML = '<tr><th>mesh</th><th>noise</th><th>best</th><th>' + esc(key) + '</th><th>time</th></tr>';
