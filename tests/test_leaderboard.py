@@ -193,3 +193,25 @@ def test_winners_carry_the_inputs_own_value(tiny_run):
         assert r.input_value == pytest.approx(cell["input_ev_mean"].mean(), rel=1e-12), r
     assert w.loc[w["task"] == "simplification", "input_value"].isna().all()
     assert "| input |" in (tiny_run / "winners.md").read_text()
+
+
+def test_methods_are_ranked_at_equal_k_and_equal_source_sets():
+    """A spectrum at k = 10 is not a competitor of one at k = 40 (nor geodesics from 1 source of
+    those from 4): ``k`` and the source set are axis parameters, one cell each, and the variant
+    labels leave them out (formerly ``libigl.eigsh k=10`` beat ``... k=40`` in one cell)."""
+    import pandas as pd
+
+    from harness import tasks
+    from harness.leaderboard import winners
+    rows = []
+    for k, err in ((10, 0.01), (40, 0.05)):
+        for m, f in (("a.eig", 1.0), ("b.eig", 2.0)):
+            rows.append({"case_id": f"{m}{k}", "task": "spectrum", "mesh": "sphere", "noise_model": "none",
+                         "noise_level": 0.0, "seed": 0, "method": m, "params": json.dumps({"k": k}), "status": "ok",
+                         "eig_rel_error_mean": err * f, "eig_rel_error_max": err * f})
+    spec = tasks.get("spectrum").spec()
+    w = winners({"spectrum": pd.DataFrame(rows)}, {"spectrum": spec})
+    w = w[w["metric"] == "eig_rel_error_mean"]
+    assert sorted(w["setting"]) == ['{"k": 10}', '{"k": 40}'] and set(w["best"]) == {"a.eig"}
+    assert set(w["runner_up"]) == {"b.eig"}
+    assert {"sources", "source_seed"} <= set(tasks.get("geodesics").spec()["axis_params"])

@@ -28,7 +28,7 @@ from ..results import RunFolder
 from ..schema import scalar as _clean
 from .common import esc as _esc
 from .common import fmt as _fmt
-from .common import natural_key, noise_label, params_of, variant_labels
+from .common import natural_key, noise_label, params_of, short, variant_labels
 from .laplacian import property_matrix, property_matrix_section
 
 HERE = Path(__file__).parent
@@ -59,14 +59,16 @@ def _frame_payload(spec, df) -> dict:
         except json.JSONDecodeError:
             val = None
         hist.append(val if isinstance(val, list) else None)
-    target = []
+    target, axis = [], []
+    axes = sorted(spec.get("axis_params") or ())
     for s in df["params"]:
         p = params_of(s)
         target.append(p.get("target_ratio") if p.get("target_ratio") is not None else p.get("target_faces"))
+        axis.append(" ".join(f"{k}={short(p.get(k))}" for k in axes if k in p))   # e.g. "k=50": ranked apart
     invalid = validity(spec, df).tolist() if "status" in df else [""] * len(rows)
-    cols += ["_variant", "_noise", "_hist", "_target", "_invalid"]
-    for r, v, n, h, t, bad in zip(rows, variants, noise, hist, target, invalid):
-        r += [v, n, h, _clean(t) if not isinstance(t, str) else t, bad or None]
+    cols += ["_variant", "_noise", "_hist", "_target", "_invalid", "_axis"]
+    for r, v, n, h, t, bad, ax in zip(rows, variants, noise, hist, target, invalid, axis):
+        r += [v, n, h, _clean(t) if not isinstance(t, str) else t, bad or None, ax]
     order = sorted(set(variants), key=natural_key)
     return {"columns": cols, "rows": rows, "variants": order, "spec": spec}
 

@@ -931,8 +931,10 @@
           validOrShown(r);
       });
       var bt = el('table', {'class': 'best'});
-      bt.innerHTML = '<tr><th>mesh</th><th>noise</th><th>best</th><th>' + esc(key) + '</th><th>time</th></tr>';
-      groupBy(vis, function (r) { return r.mesh + '|' + r._noise; }).forEach(function (rows) {
+      var axes = vis.some(function (r) { return r._axis; });    // the task's axis parameters (e.g. k): ranked apart
+      bt.innerHTML = '<tr><th>mesh</th><th>noise</th>' + (axes ? '<th>setting</th>' : '') + '<th>best</th><th>' + esc(key) +
+        '</th><th>time</th></tr>';
+      groupBy(vis, function (r) { return r.mesh + '|' + r._noise + '|' + (r._axis || ''); }).forEach(function (rows) {
         var rs = [];
         groupBy(rows, function (r) { return r._variant; }).forEach(function (g) {
           var o = Object.assign({}, g[0]);
@@ -944,11 +946,13 @@
         var best = rs.reduce(function (a, b) { return (lower ? b[key] < a[key] : b[key] > a[key]) ? b : a; });
         var tol = tolOf(spec, key);
         var tied = rs.filter(function (r) { return r !== best && ties(r[key], best[key], tol); }).map(function (r) { return r._variant; });
-        bt.appendChild(el('tr', {html: '<td>' + esc(best.mesh) + '</td><td>' + esc(best._noise) + '</td><td><i style="color:' +
+        bt.appendChild(el('tr', {html: '<td>' + esc(best.mesh) + '</td><td>' + esc(best._noise) + '</td>' +
+          (axes ? '<td>' + esc(best._axis || '') + '</td>' : '') + '<td><i style="color:' +
           d.colors[best._variant] + '">●</i> ' + esc(best._variant) + tiedNote(tied) + '</td><td class="num">' + fmt(best[key], 4) +
           '</td><td class="num">' + fmtTime(best.time_s) + '</td>'}));
       });
-      plots.appendChild(el('h4', {text: 'Best method per mesh and noise level by ' + key + ' (mean over seeds)'}));
+      plots.appendChild(el('h4', {text: 'Best method per mesh, noise level' + (axes ? ' and setting' : '') + ' by ' + key +
+        ' (mean over seeds)'}));
       plots.appendChild(bt);
       var panels = panelGroup(plots, key + ' vs time, per mesh', 'One point per case; ' + m.better +
         ' is better' + (m.unit ? ' (' + m.unit + ')' : '') + '.', function () { return legend(d.variants, d.colors, hidden, render); });

@@ -225,5 +225,6 @@ TASK = Task(
         Metric("per_source_s", "info", "the method's time per source after precomputation (its own split)", unit="s"),
     ),
     params=PARAMS, prepare=prepare, measure=measure, check_result=_check, view=view, view_metric="rel_error_mean",
+    axis_params=frozenset({"sources", "source_seed"}),     # methods are ranked against each other per source set
     output_mesh=output_mesh, order=50, checks=(("zero_at_source", _zero_at_source),),
     input_facts=("geodesic_reference",))

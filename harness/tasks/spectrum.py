@@ -192,4 +192,5 @@ TASK = Task(
         Metric("hks_rel_error", "lower", "max over vertices and 4 times of |HKS - HKS*| / HKS*, spheres", **_E),
     ),
     params=PARAMS, measure=measure, check_result=_check, view=view, view_metric="eig_rel_error_mean", order=60,
+    axis_params=frozenset({"k"}),         # methods are ranked against each other at the same k
     checks=(("zero_first", _zero_first),))
