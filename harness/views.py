@@ -76,15 +76,18 @@ def pack(meshes: list) -> dict:
     quantised to 16 bits in a common box, faces as uint32, values to 8 bits on one colour scale per
     quantity (meshes showing the same ``what`` share it: 99th percentile of their values, or their
     maximum when ``options`` has ``isolines: n``, which also draws ``n`` evenly spaced level lines
-    of the values, e.g. of a distance field)."""
+    of the values, e.g. of a distance field). A quantity with a negative value is ``signed``: its
+    scale is symmetric about 0 (of |values|) and 0 maps to the middle of the 8 bits."""
     meshes = [tuple(m) + ({},) * (6 - len(m)) for m in meshes]
     allV = np.vstack([np.asarray(m[1], dtype=np.float64) for m in meshes])
     lo = allV.min(0)
     span = float((allV.max(0) - lo).max()) or 1.0
     scale: dict[str, float] = {}
+    signed = {what for _, _, _, err, what, _ in meshes if err is not None and len(err) and float(np.min(err)) < 0}
     for _, _, _, err, what, opt in meshes:
         if err is not None and len(err):
-            top = float(np.max(err)) if opt.get("isolines") else float(np.percentile(err, 99))
+            mag = np.abs(err) if what in signed else err      # a signed quantity: symmetric about 0
+            top = float(np.max(mag)) if opt.get("isolines") else float(np.percentile(mag, 99))
             scale[what] = max(scale.get(what, 0.0), top)
     out = []
     for label, V, F, err, what, opt in meshes:
@@ -95,9 +98,10 @@ def pack(meshes: list) -> dict:
              "F": _b64(F.astype("<u4")), "note": note}
         if err is not None:
             emax = scale.get(what, 0.0)
-            qe = np.clip(np.round(err / emax * 255.0), 0, 255) if emax > 0 else np.zeros(len(err))
+            t = (0.5 + 0.5 * err / emax) if what in signed else err / emax    # signed: 0 maps to the middle
+            qe = np.clip(np.round(t * 255.0), 0, 255) if emax > 0 else np.zeros(len(err))
             m.update(e=_b64(qe.astype(np.uint8)), emean=float(np.mean(err)), emaxv=float(np.max(err)),
-                     escale=float(emax))
+                     eminv=float(np.min(err)), escale=float(emax), signed=what in signed)
             if opt.get("isolines"):
                 m["isolines"] = int(opt["isolines"])
         out.append(m)

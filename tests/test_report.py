@@ -203,3 +203,18 @@ def test_a_method_that_crashes_when_recomputed_costs_only_its_view(tmp_path, mon
     assert cli(["views", str(out)]) == 0                             # recomputing: the method aborts
     views = page_data(out / "report.html")["views"]
     assert "SIGABRT" in views[0]["error"] and "computing the view failed" in views[0]["error"]
+
+
+def test_signed_view_values_keep_their_sign():
+    """A signed quantity (a saddle's curvature, an eigenvector) is coloured on a scale symmetric
+    about 0 with 0 in the middle, not clipped at 0; an unsigned error keeps the 0-based scale."""
+    import base64
+
+    from harness.views import pack
+    V = np.eye(3)
+    F = np.array([[0, 1, 2]])
+    p = pack([("a", V, F, np.array([-2.0, 0.0, 2.0]), "K estimated"), ("b", V, F, np.array([0.0, 1.0, 2.0]), "|err|")])
+    a, b = p["meshes"]
+    assert a["signed"] and not b["signed"] and a["eminv"] == -2.0
+    assert list(base64.b64decode(a["e"])) == [0, 128, 255]      # -2 -> 0, 0 -> the middle, +2 -> 255
+    assert list(base64.b64decode(b["e"]))[0] == 0 and b["escale"] > 0

@@ -213,3 +213,22 @@ def test_a_numerically_flat_face_is_a_clear_error():
         methods.get("libigl.eigsh")(np.vstack([V0, [[9.0, 9, 9]]]), F0, k=10)
     lam = methods.get("scratch.spectrum")(mesh.V, mesh.F, k=10, operator="tufted").values
     assert abs(lam[0]) < 1e-6 and lam[1] > 1.0
+
+
+def test_fewer_eigenpairs_than_asked_is_an_error_row_not_an_easier_score():
+    """A result with fewer than k eigenpairs would be scored on its easier low eigenvalues and
+    rank ahead of complete ones: it is an error naming both counts."""
+    from harness.config import load_config
+    from harness.errors import MethodFailed
+    from harness.runner import prepare_input
+    from harness import tasks
+    cfg = load_config({"meshes": [{"procedural": "sphere", "subdivisions": 2}],
+                       "tasks": {"spectrum": {"methods": ["scratch.spectrum"], "params": {"k": 12}}}})
+    case = cfg.cases[0]
+    inp, _ = prepare_input(case)
+    full = methods.get("scratch.spectrum")(inp.V, inp.F, k=12)
+    task = tasks.get("spectrum")
+    assert task.measure(inp, full, {"k": 12})["k_returned"] == 12
+    short = type(full)(values=full.values[:8], vectors=None, W=full.W, M=full.M)
+    with pytest.raises(MethodFailed, match="returned 8 eigenpairs of the k = 12 asked"):
+        task.measure(inp, short, {"k": 12})

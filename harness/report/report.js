@@ -684,6 +684,12 @@
     var i = Math.min(Math.floor(t), VIRIDIS.length - 2), f = t - i, a = VIRIDIS[i], b = VIRIDIS[i + 1];
     return [a[0] + (b[0] - a[0]) * f, a[1] + (b[1] - a[1]) * f, a[2] + (b[2] - a[2]) * f];
   }
+  var DIVERGING = [[33, 102, 172], [146, 197, 222], [247, 247, 247], [244, 165, 130], [178, 24, 43]];
+  function dmap(t) {                       // signed quantities: blue below 0, white at 0, red above
+    t = Math.max(0, Math.min(1, t)) * (DIVERGING.length - 1);
+    var i = Math.min(Math.floor(t), DIVERGING.length - 2), f = t - i, a = DIVERGING[i], b = DIVERGING[i + 1];
+    return [a[0] + (b[0] - a[0]) * f, a[1] + (b[1] - a[1]) * f, a[2] + (b[2] - a[2]) * f];
+  }
   function decode(b64, Type) {
     var s = atob(b64), u = new Uint8Array(s.length);
     for (var i = 0; i < s.length; i++) u[i] = s.charCodeAt(i);
@@ -693,7 +699,7 @@
     var q = decode(m.V, Uint16Array), V = new Float32Array(q.length);
     for (var i = 0; i < q.length; i++) V[i] = lo[i % 3] + q[i] / 65535 * span;
     return {V: V, F: decode(m.F, Uint32Array), e: m.e ? decode(m.e, Uint8Array) : null, nv: m.nv, nf: m.nf,
-      iso: m.e && m.isolines > 0 ? m.isolines : 0};
+      iso: m.e && m.isolines > 0 ? m.isolines : 0, signed: !!m.signed};
   }
   function drawMesh(canvas, mesh, cam, center, radius) {
     var ctx = canvas.getContext('2d'), w = canvas.width, h = canvas.height;
@@ -720,7 +726,7 @@
       var nx = uy * vz - uz * vy, ny = uz * vx - ux * vz, nz = ux * vy - uy * vx, nl = Math.hypot(nx, ny, nz);
       if (!(nl > 0)) continue;
       var sh = 0.28 + 0.72 * Math.abs(nx * L[0] + ny * L[1] + nz * L[2]) / nl;
-      var col = e ? cmap((e[a] + e[b] + e[c]) / 765) : [206, 209, 216];
+      var col = e ? (mesh.signed ? dmap : cmap)((e[a] + e[b] + e[c]) / 765) : [206, 209, 216];
       var rgb = 'rgb(' + (col[0] * sh | 0) + ',' + (col[1] * sh | 0) + ',' + (col[2] * sh | 0) + ')';
       ctx.fillStyle = rgb; ctx.strokeStyle = rgb;
       ctx.beginPath();
@@ -769,11 +775,12 @@
       var cv = el('canvas', {width: Math.round(size * dpr), height: Math.round(size * dpr),
         style: 'width:' + size + 'px;height:' + size + 'px'});
       var capHtml = '<b>' + esc(m.label) + '</b> — ' + m.nf.toLocaleString('en') + ' faces' + (m.note ? ' (' + esc(m.note) + ')' : '') +
-        '<br>' + esc(m.what) + (isNum(m.emean) ? '<br>mean ' + fmt(m.emean, 3) + ', max ' + fmt(m.emaxv, 3) : '');
+        '<br>' + esc(m.what) + (isNum(m.emean) ? '<br>mean ' + fmt(m.emean, 3) + (m.signed && isNum(m.eminv) ?
+          ', min ' + fmt(m.eminv, 3) : '') + ', max ' + fmt(m.emaxv, 3) : '');
       var cap = el('figcaption', {html: capHtml});
       if (isNum(m.escale)) {
-        cap.appendChild(el('div', {'class': 'colorbar'}, [el('span', {text: '0'}), el('span', {'class': 'bar'}),
-          el('span', {text: fmt(m.escale, 3) + '+'})]));
+        cap.appendChild(el('div', {'class': 'colorbar'}, [el('span', {text: m.signed ? '−' + fmt(m.escale, 3) : '0'}),
+          el('span', {'class': m.signed ? 'bar signed' : 'bar'}), el('span', {text: fmt(m.escale, 3) + '+'})]));
       }
       var fig = el('figure', {}, [cv, cap]);
       row.appendChild(fig); canvases.push(cv);
@@ -954,9 +961,11 @@
       plots.appendChild(el('h4', {text: 'Best method per mesh, noise level' + (axes ? ' and setting' : '') + ' by ' + key +
         ' (mean over seeds)'}));
       plots.appendChild(bt);
-      var panels = panelGroup(plots, key + ' vs time, per mesh', 'One point per case; ' + m.better +
+      var panels = panelGroup(plots, key + ' vs time, per mesh' + (axes ? ' and setting' : ''), 'One point per case; ' + m.better +
         ' is better' + (m.unit ? ' (' + m.unit + ')' : '') + '.', function () { return legend(d.variants, d.colors, hidden, render); });
-      groupBy(vis.filter(function (r) { return isNum(r.time_s); }), function (r) { return r.mesh + ' · ' + r._noise; }).forEach(function (rs, title) {
+      groupBy(vis.filter(function (r) { return isNum(r.time_s); }), function (r) {
+        return r.mesh + ' · ' + r._noise + (r._axis ? ' · ' + r._axis : '');        // one panel per setting (e.g. k)
+      }).forEach(function (rs, title) {
         var series = [];
         groupBy(rs, function (r) { return r._variant; }).forEach(function (vr, v) {
           series.push({name: v, color: d.colors[v], pts: vr.map(function (r) {
@@ -964,6 +973,7 @@
         });
         addPanel(panels, chart({title: title, xlabel: 'time (s)', ylabel: key, xlog: true, ylog: false, series: series}));
       });
+      noisePanels(plots, d, vis, key);
       sweepPanels(plots, vis, key);
     }
     render();
@@ -972,6 +982,32 @@
 
   // the metric against every numeric parameter that some method sweeps over >= 3 values (e.g. the
   // heat method's time factor): one line per method and its other parameters, mean over seeds
+  // the metric against the noise level, per mesh and noise model (clean rows at level 0), one line per
+  // variant and setting; drawn only where a line has two levels or more
+  function noisePanels(plots, d, vis, key) {
+    var clean = vis.filter(function (r) { return r.noise_model === 'none'; });
+    var noisy = vis.filter(function (r) { return r.noise_model !== 'none' && isNum(r.noise_level); });
+    var groups = groupBy(noisy, function (r) { return r.mesh + ' · ' + r.noise_model; });
+    if (!Array.from(groups.values()).some(function (g) { return uniq(g.map(function (r) { return r.noise_level; })).length >= 2 ||
+      clean.some(function (c) { return c.mesh === g[0].mesh; }); })) return;
+    var panels = panelGroup(plots, key + ' vs noise level, per mesh and noise model',
+      'Mean over seeds; noise level = σ / mean edge length (0: the clean mesh).', function () {
+        return legend(d.variants, d.colors, new Set(), function () {}); });
+    groups.forEach(function (g, title) {
+      var rows = g.concat(clean.filter(function (c) { return c.mesh === g[0].mesh; }));
+      var series = [];
+      groupBy(rows, function (r) { return r._variant + (r._axis ? ' ' + r._axis : ''); }).forEach(function (vr, name) {
+        var byX = groupBy(vr, function (r) { return r.noise_model === 'none' ? 0 : r.noise_level; });
+        var xs = Array.from(byX.keys()).sort(function (a, b) { return a - b; });
+        if (xs.length < 2) return;
+        series.push({name: name, color: d.colors[vr[0]._variant], line: true, r: 3, pts: xs.map(function (x) {
+          var y = mean(byX.get(x).map(function (r) { return r[key]; }));
+          return [x, y, name + '\n' + title + '\nlevel ' + fmt(x) + ', ' + key + ' ' + fmt(y)];
+        })});
+      });
+      if (series.length) addPanel(panels, chart({title: title, xlabel: 'noise level', ylabel: key, ylog: false, series: series}));
+    });
+  }
   function sweepPanels(plots, vis, key) {
     var P = vis.map(function (r) { try { return JSON.parse(r.params) || {}; } catch (e) { return {}; } });
     var names = uniq([].concat.apply([], P.map(function (p) { return Object.keys(p); }))).sort();

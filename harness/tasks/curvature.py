@@ -149,9 +149,10 @@ def measure(inp, result, params) -> dict:
 
 
 def view(inp, result) -> list:
-    """The result coloured by its first provided quantity and, with ground truth, by its error."""
+    """The result coloured by the quantity of the view metric (H, ``H_rel_l2``) when it provides
+    it, else by its first provided one, and, with ground truth, by its error."""
     f = _facts(inp)
-    q = next(q for q in QUANTITIES if getattr(result, q) is not None)
+    q = next(q for q in ("H",) + QUANTITIES if getattr(result, q) is not None)
     est = getattr(result, q)
     meshes = [("estimate", inp.V, inp.F, est, f"{q} estimated")]
     if f["truth"] is not None:

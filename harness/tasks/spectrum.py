@@ -92,6 +92,9 @@ def analytic(shape: dict | None, k: int) -> np.ndarray | None:
 
 def measure(inp, result, params) -> dict:
     lam = result.values
+    want = min(int(params.get("k") or len(lam)), len(inp.V) - 1)
+    if len(lam) < want:          # scored on its easier low eigenvalues it would rank ahead: an error row
+        raise MethodFailed(f"returned {len(lam)} eigenpairs of the k = {want} asked")
     row = {"k_returned": int(len(lam)), "eig0": float(lam[0]) if len(lam) else None,
            "eig_max": float(lam[-1]) if len(lam) else None}
     ref = analytic(inp.shape, len(lam))
