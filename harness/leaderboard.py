@@ -73,6 +73,8 @@ def validity(spec: dict, df: pd.DataFrame) -> pd.Series:
             hit = (pd.to_numeric(df[col], errors="coerce") > float(rule["value"])).fillna(False)
         else:
             hit = df[col].map(_truthy).map(lambda v, want=rule.get("value"): v == want and not pd.isna(v))
+        if rule.get("method"):
+            hit = hit.astype(bool) & (df["method"] == rule["method"] if "method" in df else False)
         why[ok & hit.astype(bool) & (why == "")] = rule.get("why") or col
     return why
 

@@ -215,3 +215,18 @@ def test_methods_are_ranked_at_equal_k_and_equal_source_sets():
     assert sorted(w["setting"]) == ['{"k": 10}', '{"k": 40}'] and set(w["best"]) == {"a.eig"}
     assert set(w["runner_up"]) == {"b.eig"}
     assert {"sources", "source_seed"} <= set(tasks.get("geodesics").spec()["axis_params"])
+
+
+def test_the_reference_method_is_no_competitor_where_it_is_the_reference():
+    """Where no analytic distance exists the geodesic reference is libigl's exact_geodesic: its
+    own 0 there is no measurement, so it is not a valid result there (ranked last, never best);
+    on analytic cells, and for every other method, nothing changes."""
+    import pandas as pd
+
+    from harness import tasks
+    from harness.leaderboard import validity
+    df = pd.DataFrame([{"method": m, "status": "ok", "reference_exact": ex, "rel_error_mean": 0.0}
+                       for m, ex in (("libigl.exact_geodesic", True), ("libigl.exact_geodesic", False),
+                                     ("scratch.heat", True), ("potpourri3d.exact", True))])
+    why = validity(tasks.get("geodesics").spec(), df).tolist()
+    assert why == ["is the reference itself (0 by construction)", "", "", ""]

@@ -51,17 +51,20 @@ class Metric:
 @dataclass(frozen=True)
 class Invalid:
     """A row is not a valid result when ``column`` ``op`` (``==`` or ``>``) ``value``, or, with
-    ``than``, when ``column > row[than]`` (e.g. an error above the input's own error); ``why``
-    is what the report and leaderboard say. Blank values never match."""
+    ``than``, when ``column > row[than]`` (e.g. an error above the input's own error); with
+    ``method``, only that method's rows (e.g. the method that computes the reference itself);
+    ``why`` is what the report and leaderboard say. Blank values never match."""
 
     column: str
     op: str
     why: str
     value: Any = None
     than: str | None = None
+    method: str | None = None
 
     def spec(self) -> dict:
-        return {"column": self.column, "op": self.op, "value": self.value, "than": self.than, "why": self.why}
+        return {"column": self.column, "op": self.op, "value": self.value, "than": self.than, "why": self.why,
+                "method": self.method}
 
 
 @dataclass

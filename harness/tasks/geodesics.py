@@ -35,7 +35,7 @@ import numpy as np
 
 from ..core.params import Param
 from ..errors import MethodFailed
-from .base import Metric, Task, float_array
+from .base import Invalid, Metric, Task, float_array
 
 EXCLUDE = 3.0
 
@@ -227,4 +227,8 @@ TASK = Task(
     params=PARAMS, prepare=prepare, measure=measure, check_result=_check, view=view, view_metric="rel_error_mean",
     axis_params=frozenset({"sources", "source_seed"}),     # methods are ranked against each other per source set
     output_mesh=output_mesh, order=50, checks=(("zero_at_source", _zero_at_source),),
-    input_facts=("geodesic_reference",))
+    input_facts=("geodesic_reference",),
+    # where no analytic distance exists the reference is libigl's exact_geodesic: that method
+    # scores 0 by construction there, which is no measurement of it
+    invalid_when=(Invalid("reference_exact", "==", "is the reference itself (0 by construction)", value=True,
+                          method="libigl.exact_geodesic"),))
