@@ -102,6 +102,26 @@ def cell_values(spec: dict, df: pd.DataFrame, metric: str, axis_params=()):
     when any seed of the variant has no value there) and of whether a variant's result in the
     cell is invalid (a seed errored or timed out, or broke a validity rule). Cell labels are
     ``mesh|noise model|noise level|axis parameters (JSON)``."""
+    d = _cells(spec, df, metric, axis_params)
+    g = d.groupby(["_cell", "_variant"])
+    every_seed = g["_value"].count() == g.size()     # no mean over the seeds that happen to have a value
+    vals = g["_value"].mean().where(every_seed).unstack("_variant")
+    inval = g["_invalid"].any().unstack("_variant").reindex_like(vals).fillna(False).astype(bool)
+    return vals, inval
+
+
+def seed_values(spec: dict, df: pd.DataFrame, metric: str, axis_params=()) -> pd.DataFrame:
+    """The metric per seed: (cell, seed) x variants (ok rows; blank otherwise), cells as in
+    `cell_values`."""
+    d = _cells(spec, df, metric, axis_params)
+    seed = d["seed"] if "seed" in d else pd.Series(0, index=d.index)
+    return d.assign(_seed=seed).pivot_table(index=["_cell", "_seed"], columns="_variant", values="_value",
+                                            aggfunc="mean", dropna=False)
+
+
+def _cells(spec: dict, df: pd.DataFrame, metric: str, axis_params=()) -> pd.DataFrame:
+    """``df`` with ``_variant``, ``_invalid``, ``_cell`` (see `cell_values`) and ``_value`` (the
+    metric of ok rows)."""
     d = df.copy()
     d["_variant"] = _variant(d, set(axis_params))
     d["_invalid"] = (validity(spec, d) != "") & d["status"].isin(FAILED + ("ok",))
@@ -111,11 +131,7 @@ def cell_values(spec: dict, df: pd.DataFrame, metric: str, axis_params=()):
                                            [json.dumps({k: p.get(k) for k in sorted(axis_params)}) for p in ps])]
     val = pd.to_numeric(d[metric], errors="coerce")
     d["_value"] = val.where(d["status"] == "ok")
-    g = d.groupby(["_cell", "_variant"])
-    every_seed = g["_value"].count() == g.size()     # no mean over the seeds that happen to have a value
-    vals = g["_value"].mean().where(every_seed).unstack("_variant")
-    inval = g["_invalid"].any().unstack("_variant").reindex_like(vals).fillna(False).astype(bool)
-    return vals, inval
+    return d
 
 
 def tolerance(spec: dict, metric: str) -> tuple[float, float]:
@@ -181,8 +197,9 @@ WINNER_COLUMNS = ["task", "metric", "better", "mesh", "noise_model", "noise_leve
 
 def winners(frames: dict, specs: dict) -> pd.DataFrame:
     """Per task, ranking metric and cell: the best valid variant, the variants tied with it
-    (within the metric's tolerance, `tie_groups`; ``tied_with_best``, comma-separated) and the
-    runner-up, the best variant outside that tie (invalid results are excluded and counted in
+    (``tied_with_best``, comma-separated: within the metric's tolerance of its mean over seeds,
+    `tie_groups`, or, with several seeds, not worse than the best beyond that tolerance on every
+    seed they share) and the runner-up, the best variant outside that tie (invalid results are excluded and counted in
     ``invalid_excluded``); ``input_value``: the metric of the case's input where the task
     measures it (``input_<metric>``, e.g. smoothing's noisy input), else blank."""
     rows = []
@@ -193,6 +210,8 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
             if not m.get("rank") or m.get("better") not in ("lower", "higher") or m["name"] not in df or not len(df):
                 continue
             vals, inval = cell_values(spec, df, m["name"], axis)
+            per_seed = seed_values(spec, df, m["name"], axis)
+            rel, abs_ = tolerance(spec, m["name"])
             given = f"input_{m['name']}"
             inputs = cell_values(spec, df, given, axis)[0].mean(axis=1) if given in df else pd.Series(dtype=float)
             for cell, v in vals.iterrows():
@@ -210,9 +229,12 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
                     continue
                 order = ok.sort_values(ascending=m["better"] == "lower", kind="stable")
                 sign = -1.0 if m["better"] == "higher" else 1.0
-                gid = tie_groups(sign * order.to_numpy(), *tolerance(spec, m["name"]))
-                tied = [str(x) for x in order.index[1:][gid[1:] == 0]]
-                rest = order[gid > 0]
+                gid = tie_groups(sign * order.to_numpy(), rel, abs_)
+                S = per_seed.loc[cell] if cell in per_seed.index.get_level_values(0) else None
+                tie = [v for v, g in zip(order.index[1:], gid[1:])
+                       if g == 0 or not _beaten_on_every_seed(S, order.index[0], v, sign, rel, abs_)]
+                tied = [str(x) for x in tie]
+                rest = order[[v for v in order.index[1:] if v not in tie]]
                 rows.append({"task": task, "metric": m["name"], "better": m["better"], "mesh": mesh,
                              "noise_model": noise, "noise_level": level, "setting": "" if setting == "{}" else setting,
                              "best": order.index[0], "value": float(order.iloc[0]), "tied_with_best": ", ".join(tied),
@@ -220,6 +242,19 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
                              "runner_up_value": float(rest.iloc[0]) if len(rest) else None, "input_value": iv,
                              "variants": int(v.notna().sum()), "invalid_excluded": int(inval.loc[cell].sum())})
     return pd.DataFrame(rows, columns=WINNER_COLUMNS)
+
+
+def _beaten_on_every_seed(S, best, other, sign: float, rel: float, abs_: float) -> bool:
+    """Whether ``best`` is better than ``other`` beyond the tolerance on every seed both have
+    (``S``: seeds x variants); True without a shared seed (the means decide)."""
+    if S is None or best not in S or other not in S:
+        return True
+    a, b = S[best], S[other]
+    both = a.notna() & b.notna()
+    if not both.any():
+        return True
+    gap = sign * (b[both] - a[both])
+    return bool((gap > np.maximum(rel * a[both].abs(), abs_)).all())
 
 
 def _best(r) -> str:

@@ -230,3 +230,23 @@ def test_the_reference_method_is_no_competitor_where_it_is_the_reference():
                                      ("scratch.heat", True), ("potpourri3d.exact", True))])
     why = validity(tasks.get("geodesics").spec(), df).tolist()
     assert why == ["is the reference itself (0 by construction)", "", "", ""]
+
+
+def test_a_winner_must_be_better_on_every_seed_or_it_ties():
+    """With several seeds the better mean alone names no winner: B has the best mean (1.05 against
+    A's 1.10) but A is better on seed 0, so they tie; C, worse on every seed, is the runner-up."""
+    import pandas as pd
+
+    from harness import tasks
+    from harness.leaderboard import winners
+    vals = {"a.m": (1.0, 1.2), "b.m": (1.1, 1.0), "c.m": (1.3, 1.4)}
+    rows = [{"case_id": f"{m}{s}", "task": "curvature", "mesh": "torus", "noise_model": "gaussian_normal",
+             "noise_level": 0.2, "seed": s, "method": m, "params": "{}", "status": "ok", "K_rel_l2": v[s]}
+            for m, v in vals.items() for s in (0, 1)]
+    spec = tasks.get("curvature").spec()
+    w = winners({"curvature": pd.DataFrame(rows)}, {"curvature": spec})
+    r = w[w["metric"] == "K_rel_l2"].iloc[0]
+    assert r["best"] == "b.m" and r["tied_with_best"] == "a.m" and r["runner_up"] == "c.m"
+    one = [dict(x, seed=0) for x in rows if x["seed"] == 0]     # one seed: the tolerance alone decides
+    r = winners({"curvature": pd.DataFrame(one)}, {"curvature": spec}).query("metric == 'K_rel_l2'").iloc[0]
+    assert r["best"] == "a.m" and r["tied_with_best"] == "" and r["runner_up"] == "b.m"

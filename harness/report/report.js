@@ -251,6 +251,22 @@
     return [m && isNum(m.rel) ? m.rel : 0.01, m && isNum(m.abs) ? m.abs : 0];
   }
   function ties(a, best, tol) { return Math.abs(a - best) <= Math.max(tol[0] * Math.abs(best), tol[1]); }
+  // with several seeds, a variant ties with the best unless the best is better beyond the tolerance on
+  // every seed both have (as winners.csv); rows: the cell's rows, one per variant and seed
+  function beatenOnEverySeed(rows, best, v, key, tol, lower) {
+    var a = new Map(), b = new Map(), n = 0, all = true;
+    rows.forEach(function (r) {
+      if (!isNum(r[key])) return;
+      if (r._variant === best) a.set(r.seed, r[key]); else if (r._variant === v) b.set(r.seed, r[key]);
+    });
+    a.forEach(function (va, s) {
+      if (!b.has(s)) return;
+      n++;
+      var gap = lower ? b.get(s) - va : va - b.get(s);
+      if (!(gap > Math.max(tol[0] * Math.abs(va), tol[1]))) all = false;
+    });
+    return n === 0 || all;
+  }
   function tiedNote(names) { // ' (tied: a, b)', or ' (tied: 5 others)' with the names on hover
     if (!names.length) return '';
     return ' <span class="muted" title="within the metric\'s tolerance of the best: ' + esc(names.join(', ')) +
@@ -504,7 +520,9 @@
         }
         var pts = aggregate(rs, key);
         var best = pts.reduce(function (a, b) { return b[1] < a[1] ? b : a; });
-        var tied = pts.filter(function (p) { return p !== best && ties(p[1], best[1], tol); }).map(function (p) { return p[4]; });
+        var tied = pts.filter(function (p) {
+          return p !== best && (ties(p[1], best[1], tol) || !beatenOnEverySeed(rs, best[4], p[4], key, tol, true));
+        }).map(function (p) { return p[4]; });
         var inp = inKey ? mean(rs.map(function (r) { return r[inKey]; }).filter(isNum)) : null;
         if (isNum(inp) && best[1] > inp) anyWorse = true;
         var front = pareto(pts, tol).map(function (p) { return esc(p[4]) + ' ' + fmt(p[1], 3) + ', ' + fmtTime(p[0]); }).join('<br>');
@@ -637,7 +655,9 @@
           rs.push(o);
         });
         var best = rs.reduce(function (a, b) { return b[key] < a[key] ? b : a; });
-        var tied = rs.filter(function (r) { return r !== best && ties(r[key], best[key], tol); }).map(function (r) { return r._variant; });
+        var tied = rs.filter(function (r) {
+          return r !== best && (ties(r[key], best[key], tol) || !beatenOnEverySeed(rows, best._variant, r._variant, key, tol, true));
+        }).map(function (r) { return r._variant; });
         var fast = rs.filter(function (r) { return isNum(r.time_s); }).reduce(function (a, b) { return b.time_s < a.time_s ? b : a; }, rs[0]);
         bt.appendChild(el('tr', {html: '<td>' + esc(best.mesh) + '</td><td>' + esc(best._noise) + '</td><td>' + esc(fmt(best._target)) +
           '</td><td><i style="color:' + d.colors[best._variant] + '">●</i> ' + esc(best._variant) + tiedNote(tied) + '</td><td class="num">' + fmt(best[key], 4) +
@@ -952,7 +972,9 @@
         });
         var best = rs.reduce(function (a, b) { return (lower ? b[key] < a[key] : b[key] > a[key]) ? b : a; });
         var tol = tolOf(spec, key);
-        var tied = rs.filter(function (r) { return r !== best && ties(r[key], best[key], tol); }).map(function (r) { return r._variant; });
+        var tied = rs.filter(function (r) {
+          return r !== best && (ties(r[key], best[key], tol) || !beatenOnEverySeed(rows, best._variant, r._variant, key, tol, lower));
+        }).map(function (r) { return r._variant; });
         bt.appendChild(el('tr', {html: '<td>' + esc(best.mesh) + '</td><td>' + esc(best._noise) + '</td>' +
           (axes ? '<td>' + esc(best._axis || '') + '</td>' : '') + '<td><i style="color:' +
           d.colors[best._variant] + '">●</i> ' + esc(best._variant) + tiedNote(tied) + '</td><td class="num">' + fmt(best[key], 4) +
