@@ -151,7 +151,8 @@ def _residual(R: np.ndarray, W, M, norms: np.ndarray, lam: np.ndarray) -> float 
 
 def view(inp, result) -> list:
     """The input coloured by the first non-constant eigenvector and by the heat kernel signature
-    at the smallest and largest of 4 log-spaced times (when eigenvectors are returned)."""
+    at the two smallest of 4 log-spaced times, minus its mean over the vertices (when
+    eigenvectors are returned; at the largest times the signature is nearly constant, 1/area)."""
     if result.vectors is None or result.vectors.shape[1] < 2:
         return []
     X = result.vectors
@@ -160,9 +161,9 @@ def view(inp, result) -> list:
         X = X / np.sqrt(np.maximum(np.einsum("ij,ij->j", X, result.M @ X), 1e-300))
         times = hks_times(result.values)
         if len(times) >= 2:
-            H = heat_kernel_signature(result.values, X, times[[0, -1]])
-            out += [(f"HKS t={t:.3g}", inp.V, inp.F, H[:, j], f"heat kernel signature at t = {t:.3g}")
-                    for j, t in enumerate(times[[0, -1]])]
+            H = heat_kernel_signature(result.values, X, times[:2])
+            out += [(f"HKS t={t:.3g}", inp.V, inp.F, H[:, j] - H[:, j].mean(),
+                     f"heat kernel signature at t = {t:.3g} minus its mean") for j, t in enumerate(times[:2])]
     return out
 
 
