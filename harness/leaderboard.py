@@ -192,7 +192,8 @@ def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_para
 
 
 WINNER_COLUMNS = ["task", "metric", "better", "mesh", "noise_model", "noise_level", "setting", "best", "value",
-                  "tied_with_best", "runner_up", "runner_up_value", "input_value", "variants", "invalid_excluded"]
+                  "tied_with_best", "runner_up", "runner_up_value", "tied_with_runner_up", "input_value", "variants",
+                  "invalid_excluded"]
 
 
 def winners(frames: dict, specs: dict) -> pd.DataFrame:
@@ -224,24 +225,33 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
                         rows.append({"task": task, "metric": m["name"], "better": m["better"], "mesh": mesh,
                                      "noise_model": noise, "noise_level": level,
                                      "setting": "" if setting == "{}" else setting, "best": "", "value": None,
-                                     "tied_with_best": "", "runner_up": "", "runner_up_value": None, "input_value": iv,
+                                     "tied_with_best": "", "runner_up": "", "runner_up_value": None,
+                                     "tied_with_runner_up": "", "input_value": iv,
                                      "variants": int(v.notna().sum()), "invalid_excluded": int(inval.loc[cell].sum())})
                     continue
                 order = ok.sort_values(ascending=m["better"] == "lower", kind="stable")
                 sign = -1.0 if m["better"] == "higher" else 1.0
-                gid = tie_groups(sign * order.to_numpy(), rel, abs_)
                 S = per_seed.loc[cell] if cell in per_seed.index.get_level_values(0) else None
-                tie = [v for v, g in zip(order.index[1:], gid[1:])
-                       if g == 0 or not _beaten_on_every_seed(S, order.index[0], v, sign, rel, abs_)]
-                tied = [str(x) for x in tie]
+                tie = _tied_with_first(order, S, sign, rel, abs_)
                 rest = order[[v for v in order.index[1:] if v not in tie]]
+                second = _tied_with_first(rest, S, sign, rel, abs_) if len(rest) else []
                 rows.append({"task": task, "metric": m["name"], "better": m["better"], "mesh": mesh,
                              "noise_model": noise, "noise_level": level, "setting": "" if setting == "{}" else setting,
-                             "best": order.index[0], "value": float(order.iloc[0]), "tied_with_best": ", ".join(tied),
+                             "best": order.index[0], "value": float(order.iloc[0]),
+                             "tied_with_best": ", ".join(str(x) for x in tie),
                              "runner_up": rest.index[0] if len(rest) else "",
+                             "tied_with_runner_up": ", ".join(str(x) for x in second),
                              "runner_up_value": float(rest.iloc[0]) if len(rest) else None, "input_value": iv,
                              "variants": int(v.notna().sum()), "invalid_excluded": int(inval.loc[cell].sum())})
     return pd.DataFrame(rows, columns=WINNER_COLUMNS)
+
+
+def _tied_with_first(order: pd.Series, S, sign: float, rel: float, abs_: float) -> list:
+    """The variants of ``order`` (sorted, best first) tied with its first: within the tolerance
+    of its mean (`tie_groups`) or, with several seeds (``S``), not beaten on every seed."""
+    gid = tie_groups(sign * order.to_numpy(), rel, abs_)
+    return [v for v, g in zip(order.index[1:], gid[1:])
+            if g == 0 or not _beaten_on_every_seed(S, order.index[0], v, sign, rel, abs_)]
 
 
 def _beaten_on_every_seed(S, best, other, sign: float, rel: float, abs_: float) -> bool:
@@ -265,6 +275,12 @@ def _best(r) -> str:
     return f"{r.best} (tied: {tied})" if tied else str(r.best)
 
 
+def _runner_up(r) -> str:
+    """The runner-up, and those tied with it."""
+    tied = "" if pd.isna(r.tied_with_runner_up) else str(r.tied_with_runner_up)
+    return f"{r.runner_up} (tied: {tied})" if tied and str(r.runner_up) else ("" if pd.isna(r.runner_up) else str(r.runner_up))
+
+
 def _g(x) -> str:
     return "" if x is None or pd.isna(x) else format(x, ".4g")
 
@@ -276,7 +292,7 @@ def winners_markdown(w: pd.DataFrame) -> str:
         out.append(f"### {task}: best by {metric} ({g.iloc[0].better} is better)\n\n"
                    "| mesh | noise | setting | best | value | runner-up | value |" + (" input |" if inp else "") +
                    " invalid excluded |\n|---|---|---|---|---:|---|---:|" + ("---:|" if inp else "") + "---:|")
-        out += [f"| {r.mesh} | {r.noise_model} {r.noise_level} | {r.setting} | {_best(r)} | {_g(r.value)} | {r.runner_up} | "
+        out += [f"| {r.mesh} | {r.noise_model} {r.noise_level} | {r.setting} | {_best(r)} | {_g(r.value)} | {_runner_up(r)} | "
                 f"{_g(r.runner_up_value)} |" + (f" {_g(r.input_value)} |" if inp else "") + f" {r.invalid_excluded} |"
                 for r in g.itertuples()]
         if inp:
@@ -291,7 +307,7 @@ def winners_latex(w: pd.DataFrame) -> str:
         out += [r"\begin{table}[t]", r"\centering", r"\begin{tabular}{llllrlr}", r"\toprule",
                 r"mesh & noise & setting & best & value & runner-up & value \\", r"\midrule"]
         out += [f"{_tex(r.mesh)} & {_tex(r.noise_model)} {_tex(r.noise_level)} & {_tex(r.setting)} & {_tex(_best(r))} & "
-                f"{_g(r.value)} & {_tex(r.runner_up)} & {_g(r.runner_up_value)} \\\\" for r in g.itertuples()]
+                f"{_g(r.value)} & {_tex(_runner_up(r))} & {_g(r.runner_up_value)} \\\\" for r in g.itertuples()]
         out += [r"\bottomrule", r"\end{tabular}",
                 f"\\caption{{{_tex(task)}: best valid method per cell by \\texttt{{{_tex(metric)}}} ({g.iloc[0].better} is "
                 f"better); invalid results excluded.}}", r"\end{table}", ""]

@@ -247,6 +247,24 @@ def test_a_winner_must_be_better_on_every_seed_or_it_ties():
     w = winners({"curvature": pd.DataFrame(rows)}, {"curvature": spec})
     r = w[w["metric"] == "K_rel_l2"].iloc[0]
     assert r["best"] == "b.m" and r["tied_with_best"] == "a.m" and r["runner_up"] == "c.m"
+    assert r["tied_with_runner_up"] == ""
     one = [dict(x, seed=0) for x in rows if x["seed"] == 0]     # one seed: the tolerance alone decides
     r = winners({"curvature": pd.DataFrame(one)}, {"curvature": spec}).query("metric == 'K_rel_l2'").iloc[0]
     assert r["best"] == "a.m" and r["tied_with_best"] == "" and r["runner_up"] == "b.m"
+
+
+def test_the_runner_up_shows_its_own_ties():
+    """Two variants equal within the tolerance behind the winner: the runner-up names the other
+    (``tied_with_runner_up``, and ``(tied: ...)`` in winners.md)."""
+    import pandas as pd
+
+    from harness import tasks
+    from harness.leaderboard import winners, winners_markdown
+    vals = {"a.m": 1.0, "b.m": 2.0, "c.m": 2.0 * (1 + 1e-4)}
+    rows = [{"case_id": m, "task": "curvature", "mesh": "torus", "noise_model": "none", "noise_level": 0.0,
+             "seed": 0, "method": m, "params": "{}", "status": "ok", "K_rel_l2": v} for m, v in vals.items()]
+    w = winners({"curvature": pd.DataFrame(rows)}, {"curvature": tasks.get("curvature").spec()})
+    w = w[w["metric"] == "K_rel_l2"]
+    r = w.iloc[0]
+    assert r["best"] == "a.m" and r["runner_up"] == "b.m" and r["tied_with_runner_up"] == "c.m"
+    assert "| b.m (tied: c.m) |" in winners_markdown(w)
