@@ -1045,10 +1045,12 @@
       var lines = groupBy(pts, function (p) { return p.r.mesh + '|' + p.r._noise + '|' + p.series; });
       if (!Array.from(lines.values()).some(function (g) { return uniq(g.map(function (p) { return p.x; })).length >= 3; })) return;
       var positive = pts.every(function (p) { return p.x > 0; });
+      var drawn = [];                         // the legend lists the series that get a line (two x or more)
+      lines.forEach(function (g) { if (uniq(g.map(function (p) { return p.x; })).length >= 2) drawn.push(g[0].series); });
       var panels = panelGroup(plots, key + ' vs ' + pn + ', per mesh',
         'One line per method and its other parameters; mean over seeds.', function () {
           var box = el('div', {'class': 'legend'});
-          uniq(pts.map(function (p) { return p.series; })).sort().forEach(function (name) {
+          uniq(drawn).sort().forEach(function (name) {
             box.appendChild(el('span', {style: 'cursor:default'}, [el('i', {style: 'background:' + colorOf(name)}), name]));
           });
           return box;
