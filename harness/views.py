@@ -98,8 +98,11 @@ def pack(meshes: list) -> dict:
              "F": _b64(F.astype("<u4")), "note": note}
         if err is not None:
             emax = scale.get(what, 0.0)
-            t = (0.5 + 0.5 * err / emax) if what in signed else err / emax    # signed: 0 maps to the middle
-            qe = np.clip(np.round(t * 255.0), 0, 255) if emax > 0 else np.zeros(len(err))
+            if emax > 0:
+                t = (0.5 + 0.5 * err / emax) if what in signed else err / emax    # signed: 0 maps to the middle
+                qe = np.clip(np.round(t * 255.0), 0, 255)
+            else:
+                qe = np.full(len(err), 128.0 if what in signed else 0.0)
             m.update(e=_b64(qe.astype(np.uint8)), emean=float(np.mean(err)), emaxv=float(np.max(err)),
                      eminv=float(np.min(err)), escale=float(emax), signed=what in signed)
             if opt.get("isolines"):
