@@ -76,14 +76,15 @@ def pack(meshes: list) -> dict:
     quantised to 16 bits in a common box, faces as uint32, values to 8 bits on one colour scale per
     quantity (meshes showing the same ``what`` share it: 99th percentile of their values, or their
     maximum when ``options`` has ``isolines: n``, which also draws ``n`` evenly spaced level lines
-    of the values, e.g. of a distance field). A quantity with a negative value is ``signed``: its
-    scale is symmetric about 0 (of |values|) and 0 maps to the middle of the 8 bits."""
+    of the values, e.g. of a distance field). With ``signed: True`` in ``options`` (a quantity
+    with a meaningful sign: a curvature, an eigenvector) the scale is symmetric about 0 (of
+    |values|) and 0 maps to the middle of the 8 bits; other values are clipped at 0."""
     meshes = [tuple(m) + ({},) * (6 - len(m)) for m in meshes]
     allV = np.vstack([np.asarray(m[1], dtype=np.float64) for m in meshes])
     lo = allV.min(0)
     span = float((allV.max(0) - lo).max()) or 1.0
     scale: dict[str, float] = {}
-    signed = {what for _, _, _, err, what, _ in meshes if err is not None and len(err) and float(np.min(err)) < 0}
+    signed = {what for _, _, _, err, what, opt in meshes if opt.get("signed") and err is not None and len(err)}
     for _, _, _, err, what, opt in meshes:
         if err is not None and len(err):
             mag = np.abs(err) if what in signed else err      # a signed quantity: symmetric about 0

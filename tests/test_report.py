@@ -213,8 +213,12 @@ def test_signed_view_values_keep_their_sign():
     from harness.views import pack
     V = np.eye(3)
     F = np.array([[0, 1, 2]])
-    p = pack([("a", V, F, np.array([-2.0, 0.0, 2.0]), "K estimated"), ("b", V, F, np.array([0.0, 1.0, 2.0]), "|err|")])
-    a, b = p["meshes"]
+    p = pack([("a", V, F, np.array([-2.0, 0.0, 2.0]), "K estimated", {"signed": True}),
+              ("b", V, F, np.array([0.0, 1.0, 2.0]), "|err|"),
+              ("c", V, F, np.array([-0.1, 1.0, 2.0]), "distance, 12 level lines", {"isolines": 12})])
+    a, b, c = p["meshes"]
     assert a["signed"] and not b["signed"] and a["eminv"] == -2.0
     assert list(base64.b64decode(a["e"])) == [0, 128, 255]      # -2 -> 0, 0 -> the middle, +2 -> 255
     assert list(base64.b64decode(b["e"]))[0] == 0 and b["escale"] > 0
+    # a slightly negative heat distance keeps its 0-based scale and its level lines: signed is opt-in
+    assert not c["signed"] and list(base64.b64decode(c["e"])) == [0, 128, 255] and c["isolines"] == 12

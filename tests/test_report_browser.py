@@ -316,6 +316,14 @@ def test_winner_tables_show_ties_and_cells_without_a_valid_result(tiny_run, tmp_
     for r in rows:
         if r["mesh"] == "knight" and r["noise_level"] and float(r["noise_level"]) == 0.5:
             r.update(status="error", error="MethodFailed: boom", dist_mean="", ev_mean="")
+    # a second seed on which the best variant is worse than its input: the variant leaves the cell
+    # (as in winners.csv), not averaged over its one good seed
+    plane = [r for r in rows if r["mesh"].startswith("plane") and r["noise_level"] and float(r["noise_level"]) == 0.2]
+    assert len(plane) == 2
+    for r in plane:
+        bad = json.loads(r["params"])["iterations"] == 6
+        rows.append(dict(r, seed="1", case_id=r["case_id"][:-1] + "x",
+                         dist_mean=repr(float(r["input_dist_mean"]) * (2.0 if bad else 0.9))))
     with sm.open("w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=list(rows[0]), lineterminator="\n")
         w.writeheader()
@@ -329,6 +337,8 @@ def test_winner_tables_show_ties_and_cells_without_a_valid_result(tiny_run, tmp_
     assert none and "worse than the noisy input" in none[0] and "(2 invalid" in none[0], text
     failed = [r for r in s["bestRows"] if "status error" in r]
     assert len(failed) == 1 and failed[0].startswith("knightgaussian_normal 0.5no valid result (2 invalid"), text
+    spoiled = [r for r in s["bestRows"] if r.startswith("plane") and "gaussian_normal 0.2●" in r]
+    assert len(spoiled) == 1 and "● scratch.explicit iterations=2" in spoiled[0], text
     seeded = [r for r in s["bestRows"] if r.startswith("plane") and "no noise0.5" in r]
     assert len(seeded) == 1 and "seedy.qem (tied: fast_simplification.qem)" in seeded[0], text
     winners = (run / "winners.md").read_text()                 # written by the run (the seed rule: test_leaderboard)

@@ -255,21 +255,36 @@
   // every seed both have (as winners.csv); rows: the cell's rows, one per variant and seed
   function beatenOnEverySeed(rows, best, v, key, tol, lower) {
     var a = new Map(), b = new Map(), n = 0, all = true;
+    var add = function (m, s, x) { var c = m.get(s) || [0, 0]; c[0] += x; c[1]++; m.set(s, c); };  // mean per seed
     rows.forEach(function (r) {
       if (!isNum(r[key])) return;
-      if (r._variant === best) a.set(r.seed, r[key]); else if (r._variant === v) b.set(r.seed, r[key]);
+      var s = r.seed === undefined || r.seed === null ? '' : String(r.seed);
+      if (r._variant === best) add(a, s, r[key]); else if (r._variant === v) add(b, s, r[key]);
     });
-    a.forEach(function (va, s) {
+    a.forEach(function (ca, s) {
       if (!b.has(s)) return;
       n++;
-      var gap = lower ? b.get(s) - va : va - b.get(s);
+      var va = ca[0] / ca[1], cb = b.get(s), vb = cb[0] / cb[1];
+      var gap = lower ? vb - va : va - vb;
       if (!(gap > Math.max(tol[0] * Math.abs(va), tol[1]))) all = false;
     });
     return n === 0 || all;
   }
+  // the variants of a cell that can win, as in winners.csv: every row of the variant in the cell has a
+  // value and, unless invalid results are shown, none is invalid (one failed, diverged or invalid seed
+  // takes the variant out of the cell: no mean over the seeds that happen to be good)
+  function cellVariants(cell, key) {
+    var keep = new Set();
+    groupBy(cell, function (r) { return r._variant; }).forEach(function (g, v) {
+      var blank = g.some(function (r) { return r.status !== 'ok' || r.diverged || !isNum(r[key]); });
+      if (!blank && (showInvalid || !g.some(function (r) { return r._invalid; }))) keep.add(v);
+    });
+    return keep;
+  }
   function tiedNote(names) { // ' (tied: a, b)', or ' (tied: 5 others)' with the names on hover
     if (!names.length) return '';
-    return ' <span class="muted" title="within the metric\'s tolerance of the best: ' + esc(names.join(', ')) +
+    return ' <span class="muted" title="within the metric\'s tolerance of the best, or not beaten on every seed: ' +
+      esc(names.join(', ')) +
       '">(tied: ' + (names.length <= 2 ? esc(names.join(', ')) : names.length + ' others') + ')</span>';
   }
   function noValidRow(rs, ncol, target) { // a cell whose every result is invalid: said, not left out
@@ -513,11 +528,14 @@
       var nInvalid = vis.filter(function (r) { return r._invalid; }).length;
       var tol = tolOf(d.T.spec, key), visSet = new Set(vis);
       groupBy(all, panelsKey).forEach(function (cell) {   // every row of the cell: failed, diverged and hidden too
-        var rs = cell.filter(function (r) { return visSet.has(r) && validOrShown(r); });
-        if (!rs.length) {                                 // said only when no result of the cell is valid
-          if (cell.every(function (r) { return r._invalid; })) bt.appendChild(noValidRow(cell, 5));
+        var keep = cellVariants(cell, key);
+        if (!keep.size) {                                 // said only when no result of the cell is valid
+          var bad = cell.filter(function (r) { return r._invalid; });
+          if (bad.length) bt.appendChild(noValidRow(bad, 5));
           return;
         }
+        var rs = cell.filter(function (r) { return keep.has(r._variant) && visSet.has(r); });
+        if (!rs.length) return;                           // the valid results are hidden
         var pts = aggregate(rs, key);
         var best = pts.reduce(function (a, b) { return b[1] < a[1] ? b : a; });
         var tied = pts.filter(function (p) {
@@ -639,11 +657,14 @@
       var nInvalid = vis.filter(function (r) { return r._invalid; }).length;
       var tol = tolOf(d.T.spec, key), visSet = new Set(vis);
       groupBy(all, function (r) { return r.mesh + '|' + r._noise + '|' + r._target; }).forEach(function (cell) {
-        var rows = cell.filter(function (r) { return visSet.has(r) && validOrShown(r); });
-        if (!rows.length) {                               // said only when no result of the cell is valid
-          if (cell.every(function (r) { return r._invalid; })) bt.appendChild(noValidRow(cell, 7, cell[0]._target));
+        var keep = cellVariants(cell, key);
+        if (!keep.size) {                                 // said only when no result of the cell is valid
+          var bad = cell.filter(function (r) { return r._invalid; });
+          if (bad.length) bt.appendChild(noValidRow(bad, 7, cell[0]._target));
           return;
         }
+        var rows = cell.filter(function (r) { return keep.has(r._variant) && visSet.has(r); });
+        if (!rows.length) return;                         // the valid results are hidden
         // one entry per method: mean metric and faces over seeds, median time
         var rs = [];
         groupBy(rows, function (r) { return r._variant; }).forEach(function (g, v) {
@@ -961,7 +982,13 @@
       var axes = vis.some(function (r) { return r._axis; });    // the task's axis parameters (e.g. k): ranked apart
       bt.innerHTML = '<tr><th>mesh</th><th>noise</th>' + (axes ? '<th>setting</th>' : '') + '<th>best</th><th>' + esc(key) +
         '</th><th>time</th></tr>';
-      groupBy(vis, function (r) { return r.mesh + '|' + r._noise + '|' + (r._axis || ''); }).forEach(function (rows) {
+      var visSet = new Set(vis);
+      groupBy(d.rows.filter(function (r) { return !state.mesh || r.mesh === state.mesh; }), function (r) {
+        return r.mesh + '|' + r._noise + '|' + (r._axis || '');
+      }).forEach(function (cell) {
+        var keep = cellVariants(cell, key);
+        var rows = cell.filter(function (r) { return keep.has(r._variant) && visSet.has(r); });
+        if (!rows.length) return;
         var rs = [];
         groupBy(rows, function (r) { return r._variant; }).forEach(function (g) {
           var o = Object.assign({}, g[0]);
@@ -1009,26 +1036,33 @@
   function noisePanels(plots, d, vis, key) {
     var clean = vis.filter(function (r) { return r.noise_model === 'none'; });
     var noisy = vis.filter(function (r) { return r.noise_model !== 'none' && isNum(r.noise_level); });
-    var groups = groupBy(noisy, function (r) { return r.mesh + ' · ' + r.noise_model; });
-    if (!Array.from(groups.values()).some(function (g) { return uniq(g.map(function (r) { return r.noise_level; })).length >= 2 ||
-      clean.some(function (c) { return c.mesh === g[0].mesh; }); })) return;
-    var panels = panelGroup(plots, key + ' vs noise level, per mesh and noise model',
-      'Mean over seeds; noise level = σ / mean edge length (0: the clean mesh).', function () {
-        return legend(d.variants, d.colors, new Set(), function () {}); });
-    groups.forEach(function (g, title) {
+    var panels = [], drawn = new Map();          // series name -> colour: the legend lists what got a line
+    groupBy(noisy, function (r) { return r.mesh + ' · ' + r.noise_model; }).forEach(function (g, title) {
       var rows = g.concat(clean.filter(function (c) { return c.mesh === g[0].mesh; }));
       var series = [];
       groupBy(rows, function (r) { return r._variant + (r._axis ? ' ' + r._axis : ''); }).forEach(function (vr, name) {
         var byX = groupBy(vr, function (r) { return r.noise_model === 'none' ? 0 : r.noise_level; });
         var xs = Array.from(byX.keys()).sort(function (a, b) { return a - b; });
         if (xs.length < 2) return;
-        series.push({name: name, color: d.colors[vr[0]._variant], line: true, r: 3, pts: xs.map(function (x) {
+        var color = vr[0]._axis ? colorOf(name) : d.colors[vr[0]._variant];   // k = 6 and k = 10 apart
+        drawn.set(name, color);
+        series.push({name: name, color: color, line: true, r: 3, pts: xs.map(function (x) {
           var y = mean(byX.get(x).map(function (r) { return r[key]; }));
           return [x, y, name + '\n' + title + '\nlevel ' + fmt(x) + ', ' + key + ' ' + fmt(y)];
         })});
       });
-      if (series.length) addPanel(panels, chart({title: title, xlabel: 'noise level', ylabel: key, ylog: false, series: series}));
+      if (series.length) panels.push(chart({title: title, xlabel: 'noise level', ylabel: key, ylog: false, series: series}));
     });
+    if (!panels.length) return;
+    var group = panelGroup(plots, key + ' vs noise level, per mesh and noise model',
+      'Mean over seeds; noise level = σ / mean edge length (0: the clean mesh).', function () {
+        var box = el('div', {'class': 'legend'});
+        Array.from(drawn.keys()).sort().forEach(function (name) {
+          box.appendChild(el('span', {style: 'cursor:default'}, [el('i', {style: 'background:' + drawn.get(name)}), name]));
+        });
+        return box;
+      });
+    panels.forEach(function (p) { addPanel(group, p); });
   }
   function sweepPanels(plots, vis, key) {
     var P = vis.map(function (r) { try { return JSON.parse(r.params) || {}; } catch (e) { return {}; } });

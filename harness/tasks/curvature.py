@@ -154,7 +154,7 @@ def view(inp, result) -> list:
     f = _facts(inp)
     q = next(q for q in ("H",) + QUANTITIES if getattr(result, q) is not None)
     est = getattr(result, q)
-    meshes = [("estimate", inp.V, inp.F, est, f"{q} estimated")]
+    meshes = [("estimate", inp.V, inp.F, est, f"{q} estimated", {"signed": True})]
     if f["truth"] is not None:
         meshes.append(("error", inp.V, inp.F, np.abs(est - f["truth"][q]), f"|{q} - exact {q}|"))
     return meshes

@@ -156,14 +156,15 @@ def view(inp, result) -> list:
     if result.vectors is None or result.vectors.shape[1] < 2:
         return []
     X = result.vectors
-    out = [("eigenvector 1", inp.V, inp.F, X[:, 1], "first non-constant eigenvector")]
+    out = [("eigenvector 1", inp.V, inp.F, X[:, 1], "first non-constant eigenvector", {"signed": True})]
     if result.M is not None:
         X = X / np.sqrt(np.maximum(np.einsum("ij,ij->j", X, result.M @ X), 1e-300))
         times = hks_times(result.values)
         if len(times) >= 2:
             H = heat_kernel_signature(result.values, X, times[:2])
             out += [(f"HKS t={t:.3g}", inp.V, inp.F, H[:, j] - H[:, j].mean(),
-                     f"heat kernel signature at t = {t:.3g} minus its mean") for j, t in enumerate(times[:2])]
+                     f"heat kernel signature at t = {t:.3g} minus its mean", {"signed": True})
+                    for j, t in enumerate(times[:2])]
     return out
 
 
