@@ -205,8 +205,35 @@ def _cmd_report(a) -> int:
     d = Path(a.run_dir)
     if not (d / "run.json").exists() and not any(d.glob("*.csv")):
         raise ShootoutError(f"{d}: not a run folder (no run.json or CSV files)")
+    for note in _rules_changed(d):
+        print(f"note: {note}", file=sys.stderr)
     print(build_report(d))
     return 0
+
+
+def _rules_changed(run_dir: Path) -> list[str]:
+    """Tasks whose axis parameters or validity rules in the folder's run.json differ from this
+    version's: the report keeps the recorded ones (it reads files only), a rerun applies these."""
+    import json
+    try:
+        recorded = json.loads((run_dir / "run.json").read_text()).get("tasks") or {}
+    except (OSError, ValueError, AttributeError):
+        return []
+    out = []
+    for name, spec in recorded.items():
+        try:
+            now = tasks.get(name).spec()
+        except KeyError:
+            continue
+        if not isinstance(spec, dict):
+            continue
+        def norm(x):          # a rule's absent and None fields are the same rule
+            return [{k: v for k, v in r.items() if v is not None} if isinstance(r, dict) else r for r in x or []]
+        keys = [k for k in ("axis_params", "invalid_when") if k in spec and norm(spec[k]) != norm(now[k])]
+        if keys:
+            out.append(f"{name}: this run ranks by the {' and '.join(keys)} recorded when it ran; this version "
+                       "declares others (rerun the config to apply them)")
+    return out
 
 
 def _cmd_views(a) -> int:

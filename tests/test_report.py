@@ -222,3 +222,19 @@ def test_signed_view_values_keep_their_sign():
     assert list(base64.b64decode(b["e"]))[0] == 0 and b["escale"] > 0
     # a slightly negative heat distance keeps its 0-based scale and its level lines: signed is opt-in
     assert not c["signed"] and list(base64.b64decode(c["e"])) == [0, 128, 255] and c["isolines"] == 12
+
+
+def test_rebuilding_an_older_runs_report_says_its_rules_differ(run_dir, tmp_path, capsys):
+    """`shootout report` reads files only, so a folder made before a task's axis parameters or
+    validity rules changed keeps the recorded ones: it says so, per task; a current run says nothing."""
+    from harness.cli import main as cli
+    run = copy_run(run_dir, tmp_path)
+    assert cli(["report", str(run)]) == 0
+    assert "note:" not in capsys.readouterr().err
+    meta = json.loads((run / "run.json").read_text())
+    meta["tasks"]["smoothing"]["invalid_when"] = []           # as recorded by an older version
+    (run / "run.json").write_text(json.dumps(meta))
+    assert cli(["report", str(run)]) == 0
+    err = capsys.readouterr().err
+    assert "note: smoothing: this run ranks by the invalid_when recorded when it ran" in err
+    assert "simplification" not in err and "laplacian" not in err
