@@ -343,3 +343,16 @@ def test_winner_tables_show_ties_and_cells_without_a_valid_result(tiny_run, tmp_
     assert len(seeded) == 1 and "seedy.qem (tied: fast_simplification.qem)" in seeded[0], text
     winners = (run / "winners.md").read_text()                 # written by the run (the seed rule: test_leaderboard)
     assert "| knight | none 0.0 |" in winners and "no valid result" in winners
+
+
+def test_generic_table_says_when_no_result_of_a_cell_is_valid(tmp_path):
+    """Geodesics on a mesh without an analytic distance: libigl's exact_geodesic is the reference
+    there, so its 0 is no result; the report's table says so instead of crowning it."""
+    import harness
+    cfg = {"name": "ref", "repeats": 1, "time_budget": 0, "meshes": ["knight"],
+           "tasks": {"geodesics": {"methods": ["libigl.exact_geodesic"]}}}
+    harness.run(cfg, out=tmp_path, quiet=True, workers=1)
+    s = check_report_in_browser(tmp_path / "report.html", interact=False)
+    assert s["console_errors"] == [] and s["exceptions"] == [] and s["jserrors"] == 0
+    rows = [r for r in s["bestRows"] if r.startswith("knight")]
+    assert rows and all("no valid result (1 invalid: is the reference itself" in r for r in rows), s["bestRows"]

@@ -987,6 +987,11 @@
         return r.mesh + '|' + r._noise + '|' + (r._axis || '');
       }).forEach(function (cell) {
         var keep = cellVariants(cell, key);
+        if (!keep.size) {                                 // said only when no result of the cell is valid
+          var bad = cell.filter(function (r) { return r._invalid; });
+          if (bad.length) bt.appendChild(noValidRow(bad, 3, axes ? (cell[0]._axis || '') : undefined));
+          return;
+        }
         var rows = cell.filter(function (r) { return keep.has(r._variant) && visSet.has(r); });
         if (!rows.length) return;
         var rs = [];
