@@ -269,6 +269,13 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
     if raw.get("tune") is not None:
         from .tune import check_tune
         tune = check_tune(raw["tune"], base_dir, P, tasks, lambda m: _check_meshes(m, base_dir, P))
+        if tune is not None:                      # searched on the meshes it is judged on: not a fair test
+            judged = {json.dumps(_identity(m), sort_keys=True) for m in meshes}
+            for m in tune.train:
+                if json.dumps(_identity(m), sort_keys=True) in judged:
+                    what = m.get("bundled") or m.get("procedural") or Path(m.get("file", "?")).name
+                    P.append(f"tune.train: {what} is also a test mesh (meshes:); tuning on the meshes a method "
+                             "is judged on favours the tuned setting: train on other meshes")
 
     if P:
         raise ConfigError(label, P)

@@ -303,7 +303,7 @@ def test_grids_too_large_duplicate_keys_and_exiting_plugins_are_config_errors(tm
     from harness.config import load_config
     from harness.errors import ConfigError
     tune = {**SMALL, "tasks": {"smoothing": {"methods": ["scratch.explicit"]}},
-            "tune": {"metric": "ev_rms", "train": ["knight"], "budget": 1000,
+            "tune": {"metric": "ev_rms", "train": ["woody"], "budget": 1000,
                      "params": {"scratch.explicit": {"step": [0.01 * i for i in range(1, 101)],
                                                      "iterations": list(range(1, 101))}}},
             "noise": [{"model": "gaussian_normal", "levels": [0.1, 0.2, 0.3]}] * 40}

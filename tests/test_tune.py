@@ -63,3 +63,16 @@ def test_sampled_settings_are_the_products_positions():
     keys = sorted(ranges)
     grid = [dict(zip(keys, c)) for c in itertools.product(*(ranges[k] for k in keys))]
     assert [_nth_combination(ranges, keys, i) for i in range(len(grid))] == grid
+
+
+def test_the_tuning_table_never_shows_another_settings_value_for_failed_cases():
+    """When the tuned setting fails on the test meshes the table says so (it showed the defaults'
+    mean, reading as "tuning changed nothing"); a partial failure says how many cases the mean has."""
+    import pandas as pd
+
+    from harness.report.html import _test_mean
+    rows = pd.DataFrame({"status": ["error", "error"], "dist_mean": [None, None]})
+    assert _test_mean(rows, "dist_mean") == "failed (0 of 2 ok)"
+    rows = pd.DataFrame({"status": ["ok", "error", "ok"], "dist_mean": [1.0, None, 3.0]})
+    assert _test_mean(rows, "dist_mean") == "2 (2 of 3 ok)"
+    assert _test_mean(rows.iloc[[0, 2]], "dist_mean") == "2" and _test_mean(rows.iloc[[]], "dist_mean") == "—"

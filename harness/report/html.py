@@ -129,6 +129,19 @@ def _errors_html(frames) -> str:
     return "".join(out)
 
 
+def _test_mean(rows, metric: str) -> str:
+    """The metric's mean over the ok test cases, with how many of the cases that is when some
+    failed ("failed (0 of n ok)" when all did): never another setting's value in their place."""
+    n = len(rows)
+    ok = rows[(rows["status"] == "ok") & rows[metric].notna()] if n else rows
+    if not n:
+        return "—"
+    if not len(ok):
+        return f"failed (0 of {n} ok)"
+    val = _fmt(float(ok[metric].mean()), 4)
+    return val if len(ok) == n else f"{val} ({len(ok)} of {n} ok)"
+
+
 def _tune_html(meta, frames) -> str:
     """Default vs tuned, per tuned method: the chosen setting, training scores and the test meshes' mean."""
     tune = meta.get("tune")
@@ -139,21 +152,22 @@ def _tune_html(meta, frames) -> str:
     for m, ch in tune["methods"].items():
         df = frames.get(ch.get("task"))
         tuned_ids = set(ch.get("test_case_ids") or [])
-        test_default = test_tuned = test_input = None
+        test_default = test_tuned = test_input = "—"
         if df is not None and metric in df:
-            rows = df[(df["method"] == m) & (df["status"] == "ok")]
-            is_tuned = rows["case_id"].astype(str).isin(tuned_ids)
-            base, tuned = rows[~is_tuned], rows[is_tuned]
-            test_default = float(base[metric].mean()) if len(base) else None
-            test_tuned = float(tuned[metric].mean()) if len(tuned) else test_default
-            if f"input_{metric}" in rows and len(rows):
-                test_input = float(rows[f"input_{metric}"].mean())
+            every = df[df["method"] == m]
+            is_tuned = every["case_id"].astype(str).isin(tuned_ids)
+            test_default = _test_mean(every[~is_tuned], metric)
+            # the chosen setting equal to the defaults runs no tuned case: its test value is the defaults'
+            test_tuned = _test_mean(every[is_tuned], metric) if ch.get("chosen") else "= defaults"
+            ok = every[every["status"] == "ok"]
+            if f"input_{metric}" in ok and len(ok):
+                test_input = _fmt(float(ok[f"input_{metric}"].mean()), 4)
         chosen = ", ".join(f"{k}={v}" for k, v in (ch.get("chosen") or {}).items()) or "the defaults"
         dtrain = "invalid or failed" if ch.get("default_train_score") is None else _fmt(ch["default_train_score"], 4)
         body.append(f"<tr><td>{_esc(m)}</td><td>{_esc(chosen)}</td><td class='num'>{_esc(ch.get('candidates'))}</td>"
                     f"<td class='num'>{_esc(dtrain)}</td><td class='num'>{_fmt(ch.get('train_score'), 4)}</td>"
-                    f"<td class='num'>{_fmt(test_default, 4)}</td><td class='num'>{_fmt(test_tuned, 4)}</td>"
-                    f"<td class='num'>{_fmt(test_input, 4)}</td></tr>")
+                    f"<td class='num'>{_esc(test_default)}</td><td class='num'>{_esc(test_tuned)}</td>"
+                    f"<td class='num'>{_esc(test_input)}</td></tr>")
     better = next((c.get("better") for c in tune["methods"].values() if isinstance(c, dict)), "")
     return (f"<h3>Tuning: default vs tuned (by {_esc(metric)}, {_esc(better)} is better)</h3>"
             f"<p>Parameters searched on the training meshes ({_esc(', '.join(tune.get('train_meshes') or []))}), "
