@@ -5,7 +5,7 @@ Config::
 
     tune:
       metric: dist_mean          # a metric of the methods' task (its declared direction decides)
-      train: [bunny, fandisk]    # mesh list, same syntax as meshes: (never the test meshes' role)
+      train: [spot, fandisk]     # mesh list, same syntax as meshes:, none of them a test mesh
       budget: 12                 # settings tried per method: the whole grid if it is smaller, else
       seed: 0                    #   a seeded random sample of it (the defaults are always tried)
       params:
