@@ -45,6 +45,7 @@ import json
 import math
 import os
 import resource
+import socket
 import statistics
 import sys
 import threading
@@ -289,7 +290,14 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
     try:
         from .plugins import import_methods
         methods = import_methods()
-        methods.load_plugins(list(case.plugins))
+        for mod in case.plugins:           # the config checked them in the driver; a worker may lack them
+            try:
+                methods.load_plugins([mod])
+            except ModuleNotFoundError as exc:
+                raise ShootoutError(f"plugin {mod!r} cannot be imported in the case's process on "
+                                    f"{socket.gethostname()} ({exc}): on a Dask worker, its module must be "
+                                    "on the worker's PYTHONPATH too") from None
+        methods.load_plugins([])
         method = methods.get(case.method)
         task = tasks.get(case.task)
         row["library"] = method.library

@@ -106,3 +106,16 @@ def test_serial_executor_is_not_used_for_isolation_by_default(tmp_path):
     frames = harness.run(cfg, out=tmp_path / "out", workers=1)
     st = frames["laplacian"].set_index("method")["status"].to_dict()
     assert st == {"crashy.segfault": "error", "scratch.uniform": "ok"}
+
+
+def test_a_plugin_missing_in_the_case_process_is_named_with_the_fix():
+    """A Dask worker without the config's plugin module on its path: every case's row names the
+    plugin and the worker's PYTHONPATH, not a bare ModuleNotFoundError at <frozen importlib>."""
+    import dataclasses
+
+    from harness import runner
+    from harness.config import load_config
+    c = load_config({"meshes": ["knight"], "tasks": {"smoothing": {"methods": ["scratch.taubin"]}}})
+    row, _ = runner.run_case(dataclasses.replace(c.cases[0], plugins=("no_such_plugin_mod",)))
+    assert row["status"] == "error"
+    assert "plugin 'no_such_plugin_mod' cannot be imported" in row["error"] and "PYTHONPATH" in row["error"]
