@@ -36,6 +36,8 @@ def _parser() -> argparse.ArgumentParser:
     m = sub.add_parser("methods", help="list registered methods")
     m.add_argument("--task", choices=tasks.names())
     m.add_argument("--json", action="store_true", help="machine-readable: one JSON list")
+    m.add_argument("--plugin", action="append", default=[], metavar="MODULE",
+                   help="import this plugin module first (as a config's plugins:), to list its methods")
     ds = sub.add_parser("datasets", help="list bundled and procedural meshes")
     ds.add_argument("--json", action="store_true", help="machine-readable: one JSON list")
     rp = sub.add_parser("report", help="rebuild report.html from a run folder (reads files only, runs no code)")
@@ -156,6 +158,17 @@ def _cmd_run(a) -> int:
 def _cmd_methods(a) -> int:
     from .plugins import import_methods
     methods = import_methods()
+    for d in (str(Path.cwd()),):                     # a plugin beside the caller, as for a config
+        if d not in sys.path:
+            sys.path.append(d)
+    for mod in a.plugin:
+        try:
+            methods.load_plugins([mod])
+        except (Exception, SystemExit) as exc:        # a user's module: its failure is a message
+            raise ShootoutError(f"--plugin {mod}: cannot import it ({type(exc).__name__}: {exc})") from None
+    if not methods.all_methods(a.task):
+        print(f"no method registered{' for task ' + a.task if a.task else ''} (a plugin's methods: --plugin MODULE)",
+              file=sys.stderr)
     if a.json:
         import json
         print(json.dumps([method_record(m) for m in methods.all_methods(a.task)], indent=1))

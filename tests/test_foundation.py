@@ -530,3 +530,21 @@ def test_compiled_face_terms_equal_numpy_definitions(name):
     assert abs(ang.mean() - ref["normal_error_deg"]) <= 1e-12
     assert abs(np.sqrt((ang ** 2).mean()) - ref["normal_error_rms_deg"]) <= 1e-12
     assert face_terms(Vn, F, o, np.zeros((0, 3)))[3].size == 0
+
+
+def test_methods_lists_a_plugins_methods(tmp_path):
+    """`shootout methods --plugin MODULE` lists the methods a plugin registers (as a config's
+    plugins: would load them); a module that cannot be imported is exit 2 naming it."""
+    from pathlib import Path
+    (tmp_path / "mylab_listed.py").write_text(
+        "from methods import register\nfrom harness.tasks.smoothing import SmoothingResult\n\n"
+        "@register('mylab_listed.same', task='smoothing', library='mylab')\n"
+        "def same(V, F):\n    \"\"\"Returns its input.\"\"\"\n    return SmoothingResult(V=V.copy())\n")
+    root = Path(__file__).resolve().parents[1]
+    env = {**__import__("os").environ, "PYTHONPATH": str(root)}
+    r = subprocess.run([sys.executable, "-m", "harness.cli", "methods", "--plugin", "mylab_listed", "--task", "smoothing"],
+                       cwd=tmp_path, capture_output=True, text=True, env=env, timeout=120)
+    assert r.returncode == 0 and "mylab_listed.same" in r.stdout, r.stderr
+    r = subprocess.run([sys.executable, "-m", "harness.cli", "methods", "--plugin", "no_such_mod_zz"],
+                       cwd=tmp_path, capture_output=True, text=True, env=env, timeout=120)
+    assert r.returncode == 2 and "--plugin no_such_mod_zz: cannot import it" in r.stderr
