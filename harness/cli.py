@@ -110,9 +110,8 @@ def _cmd_run(a) -> int:
         if P:
             raise problems_error(P)
         frames = run(Path(a.config), out=a.out)
-        n = sum(len(df) for df in frames.values())
         out = Path(a.out) if a.out else Path("results") / (_results_config(Path(a.config))[0].get("name") or "eval")
-        print(f"eval: {n} result(s) scored; report: {out / 'report.html'}")
+        print(_eval_summary(frames, out))
         return 0
     cfg, bad_config = None, None       # loaded even when a flag is bad: its problems join the same message
     try:
@@ -266,11 +265,16 @@ def _cmd_eval(a) -> int:
     from .scoring import eval_files
     frames = eval_files(a.clean, a.results, a.out, noisy=a.noisy, task=a.task, labels=a.label,
                         hausdorff_samples=a.hausdorff_samples)
+    print(_eval_summary(frames, Path(a.out)))
+    return 0
+
+
+def _eval_summary(frames, out: Path) -> str:
+    """One line: how many results were scored, how many are error rows, where the report is."""
     n = sum(len(df) for df in frames.values())
     bad = sum(int((df["status"] != "ok").sum()) for df in frames.values() if "status" in df)
-    print(f"eval: {n} result(s) scored" + (f", {bad} of them error rows (see their error column)" if bad else "")
-          + f"; report: {Path(a.out) / 'report.html'}")
-    return 0
+    return (f"eval: {n} result(s) scored" + (f", {bad} of them error rows (see their error column)" if bad else "")
+            + f"; report: {out / 'report.html'}")
 
 
 def _cmd_compare(a) -> int:
