@@ -344,3 +344,17 @@ def test_the_terminal_names_each_changed_case_by_id_and_no_time_prints_no_timing
                    for line in out.splitlines()), (r["case_id"], out)
     code, out = run_compare(run_a, b, time_factor=None)
     assert code == 1 and not any(line.startswith("note:") for line in out.splitlines()), out
+
+
+def test_a_run_of_an_unknown_task_kind_is_named_as_such(run_a, tmp_path):
+    """A run made by an installation with another task kind (a fork's `area`) is not called
+    'not a run folder': the message names the unknown kind."""
+    b = copy(run_a, tmp_path)
+    for f in b.glob("*.csv"):
+        f.unlink()
+    (b / "area.csv").write_text("case_id,task\nx,area\n")
+    meta = json.loads((b / "run.json").read_text())
+    meta["tasks"] = {"area": {"name": "area"}}
+    (b / "run.json").write_text(json.dumps(meta))
+    with pytest.raises(harness.errors.ShootoutError, match="task kind\\(s\\) area are not known to this installation"):
+        run_compare(b, run_a)
