@@ -157,9 +157,8 @@ def _cmd_run(a) -> int:
 def _cmd_methods(a) -> int:
     from .plugins import import_methods
     methods = import_methods()
-    for d in (str(Path.cwd()),):                     # a plugin beside the caller, as for a config
-        if d not in sys.path:
-            sys.path.append(d)
+    if str(Path.cwd()) not in sys.path:              # a plugin beside the caller, as for a config
+        sys.path.append(str(Path.cwd()))
     for mod in a.plugin:
         try:
             methods.load_plugins([mod])
@@ -231,6 +230,8 @@ def _rules_changed(run_dir: Path) -> list[str]:
         recorded = json.loads((run_dir / "run.json").read_text()).get("tasks") or {}
     except (OSError, ValueError, AttributeError):
         return []
+    def norm(x):              # a rule's absent and None fields are the same rule
+        return [{k: v for k, v in r.items() if v is not None} if isinstance(r, dict) else r for r in x or []]
     out = []
     for name, spec in recorded.items():
         try:
@@ -239,8 +240,6 @@ def _rules_changed(run_dir: Path) -> list[str]:
             continue
         if not isinstance(spec, dict):
             continue
-        def norm(x):          # a rule's absent and None fields are the same rule
-            return [{k: v for k, v in r.items() if v is not None} if isinstance(r, dict) else r for r in x or []]
         keys = [k for k in ("axis_params", "invalid_when") if k in spec and norm(spec[k]) != norm(now[k])]
         if keys:
             out.append(f"{name}: this run ranks by the {' and '.join(keys)} recorded when it ran; this version "
