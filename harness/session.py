@@ -19,7 +19,7 @@ from .errors import ShootoutError, check_interrupt, problems_error
 from .executors import EXECUTORS, make_executor
 from .mesh import write_ply
 from .provenance import git_commit, machine_info, now_iso, package_versions
-from .results import RunFolder, check_out_dir
+from .results import RunFolder, out_dir_problems
 
 
 def config_hash(cfg: Config) -> str:
@@ -157,9 +157,9 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
     threads = 1 if executor == "dask" else max(1, (os.cpu_count() or 1) // workers)
     cases = [dataclasses.replace(c, threads=threads) for c in cfg.cases]
     done: set[str] = set()
-    check_out_dir(out_dir)
-    if not resume and folder.foreign_files():       # refused before the folder or its lock is made
-        raise folder.foreign_error()
+    problems = out_dir_problems(out_dir, resume)     # refused before the folder or its lock is made
+    if problems:
+        raise problems_error(problems)
     # before anything is written: an unreachable Dask scheduler is exit 2 with the folder untouched
     ex = make_executor(executor, workers, timeout, scheduler)
     try:

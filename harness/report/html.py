@@ -133,9 +133,9 @@ def _test_mean(rows, metric: str) -> str:
     """The metric's mean over the ok test cases, with how many of the cases that is when some
     failed ("failed (0 of n ok)" when all did): never another setting's value in their place."""
     n = len(rows)
-    ok = rows[(rows["status"] == "ok") & rows[metric].notna()] if n else rows
     if not n:
         return "—"
+    ok = rows[(rows["status"] == "ok") & rows[metric].notna()]
     if not len(ok):
         return f"failed (0 of {n} ok)"
     val = _fmt(float(ok[metric].mean()), 4)
