@@ -281,6 +281,24 @@
     });
     return keep;
   }
+  // the rows of a cell's variants that can win (`cellVariants`) among the shown ones (visSet); when no
+  // result of the cell is valid, a row of table bt says so (ncol cells after mesh, noise [and target])
+  function winnerRows(cell, key, visSet, bt, ncol, target) {
+    var keep = cellVariants(cell, key);
+    if (!keep.size) {
+      var bad = cell.filter(function (r) { return r._invalid; });
+      if (bad.length) bt.appendChild(noValidRow(bad, ncol, target));
+      return [];
+    }
+    return cell.filter(function (r) { return keep.has(r._variant) && visSet.has(r); });
+  }
+  // the names of items tied with best: within the tolerance of its mean, or not beaten on every seed
+  function tiedWith(items, best, valueOf, nameOf, rows, key, tol, lower) {
+    return items.filter(function (x) {
+      return x !== best && (ties(valueOf(x), valueOf(best), tol) ||
+        !beatenOnEverySeed(rows, nameOf(best), nameOf(x), key, tol, lower));
+    }).map(nameOf);
+  }
   function tiedNote(names) { // ' (tied: a, b)', or ' (tied: 5 others)' with the names on hover
     if (!names.length) return '';
     return ' <span class="muted" title="within the metric\'s tolerance of the best, or not beaten on every seed: ' +
@@ -293,6 +311,13 @@
       '" class="muted">no valid result (' + uniq(rs.map(function (r) { return r._variant; })).length + ' invalid: ' +
       esc(uniq(rs.map(function (r) { return r._invalid; })).join('; ')) +
       ')</td>'});
+  }
+  function staticLegend(names, colorFor) { // a legend that only names the drawn lines (no toggling)
+    var box = el('div', {'class': 'legend'});
+    names.forEach(function (name) {
+      box.appendChild(el('span', {style: 'cursor:default'}, [el('i', {style: 'background:' + colorFor(name)}), name]));
+    });
+    return box;
   }
   function legend(variants, colors, hidden, onToggle, extra) {
     var box = el('div', {'class': 'legend'});
@@ -528,19 +553,11 @@
       var nInvalid = vis.filter(function (r) { return r._invalid; }).length;
       var tol = tolOf(d.T.spec, key), visSet = new Set(vis);
       groupBy(all, panelsKey).forEach(function (cell) {   // every row of the cell: failed, diverged and hidden too
-        var keep = cellVariants(cell, key);
-        if (!keep.size) {                                 // said only when no result of the cell is valid
-          var bad = cell.filter(function (r) { return r._invalid; });
-          if (bad.length) bt.appendChild(noValidRow(bad, 5));
-          return;
-        }
-        var rs = cell.filter(function (r) { return keep.has(r._variant) && visSet.has(r); });
-        if (!rs.length) return;                           // the valid results are hidden
+        var rs = winnerRows(cell, key, visSet, bt, 5);
+        if (!rs.length) return;
         var pts = aggregate(rs, key);
         var best = pts.reduce(function (a, b) { return b[1] < a[1] ? b : a; });
-        var tied = pts.filter(function (p) {
-          return p !== best && (ties(p[1], best[1], tol) || !beatenOnEverySeed(rs, best[4], p[4], key, tol, true));
-        }).map(function (p) { return p[4]; });
+        var tied = tiedWith(pts, best, function (p) { return p[1]; }, function (p) { return p[4]; }, rs, key, tol, true);
         var inp = inKey ? mean(rs.map(function (r) { return r[inKey]; }).filter(isNum)) : null;
         if (isNum(inp) && best[1] > inp) anyWorse = true;
         var front = pareto(pts, tol).map(function (p) { return esc(p[4]) + ' ' + fmt(p[1], 3) + ', ' + fmtTime(p[0]); }).join('<br>');
@@ -657,14 +674,8 @@
       var nInvalid = vis.filter(function (r) { return r._invalid; }).length;
       var tol = tolOf(d.T.spec, key), visSet = new Set(vis);
       groupBy(all, function (r) { return r.mesh + '|' + r._noise + '|' + r._target; }).forEach(function (cell) {
-        var keep = cellVariants(cell, key);
-        if (!keep.size) {                                 // said only when no result of the cell is valid
-          var bad = cell.filter(function (r) { return r._invalid; });
-          if (bad.length) bt.appendChild(noValidRow(bad, 7, cell[0]._target));
-          return;
-        }
-        var rows = cell.filter(function (r) { return keep.has(r._variant) && visSet.has(r); });
-        if (!rows.length) return;                         // the valid results are hidden
+        var rows = winnerRows(cell, key, visSet, bt, 7, cell[0]._target);
+        if (!rows.length) return;
         // one entry per method: mean metric and faces over seeds, median time
         var rs = [];
         groupBy(rows, function (r) { return r._variant; }).forEach(function (g, v) {
@@ -676,9 +687,7 @@
           rs.push(o);
         });
         var best = rs.reduce(function (a, b) { return b[key] < a[key] ? b : a; });
-        var tied = rs.filter(function (r) {
-          return r !== best && (ties(r[key], best[key], tol) || !beatenOnEverySeed(rows, best._variant, r._variant, key, tol, true));
-        }).map(function (r) { return r._variant; });
+        var tied = tiedWith(rs, best, function (r) { return r[key]; }, function (r) { return r._variant; }, rows, key, tol, true);
         var fast = rs.filter(function (r) { return isNum(r.time_s); }).reduce(function (a, b) { return b.time_s < a.time_s ? b : a; }, rs[0]);
         bt.appendChild(el('tr', {html: '<td>' + esc(best.mesh) + '</td><td>' + esc(best._noise) + '</td><td>' + esc(fmt(best._target)) +
           '</td><td><i style="color:' + d.colors[best._variant] + '">●</i> ' + esc(best._variant) + tiedNote(tied) + '</td><td class="num">' + fmt(best[key], 4) +
@@ -720,17 +729,14 @@
 
   // ------------------------------------------------------------------ 3D views (canvas 2D painter's algorithm)
   var VIRIDIS = [[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]];
-  function cmap(t) {
-    t = Math.max(0, Math.min(1, t)) * (VIRIDIS.length - 1);
-    var i = Math.min(Math.floor(t), VIRIDIS.length - 2), f = t - i, a = VIRIDIS[i], b = VIRIDIS[i + 1];
-    return [a[0] + (b[0] - a[0]) * f, a[1] + (b[1] - a[1]) * f, a[2] + (b[2] - a[2]) * f];
-  }
   var DIVERGING = [[33, 102, 172], [146, 197, 222], [247, 247, 247], [244, 165, 130], [178, 24, 43]];
-  function dmap(t) {                       // signed quantities: blue below 0, white at 0, red above
-    t = Math.max(0, Math.min(1, t)) * (DIVERGING.length - 1);
-    var i = Math.min(Math.floor(t), DIVERGING.length - 2), f = t - i, a = DIVERGING[i], b = DIVERGING[i + 1];
+  function ramp(stops, t) {                // t in [0, 1] -> the colour between evenly spaced stops
+    t = Math.max(0, Math.min(1, t)) * (stops.length - 1);
+    var i = Math.min(Math.floor(t), stops.length - 2), f = t - i, a = stops[i], b = stops[i + 1];
     return [a[0] + (b[0] - a[0]) * f, a[1] + (b[1] - a[1]) * f, a[2] + (b[2] - a[2]) * f];
   }
+  function cmap(t) { return ramp(VIRIDIS, t); }
+  function dmap(t) { return ramp(DIVERGING, t); }   // signed quantities: blue below 0, white at 0, red above
   function decode(b64, Type) {
     var s = atob(b64), u = new Uint8Array(s.length);
     for (var i = 0; i < s.length; i++) u[i] = s.charCodeAt(i);
@@ -986,13 +992,7 @@
       groupBy(d.rows.filter(function (r) { return !state.mesh || r.mesh === state.mesh; }), function (r) {
         return r.mesh + '|' + r._noise + '|' + (r._axis || '');
       }).forEach(function (cell) {
-        var keep = cellVariants(cell, key);
-        if (!keep.size) {                                 // said only when no result of the cell is valid
-          var bad = cell.filter(function (r) { return r._invalid; });
-          if (bad.length) bt.appendChild(noValidRow(bad, 3, axes ? (cell[0]._axis || '') : undefined));
-          return;
-        }
-        var rows = cell.filter(function (r) { return keep.has(r._variant) && visSet.has(r); });
+        var rows = winnerRows(cell, key, visSet, bt, 3, axes ? (cell[0]._axis || '') : undefined);
         if (!rows.length) return;
         var rs = [];
         groupBy(rows, function (r) { return r._variant; }).forEach(function (g) {
@@ -1004,9 +1004,7 @@
         });
         var best = rs.reduce(function (a, b) { return (lower ? b[key] < a[key] : b[key] > a[key]) ? b : a; });
         var tol = tolOf(spec, key);
-        var tied = rs.filter(function (r) {
-          return r !== best && (ties(r[key], best[key], tol) || !beatenOnEverySeed(rows, best._variant, r._variant, key, tol, lower));
-        }).map(function (r) { return r._variant; });
+        var tied = tiedWith(rs, best, function (r) { return r[key]; }, function (r) { return r._variant; }, rows, key, tol, lower);
         bt.appendChild(el('tr', {html: '<td>' + esc(best.mesh) + '</td><td>' + esc(best._noise) + '</td>' +
           (axes ? '<td>' + esc(best._axis || '') + '</td>' : '') + '<td><i style="color:' +
           d.colors[best._variant] + '">●</i> ' + esc(best._variant) + tiedNote(tied) + '</td><td class="num">' + fmt(best[key], 4) +
@@ -1034,8 +1032,6 @@
     RERENDER.push(render);
   }
 
-  // the metric against every numeric parameter that some method sweeps over >= 3 values (e.g. the
-  // heat method's time factor): one line per method and its other parameters, mean over seeds
   // the metric against the noise level, per mesh and noise model (clean rows at level 0), one line per
   // variant and setting; drawn only where a line has two levels or more
   function noisePanels(plots, d, vis, key) {
@@ -1061,14 +1057,12 @@
     if (!panels.length) return;
     var group = panelGroup(plots, key + ' vs noise level, per mesh and noise model',
       'Mean over seeds; noise level = σ / mean edge length (0: the clean mesh).', function () {
-        var box = el('div', {'class': 'legend'});
-        Array.from(drawn.keys()).sort().forEach(function (name) {
-          box.appendChild(el('span', {style: 'cursor:default'}, [el('i', {style: 'background:' + drawn.get(name)}), name]));
-        });
-        return box;
+        return staticLegend(Array.from(drawn.keys()).sort(), function (name) { return drawn.get(name); });
       });
     panels.forEach(function (p) { addPanel(group, p); });
   }
+  // the metric against every numeric parameter that some method sweeps over >= 3 values (e.g. the
+  // heat method's time factor): one line per method and its other parameters, mean over seeds
   function sweepPanels(plots, vis, key) {
     var P = vis.map(function (r) { try { return JSON.parse(r.params) || {}; } catch (e) { return {}; } });
     var names = uniq([].concat.apply([], P.map(function (p) { return Object.keys(p); }))).sort();
@@ -1088,11 +1082,7 @@
       lines.forEach(function (g) { if (uniq(g.map(function (p) { return p.x; })).length >= 2) drawn.push(g[0].series); });
       var panels = panelGroup(plots, key + ' vs ' + pn + ', per mesh',
         'One line per method and its other parameters; mean over seeds.', function () {
-          var box = el('div', {'class': 'legend'});
-          uniq(drawn).sort().forEach(function (name) {
-            box.appendChild(el('span', {style: 'cursor:default'}, [el('i', {style: 'background:' + colorOf(name)}), name]));
-          });
-          return box;
+          return staticLegend(uniq(drawn).sort(), colorOf);
         });
       groupBy(pts, function (p) { return p.r.mesh + ' · ' + p.r._noise; }).forEach(function (g, title) {
         var series = [];
