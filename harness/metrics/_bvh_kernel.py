@@ -414,6 +414,12 @@ def _upper(P, D, I, VY, FY, NY, B, stack, dstack, thr, state, W, seeds):
     return max(u, dmax)
 
 
+@njit(cache=True, inline="always")
+def _closing(state, eps, atol):
+    """The bound below which a (sub-)triangle closes: ``(1 + eps) max(L, floor) + atol``."""
+    return (1.0 + eps) * max(state[0], state[8]) + atol
+
+
 @njit(cache=True)
 def roots(VX, FX, dV, iV, VY, FY, B, NY, W, eps, atol, state, cap):
     """Upper bound (m,) of every triangle of X (`_upper`, and ``cap[f]``, a bound known a
@@ -432,7 +438,7 @@ def roots(VX, FX, dV, iV, VY, FY, B, NY, W, eps, atol, state, cap):
             v = FX[f, i]
             P[i, 0], P[i, 1], P[i, 2] = VX[v, 0], VX[v, 1], VX[v, 2]
             D[i], I[i] = dV[v], iV[v]
-        thr = (1.0 + eps) * max(state[0], state[8]) + atol
+        thr = _closing(state, eps, atol)
         if cap[f] <= thr:
             ub[f] = max(cap[f], D[0], D[1], D[2])
         else:
@@ -514,7 +520,7 @@ def best_first(tris, ub0, VX, FX, dV, iV, VY, FY, B, NY, W, eps, atol,
     while n > 0 and pops < max_pops:
         s = H[0]
         u = SU[0]
-        thr = (1.0 + eps) * max(state[0], state[8]) + atol
+        thr = _closing(state, eps, atol)
         if u <= thr:                                 # the largest open bound is closed: done
             state[2] = max(state[2], u)
             break
@@ -553,7 +559,7 @@ def best_first(tris, ub0, VX, FX, dV, iV, VY, FY, B, NY, W, eps, atol,
             state[1] += 1.0
             if MD[e] > state[0]:
                 state[0] = MD[e]
-        thr = (1.0 + eps) * max(state[0], state[8]) + atol
+        thr = _closing(state, eps, atol)
         # children: corner ci with the midpoints of its two edges, then the middle triangle; the
         # parent's slot is reused by the last child
         for q in range(4):
@@ -569,7 +575,7 @@ def best_first(tris, ub0, VX, FX, dV, iV, VY, FY, B, NY, W, eps, atol,
                 CD[0], CD[1], CD[2] = MD[0], MD[1], MD[2]
                 CI[0], CI[1], CI[2] = MI[0], MI[1], MI[2]
             cu = _upper(CP, CD, CI, VY, FY, NY, B, stack, dstack, thr, state, W, seeds)
-            if cu <= (1.0 + eps) * max(state[0], state[8]) + atol:
+            if cu <= _closing(state, eps, atol):
                 state[2] = max(state[2], cu)
                 if q == 3:
                     free[nfree] = s
@@ -590,5 +596,5 @@ def best_first(tris, ub0, VX, FX, dV, iV, VY, FY, B, NY, W, eps, atol,
     state[5] = n
     state[6] = nfree
     state[3] = SU[0] if n > 0 else 0.0
-    state[7] = 1.0 if (n == 0 or SU[0] <= (1.0 + eps) * max(state[0], state[8]) + atol) else 0.0
+    state[7] = 1.0 if (n == 0 or SU[0] <= _closing(state, eps, atol)) else 0.0
     return SP, SD, SI, SU, H, free
