@@ -97,31 +97,39 @@ def _variant(df: pd.DataFrame, axis: set) -> pd.Series:
 FAILED = ("error", "timeout")     # a method's own failure: ranks last; "unavailable" is not run (missing)
 
 
-def cell_values(spec: dict, df: pd.DataFrame, metric: str, axis_params=()):
+def cell_values(spec: dict, df: pd.DataFrame, metric: str, axis_params=(), cells=None):
     """(values, invalid): cells x variants tables of the metric's mean over seeds (ok rows; blank
     when any seed of the variant has no value there) and of whether a variant's result in the
     cell is invalid (a seed errored or timed out, or broke a validity rule). Cell labels are
-    ``mesh|noise model|noise level|axis parameters (JSON)``."""
-    d = _cells(spec, df, metric, axis_params)
-    g = d.groupby(["_cell", "_variant"])
-    every_seed = g["_value"].count() == g.size()     # no mean over the seeds that happen to have a value
-    vals = g["_value"].mean().where(every_seed).unstack("_variant")
-    inval = g["_invalid"].any().unstack("_variant").reindex_like(vals).fillna(False).astype(bool)
+    ``mesh|noise model|noise level|axis parameters (JSON)``. ``cells``: `_cells` of ``df``, when
+    already made (it does not depend on the metric)."""
+    d = _cells(spec, df, axis_params) if cells is None else cells
+    keys = [d["_cell"], d["_variant"]]
+    g = _value(d, metric).groupby(keys)
+    every_seed = g.count() == g.size()               # no mean over the seeds that happen to have a value
+    vals = g.mean().where(every_seed).unstack("_variant")
+    inval = d["_invalid"].groupby(keys).any().unstack("_variant").reindex_like(vals).fillna(False).astype(bool)
     return vals, inval
 
 
-def seed_values(spec: dict, df: pd.DataFrame, metric: str, axis_params=()) -> pd.DataFrame:
+def seed_values(spec: dict, df: pd.DataFrame, metric: str, axis_params=(), cells=None) -> pd.DataFrame:
     """The metric per seed: (cell, seed) x variants (ok rows; blank otherwise), cells as in
     `cell_values`."""
-    d = _cells(spec, df, metric, axis_params)
+    d = _cells(spec, df, axis_params) if cells is None else cells
     seed = d["seed"] if "seed" in d else pd.Series(0, index=d.index)
-    return d.assign(_seed=seed).pivot_table(index=["_cell", "_seed"], columns="_variant", values="_value",
-                                            aggfunc="mean", dropna=False)
+    return pd.DataFrame({"_cell": d["_cell"], "_seed": seed, "_variant": d["_variant"], "_value": _value(d, metric)}
+                        ).pivot_table(index=["_cell", "_seed"], columns="_variant", values="_value", aggfunc="mean",
+                                      dropna=False)
 
 
-def _cells(spec: dict, df: pd.DataFrame, metric: str, axis_params=()) -> pd.DataFrame:
-    """``df`` with ``_variant``, ``_invalid``, ``_cell`` (see `cell_values`) and ``_value`` (the
-    metric of ok rows)."""
+def _value(d: pd.DataFrame, metric: str) -> pd.Series:
+    """The metric of ok rows (blank elsewhere)."""
+    return pd.to_numeric(d[metric], errors="coerce").where(d["status"] == "ok")
+
+
+def _cells(spec: dict, df: pd.DataFrame, axis_params=()) -> pd.DataFrame:
+    """``df`` with ``_variant``, ``_invalid`` and ``_cell`` (see `cell_values`): the same for
+    every metric of the task."""
     d = df.copy()
     d["_variant"] = _variant(d, set(axis_params))
     d["_invalid"] = (validity(spec, d) != "") & d["status"].isin(FAILED + ("ok",))
@@ -129,8 +137,6 @@ def _cells(spec: dict, df: pd.DataFrame, metric: str, axis_params=()) -> pd.Data
     text = lambda col: [("" if pd.isna(v) else str(v)) for v in d[col]] if col in d else [""] * len(d)  # noqa: E731
     d["_cell"] = ["|".join(t) for t in zip(text("mesh"), text("noise_model"), text("noise_level"),
                                            [json.dumps({k: p.get(k) for k in sorted(axis_params)}) for p in ps])]
-    val = pd.to_numeric(d[metric], errors="coerce")
-    d["_value"] = val.where(d["status"] == "ok")
     return d
 
 
@@ -172,12 +178,12 @@ def _tied_rank_row(score: np.ndarray, rel: float, abs_: float) -> np.ndarray:
     return ranks
 
 
-def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_params=()):
+def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_params=(), cells=None):
     """(ranks DataFrame cells x variants, missing per variant, invalid per variant); values within
     the metric's tolerance tie (`tie_groups`)."""
     if metric not in df or not len(df):
         return pd.DataFrame(), {}, {}
-    vals, inval = cell_values(spec, df, metric, axis_params)
+    vals, inval = cell_values(spec, df, metric, axis_params, cells)
     missing = vals.isna() & ~inval
     ran = ~missing.all(axis=0)             # a variant with no value anywhere (unavailable) is left out
     vals, inval, missing = vals.loc[:, ran], inval.loc[:, ran], missing.loc[:, ran]
@@ -207,14 +213,16 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
     for task, df in frames.items():
         spec = specs.get(task) or {}
         axis = spec.get("axis_params") or ()
+        cells = _cells(spec, df, axis) if len(df) else None       # once per task, for every metric
         for m in spec.get("metrics", []):
             if not m.get("rank") or m.get("better") not in ("lower", "higher") or m["name"] not in df or not len(df):
                 continue
-            vals, inval = cell_values(spec, df, m["name"], axis)
-            per_seed = seed_values(spec, df, m["name"], axis)
+            vals, inval = cell_values(spec, df, m["name"], axis, cells)
+            per_seed = seed_values(spec, df, m["name"], axis, cells)
             rel, abs_ = tolerance(spec, m["name"])
             given = f"input_{m['name']}"
-            inputs = cell_values(spec, df, given, axis)[0].mean(axis=1) if given in df else pd.Series(dtype=float)
+            inputs = (cell_values(spec, df, given, axis, cells)[0].mean(axis=1) if given in df
+                      else pd.Series(dtype=float))
             for cell, v in vals.iterrows():
                 iv = inputs.get(cell)
                 iv = None if iv is None or pd.isna(iv) else float(iv)
@@ -334,10 +342,11 @@ def leaderboard(frames: dict, specs: dict) -> pd.DataFrame:
     for task, df in frames.items():
         spec = specs.get(task) or {}
         axis = spec.get("axis_params") or ()
+        cells = _cells(spec, df, axis) if len(df) else None       # once per task, for every metric
         for m in spec.get("metrics", []):
             if not m.get("rank") or m.get("better") not in ("lower", "higher"):
                 continue
-            ranks, missing, invalid = cell_ranks(spec, df, m["name"], m["better"], axis)
+            ranks, missing, invalid = cell_ranks(spec, df, m["name"], m["better"], axis, cells)
             if ranks.empty:
                 continue
             chi2, p, cd = friedman_nemenyi(ranks)
