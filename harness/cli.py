@@ -225,10 +225,9 @@ def _cmd_report(a) -> int:
 def _rules_changed(run_dir: Path) -> list[str]:
     """Tasks whose axis parameters or validity rules in the folder's run.json differ from this
     version's: the report keeps the recorded ones (it reads files only), a rerun applies these."""
-    import json
-    try:
-        recorded = json.loads((run_dir / "run.json").read_text()).get("tasks") or {}
-    except (OSError, ValueError, AttributeError):
+    from .results import RunFolder
+    recorded = (RunFolder(run_dir).read_run_json() or {}).get("tasks") or {}
+    if not isinstance(recorded, dict):
         return []
     def norm(x):              # a rule's absent and None fields are the same rule
         return [{k: v for k, v in r.items() if v is not None} if isinstance(r, dict) else r for r in x or []]
