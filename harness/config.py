@@ -54,6 +54,13 @@ class Case:
     hausdorff_eps: float = 1e-3     # relative gap the certified Hausdorff distance aims for
 
     @property
+    def noise_name(self) -> str:
+        """The noise as rows name it: the model, with its fraction when it moves only part of
+        the vertices (``impulsive(fraction=0.3)``), so that entries differing only in their
+        fraction are different inputs in every table and cell."""
+        return noise_name(self.noise_model, self.fraction)
+
+    @property
     def adds_noise(self) -> bool:
         """Whether the harness adds noise to the clean mesh (it then uses the mesh's noise frame);
         False for a clean input and for a given noisy/clean pair (model ``given``)."""
@@ -73,6 +80,11 @@ class Config:
     report: dict = field(default_factory=dict)
     source: str = "<config>"
     tune: object = None             # harness.tune.TuneSpec, or None
+
+
+def noise_name(model: str, fraction: float = 1.0) -> str:
+    """``model``, or ``model(fraction=f)`` when ``f`` < 1 (the impulsive model's moved share)."""
+    return model if fraction is None or float(fraction) == 1.0 else f"{model}(fraction={float(fraction):g})"
 
 
 def _close(word, options):

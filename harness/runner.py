@@ -214,7 +214,7 @@ def forget_inputs() -> None:
 def base_row(case: Case) -> dict:
     """The common columns known before running (status error until proven otherwise)."""
     return {"case_id": case.case_id, "task": case.task, "mesh": case.mesh_key, "n_vertices": None,
-            "n_faces": None, "noise_model": case.noise_model,
+            "n_faces": None, "noise_model": case.noise_name,
             "noise_level": None if math.isnan(case.noise_level) else case.noise_level,
             "seed": case.seed, "method": case.method, "library": _library(case.method),
             "params": json.dumps(case.params, sort_keys=True), "status": "error", "error": "",
@@ -253,7 +253,8 @@ def prepare_input(case: Case) -> tuple[CaseInput, float | None]:
 
 def input_mesh_name(case: Case) -> str:
     lvl = "pair" if math.isnan(case.noise_level) else f"{case.noise_level:g}"
-    return f"{case.mesh_key}-{case.noise_model}-{lvl}-{case.seed}-input.ply"
+    model = case.noise_model if case.fraction == 1.0 else f"{case.noise_model}-fraction{case.fraction:g}"
+    return f"{case.mesh_key}-{model}-{lvl}-{case.seed}-input.ply"
 
 
 QUALITY = "quality = unsigned distance of each vertex to the clean surface (mesh units)"

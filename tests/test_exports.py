@@ -73,3 +73,32 @@ def test_file_meshes_take_a_name_and_a_known_level(tmp_path):
     msg = str(e.value)
     assert "meshes[0].level: the noise level of a given pair needs 'clean'" in msg
     assert "meshes[1].name:" in msg and "meshes[1].level:" in msg
+
+
+def test_impulsive_entries_differing_only_in_fraction_are_different_inputs(tmp_path):
+    """Two impulsive entries at one level and seed, fractions 0.1 and 0.9, are different inputs:
+    their rows name the fraction, each gets its own winners row and its own saved input mesh
+    (rows alike would be averaged as seeds of one cell, and the inputs would share one file)."""
+    import pandas as pd
+    from harness.datasets import load
+    from harness.mesh import read_mesh
+    from harness.noise import apply_noise
+    out = tmp_path / "frac"
+    run({"name": "frac", "meshes": ["knight"], "save_meshes": True, "repeats": 1,
+         "noise": [{"model": "impulsive", "levels": [0.5], "fraction": 0.1},
+                   {"model": "impulsive", "levels": [0.5], "fraction": 0.9},
+                   {"model": "impulsive", "levels": [0.5]}],
+         "tasks": {"smoothing": {"methods": ["scratch.taubin"]}}}, out=out, quiet=True)
+    rows = pd.read_csv(out / "smoothing.csv")
+    assert sorted(rows.noise_model) == ["impulsive", "impulsive(fraction=0.1)", "impulsive(fraction=0.9)"]
+    assert len(set(rows.input_ev_mean)) == 3
+    win = pd.read_csv(out / "winners.csv")
+    assert sorted(win[win.metric == "ev_mean"].noise_model) == sorted(rows.noise_model)
+    clean = load("knight").clean
+    for frac, name in ((0.1, "knight-impulsive-fraction0.1-0.5-0-input.ply"),
+                       (0.9, "knight-impulsive-fraction0.9-0.5-0-input.ply"),
+                       (1.0, "knight-impulsive-0.5-0-input.ply")):
+        V = read_mesh(out / "meshes" / name, repair=False).V
+        want = apply_noise(clean.V, clean.F, "impulsive", 0.5, 0, mesh_key="knight", fraction=frac,
+                           frame=clean.noise_frame)
+        np.testing.assert_allclose(V, want, rtol=0, atol=1e-12 * clean.diagonal())
