@@ -21,6 +21,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 
@@ -169,6 +170,8 @@ def check_report_in_browser(report: Path, screenshot: Path | None = None, timeou
                     smoothingSvgs: document.querySelectorAll('#plots-smoothing svg.chart').length,
                     groupTitles: [...document.querySelectorAll('.plotgroup h4')].map(h => h.textContent),
                     bestRows: [...document.querySelectorAll('[id^="plots-"] table.best tr')].map(r => r.textContent),
+                    legends: [...document.querySelectorAll('.legend')].map(l => [...l.querySelectorAll('span')]
+                        .filter(sp => !sp.querySelector('i.ref')).map(sp => [sp.textContent, sp.querySelector('i').style.background])),
                     height: document.documentElement.scrollHeight};
         })()""")
         if interact:
@@ -356,3 +359,27 @@ def test_generic_table_says_when_no_result_of_a_cell_is_valid(tmp_path):
     assert s["console_errors"] == [] and s["exceptions"] == [] and s["jserrors"] == 0
     rows = [r for r in s["bestRows"] if r.startswith("knight")]
     assert rows and all("no valid result (1 invalid: is the reference itself" in r for r in rows), s["bestRows"]
+
+
+def test_every_legend_gives_its_lines_distinct_colours(tmp_path):
+    """Within a legend no two names share a colour. The hue hashed from a method's name gave
+    libigl.principal_curvature and trimesh.curvature_measure hues 1 degree apart; they are two
+    of the four methods here, whose noise-level panels and tables name them side by side."""
+    import harness
+    cfg = {"name": "colours", "repeats": 1, "time_budget": 0, "meshes": [{"procedural": "torus", "resolution": 24}],
+           "noise": [{"model": "gaussian_normal", "levels": [0.1, 0.3]}],
+           "tasks": {"curvature": {"methods": ["libigl.principal_curvature", "trimesh.curvature_measure",
+                                               "scratch.angle_defect", "scratch.cotan_mean"]}}}
+    harness.run(cfg, out=tmp_path, quiet=True, workers=1)
+    s = check_report_in_browser(tmp_path / "report.html", interact=False)
+    assert s["console_errors"] == [] and s["exceptions"] == [] and s["jserrors"] == 0
+    import itertools
+    import re
+
+    def rgb(css):
+        return np.array([float(x) for x in re.findall(r"[\d.]+", css)[:3]])
+    legends = [dict(leg) for leg in s["legends"] if leg]
+    assert any({"libigl.principal_curvature", "trimesh.curvature_measure"} <= set(leg) for leg in legends), legends
+    for leg in legends:                   # the hashed hues of the pair above were 35 apart in RGB
+        gaps = [np.linalg.norm(rgb(leg[a]) - rgb(leg[b])) for a, b in itertools.combinations(leg, 2)]
+        assert min(gaps) >= 60, leg

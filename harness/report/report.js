@@ -74,12 +74,20 @@
   }
 
   // ------------------------------------------------------------------ task data
-  // a variant's colour comes from its name (FNV-1a hash -> palette slot, then hue), so the same method
-  // has the same colour in every report whatever else the run contains
-  function colorOf(name) {
-    var h = 2166136261;
-    for (var i = 0; i < name.length; i++) { h ^= name.charCodeAt(i); h = Math.imul(h, 16777619) >>> 0; }
-    return 'hsl(' + (h % 360) + ',' + (55 + (h >>> 9) % 25) + '%,' + (38 + (h >>> 17) % 14) + '%)';
+  // colours of a set of names, by the names' sorted order: d3's category10 without its grey (the
+  // reference's), then eleven picked farthest-first from tab20 and Kelly's colours (every two of
+  // the twenty at least 64 apart in RGB), then golden-angle hues; a hash of the name gave two
+  // methods of one task hues 0-1 degree apart
+  var PALETTE = ['#1f77b4', '#ff7f0e', '#2ca02c', '#d62728', '#9467bd', '#8c564b', '#e377c2', '#bcbd22',
+    '#17becf', '#000080', '#dbdb8d', '#a1caf1', '#2b3d26', '#393b79', '#f99379', '#f7b6d2', '#98df8a',
+    '#882d17', '#008856', '#f3c300'];
+  function paletteFor(names) {
+    var out = {};
+    uniq(names).sort().forEach(function (n, i) {
+      out[n] = i < PALETTE.length ? PALETTE[i]
+        : 'hsl(' + Math.round((i * 137.508) % 360) + ',60%,' + (i % 2 ? 35 : 55) + '%)';
+    });
+    return out;
   }
   function taskRows(task) {
     var T = D.tasks[task];
@@ -87,9 +95,7 @@
     var rows = T.rows.map(function (r) {
       var o = {}; T.columns.forEach(function (c, i) { o[c] = r[i]; }); return o;
     });
-    var colors = {};
-    T.variants.forEach(function (v) { colors[v] = colorOf(v); });
-    return {T: T, rows: rows, colors: colors, variants: T.variants};
+    return {T: T, rows: rows, colors: paletteFor(T.variants), variants: T.variants};
   }
 
   // ------------------------------------------------------------------ plotting (SVG)
@@ -1038,6 +1044,7 @@
     var clean = vis.filter(function (r) { return r.noise_model === 'none'; });
     var noisy = vis.filter(function (r) { return r.noise_model !== 'none' && isNum(r.noise_level); });
     var panels = [], drawn = new Map();          // series name -> colour: the legend lists what got a line
+    var axisColors = paletteFor(noisy.filter(function (r) { return r._axis; }).map(function (r) { return r._variant + ' ' + r._axis; }));
     groupBy(noisy, function (r) { return r.mesh + ' · ' + r.noise_model; }).forEach(function (g, title) {
       var rows = g.concat(clean.filter(function (c) { return c.mesh === g[0].mesh; }));
       var series = [];
@@ -1045,7 +1052,7 @@
         var byX = groupBy(vr, function (r) { return r.noise_model === 'none' ? 0 : r.noise_level; });
         var xs = Array.from(byX.keys()).sort(function (a, b) { return a - b; });
         if (xs.length < 2) return;
-        var color = vr[0]._axis ? colorOf(name) : d.colors[vr[0]._variant];   // k = 6 and k = 10 apart
+        var color = vr[0]._axis ? axisColors[name] : d.colors[vr[0]._variant];   // k = 6 and k = 10 apart
         drawn.set(name, color);
         series.push({name: name, color: color, line: true, r: 3, pts: xs.map(function (x) {
           var y = mean(byX.get(x).map(function (r) { return r[key]; }));
@@ -1078,11 +1085,12 @@
       var lines = groupBy(pts, function (p) { return p.r.mesh + '|' + p.r._noise + '|' + p.series; });
       if (!Array.from(lines.values()).some(function (g) { return uniq(g.map(function (p) { return p.x; })).length >= 3; })) return;
       var positive = pts.every(function (p) { return p.x > 0; });
+      var colors = paletteFor(pts.map(function (p) { return p.series; }));
       var drawn = [];                         // the legend lists the series that get a line (two x or more)
       lines.forEach(function (g) { if (uniq(g.map(function (p) { return p.x; })).length >= 2) drawn.push(g[0].series); });
       var panels = panelGroup(plots, key + ' vs ' + pn + ', per mesh',
         'One line per method and its other parameters; mean over seeds.', function () {
-          return staticLegend(uniq(drawn).sort(), colorOf);
+          return staticLegend(uniq(drawn).sort(), function (name) { return colors[name]; });
         });
       groupBy(pts, function (p) { return p.r.mesh + ' · ' + p.r._noise; }).forEach(function (g, title) {
         var series = [];
@@ -1090,7 +1098,7 @@
           var byX = groupBy(sp, function (p) { return p.x; });
           var xs = Array.from(byX.keys()).sort(function (a, b) { return a - b; });
           if (xs.length < 2) return;
-          series.push({name: name, color: colorOf(name), line: true, r: 3, pts: xs.map(function (x) {
+          series.push({name: name, color: colors[name], line: true, r: 3, pts: xs.map(function (x) {
             var y = mean(byX.get(x).map(function (p) { return p.r[key]; }));
             return [x, y, name + '\n' + title + '\n' + pn + ' ' + fmt(x) + ', ' + key + ' ' + fmt(y)];
           })});
