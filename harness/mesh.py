@@ -3,16 +3,20 @@
 Repair policy (each repair is recorded in ``Mesh.repairs`` and in the run's rows):
 - polygons with more than 3 corners are fan-triangulated;
 - STL corners at exactly the same position are welded into one vertex (STL has no indices);
-- faces with a repeated vertex index and exact duplicate faces are removed;
+- faces with a repeated vertex index are removed, and so is every face but the first on the same
+  three vertices (in either orientation: a two-sided sheet becomes one-sided);
 - unreferenced vertices are removed, ``Mesh.vertex_map`` keeps the original index of each kept one.
-Errors (``InvalidMeshError``): unreadable or empty file, unsupported extension, NaN/inf
-coordinates, indices out of range, no face left after the repairs.
+Errors (``InvalidMeshError``): unreadable or empty file, unsupported extension, a file whose
+header promises more or less data than it holds, NaN/inf coordinates, indices out of range, no
+face left after the repairs, a surface of zero area (every face degenerate). A UTF-8 byte-order
+mark at the start of a file is skipped.
 Kept as they are, and reported by `topology`: zero-area faces with distinct corners,
 non-manifold edges and vertices, several components, boundaries.
 """
 from __future__ import annotations
 
 import functools
+import hashlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -107,6 +111,9 @@ def _read_off(text: str):
         raise InvalidMeshError(f"truncated OFF: header promises {nv} vertices and {nf} faces, "
                                f"file has {len(tokens_lines) - start} data lines")
     V = np.asarray([t[:3] for t in tokens_lines[start:start + nv]], dtype=np.float64).reshape(-1, 3)
+    extra = len(tokens_lines) - (start + nv + nf)
+    if extra:
+        raise InvalidMeshError(f"OFF header promises {nf} faces, but {extra} more data line(s) follow them")
     polys = []
     for t in tokens_lines[start + nv:start + nv + nf]:
         k = int(t[0])
@@ -142,9 +149,25 @@ def _read_ply(data: bytes):
             elements[-1][2].append(t[1:])
     if fmt not in ("ascii", "binary_little_endian", "binary_big_endian"):
         raise InvalidMeshError(f"unsupported PLY format {fmt!r}")
+    for name, count, props in elements:
+        if count < 0:
+            raise InvalidMeshError(f"PLY element {name} with a negative count {count}")
+        for p in props:
+            if any(t not in _PLY_TYPES for t in (p[1:3] if p[0] == "list" else p[:1])) or len(p) < (4 if p[0] == "list" else 2):
+                raise InvalidMeshError(f"PLY property {' '.join(p)!r}: unknown type or missing name")
     V, polys = None, []
+
+    def face_list(props):        # the index list of a face: vertex_indices (or vertex_index), else the first list
+        lists = [p[-1] for p in props if p[0] == "list"]
+        named = [n for n in lists if n in ("vertex_indices", "vertex_index")]
+        return (named or lists or [None])[0]
+
     if fmt == "ascii":
         tokens = body.split()
+        least = sum(count * len(props) for _, count, props in elements)     # a list takes its count at least
+        if least > len(tokens):
+            raise InvalidMeshError(f"truncated PLY: the header's elements need at least {least} values, "
+                                   f"the file holds {len(tokens)}")
         pos = 0
         for name, count, props in elements:
             if name == "vertex":
@@ -159,21 +182,28 @@ def _read_ply(data: bytes):
                 V = vals[:, [names.index("x"), names.index("y"), names.index("z")]]
                 pos += k * count
             else:
+                lst = face_list(props)
                 for _ in range(count):
-                    row = []
+                    row = None
                     for p in props:
                         if p[0] == "list":
                             m = int(tokens[pos])
-                            row.append([int(x) for x in tokens[pos + 1:pos + 1 + m]])
+                            if p[-1] == lst:
+                                row = [int(x) for x in tokens[pos + 1:pos + 1 + m]]
                             pos += 1 + m
                         else:
                             pos += 1
                     if name == "face":
-                        polys.append(row[0])
+                        polys.append(row)
                 if pos > len(tokens):
                     raise InvalidMeshError(f"truncated PLY {name} data")
         return V, polys
     order = "<" if fmt == "binary_little_endian" else ">"
+    least = sum(count * sum(np.dtype(_PLY_TYPES[p[1] if p[0] == "list" else p[0]]).itemsize for p in props)
+                for _, count, props in elements)
+    if least > len(body):
+        raise InvalidMeshError(f"truncated PLY: the header's elements need at least {least} bytes, "
+                               f"the file holds {len(body)}")
     off = 0
     for name, count, props in elements:
         if all(p[0] != "list" for p in props):
@@ -192,9 +222,9 @@ def _read_ply(data: bytes):
             else:
                 fields.append((p[-1], order + _PLY_TYPES[p[0]]))
         dt = np.dtype(fields)
-        lst = [p[-1] for p in props if p[0] == "list"][0]
+        lst = face_list(props)
         arr = np.frombuffer(body, dtype=dt, count=count, offset=off) if len(body) - off >= dt.itemsize * count else None
-        if arr is not None and np.all(arr[lst + "_n"] == 3):
+        if arr is not None and all(np.all(arr[p[-1] + "_n"] == 3) for p in props if p[0] == "list"):
             off += dt.itemsize * count
             if name == "face":
                 polys = arr[lst].astype(np.int64)
@@ -206,7 +236,8 @@ def _read_ply(data: bytes):
                     ct, it = np.dtype(order + _PLY_TYPES[p[1]]), np.dtype(order + _PLY_TYPES[p[2]])
                     m = int(np.frombuffer(body, ct, 1, off)[0])
                     off += ct.itemsize
-                    row = np.frombuffer(body, it, m, off).astype(np.int64).tolist()
+                    if p[-1] == lst:
+                        row = np.frombuffer(body, it, m, off).astype(np.int64).tolist()
                     off += it.itemsize * m
                 else:
                     off += np.dtype(_PLY_TYPES[p[0]]).itemsize
@@ -243,25 +274,37 @@ def _read_stl(data: bytes):
     return V, np.arange(len(V), dtype=np.int64).reshape(-1, 3)
 
 
-def read_mesh(path, name: str | None = None, repair: bool = True) -> Mesh:
-    """Read a triangle mesh file and validate it (see the module docstring for the policy)."""
+def read_mesh(path, name: str | None = None, repair: bool = True, sha1: str | None = None) -> Mesh:
+    """Read a triangle mesh file and validate it (see the module docstring for the policy).
+
+    ``sha1``: the hex digest the file's bytes must have (a file that changed since its run
+    started is an error, not another mesh under the same name)."""
     path = Path(path)
     ext = path.suffix.lower()
     if ext not in SUPPORTED:
         raise InvalidMeshError(f"{path.name}: unsupported extension {ext!r}; expected one of {SUPPORTED}")
     if not path.is_file():
         raise InvalidMeshError(f"{path}: no such file")
-    if path.stat().st_size == 0:
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise InvalidMeshError(f"{path}: cannot read it ({exc.strerror or exc})") from None
+    if not data:
         raise InvalidMeshError(f"{path.name}: empty file")
+    if sha1 is not None and hashlib.sha1(data).hexdigest() != sha1:
+        raise InvalidMeshError(f"{path}: the file changed since the run started (its sha1 is now "
+                               f"{hashlib.sha1(data).hexdigest()[:12]}, was {sha1[:12]}); start the run again")
+    if ext != ".stl" and data.startswith(b"\xef\xbb\xbf"):          # a UTF-8 byte-order mark
+        data = data[3:]
     notes = []
     try:
         if ext in (".obj", ".off", ".ply"):
             if ext == ".ply":
-                V, polys = _read_ply(path.read_bytes())
+                V, polys = _read_ply(data)
                 if V is None:
                     raise InvalidMeshError("PLY file has no vertex element")
             else:
-                text = path.read_text(errors="replace")
+                text = data.decode("utf-8", errors="replace")
                 V, polys = _read_obj(text) if ext == ".obj" else _read_off(text)
             if isinstance(polys, np.ndarray):
                 F, n_poly = polys, 0
@@ -270,7 +313,7 @@ def read_mesh(path, name: str | None = None, repair: bool = True) -> Mesh:
             if n_poly:
                 notes.append(f"fan-triangulated {n_poly} polygon(s) with more than 3 corners")
         else:
-            V, F = _read_stl(path.read_bytes())
+            V, F = _read_stl(data)
             if len(V):       # STL stores each triangle's corners separately: weld exact copies
                 V, inv = np.unique(V, axis=0, return_inverse=True)
                 F = inv.ravel()[F]
@@ -368,6 +411,9 @@ def validate(V, F, name: str = "", repair: bool = True) -> Mesh:
             remap = np.full(len(V), -1, np.int64)
             remap[vmap] = np.arange(len(vmap))
             V, F = V[vmap], remap[F]
+    if not any(np.cross(V[f[:, 1]] - V[f[:, 0]], V[f[:, 2]] - V[f[:, 0]]).any() for f in (F[:64], F)):
+        raise InvalidMeshError(f"{label}every face has zero area (the surface is degenerate: its vertices "
+                               "lie on a line or coincide)")
     return Mesh(V=np.ascontiguousarray(V), F=np.ascontiguousarray(F), name=name,
                 vertex_map=vmap, repairs=notes)
 

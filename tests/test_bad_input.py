@@ -5,8 +5,8 @@ isolated executor) with every task. Each input has one defined outcome, per the 
 harness/mesh.py:
 
 - error (every row of the mesh is ``error`` and the message names the problem): NaN or inf
-  coordinates, empty file, unreadable or truncated file, unsupported extension, indices out
-  of range;
+  coordinates, empty file, unreadable or truncated file, a header promising more or less data
+  than the file holds, unsupported extension, indices out of range, a surface of zero area;
 - repaired (rows ok, the repair named in the ``error`` column as ``input repaired: ...``):
   quads and polygons (fan-triangulated), duplicate faces, faces with a repeated vertex,
   unreferenced vertices;
@@ -115,6 +115,24 @@ def _files() -> dict[str, str | bytes]:
     V3 = V + [[x + 5, y, z] for x, y, z in OCTA_V]
     out["components.obj"] = _obj(V3, OCTA_F + [(p + 6, q + 6, r + 6) for p, q, r in OCTA_F])
     out["single_triangle.obj"] = _obj([(0, 0, 0), (1, 0, 0), (0, 1, 0)], [(0, 1, 2)])
+    out["bom.obj"] = b"\xef\xbb\xbf" + _obj(V, OCTA_F).encode()        # a UTF-8 byte-order mark first
+    # MeshLab's per-corner texture coordinates: a second list on each face, after or before the indices
+    thdr = hdr.replace(b"vertex_indices\n", b"vertex_indices\nproperty list uchar float texcoord\n")
+    tc = struct.pack("<B6f", 6, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6)
+    out["texcoord_binary.ply"] = thdr + vb + b"".join(struct.pack("<B3i", 3, *f) + tc for f in OCTA_F)
+    out["texcoord_first_ascii.ply"] = (
+        "ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty float y\nproperty float z\n"
+        "element face 8\nproperty list uchar float texcoord\nproperty list uchar int vertex_indices\nend_header\n"
+        + "".join(f"{x} {y} {z}\n" for x, y, z in V)
+        + "".join("6 0.1 0.2 0.3 0.4 0.5 0.6 3 " + " ".join(map(str, f)) + "\n" for f in OCTA_F))
+    # an ASCII PLY whose header declares 1e9 more elements than the file holds (read in a Python loop)
+    out["huge_count.ply"] = (
+        "ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty float y\nproperty float z\n"
+        "element face 8\nproperty list uchar int vertex_indices\nelement junk 1000000000\nproperty float a\n"
+        "end_header\n" + "".join(f"{x} {y} {z}\n" for x, y, z in V)
+        + "".join("3 " + " ".join(map(str, f)) + "\n" for f in OCTA_F))
+    out["extra_faces.off"] = _off(V, OCTA_F).replace("6 8 0", "6 7 0", 1)   # one face past the promised count
+    out["collinear.obj"] = _obj([(0, 0, 0), (1, 0, 0), (2, 0, 0), (3, 0, 0)], [(0, 1, 2), (1, 2, 3)])
     return out
 
 
@@ -128,8 +146,11 @@ LOAD_ERRORS = {
     "garbage_ply": "missing PLY header",
     "garbage_stl": "truncated ASCII STL",
     "truncated_binary": "unreadable",            # .ply and .stl: both stems map here
-    "lying_header": "unreadable (ValueError: buffer is smaller",
+    "lying_header": "truncated PLY: the header's elements need at least",
     "out_of_range": "face indices out of range",
+    "huge_count": "truncated PLY: the header's elements need at least",
+    "extra_faces": "OFF header promises 7 faces, but 1 more data line(s) follow them",
+    "collinear": "every face has zero area",
 }
 # stem -> (repair note in every row, vertices, faces after reading) -------------------------
 REPAIRED = {
@@ -139,6 +160,9 @@ REPAIRED = {
     "repeated_vertex": ("removed 1 face(s) with a repeated vertex", 6, 8),
     "unreferenced": ("removed 2 unreferenced vertex/vertices", 6, 8),
     "octa_binary": ("", 6, 8),                  # .ply: nothing to repair; .stl: corners welded
+    "bom": ("", 6, 8),
+    "texcoord_binary": ("", 6, 8),
+    "texcoord_first_ascii": ("", 6, 8),
 }
 # stem -> topology facts that must survive reading unchanged --------------------------------
 KEPT = {
