@@ -123,6 +123,8 @@ def _identity(spec: dict) -> dict:
     """What defines a mesh for the case id: file contents (sha1), not where the file lies."""
     out = {}
     for k, v in spec.items():
+        if k.endswith("_sha1"):
+            continue                      # a case's record of the bytes it must read (`expand_cases`)
         if k in ("file", "clean"):
             out[k + "_sha1"] = hashlib.sha1(Path(v).read_bytes()).hexdigest()
         elif k == "name":
@@ -331,6 +333,7 @@ def expand_cases(meshes: list, noises, tasks: dict, seed: int, repeats: int, plu
     labels = _unique_labels(meshes)
     for spec, key in zip(meshes, labels):
         ident = _identity(spec)
+        spec = {**spec, **{k: v for k, v in ident.items() if k.endswith("_sha1")}}   # the bytes each case must read
         is_pair = "clean" in spec or datasets.resolve_bundled(spec.get("bundled", "")) in datasets.PAIRS
         given = ("given", float("nan"), seed, 1.0)          # one NaN object: tuples compare by identity first
 
@@ -424,6 +427,12 @@ def _check_meshes(meshes, base_dir: Path, P: list) -> list[dict]:
                     continue
                 if path.suffix.lower() not in SUPPORTED:
                     P.append(f"{at}.{k}: unsupported extension {yaml_input.short(path.suffix)} of {f}; expected one of {list(SUPPORTED)}")
+                    continue
+                try:
+                    with open(path, "rb") as fh:
+                        fh.read(1)
+                except OSError as exc:
+                    P.append(f"{at}.{k}: cannot read {f}: {exc.strerror or exc}")
                     continue
                 spec[k] = str(path.resolve())
             if "file" in spec and "clean" in spec:

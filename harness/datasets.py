@@ -114,6 +114,7 @@ def _freeze(spec: dict):
 @functools.lru_cache(maxsize=8)
 def _load_cached(frozen) -> Source:
     spec = dict(frozen)
+    sha = {k: spec.pop(f"{k}_sha1", None) for k in ("file", "clean")}   # a case's files must still hold these bytes
     key = spec_key(spec)
     if "bundled" in spec:
         name = resolve_bundled(spec["bundled"])
@@ -129,13 +130,13 @@ def _load_cached(frozen) -> Source:
         V, F = GENERATORS[kind](**params)
         return Source(key, validate(V, F, name=key), shape={"procedural": kind, **params})
     if "clean" in spec:
-        return _pair(key, Path(spec["file"]), Path(spec["clean"]), spec.get("level"))
-    return Source(key, read_mesh(spec["file"]))
+        return _pair(key, Path(spec["file"]), Path(spec["clean"]), spec.get("level"), sha["file"], sha["clean"])
+    return Source(key, read_mesh(spec["file"], sha1=sha["file"]))
 
 
-def _pair(key: str, noisy_path: Path, clean_path: Path, level) -> Source:
-    noisy = read_mesh(noisy_path, repair=False)
-    clean = read_mesh(clean_path, repair=False)
+def _pair(key: str, noisy_path: Path, clean_path: Path, level, noisy_sha1=None, clean_sha1=None) -> Source:
+    noisy = read_mesh(noisy_path, repair=False, sha1=noisy_sha1)
+    clean = read_mesh(clean_path, repair=False, sha1=clean_sha1)
     if noisy.n_vertices != clean.n_vertices:
         raise InvalidMeshError(f"{key}: noisy ({noisy.n_vertices}) and clean ({clean.n_vertices}) "
                                "vertex counts differ; a pair needs the same vertices in the same order")

@@ -262,7 +262,8 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         if prev and prev.get("config_hash") != chash:
             raise ShootoutError(
                 f"--resume: the config changed since the run in {out_dir} started "
-                "(cases, repeats, hausdorff_samples or hausdorff_eps differ); run without --resume to start over, "
+                "(cases, repeats, hausdorff_samples or hausdorff_eps differ; a case id also changes when a mesh "
+                "file's contents do); run without --resume to start over, "
                 "or use a new --out folder")
     elif folder.foreign_files():
         raise folder.foreign_error()

@@ -422,3 +422,30 @@ def test_pygel_laplacian_refuses_tiny_meshes(bad_dir):
     cfg = load_config(config([{"file": str(bad_dir / "unreferenced.obj")}], {"smoothing": ["pygel.laplacian"]}))
     row, _ = run_isolated(cfg.cases[0], timeout=60)
     assert row["status"] == "error" and "SIGFPE on meshes with fewer than 8 vertices" in row["error"], row["error"]
+
+
+def test_a_file_that_cannot_be_read_is_a_config_problem_and_a_mesh_error(tmp_path):
+    """A mesh file whose read fails (here a link to /proc/self/mem, which answers EIO at offset 0:
+    the suite runs as root, where chmod 000 does not stop a read) is one config problem naming its
+    key path, and `read_mesh` says InvalidMeshError, not an OSError traceback."""
+    from harness.errors import InvalidMeshError
+    link = tmp_path / "mem.obj"
+    link.symlink_to("/proc/self/mem")
+    with pytest.raises(ConfigError, match=r"meshes\[0\]\.file: cannot read"):
+        load_config(config([{"file": str(link)}], {"laplacian": ["scratch.cotan"]}))
+    with pytest.raises(InvalidMeshError, match="cannot read it"):
+        read_mesh(link)
+
+
+def test_a_file_changed_after_the_run_started_is_an_error_row(tmp_path):
+    """Case ids hash a file's bytes when the config is read; a case whose file was edited since
+    (here: before the cases ran) is an error row saying so, not a row of another mesh under the
+    same label and case id."""
+    p = tmp_path / "m.obj"
+    p.write_text(_obj(OCTA_V, OCTA_F))
+    cfg = load_config(config([{"file": str(p)}], {"laplacian": ["scratch.cotan", "libigl.cotan"]}))
+    p.write_text(_obj([(2 * x, y, z) for x, y, z in OCTA_V], OCTA_F))
+    frames = harness.run(cfg, out=tmp_path / "out", workers=1)
+    df = frames["laplacian"]
+    assert len(df) == 2 and (df["status"] == "error").all(), df[["method", "status", "error"]]
+    assert df["error"].str.contains("the file changed since the run started").all(), df["error"].tolist()

@@ -258,3 +258,17 @@ def test_a_lost_scheduler_interrupts_the_run_instead_of_failing_its_cases(tmp_pa
     finally:
         proc.kill()
         worker.kill()
+
+
+def test_a_file_changed_after_the_run_started_is_an_error_row_on_a_worker(tmp_path):
+    """The cases carry the sha1 of their files' bytes when the config was read; a file edited
+    since is not shipped as if it were the same mesh: the worker's row says it changed."""
+    from harness.executors.dask import run_task
+    cfg = load_config(config(tmp_path))
+    case = next(c for c in cfg.cases if c.mesh_key == "grid" and c.method == "libigl.cotan")
+    grid = tmp_path / "shipped" / "grid.obj"
+    grid.write_text(grid.read_text().replace("v 0.000000 0.000000", "v 0.000000 0.050000", 1))
+    (sent,), blobs = ship_files([case])
+    assert blobs == {}
+    row, _ = run_task(sent, blobs, timeout=60, want_meshes=False)
+    assert row["status"] == "error" and "changed since the run started" in row["error"], row["error"]

@@ -43,7 +43,7 @@ import uuid
 from pathlib import Path
 
 from ..config import Case
-from ..errors import RunInterrupted, ShootoutError
+from ..errors import InvalidMeshError, RunInterrupted, ShootoutError
 from ..runner import base_row
 from .isolation import signal_name
 
@@ -140,7 +140,7 @@ class DaskExecutor:
         blobs = {h: self.client.scatter(b, hash=False) for h, b in data.items()}   # once per file
         futures = {}
         for case, sent in zip(cases, shipped):
-            need = {h: blobs[h] for h in _hashes(sent)}
+            need = {h: blobs[h] for h in _hashes(sent) if h in blobs}
             fut = self.client.submit(run_task, sent, need, self.timeout, want_meshes,
                                      key=f"shootout-{case.case_id}-{uuid.uuid4().hex[:12]}",
                                      pure=False, retries=0)
@@ -180,9 +180,12 @@ def ship_files(cases):
     """Cases as sent (file specs tagged with the sha1 of their bytes) and ``{sha1: bytes}``.
 
     Each distinct file is read once by the driver; a file the driver cannot read is left
-    untagged and the worker reports it (an ``error`` row naming the file).
+    untagged and the worker reports it (an ``error`` row naming the file); a file whose bytes
+    differ from the case's tag (it changed since the run started) is not sent, and the worker
+    makes that case an error row saying so.
     """
     data: dict[str, bytes] = {}
+    read: dict[str, bytes] = {}
     hashes: dict[str, str | None] = {}
     out = []
     for c in cases:
@@ -201,9 +204,14 @@ def ship_files(cases):
                     hashes[p] = None
                 else:
                     hashes[p] = hashlib.sha1(raw).hexdigest()
-                    data.setdefault(hashes[p], raw)
-            if hashes[p]:
+                    read[hashes[p]] = raw
+            expected = spec.get(f"{k}_sha1")
+            if hashes[p] is None:
+                spec.pop(f"{k}_sha1", None)          # unreadable here: the worker reads the path and says why
+            elif expected is None or expected == hashes[p]:
                 spec[f"{k}_sha1"] = hashes[p]
+                data.setdefault(hashes[p], read[hashes[p]])
+            # else: the file changed since the run started; the tag stays, no bytes go, the worker says so
         out.append(dataclasses.replace(c, mesh=spec))
     return out, data
 
@@ -228,7 +236,10 @@ def materialize(case: Case, blobs: dict) -> Case:
         h = spec.pop(f"{k}_sha1", None)
         if h is None:
             continue
-        data = blobs[h]
+        data = blobs.get(h)
+        if data is None:
+            raise InvalidMeshError(f"{spec[k]}: the file changed since the run started (its bytes no longer "
+                                   f"have sha1 {h[:12]}); start the run again")
         if hashlib.sha1(data).hexdigest() != h:
             raise ShootoutError(f"shipped bytes of {spec[k]} do not match their sha1")
         target = root / h / Path(spec[k]).name
@@ -251,6 +262,10 @@ def run_task(case: Case, blobs: dict, timeout: float | None, want_meshes: bool):
     """The Dask task: one case, isolated in a child process of the worker; never raises."""
     try:
         case = materialize(case, blobs)
+    except InvalidMeshError as exc:         # its file changed since the run started
+        row = base_row(case)
+        row["error"] = f"InvalidMeshError: {exc}"
+        return row, {}
     except Exception as exc:  # a cache directory we cannot write is this case's error, not the run's
         row = base_row(case)
         row["error"] = f"cannot materialise the shipped mesh file on the worker ({type(exc).__name__}: {exc})"
