@@ -101,10 +101,11 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
             raw = read_mesh(clean, repair=False)
             if noisy:
                 src = datasets.load({"file": str(Path(noisy).resolve()), "clean": str(clean.resolve())})
-                cleans[key] = (src.clean, src.noisy_V, len(raw.V), len(raw.F))
+                cleans[key] = (src.clean, src.noisy_V, len(raw.V), raw.F)
             else:
-                cleans[key] = (read_mesh(clean), None, len(raw.V), len(raw.F))
-        cmesh, V_in, n_raw, m_raw = cleans[key]
+                cleans[key] = (read_mesh(clean), None, len(raw.V), raw.F)
+        cmesh, V_in, n_raw, F_raw = cleans[key]
+        m_raw = len(F_raw)
         row = {"case_id": f"eval{i:04d}", "task": e.get("task") or "smoothing", "mesh": cmesh.name,
                "n_vertices": cmesh.n_vertices, "n_faces": cmesh.n_faces, "noise_model": "given" if noisy else "none",
                "noise_level": None, "seed": None, "method": e.get("label") or rp.stem, "library": "external",
@@ -119,7 +120,7 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
                 raise ShootoutError(f"{rp.name}: {len(r.F)} faces, but the clean mesh has {cmesh.n_faces}: a "
                                     "smoothing result keeps the clean mesh's faces (use --task simplification to "
                                     "compare surfaces)")
-            V = _in_clean_order(r, cmesh, n_raw, rp) if t == "smoothing" else r.V
+            V = _in_clean_order(r, cmesh, n_raw, F_raw, rp) if t == "smoothing" else r.V
             row.update(evaluate(V, r.F, cmesh.V, cmesh.F, task=t, V_noisy=V_in, hausdorff_samples=hausdorff_samples))
         except Exception as exc:  # noqa: BLE001 - any failure scoring one file is that file's error row
             row.update(status="error", error=(f"{type(exc).__name__}: {exc}" if not isinstance(exc, ShootoutError)
@@ -205,13 +206,19 @@ def results_config(raw: dict, base_dir: Path) -> tuple[list[dict], int]:
     return entries, hs
 
 
-def _in_clean_order(r: Mesh, cmesh: Mesh, n_raw: int, path: Path) -> np.ndarray:
+def _in_clean_order(r: Mesh, cmesh: Mesh, n_raw: int, F_raw: np.ndarray, path: Path) -> np.ndarray:
     """A smoothing result's positions in the clean mesh's (repaired) vertex order: the result has
-    either the repaired count or the clean file's own count (then the repair's vertex map applies)."""
-    if len(r.V) == cmesh.n_vertices:
+    either the repaired mesh's vertices and faces or the clean file's own (then the repair's
+    vertex map applies). Equal counts with other faces (e.g. an STL, whose reader welds and
+    re-sorts the corners) are an error: per-vertex errors would pair unrelated vertices."""
+    if len(r.V) == cmesh.n_vertices and np.array_equal(r.F, cmesh.F):
         return r.V
-    if len(r.V) == n_raw and cmesh.vertex_map is not None:
+    if len(r.V) == n_raw and np.array_equal(r.F, F_raw) and cmesh.vertex_map is not None:
         return r.V[cmesh.vertex_map]
+    if len(r.V) in (cmesh.n_vertices, n_raw):
+        raise ShootoutError(f"{path.name}: as many vertices as the clean mesh, but other faces: a smoothing result "
+                            "must keep the clean mesh's vertices in order and its faces (STL loses the order: save "
+                            "OBJ, OFF or PLY; or use --task simplification to compare surfaces instead)")
     raise ShootoutError(f"{path.name}: {len(r.V)} vertices, but the clean mesh has {cmesh.n_vertices}: a smoothing "
                         "result must keep the clean mesh's vertices in order (use --task simplification to "
                         "compare surfaces instead)")
