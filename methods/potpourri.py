@@ -13,6 +13,7 @@ import time
 
 import numpy as np
 
+from harness.tasks.geodesics import manifold_precheck
 from methods import GeodesicResult, Param, register
 
 
@@ -31,7 +32,7 @@ def heat(V, F, *, sources, t_factor=1.0, robust=True):
     return GeodesicResult(D=D, precompute_s=t1 - t0, per_source_s=(t2 - t1) / max(len(sources), 1))
 
 
-@register("pygeodesic.exact", task="geodesics", library="pygeodesic", requires=("pygeodesic",),
+@register("pygeodesic.exact", task="geodesics", library="pygeodesic", requires=("pygeodesic",), precheck=manifold_precheck,
           cite="Surazhsky et al. 2005 (Kirsanov's geodesic library)")
 def exact(V, F, *, sources):
     """Exact polyhedral distance from each source to all vertices (module docstring)."""

@@ -186,3 +186,36 @@ def test_scratch_heat_names_vertices_that_lie_only_on_zero_area_faces():
     W = V.copy()
     W[F[0, 2]] = (W[F[0, 0]] + W[F[0, 1]]) / 2
     assert np.isfinite(methods.get("scratch.heat")(W, F, sources=1).D).all()
+
+
+def test_a_mesh_the_exact_reference_cannot_take_is_an_error_row_saying_so(tmp_path):
+    """libigl's exact_geodesic dies of SIGSEGV on an edge of three faces and grew to 16 GB on a
+    grid with one zero-area face; as the task's reference on a file mesh it cost every method's
+    row as 'worker process died (the method crashed its process)'. The reference, and the exact
+    adapters as their precheck, now refuse such meshes with the reason (pygeodesic only the
+    non-manifold edge: it runs on the zero-area face)."""
+    nm = tmp_path / "nm_edge.obj"
+    nm.write_text("v 0 0 0\nv 1 0 0\nv 0.5 1 0\nv 0.5 -1 0\nv 0.5 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n")
+    n = 6
+    x, y = np.meshgrid(np.linspace(0, 1, n + 1), np.linspace(0, 1, n + 1), indexing="ij")
+    V = np.c_[x.ravel(), y.ravel(), 0 * x.ravel()]
+    idx = np.arange(len(V)).reshape(n + 1, n + 1)
+    F = [f for a in range(n) for b in range(n)
+         for f in ([idx[a, b], idx[a + 1, b], idx[a + 1, b + 1]], [idx[a, b], idx[a + 1, b + 1], idx[a, b + 1]])]
+    m = len(V)
+    V = np.vstack([V, (V[0] + V[1]) / 2])                      # the midpoint of boundary edge 0-1
+    F.remove([0, 8, 1])
+    F += [[0, 8, m], [m, 8, 1], [0, m, 1]]                    # the last face is collinear: zero area
+    za = tmp_path / "zero_area_grid.obj"
+    za.write_text("".join(f"v {a} {b} {c}\n" for a, b, c in V) + "".join(f"f {p + 1} {q + 1} {r + 1}\n" for p, q, r in F))
+    run({"name": "georef", "repeats": 1, "time_budget": 0, "meshes": [{"file": str(nm)}, {"file": str(za)}],
+         "noise": [{"model": "none"}],
+         "tasks": {"geodesics": {"methods": ["scratch.heat", "libigl.exact_geodesic", "pygeodesic.exact"],
+                                 "params": {"sources": 1}}}}, out=tmp_path / "o", quiet=True)
+    df = pd.read_csv(tmp_path / "o" / "geodesics.csv").set_index(["mesh", "method"])
+    assert len(df) == 6 and (df["status"] == "error").all(), df[["status", "error"]]
+    assert not df["error"].str.contains("worker process").any(), df["error"].tolist()
+    assert df.loc[("nm_edge", "scratch.heat"), "error"].startswith("InvalidMeshError: no geodesic reference")
+    assert "1 edge(s) on more than two faces" in df.loc[("nm_edge", "pygeodesic.exact"), "error"]
+    assert "zero-area face" in df.loc[("zero_area_grid", "libigl.exact_geodesic"), "error"]
+    assert "no geodesic reference" in df.loc[("zero_area_grid", "pygeodesic.exact"), "error"]

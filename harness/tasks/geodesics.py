@@ -99,8 +99,44 @@ def analytic(shape: dict | None, P: np.ndarray, s: np.ndarray) -> np.ndarray | N
     return None
 
 
+def exact_geodesic_problem(V: np.ndarray, F: np.ndarray, zero_area: bool = True) -> str | None:
+    """Why an implementation of the exact polyhedral algorithm (Surazhsky et al. 2005) cannot take
+    this mesh, or None: an edge on more than two faces (libigl's ``exact_geodesic`` and
+    pygeodesic both die of SIGSEGV there) or, with ``zero_area``, a zero-area face (libigl's grew
+    to 16 GB and threw ``std::bad_alloc`` on a grid with one collinear face; pygeodesic's did not)."""
+    from ..core.geometry import edge_face_counts, zero_area_faces
+    what = []
+    nm = int((edge_face_counts(F)[1] > 2).sum())
+    if nm:
+        what.append(f"{nm} edge(s) on more than two faces")
+    za = zero_area_faces(V, F) if zero_area else np.zeros(0, np.int64)
+    if za.size:
+        what.append(f"{za.size} zero-area face(s) (first: {za[:5].tolist()})")
+    need = "an edge-manifold mesh without zero-area faces" if zero_area else "an edge-manifold mesh"
+    return f"the exact polyhedral geodesic algorithm needs {need}; this one has {' and '.join(what)}" if what else None
+
+
+def exact_precheck(V: np.ndarray, F: np.ndarray, name: str) -> None:
+    """libigl ``exact_geodesic``'s ``precheck``: ValueError with `exact_geodesic_problem`'s reason."""
+    why = exact_geodesic_problem(V, F)
+    if why:
+        raise ValueError(f"{name}: {why}")
+
+
+def manifold_precheck(V: np.ndarray, F: np.ndarray, name: str) -> None:
+    """pygeodesic's ``precheck``: ValueError on edges of more than two faces."""
+    why = exact_geodesic_problem(V, F, zero_area=False)
+    if why:
+        raise ValueError(f"{name}: {why}")
+
+
 def exact_polyhedral(V: np.ndarray, F: np.ndarray, s: int) -> np.ndarray:
-    """Exact polyhedral geodesic distance from vertex ``s`` (libigl ``exact_geodesic``)."""
+    """Exact polyhedral geodesic distance from vertex ``s`` (libigl ``exact_geodesic``); an
+    `InvalidMeshError` where `exact_geodesic_problem` says the algorithm cannot take the mesh."""
+    why = exact_geodesic_problem(V, F)
+    if why:
+        from ..errors import InvalidMeshError
+        raise InvalidMeshError(f"no geodesic reference: {why}")
     import igl
     return np.asarray(igl.exact_geodesic(V, F, VS=np.array([s], np.int64), VT=np.arange(len(V), dtype=np.int64)),
                       dtype=np.float64)

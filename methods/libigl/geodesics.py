@@ -16,11 +16,12 @@ import time
 import numpy as np
 
 from harness.core.geometry import mean_edge_length
+from harness.tasks.geodesics import exact_precheck
 from methods import GeodesicResult, Param, register
 from methods.libigl import reject_zero_area_or_unreferenced
 
 
-@register("libigl.exact_geodesic", task="geodesics", library="libigl", requires=("igl",),
+@register("libigl.exact_geodesic", task="geodesics", library="libigl", requires=("igl",), precheck=exact_precheck,
           cite="Surazhsky, Surazhsky, Kirsanov, Gortler, Hoppe, Fast exact and approximate geodesics on meshes, "
                "SIGGRAPH 2005")
 def exact_geodesic(V, F, *, sources):
