@@ -6,7 +6,10 @@ mass and ``t = t_factor * h^2`` (``h`` the mean edge length):
 
 1. heat: ``(M - t W) u = delta_s`` (1 at the source). With a boundary, ``boundary: average``
    averages the Neumann solution and the Dirichlet one (``u = 0`` on the boundary), as the paper
-   recommends; ``neumann``/``dirichlet`` use one of them;
+   recommends; ``neumann``/``dirichlet`` use one of them. The boundary is the input mesh's, also
+   with ``laplacian: tufted`` (whose cover has none: there the Neumann solution is the cover's
+   natural one, and the Dirichlet one fixes ``u = 0`` at the input's boundary vertices), so that
+   one ``boundary`` setting compares the three operators under the same condition;
 2. ``X = grad u / |grad u|`` per face;
 3. Poisson: ``-W phi = b``, ``b_i = sum_f A_f grad(phi_i) . X_f`` (one vertex of each connected
    component pinned), then ``phi`` shifted to 0 at the source (and negated if its mean over the
@@ -92,7 +95,7 @@ class HeatSolver:
                              f"have no mass with laplacian: {laplacian}, and the heat step is singular there")
         t = float(t_factor) * mean_edge_length(V, F) ** 2
         Q = (sp.diags(m) - t * W).tocsr()
-        bnd = boundary_vertices(F, n) if laplacian != "tufted" else np.zeros(n, bool)   # the cover is closed
+        bnd = boundary_vertices(F, n)      # the input's boundary, whatever triangulation the operators use
         use_n = boundary in ("neumann", "average") or not bnd.any()
         use_d = boundary in ("dirichlet", "average") and bnd.any()
         self.neumann = factorize(Q, solver) if use_n else None
