@@ -5,7 +5,9 @@
 triangulations and normal cycle") integrate K and H over the ball of radius ``r`` around each
 vertex; the adapter divides by the ball's area on a flat surface, ``pi r^2``, to give pointwise
 values in the task's conventions (H > 0 on a sphere with outward normals). ``r = radius * h``
-with ``h`` the mean edge length. Large radii smooth the field.
+with ``h`` the mean edge length. Large radii smooth the field. The adapter calls trimesh on the
+mesh centred and scaled to unit mean edge length and scales K by ``1/h^2`` and H by ``1/h``:
+trimesh's absolute tolerances made H on a sphere of radius 1e-6 read 18x the true value.
 
 Near a boundary K is far too large, as trimesh computes it: trimesh takes every vertex's angle
 defect against ``2 pi``, also at boundary vertices (whose defect is against ``pi``), so each
@@ -29,9 +31,11 @@ from methods import CurvatureResult, Param, register
 def curvature_measure(V, F, *, radius=3.0):
     """Pointwise K and H from trimesh's curvature measures over balls (module docstring)."""
     import trimesh
-    m = trimesh.Trimesh(vertices=V, faces=F, process=False, validate=False)
-    r = float(radius) * mean_edge_length(V, F)
+    h = mean_edge_length(V, F)
+    U = (V - V.mean(axis=0)) / h        # trimesh's absolute tolerances (1e-8) assume unit-sized meshes
+    m = trimesh.Trimesh(vertices=U, faces=F, process=False, validate=False)
+    r = float(radius)
     area = np.pi * r * r
-    K = np.asarray(trimesh.curvature.discrete_gaussian_curvature_measure(m, V, r), dtype=np.float64) / area
-    H = np.asarray(trimesh.curvature.discrete_mean_curvature_measure(m, V, r), dtype=np.float64) / area
-    return CurvatureResult(K=K, H=H)
+    K = np.asarray(trimesh.curvature.discrete_gaussian_curvature_measure(m, U, r), dtype=np.float64) / area
+    H = np.asarray(trimesh.curvature.discrete_mean_curvature_measure(m, U, r), dtype=np.float64) / area
+    return CurvatureResult(K=K / (h * h), H=H / h)
