@@ -19,7 +19,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 def _parser() -> argparse.ArgumentParser:
-    p = _Parser(prog="shootout", description="Compare discrete Laplacians, smoothing and simplification methods.")
+    p = _Parser(prog="shootout", description="Compare geometry-processing methods (Laplacians, smoothing, simplification, geodesics, curvature, spectra).")
     from . import __version__
     p.add_argument("--version", action="version", version=f"mesh-shootout {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -51,7 +51,7 @@ def _parser() -> argparse.ArgumentParser:
                     "simplification: the surface a result is compared to, as in a run; without it, the clean mesh)")
     ev.add_argument("--out", required=True, help="run folder to write")
     ev.add_argument("--task", choices=["smoothing", "simplification"],
-                    help="default: smoothing when a result has the clean mesh's vertex count, else simplification")
+                    help="default: smoothing when a result has the clean mesh's vertex and face counts, else simplification")
     ev.add_argument("--label", action="append", help="method label of each result, in order (default: file stem)")
     ev.add_argument("--hausdorff-samples", type=int, default=20000, help="area samples per side (as in a config)")
     c = sub.add_parser("compare", help="compare two run folders; exit 1 on a regression")
