@@ -170,6 +170,9 @@ def check_report_in_browser(report: Path, screenshot: Path | None = None, timeou
                     smoothingSvgs: document.querySelectorAll('#plots-smoothing svg.chart').length,
                     groupTitles: [...document.querySelectorAll('.plotgroup h4')].map(h => h.textContent),
                     bestRows: [...document.querySelectorAll('[id^="plots-"] table.best tr')].map(r => r.textContent),
+                    refPoints: Object.fromEntries([...document.querySelectorAll('.plotgroup')].map(g => [
+                        g.querySelector('h4').textContent,
+                        [...g.querySelectorAll('svg.chart circle')].filter(c => c.getAttribute('fill') === '#777').length])),
                     legends: [...document.querySelectorAll('.legend')].map(l => [...l.querySelectorAll('span')]
                         .filter(sp => !sp.querySelector('i.ref')).map(sp => [sp.textContent, sp.querySelector('i').style.background])),
                     height: document.documentElement.scrollHeight};
@@ -383,3 +386,20 @@ def test_every_legend_gives_its_lines_distinct_colours(tmp_path):
     for leg in legends:                   # the hashed hues of the pair above were 35 apart in RGB
         gaps = [np.linalg.norm(rgb(leg[a]) - rgb(leg[b])) for a, b in itertools.combinations(leg, 2)]
         assert min(gaps) >= 60, leg
+
+
+def test_the_noisy_input_line_spans_levels_where_every_result_is_invalid(tmp_path):
+    """On knight at noise 0.1 every smoothing result ends farther from the clean surface than its
+    input (invalid, not plotted); the error-vs-noise panel still draws the noisy input at both
+    levels (its value does not depend on the results), and its caption says what is left out."""
+    import harness
+    cfg = {"name": "inputline", "repeats": 1, "time_budget": 0, "meshes": ["knight"],
+           "noise": [{"model": "gaussian_normal", "levels": [0.1, 0.3]}],
+           "tasks": {"smoothing": {"methods": ["scratch.taubin", "scratch.implicit"]}}}
+    frames = harness.run(cfg, out=tmp_path, quiet=True, workers=1)
+    df = frames["smoothing"]
+    assert (df[df.noise_level == 0.1]["dist_mean"] > df[df.noise_level == 0.1]["input_dist_mean"]).all()
+    s = check_report_in_browser(tmp_path / "report.html", interact=False)
+    assert s["console_errors"] == [] and s["exceptions"] == [] and s["jserrors"] == 0
+    title = next(t for t in s["refPoints"] if t.startswith("Error vs noise level"))
+    assert s["refPoints"][title] == 2, s["refPoints"]

@@ -602,9 +602,12 @@
       // error vs noise level
       var levels = uniq(vis.map(function (r) { return r.noise_level; }).filter(isNum));
       var enPanels = levels.length > 1 ? panelGroup(plots, 'Error vs noise level, per mesh and noise model',
-        'Mean over seeds; noise level = σ / mean edge length.' + (inKey ? ' Grey dashed: the noisy input.' : ''),
+        'Mean over seeds; noise level = σ / mean edge length.' + (inKey ? ' Grey dashed: the noisy input.' : '') +
+        (showInvalid ? '' : ' Invalid results are not plotted.'),
         mkLeg(inKey ? ['noisy input'] : [])) : null;       // a single level: no line to draw
-      groupBy(levels.length > 1 ? vis.filter(validOrShown) : [], function (r) { return r.mesh + ' · ' + r.noise_model; }).forEach(function (rs, title) {
+      var byMeshModel = function (r) { return r.mesh + ' · ' + r.noise_model; };
+      var allOf = groupBy(vis, byMeshModel);        // the noisy input's line: its value does not depend on validity
+      groupBy(levels.length > 1 ? vis.filter(validOrShown) : [], byMeshModel).forEach(function (rs, title) {
         var series = [];
         var yall = [];
         groupBy(rs, function (r) { return r._variant; }).forEach(function (vr, v) {
@@ -619,7 +622,7 @@
         });
         if (inKey) {
           var ip = [];
-          groupBy(rs, function (r) { return r.noise_level; }).forEach(function (g, lv) {
+          groupBy(allOf.get(title), function (r) { return r.noise_level; }).forEach(function (g, lv) {
             var y = mean(g.map(function (r) { return r[inKey]; }).filter(isNum)); yall.push(y);
             ip.push([lv, y, 'noisy input at ' + lv + ': ' + fmt(y)]);
           });
