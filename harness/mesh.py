@@ -9,7 +9,8 @@ Repair policy (each repair is recorded in ``Mesh.repairs`` and in the run's rows
 Errors (``InvalidMeshError``): unreadable or empty file, unsupported extension, a file whose
 header promises more or less data than it holds, NaN/inf coordinates, indices out of range, no
 face left after the repairs, a surface of zero area (every face degenerate). A UTF-8 byte-order
-mark at the start of a file is skipped.
+mark at the start of a file is skipped; a plain OFF whose tokens are not one vertex or face per
+line is read as a token stream when that uses every token exactly.
 Kept as they are, and reported by `topology`: zero-area faces with distinct corners,
 non-manifold edges and vertices, several components, boundaries.
 """
@@ -99,6 +100,25 @@ def _read_obj(text: str):
     return V, polys
 
 
+def _off_stream(toks: list, nv: int, nf: int):
+    """A plain OFF body read as one token stream (3 coordinates a vertex, then ``k i_1 .. i_k``
+    a face), or None unless it uses every token exactly."""
+    if len(toks) < 3 * nv:
+        return None
+    pos, polys = 3 * nv, []
+    for _ in range(nf):
+        if pos >= len(toks):
+            return None
+        k = int(toks[pos])
+        if k < 0 or pos + 1 + k > len(toks):
+            return None
+        polys.append([int(x) for x in toks[pos + 1:pos + 1 + k]])
+        pos += 1 + k
+    if pos != len(toks):
+        return None
+    return np.asarray(toks[:3 * nv], dtype=np.float64).reshape(-1, 3), polys
+
+
 def _read_off(text: str):
     tokens_lines = [ln.split("#", 1)[0].split() for ln in text.splitlines()]
     tokens_lines = [t for t in tokens_lines if t]
@@ -107,6 +127,10 @@ def _read_off(text: str):
     head = tokens_lines[0][1:] or tokens_lines[1]
     start = 1 if tokens_lines[0][1:] else 2
     nv, nf = int(head[0]), int(head[1])
+    if len(tokens_lines) != start + nv + nf and tokens_lines[0][0] == "OFF":
+        stream = _off_stream([x for t in tokens_lines[start:] for x in t], nv, nf)
+        if stream is not None:               # a plain OFF laid out freely: whitespace separates tokens
+            return stream
     if len(tokens_lines) < start + nv + nf:
         raise InvalidMeshError(f"truncated OFF: header promises {nv} vertices and {nf} faces, "
                                f"file has {len(tokens_lines) - start} data lines")

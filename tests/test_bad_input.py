@@ -132,6 +132,9 @@ def _files() -> dict[str, str | bytes]:
         "end_header\n" + "".join(f"{x} {y} {z}\n" for x, y, z in V)
         + "".join("3 " + " ".join(map(str, f)) + "\n" for f in OCTA_F))
     out["extra_faces.off"] = _off(V, OCTA_F).replace("6 8 0", "6 7 0", 1)   # one face past the promised count
+    out["free_layout.off"] = ("OFF\n6 8 0\n" + " ".join(f"{x} {y} {z}" for x, y, z in V) + "\n"   # all vertices on a line
+                              + "  ".join("3 " + " ".join(map(str, f)) for f in OCTA_F[:5]) + "\n"
+                              + "\n".join("3 " + " ".join(map(str, f)) for f in OCTA_F[5:]) + "\n")
     out["collinear.obj"] = _obj([(0, 0, 0), (1, 0, 0), (2, 0, 0), (3, 0, 0)], [(0, 1, 2), (1, 2, 3)])
     return out
 
@@ -163,6 +166,7 @@ REPAIRED = {
     "bom": ("", 6, 8),
     "texcoord_binary": ("", 6, 8),
     "texcoord_first_ascii": ("", 6, 8),
+    "free_layout": ("", 6, 8),
 }
 # stem -> topology facts that must survive reading unchanged --------------------------------
 KEPT = {
