@@ -6,11 +6,12 @@ Repair policy (each repair is recorded in ``Mesh.repairs`` and in the run's rows
 - faces with a repeated vertex index are removed, and so is every face but the first on the same
   three vertices (in either orientation: a two-sided sheet becomes one-sided);
 - unreferenced vertices are removed, ``Mesh.vertex_map`` keeps the original index of each kept one.
-Errors (``InvalidMeshError``): unreadable or empty file, unsupported extension, a file whose
-header promises more or less data than it holds, NaN/inf coordinates, indices out of range, no
-face left after the repairs, a surface of zero area (every face degenerate). A UTF-8 byte-order
-mark at the start of a file is skipped; a plain OFF whose tokens are not one vertex or face per
-line is read as a token stream when that uses every token exactly.
+Errors (``InvalidMeshError``): unreadable or empty file, unsupported extension, an OFF or PLY
+whose header promises more or less data than it holds (trailing whitespace, NUL padding and a
+DOS end-of-file mark are not data), NaN/inf coordinates, indices out of range, no face left
+after the repairs, a surface of zero area (every face degenerate). A UTF-8 byte-order mark at
+the start of a text file (OBJ, OFF, ASCII PLY or STL) is skipped; a plain OFF whose tokens are
+not one vertex or face per line is read as a token stream when that uses every token exactly.
 Kept as they are, and reported by `topology`: zero-area faces with distinct corners,
 non-manifold edges and vertices, several components, boundaries.
 """
@@ -120,6 +121,7 @@ def _off_stream(toks: list, nv: int, nf: int):
 
 
 def _read_off(text: str):
+    text = text.rstrip("\x00\x1a\r\n\t ")                 # NUL padding or a DOS end-of-file mark is not data
     tokens_lines = [ln.split("#", 1)[0].split() for ln in text.splitlines()]
     tokens_lines = [t for t in tokens_lines if t]
     if not tokens_lines or not tokens_lines[0][0].endswith("OFF"):
@@ -179,6 +181,9 @@ def _read_ply(data: bytes):
         for p in props:
             if any(t not in _PLY_TYPES for t in (p[1:3] if p[0] == "list" else p[:1])) or len(p) < (4 if p[0] == "list" else 2):
                 raise InvalidMeshError(f"PLY property {' '.join(p)!r}: unknown type or missing name")
+    if any(name == "face" and count and not any(p[0] == "list" for p in props) for name, count, props in elements):
+        raise InvalidMeshError("PLY face element without an index list")
+    elements = [e for e in elements if e[2]]          # an element without properties holds no data
     V, polys = None, []
 
     def face_list(props):        # the index list of a face: vertex_indices (or vertex_index), else the first list
@@ -221,6 +226,8 @@ def _read_ply(data: bytes):
                         polys.append(row)
                 if pos > len(tokens):
                     raise InvalidMeshError(f"truncated PLY {name} data")
+        if pos < len(tokens):
+            raise InvalidMeshError(f"PLY holds {len(tokens) - pos} value(s) past the elements its header declares")
         return V, polys
     order = "<" if fmt == "binary_little_endian" else ">"
     least = sum(count * sum(np.dtype(_PLY_TYPES[p[1] if p[0] == "list" else p[0]]).itemsize for p in props)
@@ -267,6 +274,9 @@ def _read_ply(data: bytes):
                     off += np.dtype(_PLY_TYPES[p[0]]).itemsize
             if name == "face":
                 polys.append(row)
+    rest = body[off:].rstrip(b"\r\n\t \x00\x1a")       # a trailing newline or padding is not data
+    if rest:
+        raise InvalidMeshError(f"PLY holds {len(body) - off} byte(s) past the elements its header declares")
     return V, polys
 
 
@@ -283,7 +293,7 @@ def _read_stl(data: bytes):
             rec = np.dtype([("normal", "<f4", 3), ("v", "<f4", (3, 3)), ("attr", "<u2")])
             tri = np.frombuffer(data, rec, n, 84)["v"].astype(np.float64)
             return tri.reshape(-1, 3), np.arange(3 * n, dtype=np.int64).reshape(-1, 3)
-    text = data.decode("ascii", "replace")
+    text = (data[3:] if data.startswith(b"\xef\xbb\xbf") else data).decode("ascii", "replace")   # a BOM: ASCII only
     if not text.lstrip().startswith("solid"):
         raise InvalidMeshError("unreadable STL: not ASCII, and its size does not match a binary STL's "
                                "triangle count (truncated?)")
@@ -435,7 +445,8 @@ def validate(V, F, name: str = "", repair: bool = True) -> Mesh:
             remap = np.full(len(V), -1, np.int64)
             remap[vmap] = np.arange(len(vmap))
             V, F = V[vmap], remap[F]
-    if not any(np.cross(V[f[:, 1]] - V[f[:, 0]], V[f[:, 2]] - V[f[:, 0]]).any() for f in (F[:64], F)):
+    if not any(np.cross(V[f[:, 1]] - V[f[:, 0]], V[f[:, 2]] - V[f[:, 0]]).any()
+               for f in (F[:64], *(F[i:i + 65536] for i in range(0, len(F), 65536)))):
         raise InvalidMeshError(f"{label}every face has zero area (the surface is degenerate: its vertices "
                                "lie on a line or coincide)")
     return Mesh(V=np.ascontiguousarray(V), F=np.ascontiguousarray(F), name=name,

@@ -131,6 +131,22 @@ def _files() -> dict[str, str | bytes]:
         "element face 8\nproperty list uchar int vertex_indices\nelement junk 1000000000\nproperty float a\n"
         "end_header\n" + "".join(f"{x} {y} {z}\n" for x, y, z in V)
         + "".join("3 " + " ".join(map(str, f)) + "\n" for f in OCTA_F))
+    # an element without properties declared 1e12 times (the reader looped over it), and faces past
+    # the declared count in ASCII and binary PLY (dropped without a word)
+    out["empty_element.ply"] = (
+        "ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty float y\nproperty float z\n"
+        "element face 8\nproperty list uchar int vertex_indices\nelement junk 1000000000000\nend_header\n"
+        + "".join(f"{x} {y} {z}\n" for x, y, z in V) + "".join("3 " + " ".join(map(str, f)) + "\n" for f in OCTA_F))
+    out["extra_faces_ascii.ply"] = (
+        "ply\nformat ascii 1.0\nelement vertex 6\nproperty float x\nproperty float y\nproperty float z\n"
+        "element face 7\nproperty list uchar int vertex_indices\nend_header\n"
+        + "".join(f"{x} {y} {z}\n" for x, y, z in V) + "".join("3 " + " ".join(map(str, f)) + "\n" for f in OCTA_F))
+    out["extra_faces_binary.ply"] = hdr.replace(b"element face 8", b"element face 7") + vb + fb
+    out["padded_binary.ply"] = hdr + vb + fb + b"\n\x00\x00"            # trailing newline and NUL padding: fine
+    out["dos_eof.off"] = _off(V, OCTA_F) + "\x1a"                       # a DOS end-of-file mark: fine
+    out["bom_ascii.stl"] = b"\xef\xbb\xbf" + (
+        "solid octa\n" + "".join("facet normal 0 0 0\nouter loop\n" + "".join(f"vertex {x} {y} {z}\n" for x, y, z in
+                                  (V[i] for i in f)) + "endloop\nendfacet\n" for f in OCTA_F) + "endsolid octa\n").encode()
     out["extra_faces.off"] = _off(V, OCTA_F).replace("6 8 0", "6 7 0", 1)   # one face past the promised count
     out["free_layout.off"] = ("OFF\n6 8 0\n" + " ".join(f"{x} {y} {z}" for x, y, z in V) + "\n"   # all vertices on a line
                               + "  ".join("3 " + " ".join(map(str, f)) for f in OCTA_F[:5]) + "\n"
@@ -154,6 +170,8 @@ LOAD_ERRORS = {
     "huge_count": "truncated PLY: the header's elements need at least",
     "extra_faces": "OFF header promises 7 faces, but 1 more data line(s) follow them",
     "collinear": "every face has zero area",
+    "extra_faces_ascii": "PLY holds 4 value(s) past the elements its header declares",
+    "extra_faces_binary": "PLY holds 13 byte(s) past the elements its header declares",
 }
 # stem -> (repair note in every row, vertices, faces after reading) -------------------------
 REPAIRED = {
@@ -167,6 +185,10 @@ REPAIRED = {
     "texcoord_binary": ("", 6, 8),
     "texcoord_first_ascii": ("", 6, 8),
     "free_layout": ("", 6, 8),
+    "empty_element": ("", 6, 8),
+    "padded_binary": ("", 6, 8),
+    "dos_eof": ("", 6, 8),
+    "bom_ascii": ("welded exactly coincident STL corners", 6, 8),
 }
 # stem -> topology facts that must survive reading unchanged --------------------------------
 KEPT = {
