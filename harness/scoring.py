@@ -206,14 +206,28 @@ def results_config(raw: dict, base_dir: Path) -> tuple[list[dict], int]:
     return entries, hs
 
 
+def _same_faces(A: np.ndarray, B: np.ndarray) -> bool:
+    """Whether two face lists hold the same oriented triangles, in any order and from any starting
+    corner (each face rotated to start at its smallest index, then the rows sorted)."""
+    if A.shape != B.shape:
+        return False
+
+    def canonical(F):
+        F = np.asarray(F, np.int64)
+        k = np.argmin(F, axis=1)[:, None]
+        R = np.take_along_axis(F, (k + np.arange(3)) % 3, axis=1)
+        return R[np.lexsort(R.T[::-1])]
+    return bool(np.array_equal(canonical(A), canonical(B)))
+
+
 def _in_clean_order(r: Mesh, cmesh: Mesh, n_raw: int, F_raw: np.ndarray, path: Path) -> np.ndarray:
     """A smoothing result's positions in the clean mesh's (repaired) vertex order: the result has
     either the repaired mesh's vertices and faces or the clean file's own (then the repair's
-    vertex map applies). Equal counts with other faces (e.g. an STL, whose reader welds and
+    vertex map applies), faces in any order and from any starting corner. Equal counts with other faces (e.g. an STL, whose reader welds and
     re-sorts the corners) are an error: per-vertex errors would pair unrelated vertices."""
-    if len(r.V) == cmesh.n_vertices and np.array_equal(r.F, cmesh.F):
+    if len(r.V) == cmesh.n_vertices and _same_faces(r.F, cmesh.F):
         return r.V
-    if len(r.V) == n_raw and np.array_equal(r.F, F_raw) and cmesh.vertex_map is not None:
+    if len(r.V) == n_raw and _same_faces(r.F, F_raw) and cmesh.vertex_map is not None:
         return r.V[cmesh.vertex_map]
     if len(r.V) in (cmesh.n_vertices, n_raw):
         raise ShootoutError(f"{path.name}: as many vertices as the clean mesh, but other faces: a smoothing result "

@@ -157,6 +157,14 @@ def test_a_result_with_the_clean_counts_but_other_faces_is_not_scored_per_vertex
     again = read_mesh(stl)
     assert (again.n_vertices, again.n_faces) == (clean.n_vertices, clean.n_faces)
     assert not np.array_equal(again.F, clean.F)
+    # the clean mesh with its faces listed in reverse order, each from its second corner: the same
+    # oriented triangles on the same vertices, scored as the clean mesh itself
+    same = tmp_path / "same.obj"
+    F2 = clean.F[::-1][:, [1, 2, 0]]
+    same.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in clean.V.tolist()) + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in F2))
+    assert cli(["eval", str(same), "--clean", str(PAIR / "Original.obj"), "--out", str(tmp_path / "same")]) == 0
+    row = pd.read_csv(tmp_path / "same" / "smoothing.csv").iloc[0]
+    assert row["status"] == "ok" and row["ev_mean"] == 0.0, row["error"]
     for extra in (["--task", "smoothing"], []):
         out = tmp_path / f"o{len(extra)}"
         assert cli(["eval", str(stl), "--clean", str(PAIR / "Original.obj"), "--out", str(out), *extra]) == 0
