@@ -84,7 +84,7 @@ class Config:
 
 def noise_name(model: str, fraction: float = 1.0) -> str:
     """``model``, or ``model(fraction=f)`` when ``f`` < 1 (the impulsive model's moved share)."""
-    return model if fraction is None or float(fraction) == 1.0 else f"{model}(fraction={float(fraction):g})"
+    return model if fraction is None or float(fraction) == 1.0 else f"{model}(fraction={float(fraction)!r})"
 
 
 def _close(word, options):

@@ -253,7 +253,7 @@ def prepare_input(case: Case) -> tuple[CaseInput, float | None]:
 
 def input_mesh_name(case: Case) -> str:
     lvl = "pair" if math.isnan(case.noise_level) else f"{case.noise_level:g}"
-    model = case.noise_model if case.fraction == 1.0 else f"{case.noise_model}-fraction{case.fraction:g}"
+    model = case.noise_model if case.noise_name == case.noise_model else f"{case.noise_model}-fraction{float(case.fraction)!r}"
     return f"{case.mesh_key}-{model}-{lvl}-{case.seed}-input.ply"
 
 
