@@ -76,16 +76,32 @@
   // ------------------------------------------------------------------ task data
   // colours of a set of names, by the names' sorted order: d3's category10 without its grey (the
   // reference's), then eleven picked farthest-first from tab20 and Kelly's colours (every two of
-  // the twenty at least 64 apart in RGB), then golden-angle hues; a hash of the name gave two
-  // methods of one task hues 0-1 degree apart
+  // the twenty at least 64 apart in RGB); past twenty, each next colour is the one of a grid of
+  // hues and lightnesses farthest in RGB from those taken, the reference's grey and white
   var PALETTE = ['#1f77b4', '#ff7f0e', '#2ca02c', '#d62728', '#9467bd', '#8c564b', '#e377c2', '#bcbd22',
     '#17becf', '#000080', '#dbdb8d', '#a1caf1', '#2b3d26', '#393b79', '#f99379', '#f7b6d2', '#98df8a',
     '#882d17', '#008856', '#f3c300'];
+  function hexRgb(h) { return [1, 3, 5].map(function (i) { return parseInt(h.slice(i, i + 2), 16); }); }
+  function hslRgb(h, s, l) {
+    var a = s * Math.min(l, 1 - l);
+    return [0, 8, 4].map(function (n) {
+      var k = (n + h / 30) % 12;
+      return Math.round(255 * (l - a * Math.max(-1, Math.min(k - 3, 9 - k, 1))));
+    });
+  }
+  function rgbDist(p, q) { return Math.hypot(p[0] - q[0], p[1] - q[1], p[2] - q[2]); }
   function paletteFor(names) {
-    var out = {};
+    var out = {}, taken = PALETTE.map(hexRgb).concat([hexRgb('#777777'), [255, 255, 255]]), grid = [];
+    for (var h = 0; h < 360; h += 10) [0.3, 0.45, 0.6].forEach(function (l) { grid.push(hslRgb(h, 0.65, l)); });
     uniq(names).sort().forEach(function (n, i) {
-      out[n] = i < PALETTE.length ? PALETTE[i]
-        : 'hsl(' + Math.round((i * 137.508) % 360) + ',60%,' + (i % 2 ? 35 : 55) + '%)';
+      if (i < PALETTE.length) { out[n] = PALETTE[i]; return; }
+      var best = null, bestD = -1;
+      grid.forEach(function (c) {
+        var d = Math.min.apply(null, taken.map(function (t) { return rgbDist(c, t); }));
+        if (d > bestD) { bestD = d; best = c; }
+      });
+      taken.push(best);
+      out[n] = 'rgb(' + best.join(',') + ')';
     });
     return out;
   }
