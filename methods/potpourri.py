@@ -4,11 +4,11 @@
 (Crane et al. 2013) as geometry-central implements it; with ``use_robust`` (default) its
 operators are built on the intrinsic Delaunay triangulation of the tufted cover (Sharp & Crane
 2020, "A Laplacian for nonmanifold triangle meshes"), ``t = t_coef * h^2``. Input units. On an
-open mesh it uses the Neumann heat solution alone, not the paper's average of the Neumann and
-Dirichlet ones that ``scratch.heat`` and ``libigl.heat`` use by default: with ``use_robust``
-off it equals ``scratch.heat`` with ``boundary: neumann, mass: barycentric`` to 2.3e-5 on the
-open cylinder and 6.5e-5 on a 1,000-point Delaunay plane (relative to the largest distance),
-and differs from their default by 4%; compare it with ``boundary: neumann``.
+open mesh it uses the Neumann heat solution alone (the lumped barycentric mass), not the paper's
+average of the Neumann and Dirichlet ones that ``scratch.heat`` and ``libigl.heat`` use by
+default: with ``use_robust`` off it is ``scratch.heat`` with ``boundary: neumann, mass:
+barycentric`` (to 1e-4 of the largest distance, `tests/test_geodesics.py`); its like-for-like
+peer on open meshes is that setting.
 ``pygeodesic.exact``: ``pygeodesic.geodesic.PyGeodesicAlgorithmExact`` (the exact MMP algorithm
 of Surazhsky et al. 2005, the ``geodesic`` C++ library by Kirsanov), distances to all vertices.
 """

@@ -5,9 +5,10 @@
 triangulations and normal cycle") integrate K and H over the ball of radius ``r`` around each
 vertex; the adapter divides by the ball's area on a flat surface, ``pi r^2``, to give pointwise
 values in the task's conventions (H > 0 on a sphere with outward normals). ``r = radius * h``
-with ``h`` the mean edge length. Large radii smooth the field. The adapter calls trimesh on the
-mesh centred and scaled to unit mean edge length and scales K by ``1/h^2`` and H by ``1/h``:
-trimesh's absolute tolerances made H on a sphere of radius 1e-6 read 18x the true value.
+with ``h`` the mean edge length. Large radii smooth the field. trimesh's geometric tests use
+absolute tolerances (``trimesh.tol``, 1e-8 and the like) that assume unit-sized input, so the
+adapter calls it on the mesh centred and scaled to unit mean edge length and returns
+``K / h^2`` and ``H / h``: the result is invariant under translation and scaling.
 
 Near a boundary K is far too large, as trimesh computes it: trimesh takes every vertex's angle
 defect against ``2 pi``, also at boundary vertices (whose defect is against ``pi``), so each

@@ -101,9 +101,10 @@ def analytic(shape: dict | None, P: np.ndarray, s: np.ndarray) -> np.ndarray | N
 
 def exact_geodesic_problem(V: np.ndarray, F: np.ndarray, zero_area: bool = True) -> str | None:
     """Why an implementation of the exact polyhedral algorithm (Surazhsky et al. 2005) cannot take
-    this mesh, or None: an edge on more than two faces (libigl's ``exact_geodesic`` and
-    pygeodesic both die of SIGSEGV there) or, with ``zero_area``, a zero-area face (libigl's grew
-    to 16 GB and threw ``std::bad_alloc`` on a grid with one collinear face; pygeodesic's did not)."""
+    this mesh, or None. Its window propagation assumes an edge-manifold surface (an edge of more
+    than two faces crashes libigl's ``exact_geodesic`` and pygeodesic) and, in libigl's
+    implementation (``zero_area``), triangles with a positive area (a flat triangle makes its
+    window list grow without bound)."""
     from ..core.geometry import edge_face_counts, zero_area_faces
     what = []
     nm = int((edge_face_counts(F)[1] > 2).sum())

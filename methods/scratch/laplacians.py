@@ -242,11 +242,10 @@ def intrinsic_delaunay(V, F, *, mass="voronoi"):
     LaplacianResult
         ``W`` equal to ``igl.intrinsic_delaunay_cotmatrix(V, F)`` (to ~1e-12 relative on the
         bundled meshes); ``M`` as chosen. Where the intrinsic Delaunay triangulation is not
-        unique (cocircular quads: regular, stretched or sheared grids) the cotangent weights
-        do not depend on the choice but the masses do: ``M`` may then differ from libigl's,
-        whose flips break the ties otherwise (measured up to 25% per vertex for the
-        barycentric mass on a sheared grid, 3.8% for the Voronoi mass on a flattened ellipsoid;
-        each equals the mass computed from its own triangulation's edge lengths to 1e-16).
+        unique (cocircular quads: regular, stretched or sheared grids) the cotangent weights do
+        not depend on which diagonal is chosen but the masses do (the triangle areas change):
+        ``M`` may then differ from libigl's, whose flips break the ties otherwise, while each
+        is the mass of its own triangulation.
 
     Notes
     -----
