@@ -253,9 +253,11 @@ def _cmd_views(a) -> int:
         raise ShootoutError(f"{d}: not a run folder (no run.json)")
     print(f"shootout views: rebuilding the cases from {d / 'run.json'} and running the chosen ones again "
           "(this executes the methods, including plugins named there)", file=sys.stderr)
-    n = recompute_views(d)
+    views = recompute_views(d)
     from .report import build_report
-    print(f"{n} view(s) written to {d / 'views'}; report: {build_report(d)}")
+    failed = [v for v in views if v.get("error")]
+    print(f"{len(views)} view(s) written to {d / 'views'}" + (f", {len(failed)} of them failed (first: case "
+          f"{failed[0].get('case_id')}: {failed[0]['error'][:300]})" if failed else "") + f"; report: {build_report(d)}")
     return 0
 
 

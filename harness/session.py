@@ -471,9 +471,10 @@ def finish(out_dir, cfg: Config, timeout=None, export_benchmark_json=None, extra
         _export(out_dir, export_benchmark_json)
 
 
-def recompute_views(run_dir) -> int:
+def recompute_views(run_dir) -> list[dict]:
     """Rebuild the cases from run.json's config and compute the 3D views again (this runs the
-    chosen methods, including any plugin named in run.json). Returns the number of views."""
+    chosen methods, including any plugin named in run.json). Returns the views written (a
+    failed one carries its ``error`` text)."""
     from .views import compute_views
     folder = RunFolder(run_dir)
     meta = folder.read_run_json()
@@ -487,4 +488,4 @@ def recompute_views(run_dir) -> int:
     cfg = load_config(meta["config"], base_dir=base.resolve())
     views = compute_views({c.case_id: c for c in cfg.cases}, folder.frames(), cfg.report)
     folder.write_views(views)
-    return len(views)
+    return views

@@ -185,7 +185,7 @@ def crashy(V, F, *, iterations=1):
 '''
 
 
-def test_a_method_that_crashes_when_recomputed_costs_only_its_view(tmp_path, monkeypatch):
+def test_a_method_that_crashes_when_recomputed_costs_only_its_view(tmp_path, monkeypatch, capsys):
     (tmp_path / "reporttest_plugin.py").write_text(PLUGIN)
     monkeypatch.syspath_prepend(str(tmp_path))
     marker = tmp_path / "crash-now"
@@ -200,7 +200,10 @@ def test_a_method_that_crashes_when_recomputed_costs_only_its_view(tmp_path, mon
     marker.write_text("")
     views = page_data(build_report(out))["views"]                    # the report runs nothing
     assert len(views) == 1 and "error" not in views[0]
+    capsys.readouterr()
     assert cli(["views", str(out)]) == 0                             # recomputing: the method aborts
+    said = capsys.readouterr().out
+    assert "1 view(s) written" in said and "1 of them failed" in said and "SIGABRT" in said, said
     views = page_data(out / "report.html")["views"]
     assert "SIGABRT" in views[0]["error"] and "computing the view failed" in views[0]["error"]
 
