@@ -364,7 +364,7 @@ def to_markdown(lb: pd.DataFrame) -> str:
         r0 = g.iloc[0]
         p = "—" if pd.isna(r0.friedman_p) else f"{r0.friedman_p:.2g}"
         cd = "—" if pd.isna(r0.critical_difference) else f"{r0.critical_difference:.2f}"
-        out.append(f"### {task}: {metric} ({r0.better} is better)\n\n{int(r0.cells)} cells, Friedman p = {p}, "
+        out.append(f"### {task}: {metric} ({r0.better} is better)\n\n{int(r0.cells)} cell{'' if int(r0.cells) == 1 else 's'}, Friedman p = {p}, "
                    f"Nemenyi critical difference (alpha 0.05) = {cd}\n\n| method | mean rank | missing | invalid |\n"
                    "|---|---:|---:|---:|")
         out += [f"| {r.method} | {r.mean_rank:.2f} | {r.missing_cells} | {r.invalid_cells} |" for r in g.itertuples()]
@@ -391,7 +391,7 @@ def to_latex(lb: pd.DataFrame) -> str:
                 for r in g.itertuples()]
         out += [r"\bottomrule", r"\end{tabular}",
                 f"\\caption{{{_tex(task)}: mean rank by \\texttt{{{_tex(metric)}}} ({r0.better} is better) over "
-                f"{int(r0.cells)} cells; Friedman $p = {p}$, Nemenyi CD$_{{0.05}} = {cd}$.}}", r"\end{table}", ""]
+                f"{int(r0.cells)} cell{'' if int(r0.cells) == 1 else 's'}; Friedman $p = {p}$, Nemenyi CD$_{{0.05}} = {cd}$.}}", r"\end{table}", ""]
     return "\n".join(out)
 
 

@@ -322,6 +322,9 @@ def test_winner_tables_show_ties_and_cells_without_a_valid_result(tiny_run, tmp_
     for r in rows:
         if r["mesh"] == "knight" and r["noise_level"] and float(r["noise_level"]) == 0.5:
             r.update(status="error", error="MethodFailed: boom", dist_mean="", ev_mean="")
+    ghost = next(r for r in rows if r["mesh"] == "knight" and r["noise_level"] and float(r["noise_level"]) == 0.5)
+    rows.append(dict(ghost, method="ghost.smooth", status="unavailable", error="ghost is not installed",
+                     case_id=ghost["case_id"][:-2] + "gg"))      # unavailable: missing, not one of the invalid
     # a second seed on which the best variant is worse than its input: the variant leaves the cell
     # (as in winners.csv), not averaged over its one good seed
     plane = [r for r in rows if r["mesh"].startswith("plane") and r["noise_level"] and float(r["noise_level"]) == 0.2]
@@ -403,3 +406,22 @@ def test_the_noisy_input_line_spans_levels_where_every_result_is_invalid(tmp_pat
     assert s["console_errors"] == [] and s["exceptions"] == [] and s["jserrors"] == 0
     title = next(t for t in s["refPoints"] if t.startswith("Error vs noise level"))
     assert s["refPoints"][title] == 2, s["refPoints"]
+
+
+def test_an_exact_tie_names_the_same_best_as_winners_csv(tmp_path):
+    """Two methods that return their input unchanged tie exactly in every cell; the report names
+    the alphabetically first as best, as winners.csv does (it named the first row's)."""
+    import pandas as pd
+
+    import harness
+    cfg = {"name": "exacttie", "repeats": 1, "time_budget": 0, "meshes": ["knight"],
+           "noise": [{"model": "gaussian_normal", "levels": [0.3]}],
+           "tasks": {"smoothing": {"methods": [{"name": "scratch.taubin", "params": {"iterations": 0}},
+                                               {"name": "scratch.explicit", "params": {"iterations": 0}}]}}}
+    harness.run(cfg, out=tmp_path, quiet=True, workers=1)
+    win = pd.read_csv(tmp_path / "winners.csv")
+    best = win[win.metric == "dist_mean"].best.iloc[0]
+    assert best.startswith("scratch.explicit"), best
+    s = check_report_in_browser(tmp_path / "report.html", interact=False)
+    rows = [r for r in s["bestRows"] if r.startswith("knight")]
+    assert rows and all("● scratch.explicit" in r for r in rows), rows

@@ -308,11 +308,18 @@
   function winnerRows(cell, key, visSet, bt, ncol, target) {
     var keep = cellVariants(cell, key);
     if (!keep.size) {
-      var bad = cell.filter(function (r) { return r._invalid; });
+      var bad = cell.filter(function (r) { return r._invalid && r.status !== 'unavailable'; });   // unavailable: missing, as in winners.csv
       if (bad.length) bt.appendChild(noValidRow(bad, ncol, target));
       return [];
     }
     return cell.filter(function (r) { return keep.has(r._variant) && visSet.has(r); });
+  }
+  // the best item by value (lower or higher), the alphabetically first name on an exact tie, as winners.csv
+  function pickBest(items, valueOf, nameOf, lower) {
+    return items.reduce(function (a, b) {
+      var va = valueOf(a), vb = valueOf(b);
+      return (lower ? vb < va : vb > va) || (vb === va && nameOf(b) < nameOf(a)) ? b : a;
+    });
   }
   // the names of items tied with best: within the tolerance of its mean, or not beaten on every seed
   function tiedWith(items, best, valueOf, nameOf, rows, key, tol, lower) {
@@ -578,7 +585,7 @@
         var rs = winnerRows(cell, key, visSet, bt, 5);
         if (!rs.length) return;
         var pts = aggregate(rs, key);
-        var best = pts.reduce(function (a, b) { return b[1] < a[1] ? b : a; });
+        var best = pickBest(pts, function (p) { return p[1]; }, function (p) { return p[4]; }, true);
         var tied = tiedWith(pts, best, function (p) { return p[1]; }, function (p) { return p[4]; }, rs, key, tol, true);
         var inp = inKey ? mean(rs.map(function (r) { return r[inKey]; }).filter(isNum)) : null;
         if (isNum(inp) && best[1] > inp) anyWorse = true;
@@ -711,7 +718,7 @@
           o.time_s = ts.length ? median(ts) : null;
           rs.push(o);
         });
-        var best = rs.reduce(function (a, b) { return b[key] < a[key] ? b : a; });
+        var best = pickBest(rs, function (r) { return r[key]; }, function (r) { return r._variant; }, true);
         var tied = tiedWith(rs, best, function (r) { return r[key]; }, function (r) { return r._variant; }, rows, key, tol, true);
         var fast = rs.filter(function (r) { return isNum(r.time_s); }).reduce(function (a, b) { return b.time_s < a.time_s ? b : a; }, rs[0]);
         bt.appendChild(el('tr', {html: '<td>' + esc(best.mesh) + '</td><td>' + esc(best._noise) + '</td><td>' + esc(fmt(best._target)) +
@@ -969,7 +976,7 @@
     if (!groups.length) { host.appendChild(el('p', {'class': 'muted', text: 'No ranking: no task with two or more methods and a ranking metric.'})); return; }
     groups.forEach(function (g) {
       var card = el('div', {'class': 'lb'});
-      card.appendChild(el('h4', {text: g.task + ': ' + g.metric + ' (' + g.better + ' is better), ' + g.cells + ' cells, Friedman p = ' +
+      card.appendChild(el('h4', {text: g.task + ': ' + g.metric + ' (' + g.better + ' is better), ' + g.cells + (g.cells === 1 ? ' cell' : ' cells') + ', Friedman p = ' +
         (isNum(g.p) ? fmt(g.p, 2) : '—')}));
       if (g.methods.length >= 2) card.appendChild(cdDiagram(g));
       var t = el('table', {'class': 'best'});
@@ -1027,7 +1034,7 @@
           o.time_s = ts.length ? median(ts) : null;
           rs.push(o);
         });
-        var best = rs.reduce(function (a, b) { return (lower ? b[key] < a[key] : b[key] > a[key]) ? b : a; });
+        var best = pickBest(rs, function (r) { return r[key]; }, function (r) { return r._variant; }, lower);
         var tol = tolOf(spec, key);
         var tied = tiedWith(rs, best, function (r) { return r[key]; }, function (r) { return r._variant; }, rows, key, tol, lower);
         bt.appendChild(el('tr', {html: '<td>' + esc(best.mesh) + '</td><td>' + esc(best._noise) + '</td>' +
