@@ -42,6 +42,10 @@ def _umask() -> int:
     return m
 
 
+RUNNING = '"status": "running"'
+STATUS_ROOM = len('"interrupted"') - len('"running"')       # the longest status written in place
+
+
 def atomic_write(path: Path, write) -> None:
     """Write ``path`` through ``write(fh)`` on a temporary file in the same folder, fsync, chmod to the
     umask's default and rename into place; the temporary file never survives a failure."""
@@ -123,8 +127,11 @@ class RunFolder:
         return "ok" if self.read_run_json() is not None else "corrupt"
 
     def write_run_json(self, data: dict) -> None:
+        """run.json, indented; a ``"status": "running"`` is followed by `STATUS_ROOM` spaces (JSON
+        whitespace), room for a longer status written in place when a full disk refuses a new file."""
         self.path.mkdir(parents=True, exist_ok=True)
-        atomic_write(self.run_json, lambda fh: json.dump(data, fh, indent=2, default=str))
+        text = json.dumps(data, indent=2, default=str).replace(RUNNING, RUNNING + " " * STATUS_ROOM, 1)
+        atomic_write(self.run_json, lambda fh: fh.write(text))
 
     # ------------------------------------------------------------------------- ownership
 

@@ -230,17 +230,19 @@ def _mesh_ok(path: Path) -> bool:
 
 
 def _write_status_in_place(folder, status: str) -> None:
-    """Overwrite run.json's ``"status": "running"`` in place (same length padded), which needs no
-    new disk block, when a full disk refuses a new file."""
+    """Overwrite run.json's ``"status": "running"`` and the spaces after it (`RunFolder.write_run_json`
+    leaves room) in place, which needs no new disk block, when a full disk refuses a new file. A
+    status that does not fit is not written (the file stays valid JSON)."""
+    from .results import RUNNING, STATUS_ROOM
     try:
         with open(folder.run_json, "r+b") as fh:
             data = fh.read()
-            old = b'"status": "running"'
+            old = (RUNNING + " " * STATUS_ROOM).encode()
             i = data.find(old)
-            if i >= 0:
-                new = f'"status": "{status}"'.encode().ljust(len(old))
+            new = f'"status": "{status}"'.encode()
+            if i >= 0 and len(new) <= len(old):
                 fh.seek(i)
-                fh.write(new[:len(old)])
+                fh.write(new.ljust(len(old)))
                 fh.flush()
                 os.fsync(fh.fileno())
     except OSError:

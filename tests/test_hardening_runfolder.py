@@ -363,3 +363,17 @@ def test_a_rerun_removes_only_its_own_temporaries(tmp_path):
     (out / ".run.json.abcd1234.tmp").write_text("a leftover of ours")
     assert cli(["run", cfg, "--out", out]).returncode == 0
     assert (out / ".report.html.orig.tmp").read_text() == "mine" and not (out / ".run.json.abcd1234.tmp").exists()
+
+
+@pytest.mark.parametrize("status", ["interrupted", "finished"])
+def test_the_in_place_status_of_a_full_disk_keeps_run_json_valid(tmp_path, status):
+    """When a full disk refuses a new run.json, the status is written over the running one in
+    place; 'interrupted' and 'finished' are longer than 'running', and the cut-off write left
+    '"status": "interrup' (invalid JSON: neither --resume nor a fresh run would take the folder)."""
+    from harness.results import RunFolder
+    from harness.session import _write_status_in_place
+    folder = RunFolder(tmp_path)
+    folder.write_run_json({"name": "x", "status": "running", "config_hash": "abc", "n_cases": 3})
+    _write_status_in_place(folder, status)
+    meta = json.loads(folder.run_json.read_text())
+    assert meta == {"name": "x", "status": status, "config_hash": "abc", "n_cases": 3}
