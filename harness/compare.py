@@ -2,7 +2,11 @@
 
 RUN_A is the baseline, RUN_B the candidate. For every case present in both runs and every
 metric column, the two values are compared with the rule its task declares (`harness.tasks`:
-each metric's ``better`` direction and ``rel``/``abs`` tolerance, recorded in run.json):
+each metric's ``better`` direction and ``rel``/``abs`` tolerance, recorded in run.json; the
+baseline's rule where the two runs declare different ones, and a note names those metrics).
+Two rows with one case id that describe different cases (task, mesh, method, params, noise or
+seed differ) are listed as ``changed`` and not compared; a folder with a case id in two rows is
+refused:
 
 * error-like metrics (lower is better: ``ev_*``, ``dist_mean``, ``hausdorff``, normal errors,
   ``sym_error``, ``lin_error``, ``neg_weights``, ``obtuse_fraction``, ``max_angle``) regress when
@@ -346,13 +350,23 @@ def _rows(run) -> dict[str, dict]:
             raise ShootoutError(f"{run}: its task kind(s) {', '.join(unknown)} are not known to this installation "
                                 f"(known: {', '.join(tasks.names())}); compare it with the version that made it")
         raise ShootoutError(f"{run}: not a run folder (no task CSV such as smoothing.csv)")
-    out = {}
+    out, twice = {}, set()
     for task, df in frames.items():
         for rec in df.to_dict("records"):
             rec = {k: (None if isinstance(v, float) and math.isnan(v) else v) for k, v in rec.items()}
             rec["task"] = task
-            out[str(rec["case_id"])] = rec
+            cid = str(rec["case_id"])
+            if cid in out:
+                twice.add(cid)
+            out[cid] = rec
+    if twice:
+        raise ShootoutError(f"{run}: {len(twice)} case id(s) appear in more than one row (first: "
+                            f"{sorted(twice)[0]}): a run folder holds one row per case; which one to compare is "
+                            "not decidable")
     return out
+
+
+IDENTITY = ("task", "mesh", "method", "params", "noise_model", "noise_level", "seed")
 
 
 def _label(r: dict) -> str:
@@ -382,6 +396,11 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
     for cid in common:
         ra, rb = rows_a[cid], rows_b[cid]
         base = {"case_id": cid, "task": ra["task"], "case": _label(ra)}
+        differ = [k for k in IDENTITY if str(ra.get(k)) != str(rb.get(k))]
+        if differ:                          # one id, two different cases (e.g. two evals' files in another order)
+            changes.append({**base, "metric": "case", "a": _label(ra), "b": _label(rb), "verdict": "changed",
+                            "note": f"not compared: the rows describe different cases ({', '.join(differ)} differ)"})
+            continue
         sa, sb = ra.get("status"), rb.get("status")
         if sa != sb:
             verdict = "regression" if sa == "ok" else ("improvement" if sb == "ok" else "changed")
@@ -482,7 +501,10 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
     ra, rb = _rows(run_a), _rows(run_b)
     meta_a = RunFolder(run_a).read_run_json() or {}
     meta_b = RunFolder(run_b).read_run_json() or {}
-    rules = {**rules_from_specs(meta_a.get("tasks")), **rules_from_specs(meta_b.get("tasks"))}
+    rules_a, rules_b = rules_from_specs(meta_a.get("tasks")), rules_from_specs(meta_b.get("tasks"))
+    rules = {t: {**rules_b.get(t, {}), **rules_a.get(t, {})} for t in {*rules_a, *rules_b}}   # the baseline's rules
+    other_rules = sorted(f"{t}.{m}" for t in rules_a.keys() & rules_b.keys()
+                         for m in rules_a[t].keys() & rules_b[t].keys() if rules_a[t][m] != rules_b[t][m])
     ca, cb = ((m.get("machine") or {}).get("cpu_count") for m in (meta_a, meta_b))
     res = compare_rows(ra, rb, time_factor, rules, absolute_time, cores=ca if ca == cb else None)
     changes = _sorted(res["changes"])
@@ -494,6 +516,9 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
           f"{len(res['only_a'])} only in A, {len(res['only_b'])} only in B", file=out)
     for note in (timing_notes(meta_a, meta_b, res) if time_factor else []):     # --no-time: no timing notes
         print(f"note: {note}", file=out)
+    if other_rules:
+        print(f"note: B declares other rules (direction or tolerance) for {len(other_rules)} metric(s), e.g. "
+              f"{', '.join(other_rules[:5])}: A's (the baseline's) are used", file=out)
     if res["input_changes"]:
         n = len({c['case_id'] for c in res['input_changes']})
         print(f"warning: {n} case(s) saw different input data (mesh or noise changed): "

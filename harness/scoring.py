@@ -8,6 +8,8 @@ mesh after the documented repairs); a simplification result is compared as a sur
 """
 from __future__ import annotations
 
+import functools
+import hashlib
 import json
 import sys
 from pathlib import Path
@@ -60,6 +62,37 @@ def evaluate(V, F, V_clean, F_clean, task: str = "smoothing", V_noisy=None, haus
     return row
 
 
+def _sha1_file(p) -> str | None:
+    try:
+        st = Path(p).stat()
+    except OSError:
+        return None
+    return _sha1_path(str(Path(p).resolve()), st.st_size, st.st_mtime_ns)
+
+
+@functools.lru_cache(maxsize=64)
+def _sha1_path(p: str, size: int, mtime_ns: int) -> str | None:
+    try:
+        return hashlib.sha1(Path(p).read_bytes()).hexdigest()
+    except OSError:
+        return None
+
+
+def _eval_id(e: dict, seen: set) -> str:
+    """A scored file's case id: a hash of its bytes, its label, the clean (and noisy) mesh's bytes
+    and the task asked for, so that two evals' rows of the same file match in `shootout compare`
+    whatever order the files were given in; a repeat within one eval gets the next free id."""
+    key = [_sha1_file(e["file"]), e.get("label"), _sha1_file(e["clean"]),
+           _sha1_file(e["noisy"]) if e.get("noisy") else None, e.get("task")]
+    i = 0
+    while True:
+        cid = hashlib.sha1(json.dumps(key + ([i] if i else [])).encode()).hexdigest()[:12]
+        if cid not in seen:
+            seen.add(cid)
+            return cid
+        i += 1
+
+
 def _label(path: Path, labels, i) -> str:
     return labels[i] if labels and i < len(labels) else path.stem
 
@@ -94,6 +127,7 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
         raise problems_error(list(dict.fromkeys(P)))
     rows: list[tuple[dict, bool]] = []          # each file's row, and whether its task was given
     cleans: dict = {}
+    seen_ids: set = set()
     for i, e in enumerate(entries):
         clean, noisy, rp = Path(e["clean"]), e.get("noisy"), Path(e["file"])
         key = (str(clean), str(noisy))
@@ -106,7 +140,7 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
                 cleans[key] = (read_mesh(clean), None, len(raw.V), raw.F)
         cmesh, V_in, n_raw, F_raw = cleans[key]
         m_raw = len(F_raw)
-        row = {"case_id": f"eval{i:04d}", "task": e.get("task") or "smoothing", "mesh": cmesh.name,
+        row = {"case_id": _eval_id(e, seen_ids), "task": e.get("task") or "smoothing", "mesh": cmesh.name,
                "n_vertices": cmesh.n_vertices, "n_faces": cmesh.n_faces, "noise_model": "given" if noisy else "none",
                "noise_level": None, "seed": None, "method": e.get("label") or rp.stem, "library": "external",
                "params": json.dumps({"file": str(rp)}), "status": "ok",

@@ -358,3 +358,54 @@ def test_a_run_of_an_unknown_task_kind_is_named_as_such(run_a, tmp_path):
     (b / "run.json").write_text(json.dumps(meta))
     with pytest.raises(harness.errors.ShootoutError, match="task kind\\(s\\) area are not known to this installation"):
         run_compare(b, run_a)
+
+
+def test_compare_matches_eval_rows_by_file_not_by_position(tmp_path):
+    """Two evals of the same two files given in the opposite order compare equal (eval's case
+    ids were eval0000, eval0001: the files were compared crosswise, 12 false regressions), and a
+    case id whose rows describe different cases is listed, not judged."""
+    import pandas as pd
+
+    from harness.datasets import load
+    from harness.mesh import write_obj
+    src = load("knight").clean
+    files = []
+    for k, s in enumerate((0.001, 0.01)):
+        p = tmp_path / f"r{k}.obj"
+        write_obj(p, src.V + s * np.sin(np.arange(src.V.size)).reshape(-1, 3), src.F)
+        files.append(p)
+    clean = tmp_path / "clean.obj"
+    write_obj(clean, src.V, src.F)
+    for name, order in (("E1", files), ("E2", files[::-1])):
+        labels = sum((["--label", p.stem] for p in order), [])
+        assert cli(["eval", *map(str, order), "--clean", str(clean), *labels, "--out", str(tmp_path / name)]) == 0
+    out = io.StringIO()
+    assert compare_runs(tmp_path / "E1", tmp_path / "E2", time_factor=None, out=out) == 0
+    assert "0 regression(s)" in out.getvalue() and "2 cases in both" in out.getvalue(), out.getvalue()
+    # the same ids on rows of other cases (a run folder edited by hand): listed as not compared
+    shutil.copytree(tmp_path / "E1", tmp_path / "E3")
+    csv_path = tmp_path / "E3" / "smoothing.csv"
+    df = pd.read_csv(csv_path)
+    df["method"] = df["method"][::-1].values
+    df.to_csv(csv_path, index=False)
+    out = io.StringIO()
+    assert compare_runs(tmp_path / "E1", tmp_path / "E3", time_factor=None, out=out) == 0
+    assert out.getvalue().count("not compared: the rows describe different cases (method differ)") == 2, out.getvalue()
+
+
+def test_compare_judges_with_the_baselines_rules_and_says_when_they_differ(run_a, tmp_path):
+    """B's run.json declaring a looser tolerance (or the other direction) for a metric does not
+    excuse B's regression: the baseline's rule decides, and a note names the metric."""
+    a = run_a
+    b = copy(run_a, tmp_path)
+    edit(b / "smoothing.csv", lambda rows: rows[0].update(dist_mean=repr(float(rows[0]["dist_mean"]) * 1.3)))
+    meta = json.loads((b / "run.json").read_text())
+    for m in meta["tasks"]["smoothing"]["metrics"]:
+        if m["name"] == "dist_mean":
+            m["rel"], m["better"] = 0.5, "higher"
+    (b / "run.json").write_text(json.dumps(meta))
+    out = io.StringIO()
+    assert compare_runs(a, b, time_factor=None, out=out) == 1
+    text = out.getvalue()
+    assert "smoothing.dist_mean" in text and "A's (the baseline's) are used" in text, text
+    assert "REGRESSION" in text and "dist_mean" in text
