@@ -23,11 +23,14 @@ from .results import RunFolder, out_dir_problems
 
 
 def config_hash(cfg: Config) -> str:
-    """sha1 of what the rows depend on (case ids, repeats, Hausdorff samples and gap), so a resume
-    with a changed config is detected."""
+    """sha1 of what the rows depend on (case ids, repeats, Hausdorff samples and gap, the timing
+    budget), so a resume with a changed config is detected. Settings at their defaults are left
+    out of the key, so that folders of versions that did not count them still resume."""
     hs = cfg.cases[0].hausdorff_samples if cfg.cases else None
     eps = cfg.cases[0].hausdorff_eps if cfg.cases else 1e-3
-    key = [sorted(c.case_id for c in cfg.cases), cfg.repeats, hs] + ([eps] if eps != 1e-3 else [])
+    budget = cfg.cases[0].time_budget if cfg.cases else 0.25
+    key = ([sorted(c.case_id for c in cfg.cases), cfg.repeats, hs] + ([eps] if eps != 1e-3 else [])
+           + ([["time_budget", budget]] if budget != 0.25 else []))
     blob = json.dumps(key).encode()
     return hashlib.sha1(blob).hexdigest()[:16]
 
@@ -264,7 +267,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         if prev and prev.get("config_hash") != chash:
             raise ShootoutError(
                 f"--resume: the config changed since the run in {out_dir} started "
-                "(cases, repeats, hausdorff_samples or hausdorff_eps differ; a case id also changes when a mesh "
+                "(cases, repeats, time_budget, hausdorff_samples or hausdorff_eps differ; a case id also changes when a mesh "
                 "file's contents do); run without --resume to start over, "
                 "or use a new --out folder")
     elif folder.foreign_files():

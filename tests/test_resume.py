@@ -135,6 +135,17 @@ def test_resume_with_a_changed_config_is_refused(tmp_path):
     assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file() and p.name != ".shootout.lock"} == snapshot
 
 
+def test_resume_with_a_changed_time_budget_is_refused(tmp_path):
+    """The timing budget decides how many samples a row holds: a resume with another budget would
+    mix rows of 2 samples with rows of 100 under one recorded setting."""
+    from harness.session import config_hash
+    cfg = slow_config(seconds=(0.0,))
+    base = config_hash(load_config({**cfg, "time_budget": 0.25}))
+    assert config_hash(load_config(cfg)) == base                          # the default: the key of older folders
+    assert config_hash(load_config({**cfg, "time_budget": 0})) != base
+    assert config_hash(load_config({**cfg, "time_budget": 0.3})) != config_hash(load_config({**cfg, "time_budget": 0}))
+
+
 def test_resume_drops_a_torn_last_line_and_reruns_that_case(tmp_path):
     """Should the OS ever leave half a line, --resume drops it and runs that case again."""
     cfg = load_config(slow_config(seconds=(0.0,)))
