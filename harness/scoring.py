@@ -38,16 +38,30 @@ def evaluate(V, F, V_clean, F_clean, task: str = "smoothing", V_noisy=None, haus
              target_faces: int | None = None) -> dict:
     """The task's metrics of a result ``(V, F)`` against the clean mesh ``(V_clean, F_clean)``.
 
-    ``task``: ``smoothing`` (``V`` has the clean mesh's vertices in order; ``F`` is ignored) or
-    ``simplification`` (``(V, F)`` is compared to the input surface: ``V_noisy`` with the clean
-    faces when given, else the clean mesh). ``V_noisy``: the input the result was made from
-    (smoothing: gives the ``input_*`` columns; blank without it). Lengths are fractions of the clean
-    mesh's bounding-box diagonal, as in a run.
+    ``task``: ``smoothing`` (``V`` has the clean mesh's vertices in order; ``F`` is None or the
+    clean mesh's faces, in any order and from any starting corner) or ``simplification``
+    (``(V, F)`` is compared to the input surface: ``V_noisy`` with the clean faces when given, else
+    the clean mesh). ``V_noisy``: the input the result was made from (smoothing: gives the
+    ``input_*`` columns; blank without it), finite. ``F``: integer indices. Lengths are fractions
+    of the clean mesh's bounding-box diagonal, as in a run. `ShootoutError` on input that breaks
+    these preconditions.
     """
+    if samples_problem(hausdorff_samples):
+        raise ShootoutError(f"hausdorff_samples: {samples_problem(hausdorff_samples)}")
     clean = validate(V_clean, F_clean, name="clean", repair=False)
     V_in = clean.V if V_noisy is None else np.asarray(V_noisy, dtype=np.float64)
     if V_in.shape != clean.V.shape:
         raise ShootoutError(f"the noisy input has {len(V_in)} vertices, the clean mesh {len(clean.V)}")
+    if not np.isfinite(V_in).all():
+        raise ShootoutError(f"the noisy input has {int((~np.isfinite(V_in).all(axis=1)).sum())} vertices with NaN "
+                            "or inf coordinates")
+    if F is not None:
+        Fa = np.asarray(F)
+        if Fa.dtype.kind not in "iu" and not (Fa.dtype.kind == "f" and np.array_equal(Fa, np.round(Fa))):
+            raise ShootoutError(f"F: expected integer vertex indices, got dtype {Fa.dtype}")
+    if task == "smoothing" and F is not None and not _same_faces(np.asarray(F, np.int64), clean.F):
+        raise ShootoutError("F: a smoothing result keeps the clean mesh's faces (pass F_clean or None); these differ "
+                            "(task='simplification' compares surfaces instead)")
     inp = CaseInput(clean, V_in, clean.F, clean.diagonal(), {"hausdorff_samples": hausdorff_samples})
     res = _result(task, V, F)
     t = tasks.get(task)

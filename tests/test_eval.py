@@ -170,3 +170,24 @@ def test_a_result_with_the_clean_counts_but_other_faces_is_not_scored_per_vertex
         assert cli(["eval", str(stl), "--clean", str(PAIR / "Original.obj"), "--out", str(out), *extra]) == 0
         row = pd.read_csv(out / "smoothing.csv").iloc[0]
         assert row["status"] == "error" and "other faces" in row["error"], row["error"]
+
+
+def test_evaluate_refuses_input_it_cannot_score_honestly():
+    """harness.evaluate scored a smoothing result with another connectivity (or faces out of
+    range) a perfect 0, took NaN noisy coordinates, truncated fractional face indices and let
+    hausdorff_samples reach 1e9 (24 GB); each is now a ShootoutError naming the argument."""
+    from harness import datasets
+    from harness.errors import ShootoutError
+    src = datasets.load("fandisk-noisy-0.3")
+    V, F = src.clean.V, src.clean.F
+    assert harness.evaluate(V, None, V, F)["ev_mean"] == 0.0
+    assert harness.evaluate(V, F[::-1][:, [2, 0, 1]], V, F)["ev_mean"] == 0.0     # the same faces, reordered
+    bad_noisy = src.noisy_V.copy()
+    bad_noisy[3, 1] = np.nan
+    for kwargs, needle in (({"F": (F + 1) % len(V)}, "F: a smoothing result keeps"),
+                           ({"F": F + 1000000}, "F: a smoothing result keeps"),
+                           ({"F": F + 0.5, "task": "simplification"}, "F: expected integer"),
+                           ({"F": F, "V_noisy": bad_noisy}, "NaN or inf"),
+                           ({"F": F, "hausdorff_samples": 10**9}, "hausdorff_samples")):
+        with pytest.raises(ShootoutError, match=needle):
+            harness.evaluate(V, V_clean=V, F_clean=F, **kwargs)
