@@ -93,6 +93,13 @@ def _check_output_file(path, flag: str, protect=(), run_dirs=()) -> None:
         d = d.parent
     if not d.is_dir() or not os.access(d, os.W_OK | os.X_OK):
         raise ShootoutError(f"{flag} {path}: {d} is not a writable folder")
+    import tempfile
+    try:                                  # access() says yes to root everywhere (/proc too): try it
+        fd, probe = tempfile.mkstemp(dir=d, prefix=".shootout-probe-")
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise ShootoutError(f"{flag} {path}: cannot write in {d} ({exc.strerror or exc})") from None
 
 
 def _cmd_run(a) -> int:

@@ -326,9 +326,10 @@ def test_output_files_are_checked_before_any_work(run_a, tmp_path):
     cfg = tmp_path / "c.json"
     cfg.write_text(json.dumps(SMALL))
     before = cfg.read_bytes()
-    for target in (tmp_path, cfg):
+    for target in (tmp_path, cfg, "/proc/nope/x.json"):     # /proc: access() says writable to root
         assert cli(["run", str(cfg), "--out", str(tmp_path / "o"), "--export-benchmark-json", str(target)]) == 2
     assert cfg.read_bytes() == before and not (tmp_path / "o").exists()
+    assert cli(["compare", str(run_a), str(run_a), "--html", "/proc/x.html"]) == 2
 
 
 def test_the_terminal_names_each_changed_case_by_id_and_no_time_prints_no_timing_note(run_a, tmp_path):
