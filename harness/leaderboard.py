@@ -95,13 +95,14 @@ def _variant(df: pd.DataFrame, axis: set) -> pd.Series:
 
 
 FAILED = ("error", "timeout")     # a method's own failure: ranks last; "unavailable" is not run (missing)
+CELL_SEP = "\x1f"                 # joins a cell's mesh, noise, level and setting: a mesh label is free text ('|' too)
 
 
 def cell_values(spec: dict, df: pd.DataFrame, metric: str, axis_params=(), cells=None):
     """(values, invalid): cells x variants tables of the metric's mean over seeds (ok rows; blank
     when any seed of the variant has no value there) and of whether a variant's result in the
     cell is invalid (a seed errored or timed out, or broke a validity rule). Cell labels are
-    ``mesh|noise model|noise level|axis parameters (JSON)``. ``cells``: `_cells` of ``df``, when
+    mesh, noise model, noise level and axis parameters (JSON) joined by `CELL_SEP`. ``cells``: `_cells` of ``df``, when
     already made (it does not depend on the metric)."""
     d = _cells(spec, df, axis_params) if cells is None else cells
     keys = [d["_cell"], d["_variant"]]
@@ -135,7 +136,7 @@ def _cells(spec: dict, df: pd.DataFrame, axis_params=()) -> pd.DataFrame:
     d["_invalid"] = (validity(spec, d) != "") & d["status"].isin(FAILED + ("ok",))
     ps = [json.loads(p) if isinstance(p, str) and p else {} for p in d["params"]]
     text = lambda col: [("" if pd.isna(v) else str(v)) for v in d[col]] if col in d else [""] * len(d)  # noqa: E731
-    d["_cell"] = ["|".join(t) for t in zip(text("mesh"), text("noise_model"), text("noise_level"),
+    d["_cell"] = [CELL_SEP.join(t) for t in zip(text("mesh"), text("noise_model"), text("noise_level"),
                                            [json.dumps({k: p.get(k) for k in sorted(axis_params)}) for p in ps])]
     return d
 
@@ -227,7 +228,7 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
                 iv = inputs.get(cell)
                 iv = None if iv is None or pd.isna(iv) else float(iv)
                 ok = v[~inval.loc[cell] & v.notna()]
-                mesh, noise, level, setting = cell.split("|", 3)
+                mesh, noise, level, setting = cell.split(CELL_SEP, 3)
                 if ok.empty:
                     if inval.loc[cell].any():      # every result invalid: said, not left out
                         rows.append({"task": task, "metric": m["name"], "better": m["better"], "mesh": mesh,
@@ -300,7 +301,8 @@ def winners_markdown(w: pd.DataFrame) -> str:
         out.append(f"### {task}: best by {metric} ({g.iloc[0].better} is better)\n\n"
                    "| mesh | noise | setting | best | value | runner-up | value |" + (" input |" if inp else "") +
                    " invalid excluded |\n|---|---|---|---|---:|---|---:|" + ("---:|" if inp else "") + "---:|")
-        out += [f"| {r.mesh} | {r.noise_model} {r.noise_level} | {r.setting} | {_best(r)} | {_g(r.value)} | {_runner_up(r)} | "
+        out += [f"| {_md(r.mesh)} | {_md(r.noise_model)} {r.noise_level} | {_md(r.setting)} | {_md(_best(r))} | {_g(r.value)} | "
+                f"{_md(_runner_up(r))} | "
                 f"{_g(r.runner_up_value)} |" + (f" {_g(r.input_value)} |" if inp else "") + f" {r.invalid_excluded} |"
                 for r in g.itertuples()]
         if inp:
@@ -367,9 +369,15 @@ def to_markdown(lb: pd.DataFrame) -> str:
         out.append(f"### {task}: {metric} ({r0.better} is better)\n\n{int(r0.cells)} cell{'' if int(r0.cells) == 1 else 's'}, Friedman p = {p}, "
                    f"Nemenyi critical difference (alpha 0.05) = {cd}\n\n| method | mean rank | missing | invalid |\n"
                    "|---|---:|---:|---:|")
-        out += [f"| {r.method} | {r.mean_rank:.2f} | {r.missing_cells} | {r.invalid_cells} |" for r in g.itertuples()]
+        out += [f"| {_md(r.method)} | {r.mean_rank:.2f} | {r.missing_cells} | {r.invalid_cells} |" for r in g.itertuples()]
         out.append("")
     return "\n".join(out)
+
+
+def _md(s) -> str:
+    """A table cell's text for Markdown: ``|`` escaped (it ends a cell), ``<`` ``>`` ``&`` as HTML
+    entities (Markdown renderers pass raw HTML through; a mesh's file stem is free text)."""
+    return (str(s).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;").replace("|", "\\|"))
 
 
 def _tex(s: str) -> str:
@@ -400,13 +408,12 @@ def write(run_dir, frames: dict, specs: dict) -> pd.DataFrame:
     from pathlib import Path
     lb = leaderboard(frames, specs)
     d = Path(run_dir)
-    lb.to_csv(d / "leaderboard.csv", index=False)
+    from .results import atomic_write
     none = ("No ranking: no task of this run declares a ranking metric with results (the laplacian task reports "
             "properties, see report.html).\n")
-    (d / "leaderboard.md").write_text(to_markdown(lb) or none)
-    (d / "leaderboard.tex").write_text(to_latex(lb))
     w = winners(frames, specs)
-    w.to_csv(d / "winners.csv", index=False)
-    (d / "winners.md").write_text(winners_markdown(w) or none)
-    (d / "winners.tex").write_text(winners_latex(w))
+    for name, text in (("leaderboard.csv", lb.to_csv(index=False)), ("leaderboard.md", to_markdown(lb) or none),
+                       ("leaderboard.tex", to_latex(lb)), ("winners.csv", w.to_csv(index=False)),
+                       ("winners.md", winners_markdown(w) or none), ("winners.tex", winners_latex(w))):
+        atomic_write(d / name, lambda fh, text=text: fh.write(text))      # never a half-written table
     return lb

@@ -9,6 +9,7 @@ import pandas as pd
 import pytest
 from scipy import stats
 
+import harness
 from harness import leaderboard as L
 
 
@@ -268,3 +269,30 @@ def test_the_runner_up_shows_its_own_ties():
     r = w.iloc[0]
     assert r["best"] == "a.m" and r["runner_up"] == "b.m" and r["tied_with_runner_up"] == "c.m"
     assert "| b.m (tied: c.m) |" in winners_markdown(w)
+
+
+def test_markdown_tables_escape_a_mesh_name_that_is_free_text(tmp_path):
+    """A mesh's label is its file's stem: '|' would split a table cell and '<img ...>' would be
+    raw HTML to a Markdown renderer; winners.md and leaderboard.md escape both."""
+    from harness.datasets import load
+    from harness.mesh import write_obj
+    src = load("knight").clean
+    p = tmp_path / "k<img src=x>|y.obj"
+    write_obj(p, src.V, src.F)
+    harness.run({"name": "md", "repeats": 1, "time_budget": 0, "meshes": [{"file": str(p)}],
+                 "noise": [{"model": "gaussian_normal", "levels": [0.3]}],
+                 "tasks": {"smoothing": {"methods": ["scratch.taubin", "scratch.implicit"]}}},
+                out=tmp_path / "o", quiet=True, workers=1)
+    md = (tmp_path / "o" / "winners.md").read_text()
+    assert "<img" not in md and "k&lt;img src=x&gt;\\|y" in md, md
+    head, n = None, 0
+    for ln in md.splitlines():                       # every row has its table header's cell count
+        if ln.startswith("| mesh"):
+            head = ln
+        elif ln.startswith("| k"):
+            n += 1
+            assert ln.replace("\\|", "").count("|") == head.count("|"), (ln, head)
+    assert n >= 3
+    win = pd.read_csv(tmp_path / "o" / "winners.csv")
+    assert set(win["mesh"]) == {"k<img src=x>|y"} and set(win["noise_model"]) == {"gaussian_normal"}
+    assert not list((tmp_path / "o").glob(".*.tmp"))

@@ -329,7 +329,6 @@ def build_report(run_dir) -> Path:
     """Write ``run_dir/report.html`` from the CSVs and run.json; return its path."""
     out = Path(run_dir) / "report.html"
     page = render(run_dir)
-    tmp = out.with_suffix(".html.tmp")
-    tmp.write_text(page, encoding="utf-8")
-    tmp.replace(out)
+    from ..results import atomic_write
+    atomic_write(out, lambda fh: fh.write(page))       # no half-written page, no temporary left behind
     return out
