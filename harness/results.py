@@ -256,11 +256,13 @@ class RunFolder:
                 out[r["status"]] = out.get(r["status"], 0) + 1
         return out
 
-    def keep_ok_rows(self) -> set[str]:
-        """For --resume: rewrite each CSV with only its ok rows; return their case ids."""
+    def keep_ok_rows(self, known: set | None = None) -> set[str]:
+        """For --resume: rewrite each CSV with only its ok rows (of the ``known`` case ids, when
+        given: a row of another id is not one of this config's cases); return their case ids."""
         done = set()
         for task in tasks.names():
-            rows = [r for r in self.read_rows(task) if r.get("status") == "ok"]
+            rows = [r for r in self.read_rows(task) if r.get("status") == "ok"
+                    and (known is None or r.get("case_id") in known)]
             seen = set()
             rows = [r for r in rows if not (r["case_id"] in seen or seen.add(r["case_id"]))]
             done |= seen

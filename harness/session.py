@@ -274,7 +274,15 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         raise folder.foreign_error()
     try:
         if resume:
-            done = folder.keep_ok_rows()
+            try:
+                done = folder.keep_ok_rows(known={c.case_id for c in cfg.cases})
+            except OSError as exc:
+                if exc.errno in (errno.ENOSPC, errno.EDQUOT):
+                    folder.remove_temporaries()
+                    raise DiskFull(f"{out_dir}: the disk is full ({exc.strerror}); --resume rewrites the CSVs with "
+                                   "their ok rows first and could not finish (each CSV is whole: written to a temporary file and "
+                                   "renamed); free space and resume again") from None
+                raise
             if cfg.save_meshes:              # an ok row whose saved mesh is missing or torn runs again
                 meshed = {c.case_id for c in cfg.cases if tasks.get(c.task).output_mesh is not None}
                 done = {cid for cid in done if cid not in meshed or _mesh_ok(out_dir / "meshes" / f"{cid}.ply")}

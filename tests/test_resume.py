@@ -161,6 +161,21 @@ def test_resume_drops_a_torn_last_line_and_reruns_that_case(tmp_path):
     assert len(df) == sum(c.task == "laplacian" for c in cfg.cases)
 
 
+def test_resume_drops_a_row_whose_id_is_not_one_of_the_configs_cases(tmp_path):
+    """A row edited to another case id (not a case of the config) was kept by --resume beside the
+    rerun of its case: one more row than cases, two rows for one setting."""
+    cfg = load_config(slow_config(seconds=(0.0,)))
+    out = tmp_path / "out"
+    harness.run(cfg, out=out, workers=2)
+    p = out / "laplacian.csv"
+    lines = p.read_text().splitlines(keepends=True)
+    lines[1] = "deadbeef0000" + lines[1][lines[1].index(","):]
+    p.write_text("".join(lines))
+    df = harness.run(cfg, out=out, workers=2, resume=True)["laplacian"]
+    assert "deadbeef0000" not in set(df["case_id"]) and df["case_id"].is_unique
+    assert len(df) == sum(c.task == "laplacian" for c in cfg.cases)
+
+
 def _alive(pids):
     out = []
     for pid in pids:
