@@ -145,6 +145,7 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
     ``{task: DataFrame}`` of the rows in the run folder. Bad arguments are a `ShootoutError`
     before anything is written."""
     check_run_args(workers, timeout, executor, scheduler)
+    FINISH_PROBLEMS.clear()
     raw = _results_config(config_or_path)
     if raw is not None:                  # a results: config scores files made elsewhere (shootout eval)
         from .scoring import eval_entries, results_config
@@ -457,28 +458,37 @@ def _tune(cfg: Config, ex, out_dir: Path, meta: dict, threads: int, resume: bool
     return tuned
 
 
+FINISH_PROBLEMS: list[str] = []        # what the last `finish` could not write (the CLI's exit code says so)
+
+
 def finish(out_dir, cfg: Config, timeout=None, export_benchmark_json=None, extra_cases=()) -> None:
     """After the last row: the 3D views (views/), the report and the optional benchmark export.
-    The rows are safe on disk; a failure here is a warning, never a lost run."""
+    The rows are safe on disk; a failure here is a warning and an entry of `FINISH_PROBLEMS`,
+    never a lost run."""
     from .report import build_report
     from .views import compute_views
+    FINISH_PROBLEMS.clear()
     folder = RunFolder(out_dir)
+
+    def warn(what: str, exc: Exception, extra: str = "") -> None:
+        FINISH_PROBLEMS.append(what)
+        print(f"shootout: warning: {what} ({type(exc).__name__}: {exc}){extra}", file=sys.stderr)
     try:
         views = compute_views({c.case_id: c for c in list(cfg.cases) + list(extra_cases)}, folder.frames(), cfg.report,
                               timeout=timeout)
         folder.write_views(views)
     except Exception as exc:  # noqa: BLE001
-        print(f"shootout: warning: 3D views could not be computed ({type(exc).__name__}: {exc})", file=sys.stderr)
+        warn("3D views could not be computed", exc)
     try:
         from .leaderboard import write as write_leaderboard
         write_leaderboard(out_dir, folder.frames(), {t: s for t, s in task_specs(cfg).items()})
     except Exception as exc:  # noqa: BLE001
-        print(f"shootout: warning: the leaderboard could not be written ({type(exc).__name__}: {exc})", file=sys.stderr)
+        warn("the leaderboard could not be written", exc)
     try:
         build_report(out_dir)
     except Exception as exc:  # noqa: BLE001
-        print(f"shootout: warning: report.html could not be built ({type(exc).__name__}: {exc}); "
-              f"rows are in {out_dir}; retry with `shootout report {out_dir}`", file=sys.stderr)
+        warn("report.html could not be built", exc,
+             f"; rows are in {out_dir}; retry with `shootout report {out_dir}`")
     if export_benchmark_json:
         from .benchmark_json import export_benchmark_json as _export
         _export(out_dir, export_benchmark_json)

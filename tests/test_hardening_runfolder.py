@@ -377,3 +377,22 @@ def test_the_in_place_status_of_a_full_disk_keeps_run_json_valid(tmp_path, statu
     _write_status_in_place(folder, status)
     meta = json.loads(folder.run_json.read_text())
     assert meta == {"name": "x", "status": status, "config_hash": "abc", "n_cases": 3}
+
+
+def test_a_report_that_cannot_be_written_is_exit_1_not_a_path_to_a_stale_one(tmp_path, monkeypatch, capsys):
+    """The rows are whole, but when report.html cannot be rebuilt (here: the disk refuses it) the
+    run said 'report: <path>' of the previous, stale report and exited 0."""
+    import errno
+
+    import harness.report
+    from harness.cli import main
+    cfg = write_cfg(tmp_path / "c.yaml", SMALL)
+
+    def full(run_dir):
+        raise OSError(errno.ENOSPC, "No space left on device")
+    monkeypatch.setattr(harness.report, "build_report", full)
+    assert main(["run", str(cfg), "--out", str(tmp_path / "o"), "--quiet"]) == 1
+    out = capsys.readouterr()
+    assert "not written: report.html could not be built" in out.out and "report: " not in out.out, out
+    assert "No space left on device" in out.err
+    assert len(pd.read_csv(tmp_path / "o" / "smoothing.csv")) > 0
