@@ -84,7 +84,7 @@ def _machine_info(meta: dict) -> dict:
 
 
 def commit_info(meta: dict) -> dict:
-    return {"id": meta.get("git_commit") or "unversioned", "time": None, "author_time": None, "dirty": None,
+    return {"id": meta.get("git_commit") or "unversioned", "time": None, "author_time": None, "dirty": meta.get("git_dirty"),
             "project": "mesh-shootout", "branch": None}
 
 

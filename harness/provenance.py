@@ -32,6 +32,18 @@ def git_commit() -> str | None:
         return None
 
 
+def git_dirty() -> bool | None:
+    """Whether the checkout's tracked files differ from its commit (the code that ran is not the
+    commit's), or None outside a git checkout."""
+    try:
+        here = Path(__file__).resolve().parent
+        r = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=here, capture_output=True,
+                           text=True, timeout=5, env={**os.environ, "GIT_OPTIONAL_LOCKS": "0"})   # never takes the index lock
+        return bool(r.stdout.strip()) if r.returncode == 0 else None
+    except (OSError, subprocess.SubprocessError):
+        return None
+
+
 def machine_info() -> dict:
     import psutil
     freq = psutil.cpu_freq()

@@ -18,7 +18,7 @@ from .config import Config, load_config
 from .errors import ShootoutError, check_interrupt, problems_error
 from .executors import EXECUTORS, make_executor
 from .mesh import write_ply
-from .provenance import git_commit, machine_info, now_iso, package_versions
+from .provenance import git_commit, git_dirty, machine_info, now_iso, package_versions
 from .results import RunFolder, out_dir_problems
 
 
@@ -330,7 +330,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
             "finished": None, "status": "running", "executor": executor,
             "scheduler": scheduler, "workers": workers, "timeout_s": timeout,
             "n_cases": len(cfg.cases), "resumed_ok_cases": len(done),
-            "versions": package_versions(), "git_commit": git_commit(), "machine": machine_info(),
+            "versions": package_versions(), "git_commit": git_commit(), "git_dirty": git_dirty(), "machine": machine_info(),
             "solver": _solver_info(), "command": command, "tasks": task_specs(cfg),
             "method_sources": method_sources(cfg),
             "timing": {"threads_per_case": threads, "min_repeats": cfg.repeats,

@@ -7,6 +7,7 @@ import csv
 import json
 import re
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -241,3 +242,15 @@ def test_rebuilding_an_older_runs_report_says_its_rules_differ(run_dir, tmp_path
     err = capsys.readouterr().err
     assert "note: smoothing: this run ranks by the invalid_when recorded when it ran" in err
     assert "simplification" not in err and "laplacian" not in err
+
+
+def test_run_json_says_whether_the_code_that_ran_is_its_commit(tmp_path):
+    """run.json records git_dirty next to git_commit (the benchmark export's commit_info.dirty was
+    always null): in a checkout it is a bool, False exactly when `git status` lists no tracked change."""
+    import subprocess
+    from harness.provenance import git_dirty
+    root = Path(harness.__file__).resolve().parents[1]
+    r = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=root, capture_output=True, text=True)
+    if r.returncode != 0:
+        pytest.skip("not a git checkout")
+    assert git_dirty() is bool(r.stdout.strip())

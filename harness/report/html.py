@@ -212,7 +212,8 @@ def _header_html(meta, frames, run_dir) -> str:
                                     if x))),
             ("execution", _esc(f"executor {meta.get('executor', '?')}, {workers} worker(s), timeout "
                                f"{meta.get('timeout_s') or 'none'}")),
-            ("commit", f"<span class='mono'>{_esc(meta.get('git_commit') or 'not a git checkout')}</span>"),
+            ("commit", f"<span class='mono'>{_esc(meta.get('git_commit') or 'not a git checkout')}</span>"
+                       + (" <b>with uncommitted changes to tracked files</b>" if meta.get("git_dirty") else "")),
             ("command", f"<span class='mono'>{_esc(meta.get('command', ''))}</span>")]
     if workers and cores and workers > 1:
         rows.append(("timing", f"<span class='warn'>{workers} cases ran in parallel on {cores} cores: timings include "
