@@ -88,13 +88,23 @@ def commit_info(meta: dict) -> dict:
             "project": "mesh-shootout", "branch": None}
 
 
+def _noise(rec: dict) -> str:
+    lvl = rec.get("noise_level")
+    return (str(rec.get("noise_model")) if lvl is None or (isinstance(lvl, float) and math.isnan(lvl))
+            else f"{rec.get('noise_model')}-{lvl:g}")
+
+
 def build(run_dir) -> dict:
     """The pytest-benchmark document of a run folder."""
     folder = RunFolder(run_dir)
     meta = folder.read_run_json() or {}
     benchmarks = []
     for task, df in folder.frames().items():
-        for rec in df.to_dict("records"):
+        records = df.to_dict("records")
+        seeds: dict = {}
+        for rec in records:
+            seeds.setdefault((rec.get("mesh"), _noise(rec)), set()).add(rec.get("seed"))
+        for rec in records:
             if rec.get("status") != "ok":
                 continue
             stats = stats_from_row(rec)
@@ -104,11 +114,11 @@ def build(run_dir) -> dict:
                 params = json.loads(rec.get("params") or "{}")
             except json.JSONDecodeError:
                 params = {}
-            lvl = rec.get("noise_level")
-            noise = rec.get("noise_model") if lvl is None or (isinstance(lvl, float) and math.isnan(lvl)) \
-                else f"{rec.get('noise_model')}-{lvl:g}"
+            noise = _noise(rec)
             pstr = ",".join(f"{k}={params[k]}" for k in sorted(params) if params[k] is not None)
             name = f"{rec['method']}[{pstr}]" if pstr else str(rec["method"])
+            if len(seeds[(rec.get("mesh"), noise)]) > 1:                 # several seeds: each its own name
+                name += f"[seed={rec.get('seed')}]"
             group = f"{task}/{rec.get('mesh')}/{noise}"
             extra = {k: scalar(v) for k, v in rec.items()
                      if k not in ("params", "time_s", "time_min_s", "time_max_s", "time_q1_s", "time_q3_s", "times",

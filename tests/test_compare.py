@@ -410,3 +410,15 @@ def test_compare_judges_with_the_baselines_rules_and_says_when_they_differ(run_a
     text = out.getvalue()
     assert "smoothing.dist_mean" in text and "A's (the baseline's) are used" in text, text
     assert "REGRESSION" in text and "dist_mean" in text
+
+
+def test_benchmark_export_names_each_seed(tmp_path):
+    """With two seeds of one noise level, the export's rows of one group had the same name (the
+    seed only in fullname), so pytest-benchmark compare showed two identical-looking rows."""
+    from harness.benchmark_json import build
+    harness.run({**SMALL, "noise": [{"model": "gaussian_normal", "levels": [0.3], "seeds": 2}],
+                 "tasks": {"smoothing": {"methods": ["scratch.taubin"]}}}, out=tmp_path / "o", quiet=True, workers=1)
+    doc = build(tmp_path / "o")
+    names = [(b["group"], b["name"]) for b in doc["benchmarks"]]
+    assert len(names) == 2 and len(set(names)) == 2, names
+    assert all("[seed=" in n for _, n in names)
