@@ -276,7 +276,8 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
     try:
         if resume:
             try:
-                done = folder.keep_ok_rows(known={c.case_id for c in cfg.cases})
+                known = None if cfg.tune is not None else {c.case_id for c in cfg.cases}   # tuned cases come later
+                done = folder.keep_ok_rows(known=known)
             except OSError as exc:
                 if exc.errno in (errno.ENOSPC, errno.EDQUOT):
                     folder.remove_temporaries()

@@ -41,6 +41,11 @@ def test_tuned_rows_and_the_default_vs_tuned_comparison(tmp_path):
     assert tuned["dist_mean"].mean() < default["dist_mean"].mean()
     html = (out / "report.html").read_text()
     assert "Tuning: default vs tuned" in html and "test, tuned" in html
+    # --resume of the finished run keeps every row, the tuned test rows (not cases of the config
+    # itself: the tuning makes them) included, and runs nothing again
+    before = (out / "smoothing.csv").read_text()
+    harness.run(CFG, out=out, quiet=True, resume=True)
+    assert (out / "smoothing.csv").read_text() == before
 
 
 def test_tune_section_is_validated_with_key_paths():
