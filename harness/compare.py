@@ -396,7 +396,8 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
     for cid in common:
         ra, rb = rows_a[cid], rows_b[cid]
         base = {"case_id": cid, "task": ra["task"], "case": _label(ra)}
-        differ = [k for k in IDENTITY if str(ra.get(k)) != str(rb.get(k))]
+        keys = IDENTITY if ra.get("library") != "external" else [k for k in IDENTITY if k != "params"]   # eval: the path
+        differ = [k for k in keys if str(ra.get(k)) != str(rb.get(k))]
         if differ:                          # one id, two different cases (e.g. two evals' files in another order)
             changes.append({**base, "metric": "case", "a": _label(ra), "b": _label(rb), "verdict": "changed",
                             "note": f"not compared: the rows describe different cases ({', '.join(differ)} differ)"})

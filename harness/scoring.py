@@ -93,11 +93,11 @@ def _sha1_path(p: str, size: int, mtime_ns: int) -> str | None:
 
 
 def _eval_id(e: dict, seen: set) -> str:
-    """A scored file's case id: a hash of its bytes, its label, the clean (and noisy) mesh's bytes
-    and the task asked for, so that two evals' rows of the same file match in `shootout compare`
-    whatever order the files were given in; a repeat within one eval gets the next free id."""
-    key = [_sha1_file(e["file"]), e.get("label"), _sha1_file(e["clean"]),
-           _sha1_file(e["noisy"]) if e.get("noisy") else None, e.get("task")]
+    """A scored file's case id: a hash of its label, the clean (and noisy) mesh's bytes and the task
+    asked for, so that two evals' rows of one label match in `shootout compare` whatever order the
+    files were given in (the files themselves may differ: that is what compare measures); a
+    repeat of a label within one eval gets the next free id."""
+    key = [e.get("label") or Path(e["file"]).stem, _sha1_file(e["clean"]), _sha1_file(e["noisy"]) if e.get("noisy") else None, e.get("task")]
     i = 0
     while True:
         cid = hashlib.sha1(json.dumps(key + ([i] if i else [])).encode()).hexdigest()[:12]

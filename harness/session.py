@@ -278,6 +278,10 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
             try:
                 known = None if cfg.tune is not None else {c.case_id for c in cfg.cases}   # tuned cases come later
                 done = folder.keep_ok_rows(known=known)
+                if cfg.save_meshes:              # an ok row whose saved mesh is missing or torn runs again
+                    meshed = {c.case_id for c in cfg.cases if tasks.get(c.task).output_mesh is not None}
+                    done = {cid for cid in done if cid not in meshed or _mesh_ok(out_dir / "meshes" / f"{cid}.ply")}
+                    folder.drop_rows(lambda r: r["case_id"] not in done)
             except OSError as exc:
                 if exc.errno in (errno.ENOSPC, errno.EDQUOT):
                     folder.remove_temporaries()
@@ -285,10 +289,6 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
                                    "their ok rows first and could not finish (each CSV is whole: written to a temporary file and "
                                    "renamed); free space and resume again") from None
                 raise
-            if cfg.save_meshes:              # an ok row whose saved mesh is missing or torn runs again
-                meshed = {c.case_id for c in cfg.cases if tasks.get(c.task).output_mesh is not None}
-                done = {cid for cid in done if cid not in meshed or _mesh_ok(out_dir / "meshes" / f"{cid}.ply")}
-                folder.drop_rows(lambda r: r["case_id"] not in done)
             folder.remove_temporaries()
             cases = [c for c in cases if c.case_id not in done]
         else:

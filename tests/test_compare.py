@@ -383,6 +383,15 @@ def test_compare_matches_eval_rows_by_file_not_by_position(tmp_path):
     out = io.StringIO()
     assert compare_runs(tmp_path / "E1", tmp_path / "E2", time_factor=None, out=out) == 0
     assert "0 regression(s)" in out.getvalue() and "2 cases in both" in out.getvalue(), out.getvalue()
+    # a new version of one output under its label, given by another path: compared with the old one
+    v2 = tmp_path / "v2"
+    v2.mkdir()
+    write_obj(v2 / "r0.obj", src.V + 0.02 * np.sin(np.arange(src.V.size)).reshape(-1, 3), src.F)
+    assert cli(["eval", str(v2 / "r0.obj"), str(files[1]), "--clean", str(clean), "--out", str(tmp_path / "E4")]) == 0
+    out = io.StringIO()
+    assert compare_runs(tmp_path / "E1", tmp_path / "E4", time_factor=None, out=out) == 1
+    assert "2 cases in both" in out.getvalue() and "not compared: the rows" not in out.getvalue(), out.getvalue()
+    assert "REGRESSION" in out.getvalue() and "dist_mean" in out.getvalue()
     # the same ids on rows of other cases (a run folder edited by hand): listed as not compared
     shutil.copytree(tmp_path / "E1", tmp_path / "E3")
     csv_path = tmp_path / "E3" / "smoothing.csv"

@@ -396,3 +396,41 @@ def test_a_report_that_cannot_be_written_is_exit_1_not_a_path_to_a_stale_one(tmp
     assert "not written: report.html could not be built" in out.out and "report: " not in out.out, out
     assert "No space left on device" in out.err
     assert len(pd.read_csv(tmp_path / "o" / "smoothing.csv")) > 0
+
+
+def test_a_full_disk_while_resume_rewrites_the_csvs_is_the_disk_full_message(tmp_path, monkeypatch, capsys):
+    """--resume first rewrites each CSV with its ok rows (and drops rows whose saved mesh is torn);
+    a full disk there was an OSError traceback."""
+    import errno
+
+    import harness.results
+    from harness.cli import main
+    cfg = write_cfg(tmp_path / "c.yaml", {**SMALL, "save_meshes": True})
+    out = tmp_path / "o"
+    assert main(["run", str(cfg), "--out", str(out), "--quiet"]) == 0
+    before = (out / "smoothing.csv").read_bytes()
+    real = harness.results.atomic_write
+
+    def full(path, write):
+        if str(path).endswith(".csv"):
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return real(path, write)
+    monkeypatch.setattr(harness.results, "atomic_write", full)
+    capsys.readouterr()
+    assert main(["run", str(cfg), "--out", str(out), "--resume", "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert "disk is full" in err and "Traceback" not in err, err
+    assert (out / "smoothing.csv").read_bytes() == before
+
+
+def test_compare_refuses_a_folder_with_a_case_id_in_two_rows(tmp_path):
+    """Which of two rows of one id to compare is not decidable: exit 2 naming the id (the last
+    row silently won, so a duplicated line with a 10x value decided the verdict)."""
+    from harness.cli import main
+    cfg = write_cfg(tmp_path / "c.yaml", SMALL)
+    out = tmp_path / "o"
+    assert main(["run", str(cfg), "--out", str(out), "--quiet"]) == 0
+    p = out / "smoothing.csv"
+    lines = p.read_text().splitlines(keepends=True)
+    p.write_text("".join(lines) + lines[1])
+    assert main(["compare", str(out), str(out), "--no-time"]) == 2

@@ -7,6 +7,7 @@ import csv
 import json
 import re
 import shutil
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -244,13 +245,21 @@ def test_rebuilding_an_older_runs_report_says_its_rules_differ(run_dir, tmp_path
     assert "simplification" not in err and "laplacian" not in err
 
 
-def test_run_json_says_whether_the_code_that_ran_is_its_commit(tmp_path):
+def test_run_json_says_whether_the_code_that_ran_is_its_commit(run_dir, tmp_path):
     """run.json records git_dirty next to git_commit (the benchmark export's commit_info.dirty was
-    always null): in a checkout it is a bool, False exactly when `git status` lists no tracked change."""
+    always null), and a tracked file changed in a checkout turns it True."""
     import subprocess
-    from harness.provenance import git_dirty
+    from harness.benchmark_json import build
+    meta = json.loads((run_dir / "run.json").read_text())
+    assert "git_dirty" in meta and build(run_dir)["commit_info"]["dirty"] == meta["git_dirty"]
     root = Path(harness.__file__).resolve().parents[1]
-    r = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=root, capture_output=True, text=True)
-    if r.returncode != 0:
+    if subprocess.run(["git", "rev-parse", "HEAD"], cwd=root, capture_output=True).returncode != 0:
         pytest.skip("not a git checkout")
-    assert git_dirty() is bool(r.stdout.strip())
+    clone = tmp_path / "clone"                  # a throwaway clone: this checkout is never touched
+    subprocess.run(["git", "clone", "-q", "--depth", "1", f"file://{root}", str(clone)], check=True)
+    probe = ("import sys; sys.path.insert(0, sys.argv[1]); from harness.provenance import git_dirty; "
+             "print(git_dirty())")
+    clean = subprocess.run([sys.executable, "-c", probe, str(clone)], capture_output=True, text=True)
+    (clone / "README.md").write_text((clone / "README.md").read_text() + "\nedited\n")
+    dirty = subprocess.run([sys.executable, "-c", probe, str(clone)], capture_output=True, text=True)
+    assert (clean.stdout.strip(), dirty.stdout.strip()) == ("False", "True"), (clean, dirty)
