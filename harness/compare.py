@@ -483,7 +483,7 @@ def timing_notes(meta_a: dict, meta_b: dict, res: dict) -> list[str]:
                      "on one side (raise repeats or time_budget), or a wall-time change while other processes "
                      "kept the slower run's machine busier, without a CPU-time change (see each case's note)")
     if any(time_samples(r) is None for r in list(res["rows_a"].values()) + list(res["rows_b"].values())
-           if r.get("status") == "ok"):
+           if r.get("status") == "ok" and r.get("library") != "external"):        # eval rows have no time at all
         notes.append("some rows store no timed samples (older runs): their time is judged on median/min/max only")
     return notes
 
