@@ -502,6 +502,9 @@ def recompute_views(run_dir) -> list[dict]:
     from .views import compute_views
     folder = RunFolder(run_dir)
     meta = folder.read_run_json()
+    if meta is None and folder.run_json_state() == "corrupt":
+        raise ShootoutError(f"{folder.run_json}: damaged or not written by mesh-shootout (unreadable JSON, or keys "
+                            "such as 'versions' missing): the cases cannot be rebuilt from it")
     if not meta or not isinstance(meta.get("config"), dict):
         raise ShootoutError(f"{run_dir}: no run.json with a config to rebuild the cases from")
     src, where = meta.get("config_source"), meta.get("config_dir")
