@@ -154,3 +154,17 @@ def test_estimates_scale_and_translate_with_the_mesh(name):
                 continue
             err = np.abs(np.asarray(got) * scale ** power - want).max() / np.abs(want).max()
             assert err <= tol, (q, scale, offset, err)
+
+
+def test_meshlab_principal_curvature_refuses_zero_area_faces():
+    """VCGLib's principal-curvature filter aborted its process (double free) on a grid with one
+    row collapsed onto the next; the adapter's precheck refuses zero-area faces by name."""
+    n = 10
+    x, y = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float), indexing="ij")
+    y[:, 5] = y[:, 4]                                         # row 5 onto row 4: zero-area faces between
+    V = np.c_[x.ravel(), y.ravel(), 0.1 * np.sin(x.ravel())]
+    idx = np.arange(n * n).reshape(n, n)
+    F = np.array([f for a in range(n - 1) for b in range(n - 1)
+                  for f in ([idx[a, b], idx[a + 1, b], idx[a + 1, b + 1]], [idx[a, b], idx[a + 1, b + 1], idx[a, b + 1]])])
+    with pytest.raises(ValueError, match="zero-area face"):
+        methods.get("meshlab.principal_curvature")(V, F)

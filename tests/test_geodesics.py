@@ -221,6 +221,27 @@ def test_a_mesh_the_exact_reference_cannot_take_is_an_error_row_saying_so(tmp_pa
     assert "no geodesic reference" in df.loc[("zero_area_grid", "pygeodesic.exact"), "error"]
 
 
+def test_two_spheres_sharing_a_vertex_have_no_exact_reference():
+    """Through a vertex joining two fans, libigl's exact_geodesic (the task's reference on file
+    meshes) returned 0 for every vertex of the far sphere, so correct methods were charged 0.36
+    of the diagonal; the reference refuses such a mesh and names the vertex."""
+    from harness.errors import InvalidMeshError
+    from harness.tasks.geodesics import exact_polyhedral
+    s = datasets.load({"procedural": "sphere", "subdivisions": 2}).clean
+    V2 = s.V.copy()
+    V2[:, 0] = 2 * s.V[0, 0] - V2[:, 0]                     # mirrored about the plane through vertex 0
+    n = len(s.V)
+    remap = np.arange(n) + n - 1
+    remap[0] = 0
+    remap[1:] = np.arange(1, n) + n - 1
+    V = np.vstack([s.V, V2[1:]])
+    F = np.vstack([s.F, remap[s.F][:, ::-1]])               # mirrored: reversed to stay outward
+    with pytest.raises(InvalidMeshError, match=r"1 vertex/vertices joining separate fans \(first: \[0\]\)"):
+        exact_polyhedral(V, F, 5)
+    with pytest.raises(ValueError, match="joining separate fans"):
+        methods.get("libigl.exact_geodesic")(V, F, sources=1)
+
+
 @pytest.mark.parametrize("boundary", ["neumann", "average", "dirichlet"])
 def test_tufted_heat_takes_the_boundary_condition_it_is_given(boundary):
     """On a manifold mesh the tufted Laplacian is the intrinsic Delaunay one (Sharp & Crane 2020),

@@ -367,3 +367,19 @@ def test_scratch_qem_is_translation_invariant(qem):
     b = qem(s.V + 1e6, s.F, target_ratio=0.1)
     assert np.array_equal(a.F, b.F)
     assert np.abs((b.V - 1e6) - a.V).max() <= 1e-8 * s.diagonal()
+
+
+@pytest.mark.parametrize("name", ["libigl.qslim", "libigl.decimate"])
+def test_libigl_decimation_refuses_an_inconsistently_oriented_mesh(name):
+    """With a third of a sphere's faces reversed libigl's qslim allocated until the machine ran out
+    of memory (24 GB, killed by the kernel), and on an edge of three faces it returned an empty
+    mesh: its precheck refuses both before the library is called, saying why."""
+    s = load("bunny").clean
+    F = s.F.copy()
+    F[::3] = F[::3, ::-1]
+    with pytest.raises(ValueError, match="traversed twice in one direction"):
+        methods.get(name)(s.V, F, target_ratio=0.5)
+    nm = np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]])
+    V = np.array([[0, 0, 0], [1, 0, 0], [0.5, 1, 0], [0.5, -1, 0], [0.5, 0, 1.0]])
+    with pytest.raises(ValueError, match="1 edge"):
+        methods.get(name)(V, nm, target_ratio=0.5)

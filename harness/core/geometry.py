@@ -31,6 +31,19 @@ def edge_keys(F: np.ndarray, n: int | None = None) -> tuple[np.ndarray, int]:
     return lo * n + hi, n
 
 
+def repeated_half_edges(F: np.ndarray) -> int:
+    """How many directed edges ``(i, j)`` occur in more than one face. 0 exactly when every edge
+    has at most one face on each side: the mesh is edge-manifold and consistently oriented
+    (two faces on one edge must traverse it in opposite directions)."""
+    if len(F) == 0:
+        return 0
+    E = _half_edges(F)
+    n = int(E.max()) + 1
+    keys = np.sort(E[:, 0] * n + E[:, 1])
+    dup = keys[1:] == keys[:-1]                           # a key equal to the one before it
+    return int(np.count_nonzero(dup & ~np.r_[False, dup[:-1]]))    # the first repeat of each key
+
+
 def edge_face_counts(F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Unique undirected edges (e, 2) (``E[:, 0] < E[:, 1]``, lexicographic order) and the
     number of faces using each (e,)."""

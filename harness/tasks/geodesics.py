@@ -101,19 +101,24 @@ def analytic(shape: dict | None, P: np.ndarray, s: np.ndarray) -> np.ndarray | N
 
 def exact_geodesic_problem(V: np.ndarray, F: np.ndarray, zero_area: bool = True) -> str | None:
     """Why an implementation of the exact polyhedral algorithm (Surazhsky et al. 2005) cannot take
-    this mesh, or None. Its window propagation assumes an edge-manifold surface (an edge of more
-    than two faces crashes libigl's ``exact_geodesic`` and pygeodesic) and, in libigl's
-    implementation (``zero_area``), triangles with a positive area (a flat triangle makes its
+    this mesh, or None. Its window propagation assumes a manifold surface: an edge of more than
+    two faces crashes libigl's ``exact_geodesic`` and pygeodesic, and through a vertex joining two
+    fans libigl returns 0 for the far side while pygeodesic returns no distance. In libigl's
+    implementation (``zero_area``) triangles must have a positive area (a flat triangle makes its
     window list grow without bound)."""
     from ..core.geometry import edge_face_counts, zero_area_faces
+    from ..mesh import nonmanifold_vertices
     what = []
     nm = int((edge_face_counts(F)[1] > 2).sum())
     if nm:
         what.append(f"{nm} edge(s) on more than two faces")
+    nv = nonmanifold_vertices(F, len(V))
+    if len(nv):
+        what.append(f"{len(nv)} vertex/vertices joining separate fans (first: {np.asarray(nv)[:5].tolist()})")
     za = zero_area_faces(V, F) if zero_area else np.zeros(0, np.int64)
     if za.size:
         what.append(f"{za.size} zero-area face(s) (first: {za[:5].tolist()})")
-    need = "an edge-manifold mesh without zero-area faces" if zero_area else "an edge-manifold mesh"
+    need = "a manifold mesh without zero-area faces" if zero_area else "a manifold mesh"
     return f"the exact polyhedral geodesic algorithm needs {need}; this one has {' and '.join(what)}" if what else None
 
 

@@ -10,8 +10,21 @@ import numpy as np
 from methods import SimplificationResult, register
 
 
+def oriented_manifold(V, F, name) -> None:
+    """``precheck`` of libigl's collapse loops: they walk the half-edge structure and need every
+    edge on at most two faces traversed in opposite directions (with a third of a sphere's faces
+    reversed, ``qslim`` allocated until the machine ran out of memory; on an edge of three faces
+    it returned an empty mesh)."""
+    from harness.core.geometry import repeated_half_edges
+    bad = repeated_half_edges(np.asarray(F))
+    if bad:
+        raise ValueError(f"{name}: {bad} edge(s) traversed twice in one direction (faces not consistently oriented, "
+                         "or an edge of more than two faces): libigl's decimation needs a consistently oriented "
+                         "edge-manifold mesh")
+
+
 @register("libigl.qslim", task="simplification", library="libigl", params={},
-          requires=("igl",))
+          requires=("igl",), precheck=oriented_manifold)
 def qslim(V, F, *, target_faces):
     """libigl's QSlim (Garland & Heckbert 1997) edge collapse.
 
@@ -38,7 +51,7 @@ def qslim(V, F, *, target_faces):
 
 
 @register("libigl.decimate", task="simplification", library="libigl", params={},
-          requires=("igl",))
+          requires=("igl",), precheck=oriented_manifold)
 def decimate(V, F, *, target_faces):
     """libigl's ``decimate``: collapse the shortest edge first, new vertex at the midpoint.
 

@@ -45,7 +45,18 @@ _METHODS = ("Quadric Fitting", "Taubin approximation", "Principal Component Anal
             "Scale Dependent Quadric Fitting")
 
 
+def _no_zero_area(V, F, name) -> None:
+    """``precheck``: VCGLib's principal-curvature filter aborts the process (a double free) on a
+    mesh with zero-area faces."""
+    from harness.core.geometry import zero_area_faces
+    bad = zero_area_faces(V, F)
+    if bad.size:
+        raise ValueError(f"{name}: {bad.size} zero-area face(s) (first: {bad[:5].tolist()}); VCGLib's "
+                         "principal-curvature filter aborts on them")
+
+
 @register("meshlab.principal_curvature", task="curvature", library="pymeshlab", requires=("pymeshlab",),
+          precheck=_no_zero_area,
           params={"method": Param("method", "Quadric Fitting", choices=_METHODS, doc="VCGLib's estimator"),
                   "scale": Param("scale", 10.0, "float", low=0.01, high=100.0,
                                  doc="neighbourhood radius, percent of the bounding-box diagonal")})
