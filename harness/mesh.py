@@ -62,6 +62,16 @@ class Mesh:
         from .core.geometry import vertex_normals
         return mean_edge_length(self.V, self.F), vertex_normals(self.V, self.F)
 
+    @functools.cached_property
+    def orientation_note(self) -> str:
+        """'' when every edge has at most one face on each side (edge-manifold and consistently
+        oriented), else what a row on this mesh should say: normals, mean curvature, principal
+        directions and enclosed volumes depend on the faces' orientation and are undefined."""
+        from .core.geometry import repeated_half_edges
+        k = repeated_half_edges(self.F)
+        return (f"{k} edge(s) traversed twice in one direction (faces not consistently oriented, or an edge of "
+                "more than two faces): normals, mean curvature and volumes are undefined there") if k else ""
+
 
 # ----------------------------------------------------------------------------- reading
 

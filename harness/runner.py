@@ -361,6 +361,8 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
             extras["view"] = task.view(inp, result)
         row["status"] = "ok"
         notes = ["input repaired: " + "; ".join(inp.clean.repairs)] if inp.clean.repairs else []
+        if inp.clean.orientation_note:
+            notes.append("input: " + inp.clean.orientation_note)
         heard = list(dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in said
                                    if issubclass(w.category, (RuntimeWarning, UserWarning))))
         notes += [f"the method warned: {m}" for m in heard[:3]]

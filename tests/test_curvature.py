@@ -168,3 +168,22 @@ def test_meshlab_principal_curvature_refuses_zero_area_faces():
                   for f in ([idx[a, b], idx[a + 1, b], idx[a + 1, b + 1]], [idx[a, b], idx[a + 1, b + 1], idx[a, b + 1]])])
     with pytest.raises(ValueError, match="zero-area face"):
         methods.get("meshlab.principal_curvature")(V, F)
+
+
+def test_rows_on_an_inconsistently_oriented_input_say_so(tmp_path):
+    """With a third of a sphere's faces reversed, quadric fitting read K from -2.3e4 to 1.6e4 where
+    K = 1, in ok rows with an empty error column; the rows now say the input's orientation is
+    inconsistent and what that leaves undefined. A consistent input gets no such note."""
+    from harness.mesh import write_obj
+    s = datasets.load({"procedural": "sphere", "subdivisions": 2}).clean
+    F = s.F.copy()
+    F[::3] = F[::3, ::-1]
+    write_obj(tmp_path / "flipped.obj", s.V, F)
+    write_obj(tmp_path / "sphere.obj", s.V, s.F)
+    run({"name": "orient", "repeats": 1, "time_budget": 0, "meshes": [{"file": str(tmp_path / "flipped.obj")},
+                                                                      {"file": str(tmp_path / "sphere.obj")}],
+         "noise": [{"model": "none"}], "tasks": {"curvature": {"methods": ["scratch.angle_defect"]}}},
+        out=tmp_path / "o", quiet=True, workers=1)
+    df = pd.read_csv(tmp_path / "o" / "curvature.csv").set_index("mesh")
+    assert "traversed twice in one direction" in df.loc["flipped", "error"]
+    assert pd.isna(df.loc["sphere", "error"]) or "traversed" not in df.loc["sphere", "error"]

@@ -290,6 +290,7 @@ def _warm(case: Case) -> None:
         if not any(k in case.mesh for k in FILE_KEYS):
             from .. import datasets
             src = datasets.load(case.mesh)
+            src.clean.orientation_note
             if src.noisy_V is None and case.adds_noise:
                 src.clean.noise_frame
     except Exception:  # noqa: BLE001 - reported by the child, as a row
