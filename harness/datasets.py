@@ -315,7 +315,7 @@ def sphere_random(n_points: int = 2000, seed: int = 0, radius: float = 1.0):
     P = rng.normal(size=(max(4, int(n_points)), 3))
     P /= np.linalg.norm(P, axis=1, keepdims=True)
     F = ConvexHull(P).simplices.astype(np.int64)
-    C = P[F].mean(axis=1)
+    C = P[F].mean(axis=1) - P[np.unique(F)].mean(axis=0)   # from a point inside the hull (the origin may not be)
     flip = np.einsum("ij,ij->i", face_cross(P, F), C) < 0
     F[flip] = F[flip][:, [0, 2, 1]]
     return P * radius, F

@@ -65,12 +65,13 @@ class Mesh:
     @functools.cached_property
     def orientation_note(self) -> str:
         """'' when every edge has at most one face on each side (edge-manifold and consistently
-        oriented), else what a row on this mesh should say: normals, mean curvature, principal
-        directions and enclosed volumes depend on the faces' orientation and are undefined."""
+        oriented), else what a row on this mesh should say: normals, and whatever a method derives
+        from them (curvature estimates, enclosed volumes), depend on the faces' orientation."""
         from .core.geometry import repeated_half_edges
         k = repeated_half_edges(self.F)
-        return (f"{k} edge(s) traversed twice in one direction (faces not consistently oriented, or an edge of "
-                "more than two faces): normals, mean curvature and volumes are undefined there") if k else ""
+        return (f"{k} directed edge(s) in more than one face (faces not consistently oriented, or an edge of more "
+                "than two faces): normals, and curvatures or volumes derived from them, are not defined "
+                "there") if k else ""
 
 
 # ----------------------------------------------------------------------------- reading

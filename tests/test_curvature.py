@@ -185,5 +185,5 @@ def test_rows_on_an_inconsistently_oriented_input_say_so(tmp_path):
          "noise": [{"model": "none"}], "tasks": {"curvature": {"methods": ["scratch.angle_defect"]}}},
         out=tmp_path / "o", quiet=True, workers=1)
     df = pd.read_csv(tmp_path / "o" / "curvature.csv").set_index("mesh")
-    assert "traversed twice in one direction" in df.loc["flipped", "error"]
-    assert pd.isna(df.loc["sphere", "error"]) or "traversed" not in df.loc["sphere", "error"]
+    assert "directed edge(s) in more than one face" in df.loc["flipped", "error"]
+    assert pd.isna(df.loc["sphere", "error"]) or "directed edge" not in df.loc["sphere", "error"]

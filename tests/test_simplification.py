@@ -377,9 +377,9 @@ def test_libigl_decimation_refuses_an_inconsistently_oriented_mesh(name):
     s = load("bunny").clean
     F = s.F.copy()
     F[::3] = F[::3, ::-1]
-    with pytest.raises(ValueError, match="traversed twice in one direction"):
+    with pytest.raises(ValueError, match=r"directed edge\(s\) in more than one face"):
         methods.get(name)(s.V, F, target_ratio=0.5)
     nm = np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]])
     V = np.array([[0, 0, 0], [1, 0, 0], [0.5, 1, 0], [0.5, -1, 0], [0.5, 0, 1.0]])
-    with pytest.raises(ValueError, match="1 edge"):
+    with pytest.raises(ValueError, match="1 directed edge"):
         methods.get(name)(V, nm, target_ratio=0.5)

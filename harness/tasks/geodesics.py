@@ -130,16 +130,17 @@ def exact_precheck(V: np.ndarray, F: np.ndarray, name: str) -> None:
 
 
 def manifold_precheck(V: np.ndarray, F: np.ndarray, name: str) -> None:
-    """pygeodesic's ``precheck``: ValueError on edges of more than two faces."""
+    """pygeodesic's ``precheck``: ValueError on a non-manifold edge or vertex (zero-area faces pass)."""
     why = exact_geodesic_problem(V, F, zero_area=False)
     if why:
         raise ValueError(f"{name}: {why}")
 
 
-def exact_polyhedral(V: np.ndarray, F: np.ndarray, s: int) -> np.ndarray:
+def exact_polyhedral(V: np.ndarray, F: np.ndarray, s: int, checked: bool = False) -> np.ndarray:
     """Exact polyhedral geodesic distance from vertex ``s`` (libigl ``exact_geodesic``); an
-    `InvalidMeshError` where `exact_geodesic_problem` says the algorithm cannot take the mesh."""
-    why = exact_geodesic_problem(V, F)
+    `InvalidMeshError` where `exact_geodesic_problem` says the algorithm cannot take the mesh
+    (not asked again when the caller has ``checked``)."""
+    why = None if checked else exact_geodesic_problem(V, F)
     if why:
         from ..errors import InvalidMeshError
         raise InvalidMeshError(f"no geodesic reference: {why}")
@@ -158,7 +159,11 @@ def reference(inp, sources: np.ndarray) -> tuple[np.ndarray, bool]:
         if all(r is not None for r in rows):
             inp.cache[key] = (np.stack(rows), False)
         else:
-            inp.cache[key] = (np.stack([exact_polyhedral(V, F, int(s)) for s in sources]), True)
+            why = exact_geodesic_problem(V, F)                            # the mesh checked once, not per source
+            if why:
+                from ..errors import InvalidMeshError
+                raise InvalidMeshError(f"no geodesic reference: {why}")
+            inp.cache[key] = (np.stack([exact_polyhedral(V, F, int(s), checked=True) for s in sources]), True)
     return inp.cache[key]
 
 

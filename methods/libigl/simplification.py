@@ -18,7 +18,7 @@ def oriented_manifold(V, F, name) -> None:
     from harness.core.geometry import repeated_half_edges
     bad = repeated_half_edges(np.asarray(F))
     if bad:
-        raise ValueError(f"{name}: {bad} edge(s) traversed twice in one direction (faces not consistently oriented, "
+        raise ValueError(f"{name}: {bad} directed edge(s) in more than one face (faces not consistently oriented, "
                          "or an edge of more than two faces): libigl's decimation needs a consistently oriented "
                          "edge-manifold mesh")
 
