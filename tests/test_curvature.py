@@ -187,3 +187,15 @@ def test_rows_on_an_inconsistently_oriented_input_say_so(tmp_path):
     df = pd.read_csv(tmp_path / "o" / "curvature.csv").set_index("mesh")
     assert "directed edge(s) in more than one face" in df.loc["flipped", "error"]
     assert pd.isna(df.loc["sphere", "error"]) or "directed edge" not in df.loc["sphere", "error"]
+
+
+def test_sphere_random_faces_point_outward_even_with_a_few_points():
+    """With 4-5 random points the origin can lie outside their hull, and orienting faces against
+    the origin turned one inward; every face now points away from a point inside the hull."""
+    from harness.core.geometry import face_cross
+    for n in (4, 5, 6, 8):
+        for seed in range(5):
+            s = datasets.load({"procedural": "sphere_random", "n_points": n, "seed": seed}).clean
+            inside = s.V.mean(axis=0)
+            out = np.einsum("ij,ij->i", face_cross(s.V, s.F), s.V[s.F].mean(axis=1) - inside)
+            assert (out > 0).all() and not s.orientation_note, (n, seed)
