@@ -26,7 +26,8 @@ MAX_DISPLAY_FACES = 8000    # larger meshes are decimated for display only
 
 
 def choose_views(report_cfg: dict, frames) -> list[tuple[str, str]]:
-    """(case_id, why) for the 3D views: ``report.views``, else best and worst per task."""
+    """(case_id, why) for the 3D views: ``report.views``, else best and worst per task by its view
+    metric, or, where that metric is blank everywhere (no ground truth), one ok case of the task."""
     wanted = (report_cfg or {}).get("views")
     if isinstance(wanted, list) and wanted:
         return [(str(c), "chosen in the config (report.views)") for c in wanted[:MAX_VIEWS]]
@@ -38,6 +39,10 @@ def choose_views(report_cfg: dict, frames) -> list[tuple[str, str]]:
             continue
         ok = df[(df["status"] == "ok") & df[metric.name].notna()]
         if not len(ok):
+            done = df[df["status"] == "ok"].sort_values("case_id")
+            if len(done) and task.view is not None:   # no ground truth to rank by: one case to look at
+                out.append((str(done["case_id"].iloc[0]), f"a {name} case ({metric.name} is blank on these "
+                                                          "meshes: no ground truth to pick a best or worst by)"))
             continue
         from .leaderboard import validity
         col = ok[metric.name].astype(float)
