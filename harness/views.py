@@ -38,13 +38,14 @@ def choose_views(report_cfg: dict, frames) -> list[tuple[str, str]]:
         if metric is None or df is None or metric.name not in df:
             continue
         ok = df[(df["status"] == "ok") & df[metric.name].notna()]
+        from .leaderboard import validity
         if not len(ok):
-            done = df[df["status"] == "ok"].sort_values("case_id")
+            done = df[df["status"] == "ok"]
+            done = done[validity(task.spec(), done) == ""].sort_values("case_id")   # not a diverged one
             if len(done) and task.view is not None:   # no ground truth to rank by: one case to look at
                 out.append((str(done["case_id"].iloc[0]), f"a {name} case ({metric.name} is blank on these "
                                                           "meshes: no ground truth to pick a best or worst by)"))
             continue
-        from .leaderboard import validity
         col = ok[metric.name].astype(float)
         valid = col[validity(task.spec(), ok) == ""]     # the best is a valid result; the worst may not be
         pick = valid if len(valid) else col

@@ -97,6 +97,10 @@ def test_every_other_failure_mode_is_one_defined_row(tmp_path):
         assert np.isnan(sm[col]), col
     simp = frames["simplification"].iloc[0]
     assert simp["status"] == "error" and "out of range" in simp["error"]
+    # the diverged result is no case to look at: no 3D view of it (its NaN coordinates)
+    import json
+    index = json.loads((tmp_path / "out" / "views" / "index.json").read_text())["views"]
+    assert sm["case_id"] not in {v["case_id"] for v in index}
 
 
 def test_serial_executor_is_not_used_for_isolation_by_default(tmp_path):
