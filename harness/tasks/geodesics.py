@@ -115,38 +115,38 @@ def exact_geodesic_problem(V: np.ndarray, F: np.ndarray, zero_area: bool = True)
     nv = nonmanifold_vertices(F, len(V))
     if len(nv):
         what.append(f"{len(nv)} vertex/vertices joining separate fans (first: {np.asarray(nv)[:5].tolist()})")
-    za = zero_area_faces(V, F) if zero_area else np.zeros(0, np.int64)
-    if za.size:
-        what.append(f"{za.size} zero-area face(s) (first: {za[:5].tolist()})")
+    za = zero_area_faces(V, F) if zero_area else ()
+    if len(za):
+        what.append(f"{len(za)} zero-area face(s) (first: {za[:5].tolist()})")
     need = "a manifold mesh without zero-area faces" if zero_area else "a manifold mesh"
     return f"the exact polyhedral geodesic algorithm needs {need}; this one has {' and '.join(what)}" if what else None
 
 
-def exact_precheck(V: np.ndarray, F: np.ndarray, name: str) -> None:
-    """libigl ``exact_geodesic``'s ``precheck``: ValueError with `exact_geodesic_problem`'s reason."""
-    why = exact_geodesic_problem(V, F)
+def exact_precheck(V: np.ndarray, F: np.ndarray, name: str, zero_area: bool = True) -> None:
+    """An exact adapter's ``precheck``: ValueError with `exact_geodesic_problem`'s reason (libigl's;
+    `manifold_precheck`, without the zero-area test, is pygeodesic's)."""
+    why = exact_geodesic_problem(V, F, zero_area)
     if why:
         raise ValueError(f"{name}: {why}")
 
 
 def manifold_precheck(V: np.ndarray, F: np.ndarray, name: str) -> None:
-    """pygeodesic's ``precheck``: ValueError on a non-manifold edge or vertex (zero-area faces pass)."""
-    why = exact_geodesic_problem(V, F, zero_area=False)
-    if why:
-        raise ValueError(f"{name}: {why}")
+    """pygeodesic's ``precheck``: a non-manifold edge or vertex (zero-area faces pass)."""
+    exact_precheck(V, F, name, zero_area=False)
 
 
-def exact_polyhedral(V: np.ndarray, F: np.ndarray, s: int, checked: bool = False) -> np.ndarray:
-    """Exact polyhedral geodesic distance from vertex ``s`` (libigl ``exact_geodesic``); an
-    `InvalidMeshError` where `exact_geodesic_problem` says the algorithm cannot take the mesh
-    (not asked again when the caller has ``checked``)."""
-    why = None if checked else exact_geodesic_problem(V, F)
+def exact_polyhedral(V: np.ndarray, F: np.ndarray, sources) -> np.ndarray:
+    """Exact polyhedral geodesic distances (k, n) from each vertex of ``sources`` (libigl
+    ``exact_geodesic``, one call per source); an `InvalidMeshError` where
+    `exact_geodesic_problem` says the algorithm cannot take the mesh (checked once)."""
+    why = exact_geodesic_problem(V, F)
     if why:
         from ..errors import InvalidMeshError
         raise InvalidMeshError(f"no geodesic reference: {why}")
     import igl
-    return np.asarray(igl.exact_geodesic(V, F, VS=np.array([s], np.int64), VT=np.arange(len(V), dtype=np.int64)),
-                      dtype=np.float64)
+    VT = np.arange(len(V), dtype=np.int64)
+    return np.stack([np.asarray(igl.exact_geodesic(V, F, VS=np.array([int(s)], np.int64), VT=VT), dtype=np.float64)
+                     for s in np.atleast_1d(sources)])
 
 
 def reference(inp, sources: np.ndarray) -> tuple[np.ndarray, bool]:
@@ -159,11 +159,7 @@ def reference(inp, sources: np.ndarray) -> tuple[np.ndarray, bool]:
         if all(r is not None for r in rows):
             inp.cache[key] = (np.stack(rows), False)
         else:
-            why = exact_geodesic_problem(V, F)                            # the mesh checked once, not per source
-            if why:
-                from ..errors import InvalidMeshError
-                raise InvalidMeshError(f"no geodesic reference: {why}")
-            inp.cache[key] = (np.stack([exact_polyhedral(V, F, int(s), checked=True) for s in sources]), True)
+            inp.cache[key] = (exact_polyhedral(V, F, sources), True)
     return inp.cache[key]
 
 
