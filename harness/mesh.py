@@ -26,7 +26,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from .core.geometry import COMPILED_EDGES_FROM, edge_face_counts, mean_edge_length, referenced  # noqa: F401
+from .core.geometry import COMPILED_EDGES_FROM, edge_face_counts, face_cross, mean_edge_length, referenced  # noqa: F401
 from .errors import InvalidMeshError
 
 SUPPORTED = (".obj", ".off", ".ply", ".stl")
@@ -336,9 +336,10 @@ def read_mesh(path, name: str | None = None, repair: bool = True, sha1: str | No
         raise InvalidMeshError(f"{path}: cannot read it ({exc.strerror or exc})") from None
     if not data:
         raise InvalidMeshError(f"{path.name}: empty file")
-    if sha1 is not None and hashlib.sha1(data).hexdigest() != sha1:
+    now = hashlib.sha1(data).hexdigest() if sha1 is not None else None
+    if now != sha1:
         raise InvalidMeshError(f"{path}: the file changed since the run started (its sha1 is now "
-                               f"{hashlib.sha1(data).hexdigest()[:12]}, was {sha1[:12]}); start the run again")
+                               f"{now[:12]}, was {sha1[:12]}); start the run again")
     if ext != ".stl" and data.startswith(b"\xef\xbb\xbf"):          # a UTF-8 byte-order mark
         data = data[3:]
     notes = []
@@ -456,8 +457,7 @@ def validate(V, F, name: str = "", repair: bool = True) -> Mesh:
             remap = np.full(len(V), -1, np.int64)
             remap[vmap] = np.arange(len(vmap))
             V, F = V[vmap], remap[F]
-    if not any(np.cross(V[f[:, 1]] - V[f[:, 0]], V[f[:, 2]] - V[f[:, 0]]).any()
-               for f in (F[:64], *(F[i:i + 65536] for i in range(0, len(F), 65536)))):
+    if not any(face_cross(V, f).any() for f in (F[:64], *(F[i:i + 65536] for i in range(0, len(F), 65536)))):
         raise InvalidMeshError(f"{label}every face has zero area (the surface is degenerate: its vertices "
                                "lie on a line or coincide)")
     return Mesh(V=np.ascontiguousarray(V), F=np.ascontiguousarray(F), name=name,

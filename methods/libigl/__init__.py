@@ -12,11 +12,16 @@ def reject_zero_area(V: np.ndarray, F: np.ndarray, name: str) -> None:
     Kahan's Heron formula on its edge lengths gives 0 (a numerically flat face can have a
     cross-product area of 1e-20 and a Heron area of exactly 0).
     """
+    refuse_zero_area(V, F, name, "libigl's cotangent weights are undefined there")
+
+
+def refuse_zero_area(V: np.ndarray, F: np.ndarray, name: str, why: str) -> None:
+    """ValueError naming the zero-area faces (`harness.core.geometry.zero_area_faces`) and ``why``
+    the library cannot take them; the shared body of the zero-area prechecks."""
     from harness.core.geometry import zero_area_faces
     bad = zero_area_faces(V, F)
     if bad.size:
-        raise ValueError(f"{name}: {bad.size} zero-area face(s) (first: {bad[:5].tolist()}); "
-                         "libigl's cotangent weights are undefined there")
+        raise ValueError(f"{name}: {bad.size} zero-area face(s) (first: {bad[:5].tolist()}); {why}")
 
 
 def reject_zero_area_or_unreferenced(V: np.ndarray, F: np.ndarray, name: str) -> None:

@@ -48,11 +48,8 @@ _METHODS = ("Quadric Fitting", "Taubin approximation", "Principal Component Anal
 def _no_zero_area(V, F, name) -> None:
     """``precheck``: VCGLib's principal-curvature filter aborts the process (a double free) on a
     mesh with zero-area faces."""
-    from harness.core.geometry import zero_area_faces
-    bad = zero_area_faces(V, F)
-    if bad.size:
-        raise ValueError(f"{name}: {bad.size} zero-area face(s) (first: {bad[:5].tolist()}); VCGLib's "
-                         "principal-curvature filter aborts on them")
+    from methods.libigl import refuse_zero_area
+    refuse_zero_area(V, F, name, "VCGLib's principal-curvature filter aborts on them")
 
 
 @register("meshlab.principal_curvature", task="curvature", library="pymeshlab", requires=("pymeshlab",),
