@@ -157,9 +157,9 @@ def _cmd_run(a) -> int:
         for s, n in df["status"].value_counts().items():
             total[s] = total.get(s, 0) + int(n)
     summary = ", ".join(f"{n} {s}" for s, n in sorted(total.items()))
-    from .session import FINISH_PROBLEMS
-    if FINISH_PROBLEMS:                  # the rows are whole, but what the user reads was not (re)written
-        print(f"{cfg.name}: {summary or 'no cases'}; not written: {'; '.join(FINISH_PROBLEMS)} (see the warnings "
+    not_written = getattr(frames, "not_written", [])
+    if not_written:                      # the rows are whole, but what the user reads was not (re)written
+        print(f"{cfg.name}: {summary or 'no cases'}; not written: {'; '.join(not_written)} (see the warnings "
               f"above; `shootout report {out}` retries)")
         return 1
     print(f"{cfg.name}: {summary or 'no cases'}; report: {out / 'report.html'}")

@@ -142,10 +142,10 @@ def check_run_args(workers, timeout, executor, scheduler) -> None:
 def run(config_or_path, out=None, workers=None, executor="local", scheduler=None, resume=False,
         timeout=None, quiet=True, export_benchmark_json=None):
     """Run a config (a `Config`, a path, YAML text or a dict) end to end; returns
-    ``{task: DataFrame}`` of the rows in the run folder. Bad arguments are a `ShootoutError`
+    ``{task: DataFrame}`` of the rows in the run folder (a `Frames`: its ``not_written`` lists
+    what the end of the run could not write, e.g. the report). Bad arguments are a `ShootoutError`
     before anything is written."""
     check_run_args(workers, timeout, executor, scheduler)
-    FINISH_PROBLEMS.clear()
     raw = _results_config(config_or_path)
     if raw is not None:                  # a results: config scores files made elsewhere (shootout eval)
         from .scoring import eval_entries, results_config
@@ -430,8 +430,9 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         except OSError:                       # disk full: the status below is the best we can record
             folder.remove_temporaries()
             _write_status_in_place(folder, meta["status"])
-    finish(out_dir, cfg, timeout=timeout, export_benchmark_json=export_benchmark_json, extra_cases=extra_cases)
-    return folder.frames()
+    not_written = finish(out_dir, cfg, timeout=timeout, export_benchmark_json=export_benchmark_json,
+                         extra_cases=extra_cases)
+    return Frames(folder.frames(), not_written)
 
 
 def _tune(cfg: Config, ex, out_dir: Path, meta: dict, threads: int, resume: bool, quiet: bool) -> list:
@@ -459,20 +460,26 @@ def _tune(cfg: Config, ex, out_dir: Path, meta: dict, threads: int, resume: bool
     return tuned
 
 
-FINISH_PROBLEMS: list[str] = []        # what the last `finish` could not write (the CLI's exit code says so)
+class Frames(dict):
+    """``{task: DataFrame}`` of a run folder's rows, and ``not_written``: what the end of the run
+    could not (re)write (3D views, leaderboard, report), empty when everything was written."""
+
+    def __init__(self, frames: dict, not_written=()):
+        super().__init__(frames)
+        self.not_written = list(not_written)
 
 
-def finish(out_dir, cfg: Config, timeout=None, export_benchmark_json=None, extra_cases=()) -> None:
+def finish(out_dir, cfg: Config, timeout=None, export_benchmark_json=None, extra_cases=()) -> list[str]:
     """After the last row: the 3D views (views/), the report and the optional benchmark export.
-    The rows are safe on disk; a failure here is a warning and an entry of `FINISH_PROBLEMS`,
-    never a lost run."""
+    The rows are safe on disk; a failure here is a warning and an entry of the returned list of
+    what was not written, never a lost run."""
     from .report import build_report
     from .views import compute_views
-    FINISH_PROBLEMS.clear()
+    problems: list[str] = []
     folder = RunFolder(out_dir)
 
     def warn(what: str, exc: Exception, extra: str = "") -> None:
-        FINISH_PROBLEMS.append(what)
+        problems.append(what)
         print(f"shootout: warning: {what} ({type(exc).__name__}: {exc}){extra}", file=sys.stderr)
     try:
         views = compute_views({c.case_id: c for c in list(cfg.cases) + list(extra_cases)}, folder.frames(), cfg.report,
@@ -493,6 +500,7 @@ def finish(out_dir, cfg: Config, timeout=None, export_benchmark_json=None, extra
     if export_benchmark_json:
         from .benchmark_json import export_benchmark_json as _export
         _export(out_dir, export_benchmark_json)
+    return problems
 
 
 def recompute_views(run_dir) -> list[dict]:

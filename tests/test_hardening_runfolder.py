@@ -396,6 +396,11 @@ def test_a_report_that_cannot_be_written_is_exit_1_not_a_path_to_a_stale_one(tmp
     assert "not written: report.html could not be built" in out.out and "report: " not in out.out, out
     assert "No space left on device" in out.err
     assert len(pd.read_csv(tmp_path / "o" / "smoothing.csv")) > 0
+    import harness                       # the Python API says the same, per call
+    frames = harness.run(str(cfg), out=str(tmp_path / "o"), resume=True, quiet=True)
+    assert frames.not_written == ["report.html could not be built"] and len(frames["smoothing"]) > 0
+    monkeypatch.undo()
+    assert harness.run(str(cfg), out=str(tmp_path / "o"), resume=True, quiet=True).not_written == []
 
 
 def test_a_full_disk_while_resume_rewrites_the_csvs_is_the_disk_full_message(tmp_path, monkeypatch, capsys):
