@@ -1,6 +1,6 @@
 """The columns of a task CSV and the one function that turns a value into a CSV/JSON scalar.
 
-A row is a flat dict: the common columns below, then the task's metric columns in the order
+A row is a flat dict: the common columns (`COMMON_COLUMNS`, declared with the task contract), then the task's metric columns in the order
 its `harness.tasks` declaration gives them.
 """
 from __future__ import annotations
@@ -10,11 +10,8 @@ import math
 import numpy as np
 
 from . import tasks
+from .tasks.base import COMMON_COLUMNS  # noqa: F401 - the common columns live with the task contract
 
-COMMON_COLUMNS = ["case_id", "task", "mesh", "n_vertices", "n_faces", "noise_model", "noise_level", "seed",
-                  "method", "library", "params", "status", "error", "time_s", "time_min_s", "time_max_s",
-                  "time_q1_s", "time_q3_s", "time_cold_s", "repeats", "times", "time_cpu_s", "cpu_times", "others_cpu",
-                  "method_mem_mb", "peak_rss_mb"]
 STATUSES = ("ok", "error", "timeout", "unavailable")
 
 
@@ -27,9 +24,22 @@ def task_file(task: str) -> str:
     return f"{task}.csv"
 
 
+def text(v) -> str:
+    """``str(v)`` that any UTF-8 file can hold: NUL and lone surrogates (a path decoded with
+    ``surrogateescape``, say) as backslash escapes, everything else unchanged."""
+    s = str(v)
+    if "\x00" in s:
+        s = s.replace("\x00", "\\x00")
+    try:
+        s.encode("utf-8")
+    except UnicodeEncodeError:
+        s = s.encode("utf-8", "backslashreplace").decode("utf-8")
+    return s
+
+
 def scalar(v):
     """A JSON-ready scalar: None for missing or non-finite numbers, Python bool/int/float for
-    numpy and Python numbers, ``str(v)`` for anything else."""
+    numpy and Python numbers, `text` of anything else."""
     if v is None:
         return None
     if isinstance(v, (bool, np.bool_)):
@@ -39,7 +49,7 @@ def scalar(v):
     if isinstance(v, (float, np.floating)):
         f = float(v)
         return f if math.isfinite(f) else None
-    return str(v)
+    return text(v)
 
 
 def cell(v) -> str | int | float:

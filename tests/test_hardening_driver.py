@@ -120,16 +120,25 @@ def test_a_flood_of_stderr_is_cut_back_to_its_tail(tmp_path):
 
 
 def test_wrong_result_types_are_error_rows_naming_what_came_back(tmp_path):
-    cfg = _cfg(tmp_path, ["hostile.complex", "hostile.strings", "hostile.bools", "hostile.lists"])
+    """Also messages no CSV can hold: a NUL in a warning made the whole CSV unreadable (every
+    row, the report, compare and --resume), a lone surrogate in an exception killed the driver
+    (and every --resume after it)."""
+    cfg = _cfg(tmp_path, ["hostile.complex", "hostile.strings", "hostile.bools", "hostile.lists",
+                          "hostile.nul_warning", "hostile.surrogate_raise", "scratch.explicit"])
     r = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(tmp_path / "o"), "--quiet"],
                        cwd=ROOT, env=_env(tmp_path), capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, r.stderr
-    df = pd.read_csv(tmp_path / "o" / "smoothing.csv").set_index("method")
-    assert (df["status"] == "error").all()
+    import harness
+    df = harness.load_run(tmp_path / "o").set_index("method")
+    assert (df.drop(["hostile.nul_warning", "scratch.explicit"])["status"] == "error").all()
     assert "complex128" in df.loc["hostile.complex", "error"]
     assert "<U" in df.loc["hostile.strings", "error"]
     assert "bool" in df.loc["hostile.bools", "error"]
     assert "list" in df.loc["hostile.lists", "error"]
+    assert df.loc["hostile.nul_warning", "status"] == "ok"
+    assert "library said: \\x00 done" in df.loc["hostile.nul_warning", "error"]
+    assert "/data/scan\\udcff.obj" in df.loc["hostile.surrogate_raise", "error"]
+    assert df.loc["scratch.explicit", "status"] == "ok"
 
 
 def test_ctrl_c_always_stops_the_run(tmp_path):

@@ -122,3 +122,17 @@ def escape(V, F, *, crash=False):
         faulthandler.disable()
         ctypes.string_at(0)
     return SmoothingResult(V=V.copy())
+
+
+@register("hostile.nul_warning", task="smoothing", library="hostile")
+def nul_warning(V, F):
+    """A good result, with a NUL byte in a warning's text (which the row's error column quotes)."""
+    import warnings
+    warnings.warn("library said: \x00 done")
+    return SmoothingResult(V=V.copy())
+
+
+@register("hostile.surrogate_raise", task="smoothing", library="hostile")
+def surrogate_raise(V, F):
+    """Raises with a lone surrogate in its message (a path decoded with ``surrogateescape``)."""
+    raise FileNotFoundError("cannot open " + b"/data/scan\xff.obj".decode("utf-8", "surrogateescape"))
