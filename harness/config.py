@@ -505,7 +505,9 @@ def _check_tasks(tasks, P: list, skip_unknown: bool = False, noise: dict | None 
     for task, body in tasks.items():
         at = f"tasks.{task}"
         if task not in TASKS:
-            P.append(f"{at}: unknown task{_close(task, TASKS)}; expected one of {list(TASKS)}")
+            from .tasks import BROKEN
+            why = f" (harness/tasks/{task}.py is not loaded: {BROKEN[task]})" if task in BROKEN else ""
+            P.append(f"{at}: unknown task{_close(task, TASKS)}; expected one of {list(TASKS)}{why}")
             continue
         if not isinstance(body, dict):
             P.append(f"{at}: expected a mapping with 'methods' (and optional 'params'), got {yaml_input.short(body)}")

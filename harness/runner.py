@@ -352,7 +352,7 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
             others = max(0.0, (busy1 - busy0) - (own1 - own0)) / (wall1 - wall0)
             row["others_cpu"] = round(min(others, float(os.cpu_count() or 1)), 3)
         t_measure = time.perf_counter()
-        row.update(task.measure(inp, result, full))
+        row.update(task.measured(inp, result, full))
         extras["measure_s"] = time.perf_counter() - t_measure
         input_store.save(case, inp.cache, task.input_facts)
         if want_meshes and task.output_mesh is not None:

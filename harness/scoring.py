@@ -69,7 +69,7 @@ def evaluate(V, F, V_clean, F_clean, task: str = "smoothing", V_noisy=None, haus
     params = {}
     if task == "simplification":
         params = {"target_ratio": None, "target_faces": int(target_faces or len(res.F))}
-    row = t.measure(inp, res, params)
+    row = t.measured(inp, res, params)
     if V_noisy is None:
         for k in [k for k in row if k.startswith("input_")]:
             row[k] = None

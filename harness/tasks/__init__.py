@@ -4,10 +4,30 @@ from __future__ import annotations
 
 import importlib
 import pkgutil
+import sys
 
-from .base import CaseInput, Invalid, Metric, Task
+from .base import COMMON_COLUMNS, CaseInput, Invalid, Metric, Task
 
 _TASKS: dict[str, Task] = {}
+BROKEN: dict[str, str] = {}         # module name -> why it is not a task kind (import error, bad declaration)
+
+
+def declaration_problems(task: Task) -> list[str]:
+    """What is wrong with a `Task` declaration: metrics that are not a tuple of `Metric`, metric
+    names repeated or taken by a common column, a view metric or ``Invalid`` column that is not
+    a column."""
+    if not isinstance(task.metrics, (tuple, list)) or not all(isinstance(m, Metric) for m in task.metrics):
+        return [f"metrics must be a tuple of Metric, got {type(task.metrics).__name__} (one Metric needs a "
+                "trailing comma: metrics=(Metric(...),))"]
+    P, names = [], [m.name for m in task.metrics]
+    P += [f"metric {n!r} is declared twice" for n in sorted({n for n in names if names.count(n) > 1})]
+    P += [f"metric {n!r} is a common column of every task CSV; name it otherwise" for n in names
+          if n in COMMON_COLUMNS]
+    if task.view_metric is not None and task.view_metric not in names:
+        P.append(f"view_metric {task.view_metric!r} is not one of its metrics {names}")
+    P += [f"invalid_when column {r.column!r} is not one of its metrics" for r in task.invalid_when
+          if r.column not in names]
+    return P
 
 
 def _load() -> dict[str, Task]:
@@ -16,9 +36,17 @@ def _load() -> dict[str, Task]:
         for info in sorted(pkgutil.iter_modules(__path__), key=lambda i: i.name):
             if info.name == "base":
                 continue
-            mod = importlib.import_module(f"{__name__}.{info.name}")
-            task = getattr(mod, "TASK", None)
-            if isinstance(task, Task):
+            try:                             # one broken task module costs that task kind, not every command
+                mod = importlib.import_module(f"{__name__}.{info.name}")
+                task = getattr(mod, "TASK", None)
+                problems = declaration_problems(task) if isinstance(task, Task) else []
+            except Exception as exc:  # noqa: BLE001
+                task, problems = None, [f"importing it failed ({type(exc).__name__}: {exc})"]
+            if problems:
+                BROKEN[info.name] = "; ".join(problems)
+                print(f"shootout: warning: harness/tasks/{info.name}.py is not loaded as a task kind: "
+                      f"{BROKEN[info.name]}", file=sys.stderr)
+            elif isinstance(task, Task):
                 found[task.name] = task
         _TASKS.update(found)
     return _TASKS
@@ -37,7 +65,8 @@ def get(name: str) -> Task:
     """The task ``name``; KeyError listing the known ones otherwise."""
     tasks = _load()
     if name not in tasks:
-        raise KeyError(f"unknown task {name!r}; expected one of {sorted(tasks)}")
+        broken = f" (not loaded: {', '.join(f'{m}.py: {why}' for m, why in BROKEN.items())})" if BROKEN else ""
+        raise KeyError(f"unknown task {name!r}; expected one of {sorted(tasks)}{broken}")
     return tasks[name]
 
 

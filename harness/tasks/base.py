@@ -14,6 +14,11 @@ import numpy as np
 
 from ..errors import MethodFailed
 
+# the columns every task CSV starts with (no task metric may take one of these names)
+COMMON_COLUMNS = ["case_id", "task", "mesh", "n_vertices", "n_faces", "noise_model", "noise_level", "seed",
+                  "method", "library", "params", "status", "error", "time_s", "time_min_s", "time_max_s",
+                  "time_q1_s", "time_q3_s", "time_cold_s", "repeats", "times", "time_cpu_s", "cpu_times", "others_cpu",
+                  "method_mem_mb", "peak_rss_mb"]
 BETTER = ("lower", "higher", "one", "true", "false", "count", "target", "info", "input")
 
 
@@ -130,6 +135,24 @@ class Task:
             return self.check_result(result, V, F)
         except MethodFailed as exc:
             raise MethodFailed(f"{name} {exc}") from None
+
+    def measured(self, inp: CaseInput, result, params: dict) -> dict:
+        """``measure``'s columns, checked: only declared metrics (a key of a common column or a
+        misspelt metric would overwrite or vanish silently), each a scalar (a number, a flag, a
+        string or None; an array would be written as its repr). `MethodFailed` otherwise."""
+        out = self.measure(inp, result, params)
+        if not isinstance(out, dict):
+            raise MethodFailed(f"task {self.name!r}: measure returned {type(out).__name__}, expected a dict")
+        extra = sorted(str(k) for k in out if k not in set(self.columns))
+        if extra:
+            raise MethodFailed(f"task {self.name!r}: measure returned {extra}, which are not its declared metrics "
+                               f"{self.columns} (a bug in the task's module)")
+        for k, v in out.items():
+            if not (v is None or isinstance(v, (bool, int, float, str, np.bool_, np.integer, np.floating))):
+                shape = f" of shape {np.shape(v)}" if hasattr(v, "shape") else ""
+                raise MethodFailed(f"task {self.name!r}: metric {k!r} is a {type(v).__name__}{shape}, not a "
+                                   "number, flag or string")
+        return out
 
     def spec(self) -> dict:
         """JSON-ready declaration (written to run.json, read by the report and compare)."""
