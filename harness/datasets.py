@@ -101,10 +101,15 @@ def spec_key(spec: dict) -> str:
 
 
 def load(spec) -> Source:
-    """Load the mesh a spec names (cached per process)."""
+    """Load the mesh a spec names (cached per process: its arrays are read-only, so a caller that
+    would write into them gets numpy's error instead of changing every later use; copy first)."""
     if isinstance(spec, str):
         spec = {"bundled": spec}
-    return _load_cached(_freeze(spec))
+    src = _load_cached(_freeze(spec))
+    for a in (src.clean.V, src.clean.F, src.clean.vertex_map, src.noisy_V):
+        if isinstance(a, np.ndarray):
+            a.flags.writeable = False
+    return src
 
 
 def _freeze(spec: dict):

@@ -1,7 +1,7 @@
 """The columns of a task CSV and the one function that turns a value into a CSV/JSON scalar.
 
-A row is a flat dict: the common columns (`COMMON_COLUMNS`, declared with the task contract), then the task's metric columns in the order
-its `harness.tasks` declaration gives them.
+A row is a flat dict: the common columns (`COMMON_COLUMNS`, declared with the task contract),
+then the task's metric columns in the order its `harness.tasks` declaration gives them.
 """
 from __future__ import annotations
 

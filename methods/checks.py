@@ -3,10 +3,11 @@
 ``check_method(method)`` yields ``(name, check)`` pairs; each ``check()`` raises (an
 AssertionError or the method's own exception) when the method breaks the contract. The checks:
 declared defaults valid and a docstring present; output of the task's result type, of the right
-shapes and dtypes, finite, and the same on a second call (closed mesh), also on an open mesh
+shapes and dtypes, finite, its input arrays left as they were, and the same on a second call
+(closed mesh), also on an open mesh
 (not for simplification); unknown or out-of-range parameters and malformed arrays raise
 ValueError naming the problem; and the task's own checks (`harness.tasks`: e.g. W rows summing
-to zero, the face target reached).
+to zero in libigl's sign with a positive diagonal M, the face target reached).
 
 In a plugin's tests (pytest)::
 
@@ -40,13 +41,16 @@ def _mesh(name: str):
 
 
 def closed_mesh():
-    """A small closed test mesh (decimated knight, 1k faces)."""
-    return _mesh("knight")
+    """A small closed test mesh (decimated knight, 1k faces): fresh copies, so a method that
+    writes into its input spoils no later check."""
+    V, F = _mesh("knight")
+    return V.copy(), F.copy()
 
 
 def open_mesh():
-    """A small mesh with boundary (woody)."""
-    return _mesh("woody")
+    """A small mesh with boundary (woody), as fresh copies."""
+    V, F = _mesh("woody")
+    return V.copy(), F.copy()
 
 
 def _declaration(m: Method):
@@ -57,7 +61,11 @@ def _declaration(m: Method):
 
 def _output_and_determinism(m: Method):
     V, F = closed_mesh()
-    a, b = m(V, F), m(V, F)           # Method.__call__ validates type, shapes, dtypes
+    a = m(V, F)                       # Method.__call__ validates type, shapes, dtypes
+    V0, F0 = closed_mesh()
+    assert np.array_equal(V, V0) and np.array_equal(F, F0), \
+        "the method wrote into its input arrays (a caller's mesh, e.g. a cached dataset, changes under it)"
+    b = m(V, F)
     for x, y in zip(_arrays(a), _arrays(b)):
         assert x.shape == y.shape, "a second call returned a different shape"
         np.testing.assert_allclose(x, y, rtol=0, atol=1e-12, err_msg="a second call returned different values")

@@ -77,6 +77,43 @@ def test_a_broken_method_fails_the_checks():
     checks["bad_parameters"]()          # parameter validation is the interface's, so it still holds
 
 
+def test_writing_into_the_input_and_a_flipped_laplacian_fail_the_checks():
+    """Before: a method that flattened its input in place passed every check and left the checks'
+    shared mesh (and `datasets.load`'s cached one) flat for every later check and run in the
+    process; a Laplacian of the wrong sign passed them all."""
+    import numpy as np
+    import scipy.sparse as sp
+
+    from harness import datasets
+    from methods import LaplacianResult, Method, SmoothingResult
+
+    def squash(V, F):
+        """Flattens its input in place."""
+        V[:, 2] = 0.0
+        return SmoothingResult(V=V.copy())
+
+    m = Method(name="broken.squash", task="smoothing", library="broken", func=squash, params={}, doc="broken")
+    with pytest.raises(AssertionError, match="wrote into its input"):
+        dict(check_method(m))["output_and_determinism"]()
+    assert np.ptp(datasets.load("knight").clean.V[:, 2]) > 0
+    with pytest.raises(ValueError, match="read-only"):
+        squash(datasets.load("knight").clean.V, None)
+
+    def flipped(V, F, *, mass=1.0):
+        """-cotmatrix, a mass matrix of ``mass``."""
+        import igl
+        return LaplacianResult(W=-igl.cotmatrix(V, F), M=mass * sp.identity(len(V), format="csr"))
+
+    lap = Method(name="broken.flipped", task="laplacian", library="broken", func=flipped,
+                 params={"mass": methods.Param("mass", 1.0)}, doc="broken")
+    checks = dict(check_method(lap))
+    checks["rows_sum_to_zero"]()
+    with pytest.raises(AssertionError, match="libigl's sign"):
+        checks["sign_convention"]()
+    with pytest.raises(methods.MethodFailed, match="negative diagonal entries"):
+        lap(np.eye(3), np.array([[0, 1, 2]]), mass=-1.0)
+
+
 def test_a_plugin_authors_test_file_runs_the_published_checks(tmp_path):
     """The README's example plugin and its few-line test file, run by pytest as a plugin author would."""
     (tmp_path / "my_lab").mkdir()

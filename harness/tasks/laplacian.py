@@ -45,6 +45,13 @@ def _check(result: LaplacianResult, V, F):
             k = int((~np.isfinite(A.data)).sum())
             raise MethodFailed(f"returned {what} with {k} non-finite (NaN or inf) entries")
         setattr(result, what, A)
+    M = result.M
+    if M is not None:
+        d = M.diagonal()
+        if abs(M - sp.diags(d)).max() > 0 if M.nnz else False:
+            raise MethodFailed("returned a non-diagonal M; the task takes a lumped (diagonal) mass matrix")
+        if (d < 0).any():
+            raise MethodFailed(f"returned M with {int((d < 0).sum())} negative diagonal entries (areas)")
     return result
 
 
@@ -66,10 +73,21 @@ def _rows_sum_to_zero(method, V, F):
     assert scale > 0, "W is all zero"
     worst = np.abs(np.asarray(W.sum(axis=1)).ravel()).max()
     assert worst <= 1e-10 * scale * max(1, n ** 0.5), f"a row of W sums to {worst:g} (max |W| {scale:g})"
-    if res.M is not None:
-        M = res.M
+
+
+def _sign_convention(method, V, F):
+    """libigl's sign: W negative semi-definite, so its diagonal is <= 0 and not all zero (a
+    flipped sign passes the other checks and reads as 'not PSD' in every row)."""
+    d = method(V, F).W.diagonal()
+    assert (d <= 0).all() and d.sum() < 0, (f"W's diagonal has {int((d > 0).sum())} positive entries of {len(d)}: "
+                                            "the task takes libigl's sign (cotmatrix: negative diagonal)")
+
+
+def _mass_matrix(method, V, F):
+    M = method(V, F).M
+    if M is not None:
         assert abs(M - sp.diags(M.diagonal())).max() == 0 if M.nnz else True, "M is not diagonal"
-        assert (M.diagonal() > 0).all(), "M has a non-positive diagonal entry"
+        assert (M.diagonal() > 0).all(), "M has a non-positive diagonal entry on a mesh without degenerate faces"
 
 
 _REL = 0.01
@@ -98,4 +116,5 @@ TASK = Task(
     ),
     measure=_measure, check_result=_check, sections=("property_matrix",), order=10, preload=_warm,
     input_facts=("laplacian_mesh",),
-    checks=(("rows_sum_to_zero", _rows_sum_to_zero),))
+    checks=(("rows_sum_to_zero", _rows_sum_to_zero), ("sign_convention", _sign_convention),
+            ("mass_matrix", _mass_matrix)))
