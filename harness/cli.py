@@ -301,6 +301,49 @@ def _cmd_compare(a) -> int:
     return compare_runs(a.run_a, a.run_b, html_out=a.html, time_factor=factor, absolute_time=a.absolute_time)
 
 
+class _PipeSafe:
+    """A text stream that survives its reader going away (``| head -1``, ``2>&-``): once a write
+    fails with a broken pipe (or there is no stream at all), the rest goes to /dev/null, so the
+    command still finishes its work and returns its own exit code (a regression found by
+    `compare` is exit 1 whether or not anyone read the lines)."""
+
+    def __init__(self, inner):
+        self._inner, self.broken = inner, inner is None
+
+    def write(self, s):
+        if not self.broken:
+            try:
+                return self._inner.write(s)
+            except (BrokenPipeError, ValueError):          # ValueError: the stream was closed
+                self._broke()
+        return len(s)
+
+    def flush(self):
+        if not self.broken:
+            try:
+                self._inner.flush()
+            except (BrokenPipeError, ValueError):
+                self._broke()
+
+    def isatty(self) -> bool:
+        try:
+            return not self.broken and self._inner.isatty()
+        except (OSError, ValueError):
+            return False
+
+    def _broke(self):
+        self.broken = True
+        try:                                 # the interpreter's last flush must not fail either
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, self._inner.fileno())
+            os.close(devnull)
+        except (OSError, ValueError, AttributeError):
+            pass
+
+    def __getattr__(self, name):
+        return getattr(self._inner, name)
+
+
 def threading_main() -> bool:
     import threading
     return threading.current_thread() is threading.main_thread()
@@ -318,9 +361,12 @@ def main(argv=None) -> int:
         saved = signal.getsignal(signal.SIGTERM), signal.getsignal(signal.SIGINT)
         signal.signal(signal.SIGTERM, on_interrupt)
         signal.signal(signal.SIGINT, on_interrupt)
+    streams = sys.stdout, sys.stderr
+    sys.stdout, sys.stderr = _PipeSafe(sys.stdout), _PipeSafe(sys.stderr)
     try:
         return _main(argv)
     finally:
+        sys.stdout, sys.stderr = streams
         if saved is not None:                   # an embedding process gets its handlers back
             signal.signal(signal.SIGTERM, saved[0])
             signal.signal(signal.SIGINT, saved[1])

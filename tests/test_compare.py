@@ -84,6 +84,28 @@ def test_injected_metric_regression_exits_1_and_html(run_a, tmp_path):
     assert cli(["compare", str(run_a), str(b)]) == 1           # the CLI returns the same exit code
 
 
+def test_a_regression_is_exit_1_even_when_no_one_reads_the_lines(run_a, tmp_path):
+    """Before: with stdout closed early (`| head -1`, `| true`) compare returned 0 on a regression
+    and skipped --html; a closed stderr (`2>&-`) crashed a run before its first row."""
+    b = copy(run_a, tmp_path)
+    edit(b / "smoothing.csv", lambda rows: rows[0].update(dist_mean=str(float(rows[0]["dist_mean"]) * 1.5)))
+    html = tmp_path / "d.html"
+    cmd = [sys.executable, "-m", "harness.cli", "compare", str(run_a), str(b), "--no-time", "--html", str(html)]
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=Path(harness.__file__).parents[1])
+    p.stdout.close()                                  # the reader is gone before the first line
+    _, err = p.communicate(timeout=120)
+    assert p.returncode == 1, err
+    assert "<b>1 regression(s)</b>" in html.read_text()
+    r = subprocess.run([sys.executable, "-m", "harness.cli", "compare", str(run_a), str(b), "--no-time"],
+                       stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, timeout=120)
+    assert r.returncode == 1 and "REGRESSION" in r.stdout
+    cfg = tmp_path / "c.json"
+    cfg.write_text(json.dumps({**SMALL, "tasks": {"smoothing": SMALL["tasks"]["smoothing"]}}))
+    r = subprocess.run(f"{sys.executable} -m harness.cli run {cfg} --out {tmp_path / 'o'} 2>&-", shell=True,
+                       capture_output=True, text=True, timeout=300, cwd=Path(harness.__file__).parents[1])
+    assert r.returncode == 0 and "2 ok" in r.stdout, r.stdout
+
+
 def test_changes_within_tolerance_and_improvements_exit_0(run_a, tmp_path):
     b = copy(run_a, tmp_path)
 
