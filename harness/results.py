@@ -226,6 +226,23 @@ class RunFolder:
         n = len(columns(task))
         return [r for r in rows if None not in r and len(r) == n]
 
+    def column_problems(self) -> list[str]:
+        """Each task CSV whose header is not this version's columns (`harness.schema.columns`)."""
+        out = []
+        for task in tasks.names():
+            p = self.csv_path(task)
+            if not p.is_file() or p.stat().st_size == 0:
+                continue
+            with p.open(newline="", encoding="utf-8", errors="replace") as fh:
+                head = next(csv.reader(fh), [])
+            want = columns(task)
+            if head != want:
+                missing, extra = [c for c in want if c not in head], [c for c in head if c not in want]
+                how = [f"without {missing}" if missing else "", f"with {extra}" if extra else "",
+                       "" if missing or extra else "in another order"]
+                out.append(f"{p.name} has other columns than this version's ({', '.join(h for h in how if h)})")
+        return out
+
     def reset(self) -> None:
         """Remove what a previous run in this folder wrote (a fresh run); never a user's file."""
         ours = self.run_json_state() == "ok"

@@ -162,6 +162,8 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
     cases = [dataclasses.replace(c, threads=threads) for c in cfg.cases]
     done: set[str] = set()
     problems = out_dir_problems(out_dir, resume)     # refused before the folder or its lock is made
+    if not problems and out_dir.is_dir():
+        problems = folder_problems(folder, out_dir, chash, resume)
     if problems:
         raise problems_error(problems)
     # before anything is written: an unreachable Dask scheduler is exit 2 with the folder untouched
@@ -253,26 +255,39 @@ def _write_status_in_place(folder, status: str) -> None:
         pass
 
 
+def folder_problems(folder, out_dir, chash: str, resume: bool) -> list[str]:
+    """Why this run may not write into ``folder``: another program's files there (a fresh run), or
+    (``--resume``) a run.json that is damaged, missing beside output files or of another config,
+    or a task CSV whose columns are not this version's (resuming would drop its rows)."""
+    state = folder.run_json_state()
+    if not resume:
+        return [str(folder.foreign_error())] if folder.foreign_files() else []
+    prev = folder.read_run_json()
+    if state == "ok" and prev.get("kind") == "eval":
+        return [f"--resume: {out_dir} holds the scores of `shootout eval`, not a run of a config; "
+                "use a new --out folder"]
+    if state == "corrupt" or (state == "ok" and not prev.get("config_hash")):
+        return [f"--resume: {folder.run_json} is damaged, so the rows in {out_dir} cannot be matched "
+                "to this config; run without --resume (a fresh run) or use a new --out folder"]
+    if state == "missing" and folder.foreign_files():
+        return [f"--resume: {out_dir} has {', '.join(folder.foreign_files())} but no run.json; "
+                "they cannot be matched to this config"]
+    if prev and prev.get("config_hash") != chash:
+        return [f"--resume: the config changed since the run in {out_dir} started "
+                "(cases, repeats, time_budget, hausdorff_samples or hausdorff_eps differ; a case id also changes when a "
+                "mesh file's contents or a method's default parameters do); run without --resume to start over, "
+                "or use a new --out folder"]
+    return [f"--resume: {p}: written by another version of mesh-shootout or of its task kind, so resuming would "
+            "drop its rows; run without --resume (a fresh run replaces them) or use a new --out folder"
+            for p in folder.column_problems()]
+
+
 def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, executor, scheduler, resume, quiet,
                 export_benchmark_json, ex):
     done: set[str] = set()
-    state = folder.run_json_state()
-    if resume:
-        prev = folder.read_run_json()
-        if state == "corrupt" or (state == "ok" and not prev.get("config_hash")):
-            raise ShootoutError(f"--resume: {folder.run_json} is damaged, so the rows in {out_dir} cannot be matched "
-                                "to this config; run without --resume (a fresh run) or use a new --out folder")
-        if state == "missing" and folder.foreign_files():
-            raise ShootoutError(f"--resume: {out_dir} has {', '.join(folder.foreign_files())} but no run.json; "
-                                "they cannot be matched to this config")
-        if prev and prev.get("config_hash") != chash:
-            raise ShootoutError(
-                f"--resume: the config changed since the run in {out_dir} started "
-                "(cases, repeats, time_budget, hausdorff_samples or hausdorff_eps differ; a case id also changes when a mesh "
-                "file's contents do); run without --resume to start over, "
-                "or use a new --out folder")
-    elif folder.foreign_files():
-        raise folder.foreign_error()
+    refused = folder_problems(folder, out_dir, chash, resume)     # checked before the lock too; again under it
+    if refused:
+        raise problems_error(refused)
     try:
         if resume:
             try:

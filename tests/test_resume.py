@@ -11,6 +11,7 @@ import time
 from pathlib import Path
 
 import psutil
+import pytest
 import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -144,6 +145,34 @@ def test_resume_with_a_changed_time_budget_is_refused(tmp_path):
     assert config_hash(load_config(cfg)) == base                          # the default: the key of older folders
     assert config_hash(load_config({**cfg, "time_budget": 0})) != base
     assert config_hash(load_config({**cfg, "time_budget": 0.3})) != config_hash(load_config({**cfg, "time_budget": 0}))
+
+
+def test_resume_of_a_csv_with_other_columns_is_refused_and_keeps_it(tmp_path):
+    """Before: a CSV written by a version with one column fewer (e.g. before `others_cpu`) had
+    every row silently dropped and rerun ('0 finished case(s) kept'); a renamed metric crashed
+    --resume with a traceback. A folder of the user's with no run.json kept our lock file."""
+    cfg = load_config(slow_config(seconds=(0.0,)))
+    out = tmp_path / "out"
+    harness.run(cfg, out=out, workers=2)
+    p = out / "laplacian.csv"
+    rows = list(csv.DictReader(p.open()))
+    head = [c for c in rows[0] if c != "others_cpu"]
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=head, extrasaction="ignore", lineterminator="\n")
+    w.writeheader()
+    w.writerows(rows)
+    p.write_text(buf.getvalue())
+    before = p.read_bytes()
+    with pytest.raises(harness.errors.ShootoutError, match=r"laplacian.csv has other columns than this version's "
+                       r"\(without \['others_cpu'\]\).*would drop its rows"):
+        harness.run(cfg, out=out, workers=2, resume=True)
+    assert p.read_bytes() == before
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "laplacian.csv").write_text("a,b\n1,2\n")
+    with pytest.raises(harness.errors.ShootoutError, match="but no run.json"):
+        harness.run(cfg, out=mine, workers=2, resume=True)
+    assert sorted(x.name for x in mine.iterdir()) == ["laplacian.csv"]
 
 
 def test_resume_drops_a_torn_last_line_and_reruns_that_case(tmp_path):
