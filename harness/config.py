@@ -390,7 +390,7 @@ def _check_meshes(meshes, base_dir: Path, P: list) -> list[dict]:
                 if not (_is_int(v) if want_int else _is_num(v)) or not lo <= v <= hi:
                     P.append(f"{at}.{k}: expected {'an integer' if want_int else 'a number'} in [{lo}, {hi}], got {yaml_input.short(v)}")
                     continue
-                spec[k] = v
+                spec[k] = v if want_int else float(v)      # `radius: 1` is the default 1.0: one case id
             out.append({**{"procedural": kind}, **datasets.PROCEDURAL[kind], **spec})
         elif isinstance(m, dict) and "file" in m:
             extra = set(m) - {"file", "clean", "name", "level"}

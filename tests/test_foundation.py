@@ -397,6 +397,19 @@ def test_case_ids_follow_file_contents_not_location(tmp_path):
     assert changed != ids[0]          # the id hashes the file's bytes: an edited file is a new case
 
 
+def test_a_procedural_parameter_written_as_an_integer_is_the_same_case():
+    """Before: `radius: 1` and the default `radius: 1.0` gave two case ids under one label (a
+    false 'missing' regression in compare, a refused --resume, two rows of one input)."""
+    ids = [[c.case_id for c in load_config({**GOOD, "meshes": [{"procedural": "sphere", "subdivisions": 1, **r}]}).cases]
+           for r in ({"radius": 1}, {"radius": 1.0}, {})]
+    assert ids[0] == ids[1] == ids[2]
+    with pytest.raises(ConfigError, match="also a test mesh"):
+        load_config({**GOOD, "meshes": [{"procedural": "sphere", "subdivisions": 1, "radius": 1}],
+                     "tune": {"metric": "dist_mean", "train": [{"procedural": "sphere", "subdivisions": 1}],
+                              "params": {"scratch.taubin": {"iterations": [1, 2]}}},
+                     "tasks": {"smoothing": {"methods": ["scratch.taubin"]}}})
+
+
 def test_same_stem_files_get_distinct_labels_and_defaults_dedupe(tmp_path):
     import shutil
     for d in ("d1", "d2"):
