@@ -31,7 +31,11 @@ def load_run(run_dir):
     from .results import RunFolder
     if not Path(run_dir).is_dir():
         raise ShootoutError(f"{run_dir}: no such run folder")
-    frames = RunFolder(run_dir).frames()
+    folder = RunFolder(run_dir)
+    why = folder.readable_problem()
+    if why:
+        raise ShootoutError(why)
+    frames = folder.frames()
     if not frames:
         return pd.DataFrame()
     df = pd.concat(list(frames.values()), ignore_index=True, sort=False)

@@ -225,9 +225,17 @@ def _cmd_datasets(a) -> int:
 
 def _cmd_report(a) -> int:
     from .report import build_report
+    from .results import RunFolder
     d = Path(a.run_dir)
-    if not (d / "run.json").exists() and not any(d.glob("*.csv")):
-        raise ShootoutError(f"{d}: not a run folder (no run.json or CSV files)")
+    folder = RunFolder(d)
+    ours = folder.run_json_state() == "ok"
+    has_rows = any(folder.csv_path(t).is_file() for t in tasks.names())
+    if not ours and (not has_rows or (d / "report.html").exists()):
+        raise ShootoutError(f"{d}: not a run folder of mesh-shootout (no run.json of ours" +
+                            ("; its report.html is not ours to replace)" if has_rows else ", no task CSV)"))
+    why = folder.readable_problem()
+    if why:
+        raise ShootoutError(why + "; nothing written")
     for note in _rules_changed(d):
         print(f"note: {note}", file=sys.stderr)
     print(build_report(d))

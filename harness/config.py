@@ -437,7 +437,7 @@ def _check_meshes(meshes, base_dir: Path, P: list) -> list[dict]:
                 spec[k] = str(path.resolve())
             if "file" in spec and "clean" in spec:
                 try:
-                    datasets.load(spec)
+                    datasets.cached(spec)
                 except ShootoutError as exc:
                     P.append(f"{at}: {exc}")
                     continue

@@ -4,11 +4,13 @@ A mesh spec is a dict, the normalised form of a config entry:
 ``{"bundled": "bunny"}``, ``{"procedural": "sphere", "subdivisions": 4}``,
 ``{"file": "scan.obj"}`` or ``{"file": "noisy.obj", "clean": "clean.obj"}`` (optional ``name``: the
 label in the ``mesh`` column; ``level``: the known noise level of a given pair).
-`load(spec)` returns a `Source`: the clean `Mesh` and, for ready noisy/clean pairs, the noisy
-vertex positions (same count and order; no synthetic noise is added to a pair).
+`load(spec)` returns a `Source` (a copy; `cached(spec)` the shared one): the clean `Mesh` and, for
+ready noisy/clean pairs, the noisy vertex positions (same count and order; no synthetic noise is
+added to a pair).
 """
 from __future__ import annotations
 
+import dataclasses
 import functools
 from dataclasses import dataclass
 from pathlib import Path
@@ -101,15 +103,23 @@ def spec_key(spec: dict) -> str:
 
 
 def load(spec) -> Source:
-    """Load the mesh a spec names (cached per process: its arrays are read-only, so a caller that
-    would write into them gets numpy's error instead of changing every later use; copy first)."""
+    """The mesh a spec names, as a `Source` of its own: fresh arrays, so a caller (or a method it
+    calls) that writes into them changes nothing else in the process."""
+    src = cached(spec)
+    m = src.clean
+    clean = Mesh(m.V.copy(), m.F.copy(), m.name, None if m.vertex_map is None else m.vertex_map.copy(),
+                 list(m.repairs))
+    return dataclasses.replace(src, clean=clean, noisy_V=None if src.noisy_V is None else src.noisy_V.copy(),
+                               shape=None if src.shape is None else dict(src.shape))
+
+
+def cached(spec) -> Source:
+    """The mesh a spec names, loaded once per process and shared by every case of the process
+    (with its memoised facts, e.g. `Mesh.noise_frame`): never to be written into; `load` gives a
+    copy."""
     if isinstance(spec, str):
         spec = {"bundled": spec}
-    src = _load_cached(_freeze(spec))
-    for a in (src.clean.V, src.clean.F, src.clean.vertex_map, src.noisy_V):
-        if isinstance(a, np.ndarray):
-            a.flags.writeable = False
-    return src
+    return _load_cached(_freeze(spec))
 
 
 def _freeze(spec: dict):

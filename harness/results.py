@@ -226,6 +226,27 @@ class RunFolder:
         n = len(columns(task))
         return [r for r in rows if None not in r and len(r) == n]
 
+    def recorded_tasks(self) -> list[str]:
+        """The task kinds run.json (of ours) says this folder's run had, installed here or not."""
+        meta = self.read_run_json() or {}
+        rec = meta.get("tasks") if isinstance(meta.get("tasks"), dict) else {}
+        return [t for t in rec if isinstance(t, str) and re.fullmatch(r"[A-Za-z0-9_]+", t)]
+
+    def missing_task_kinds(self) -> list[str]:
+        """Task kinds of this folder's run (run.json) with a CSV here whose module is not
+        installed: every reader would leave their rows out."""
+        known = set(tasks.names())
+        return [t for t in self.recorded_tasks() if t not in known and self.csv_path(t).exists()]
+
+    def readable_problem(self) -> str | None:
+        """Why the readers (report, `harness.load_run`) would misstate this folder: task kinds of
+        its run that are not installed here (their rows would be left out)."""
+        missing = self.missing_task_kinds()
+        if missing:
+            return (f"{self.path}: its run has task kind(s) {missing} whose module is not installed here "
+                    f"(harness/tasks/{missing[0]}.py): their rows would be left out; install them first")
+        return None
+
     def column_problems(self) -> list[str]:
         """Each task CSV whose header is not this version's columns (`harness.schema.columns`)."""
         out = []
@@ -247,7 +268,7 @@ class RunFolder:
         """Remove what a previous run in this folder wrote (a fresh run); never a user's file."""
         ours = self.run_json_state() == "ok"
         if ours:
-            for task in tasks.names():
+            for task in dict.fromkeys(tasks.names() + self.recorded_tasks()):  # also kinds not installed now
                 self.csv_path(task).unlink(missing_ok=True)
             for name in REPORT_FILES:
                 (self.path / name).unlink(missing_ok=True)
@@ -255,7 +276,7 @@ class RunFolder:
             if vdir.is_dir():
                 for f in vdir.glob("*.json"):
                     f.unlink()
-            for task in tasks.names():                   # a tuned run's training rows
+            for task in dict.fromkeys(tasks.names() + self.recorded_tasks()):   # a tuned run's training rows
                 (self.path / "tune" / task_file(task)).unlink(missing_ok=True)
         self.remove_temporaries()                # first: the manifest names the meshes' temporaries
         mdir = self.path / "meshes"

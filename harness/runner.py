@@ -240,7 +240,7 @@ def prepare_input(case: Case) -> tuple[CaseInput, float | None]:
     """The case's input (clean mesh, input positions) and the noise level of a given pair."""
     from . import datasets
     from .noise import apply_noise
-    src = datasets.load(case.mesh)
+    src = datasets.cached(case.mesh)
     clean = src.clean
     settings = {"hausdorff_samples": case.hausdorff_samples, "hausdorff_eps": case.hausdorff_eps}
     if src.noisy_V is not None:

@@ -148,7 +148,7 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
         if key not in cleans:
             raw = read_mesh(clean, repair=False)
             if noisy:
-                src = datasets.load({"file": str(Path(noisy).resolve()), "clean": str(clean.resolve())})
+                src = datasets.cached({"file": str(Path(noisy).resolve()), "clean": str(clean.resolve())})
                 cleans[key] = (src.clean, src.noisy_V, len(raw.V), raw.F)
             else:
                 cleans[key] = (read_mesh(clean), None, len(raw.V), raw.F)

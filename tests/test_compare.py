@@ -383,6 +383,35 @@ def test_a_run_of_an_unknown_task_kind_is_named_as_such(run_a, tmp_path):
         run_compare(b, run_a)
 
 
+def test_report_load_run_and_a_fresh_run_with_a_task_kind_not_installed(run_a, tmp_path, capsys):
+    """Before: `shootout report` replaced a good report with 'No rows' and `load_run` returned an
+    empty frame for a run of a kind not installed here; a fresh run into that folder left the old
+    `area.csv` beside the new rows (load_run, the report and compare then showed it); and
+    `shootout report` on a folder of the user's (any CSV) replaced their report.html."""
+    b = copy(run_a, tmp_path)
+    (b / "area.csv").write_text("case_id,task\nx,area\n")
+    meta = json.loads((b / "run.json").read_text())
+    meta["tasks"]["area"] = {"name": "area"}
+    (b / "run.json").write_text(json.dumps(meta))
+    before = (b / "report.html").read_bytes()
+    assert cli(["report", str(b)]) == 2
+    assert "task kind(s) ['area'] whose module is not installed" in capsys.readouterr().err
+    assert (b / "report.html").read_bytes() == before
+    with pytest.raises(harness.errors.ShootoutError, match="area"):
+        harness.load_run(b)
+    cfg = {**SMALL, "tasks": {"smoothing": SMALL["tasks"]["smoothing"]}}
+    harness.run(cfg, out=b, quiet=True, workers=1)
+    assert not (b / "area.csv").exists() and not (b / "laplacian.csv").exists()
+    assert set(harness.load_run(b)["task"]) == {"smoothing"}
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "data.csv").write_text("a,b\n1,2\n")
+    (mine / "report.html").write_text("<html>mine</html>")
+    assert cli(["report", str(mine)]) == 2
+    assert (mine / "report.html").read_text() == "<html>mine</html>"
+    assert "not a run folder of mesh-shootout" in capsys.readouterr().err
+
+
 def test_compare_matches_eval_rows_by_file_not_by_position(tmp_path):
     """Two evals of the same two files given in the opposite order compare equal (eval's case
     ids were eval0000, eval0001: the files were compared crosswise, 12 false regressions), and a

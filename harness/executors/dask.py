@@ -289,7 +289,7 @@ def _warm(case: Case) -> None:
         methods.load_plugins(list(case.plugins))
         if not any(k in case.mesh for k in FILE_KEYS):
             from .. import datasets
-            src = datasets.load(case.mesh)
+            src = datasets.cached(case.mesh)
             src.clean.orientation_note
             if src.noisy_V is None and case.adds_noise:
                 src.clean.noise_frame

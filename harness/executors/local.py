@@ -150,7 +150,7 @@ def _warm_mesh_cache(cases) -> None:
             continue
         seen.add(k)
         try:
-            src = datasets.load(c.mesh)
+            src = datasets.cached(c.mesh)
             src.clean.orientation_note       # computed once, inherited by every case of the mesh
             if src.noisy_V is None and k in noisy:
                 src.clean.noise_frame        # computed once, inherited by every case of the mesh
