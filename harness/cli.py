@@ -76,6 +76,10 @@ def _check_output_file(path, flag: str, protect=(), run_dirs=()) -> None:
     if path is None:
         return
     p = Path(path)
+    try:
+        p.resolve()
+    except (RuntimeError, OSError) as exc:           # a symbolic link loop
+        raise ShootoutError(f"{flag} {path}: cannot be resolved ({exc})") from None
     if p.is_dir():
         raise ShootoutError(f"{flag} {path}: is a folder; give a file name")
     for q in protect:
@@ -86,8 +90,15 @@ def _check_output_file(path, flag: str, protect=(), run_dirs=()) -> None:
             pass
     from .results import run_file_names
     for d in run_dirs:
-        if d is not None and p.resolve().parent == Path(d).resolve() and (p.exists() or p.name in run_file_names()):
-            raise ShootoutError(f"{flag} {path}: is a file of the run folder {d}; writing it would overwrite it")
+        if d is None:
+            continue
+        rd, rp = Path(d).resolve(), p.resolve()
+        if rp == rd:
+            raise ShootoutError(f"{flag} {path}: is the run folder itself; give a file name")
+        if rd in rp.parents and (rp.parent != rd or p.exists() or p.name in run_file_names()
+                                 or p.name in ("views", "tune", "meshes")):
+            raise ShootoutError(f"{flag} {path}: is inside the run folder {d} (its views/, tune/ or meshes/, or one "
+                                "of its files); writing it would overwrite the run's own files")
     d = p.resolve().parent
     while not d.exists():
         d = d.parent

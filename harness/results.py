@@ -392,7 +392,10 @@ def check_out_dir(out_dir: Path) -> None:
     out_dir = Path(out_dir)
     if out_dir.exists() and not out_dir.is_dir():
         raise ShootoutError(f"--out {out_dir}: exists and is not a folder")
-    p = out_dir.resolve()
+    try:
+        p = out_dir.resolve()
+    except (RuntimeError, OSError) as exc:           # a symbolic link loop
+        raise ShootoutError(f"--out {out_dir}: cannot be resolved ({exc})") from None
     while not p.exists():
         p = p.parent
     if not p.is_dir():

@@ -352,6 +352,19 @@ def test_output_files_are_checked_before_any_work(run_a, tmp_path):
         assert cli(["run", str(cfg), "--out", str(tmp_path / "o"), "--export-benchmark-json", str(target)]) == 2
     assert cfg.read_bytes() == before and not (tmp_path / "o").exists()
     assert cli(["compare", str(run_a), str(run_a), "--html", "/proc/x.html"]) == 2
+    # inside a run folder (its views/ etc.) or the run folder itself, not yet made: a finished run
+    # crashed on it, or the views' index was replaced by the export
+    o = tmp_path / "o"
+    for target in (o, o / "views" / "index.json", o / "views"):
+        assert cli(["run", str(cfg), "--out", str(o), "--export-benchmark-json", str(target)]) == 2
+    assert not o.exists()
+    index = (run_a / "views" / "index.json").read_bytes()
+    assert cli(["compare", str(run_a), str(run_a), "--html", str(run_a / "views" / "index.json")]) == 2
+    assert (run_a / "views" / "index.json").read_bytes() == index
+    loop = tmp_path / "loop"
+    loop.symlink_to(loop)
+    assert cli(["run", str(cfg), "--out", str(loop)]) == 2
+    assert cli(["compare", str(run_a), str(run_a), "--html", str(loop / "x.html")]) == 2
 
 
 def test_the_terminal_names_each_changed_case_by_id_and_no_time_prints_no_timing_note(run_a, tmp_path):
