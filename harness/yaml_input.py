@@ -1,4 +1,6 @@
-"""YAML from untrusted configs: safe types only, no duplicate keys, and no alias bomb.
+"""YAML from untrusted configs: safe types only, no duplicate keys, no alias bomb, and no number
+that YAML 1.1 reads otherwise than it looks (``010`` is 8, ``1:30`` is 90); ``1e-3`` is a
+number (YAML 1.1 made it text).
 
 ``yaml.safe_load`` builds shared nodes for aliases, but anything that walks the result (validation,
 JSON for run.json, an error message) expands them: a few hundred bytes of nested aliases expand to
@@ -6,6 +8,8 @@ billions of nodes. `load` refuses a document with more than ``MAX_ALIASES`` alia
 expanded size exceeds ``MAX_NODES`` nodes, before constructing anything.
 """
 from __future__ import annotations
+
+import re
 
 import yaml
 
@@ -24,6 +28,13 @@ class _Loader(yaml.SafeLoader):
             if self._aliases > MAX_ALIASES:
                 raise yaml.YAMLError(f"more than {MAX_ALIASES} aliases (*name): refused")
         return super().compose_node(parent, index)
+
+
+# YAML 1.1 reads `1e-3` and `1E5` (no dot, or no exponent sign) as text; a config means the number
+_Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
+    list("-+0123456789."))
 
 
 def _expanded_size(node, memo: dict, stack: set) -> int:
@@ -74,6 +85,33 @@ def _duplicate_keys(node, out: list, done: set, construct) -> None:
             _duplicate_keys(v, out, done, construct)
 
 
+_INT, _FLOAT = "tag:yaml.org,2002:int", "tag:yaml.org,2002:float"
+
+
+def _yaml11_numbers(node, out: list, done: set) -> None:
+    """Messages for plain numbers YAML 1.1 reads otherwise than they look: a leading zero is
+    octal (``010`` is 8) and colons are base 60 (``1:30`` is 90)."""
+    if id(node) in done:
+        return
+    done.add(id(node))
+    if isinstance(node, yaml.ScalarNode):
+        if node.style is None and node.tag in (_INT, _FLOAT):
+            t = node.value.lstrip("+-").replace("_", "")
+            why = ("is octal" if node.tag == _INT and len(t) > 1 and t[0] == "0" and t.isdigit()
+                   else "is base 60" if ":" in t else None)
+            if why:
+                value = yaml.constructor.SafeConstructor().construct_object(node)
+                out.append(f"{node.value!r} at line {node.start_mark.line + 1} {why} in YAML 1.1 (it reads as "
+                           f"{value}); write the number you mean, or quote it for text")
+    elif isinstance(node, yaml.SequenceNode):
+        for v in node.value:
+            _yaml11_numbers(v, out, done)
+    elif isinstance(node, yaml.MappingNode):
+        for k, v in node.value:
+            _yaml11_numbers(k, out, done)
+            _yaml11_numbers(v, out, done)
+
+
 def _key_value(k):
     """What a scalar key loads as, built on a throwaway constructor (a failure leaves no state
     in the document's own loader); a ``=`` key (the value tag) is the string ``=``, as the
@@ -96,10 +134,16 @@ def load(text: str):
         _duplicate_keys(node, dup, set(), _key_value)
         if dup:
             raise yaml.YAMLError("; ".join(dup) + ": each key may appear once in a mapping")
+        odd: list = []
+        _yaml11_numbers(node, odd, set())
+        if odd:
+            raise yaml.YAMLError("; ".join(odd[:10]) + (f"; and {len(odd) - 10} more" if len(odd) > 10 else ""))
         try:
             return loader.construct_document(node)
         except (ValueError, KeyError, TypeError) as exc:     # e.g. `!!int abc`, `!!bool maybe`
             raise yaml.YAMLError(f"a value cannot be read as its tag says ({type(exc).__name__}: {exc})") from None
+    except RecursionError:
+        raise yaml.YAMLError("nested too deeply to read: refused") from None
     finally:
         loader.dispose()
 

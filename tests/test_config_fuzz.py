@@ -252,6 +252,25 @@ def test_duplicate_keys_compare_as_loaded():
     assert yaml_input.load("x: &a {k: 1}\ny: *a\n<<: {z: 1}\n") == {"x": {"k": 1}, "y": {"k": 1}, "z": 1}
 
 
+def test_numbers_yaml_11_reads_otherwise_and_deep_nesting_are_refused(tmp_path):
+    """Before: `iterations: [005, 010, 020]` ran 5, 8 and 16 iterations and `timeout: 1:30` was
+    90 s, silently; `step: 1e-3` was refused as text; a config nested 400 levels deep (895 bytes) was a RecursionError traceback."""
+    import yaml
+    from harness import yaml_input
+    with pytest.raises(yaml.YAMLError, match=r"'010' at line 1 is octal in YAML 1.1 \(it reads as 8\)"):
+        yaml_input.load("iterations: [005, 010]\n")
+    with pytest.raises(yaml.YAMLError, match=r"'1:30' at line 2 is base 60 in YAML 1.1 \(it reads as 90\)"):
+        yaml_input.load("a: 1\ntimeout: 1:30\n")
+    assert yaml_input.load("a: [0, 0.5, '010', 0x10, 1_000, 08, 1.5e3, 1e-3, -2E+2, '1e3', 1e3x]\n") == {
+        "a": [0, 0.5, "010", 16, 1000, "08", 1500.0, 0.001, -200.0, "1e3", "1e3x"]}      # 1e-3 was text
+    deep = tmp_path / "deep.yaml"
+    deep.write_text("name: x\nmeshes: [knight]\ntasks: " + "[" * 400 + "]" * 400 + "\n")
+    r = subprocess.run([str(SHOOTOUT), "run", str(deep), "--out", str(tmp_path / "o")],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and "nested too deeply" in r.stderr and "Traceback" not in r.stderr
+    assert not (tmp_path / "o").exists()
+
+
 def test_a_tasks_own_noise_list_replaces_the_top_level_one():
     """``tasks.<task>.noise`` gives that task its own noise list; other tasks keep the top-level
     one, the shared inputs keep their case ids, and its problems carry their key path."""
