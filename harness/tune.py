@@ -133,8 +133,14 @@ def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | 
             P.append(f"{at}: expected a mapping parameter -> list of values")
             continue
         meth = methods.get(m)
+        from . import tasks as _tasks
+        axis = _tasks.get(configured[m][0]).axis_params
         ok = {}
         for k, vals in ranges.items():
+            if k in axis:                   # it defines the cell (the target, k, the sources): not a setting
+                P.append(f"{at}.{k}: {k} is an axis of the {configured[m][0]} task (rows with other values are "
+                         "other cells, not competitors): it cannot be tuned; list its values under the task's params")
+                continue
             vals = vals if isinstance(vals, list) else [vals]
             bad = [p for v in vals for p in meth.param_problems({k: v})]
             if not vals or bad:

@@ -56,6 +56,11 @@ def test_tune_section_is_validated_with_key_paths():
     msg = str(e.value)
     for needle in ("tune.bogus", "tune.budget", "tune.params.scratch.nothing", "tune.params.scratch.implicit.step"):
         assert needle in msg, msg
+    axis = {"name": "t", "meshes": ["bunny"], "tasks": {"simplification": {"methods": ["scratch.qem"]}},
+            "tune": {"metric": "hausdorff", "train": ["knight"],
+                     "params": {"scratch.qem": {"target_ratio": [0.5, 0.9]}}}}   # won a cell of its own
+    with pytest.raises(ConfigError, match="tune.params.scratch.qem.target_ratio: target_ratio is an axis"):
+        load_config(axis)
 
 
 def test_sampled_settings_are_the_products_positions():
