@@ -129,6 +129,14 @@ def run_args_problems(workers, timeout, executor, scheduler) -> list[str]:
         P.append(f"--executor: expected one of {', '.join(EXECUTORS)}, got {executor!r}")
     elif executor == "dask" and not scheduler:
         P.append("--executor dask needs --scheduler tcp://HOST:PORT")
+    elif executor == "serial":
+        if workers is not None and workers != 1:
+            P.append(f"--workers {workers}: --executor serial runs one case at a time in this process")
+        if timeout is not None:
+            P.append("--timeout: --executor serial runs cases in this process, where no time limit can stop one "
+                     "(use the local executor)")
+    if scheduler and executor != "dask":
+        P.append(f"--scheduler: only the dask executor uses a scheduler (this run's executor is {executor})")
     return P
 
 
@@ -155,8 +163,8 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
     cfg: Config = config_or_path if isinstance(config_or_path, Config) else load_config(config_or_path)
     out_dir = Path(out) if out else Path("results") / cfg.name
     folder = RunFolder(out_dir)
-    workers = int(workers) if workers else (os.cpu_count() or 1)
-    timeout = timeout if timeout is not None else cfg.timeout
+    workers = 1 if executor == "serial" else int(workers) if workers else (os.cpu_count() or 1)
+    timeout = None if executor == "serial" else timeout if timeout is not None else cfg.timeout
     chash = config_hash(cfg)
     threads = 1 if executor == "dask" else max(1, (os.cpu_count() or 1) // workers)
     cases = [dataclasses.replace(c, threads=threads) for c in cfg.cases]

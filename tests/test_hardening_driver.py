@@ -141,6 +141,29 @@ def test_wrong_result_types_are_error_rows_naming_what_came_back(tmp_path):
     assert df.loc["scratch.explicit", "status"] == "ok"
 
 
+def test_the_serial_executor_undoes_a_cases_global_state_and_refuses_what_it_cannot_do(tmp_path, monkeypatch):
+    """Before: under --executor serial a case that changed directory sent the rest of the run
+    (rows, run.json, report) into another folder, and its np.seterr made the next case an error
+    row; --timeout and --workers were silently ignored and recorded."""
+    import numpy as np
+
+    import harness
+    from harness.errors import ShootoutError
+    monkeypatch.syspath_prepend(str(ROOT))
+    monkeypatch.chdir(tmp_path)
+    err = np.geterr()
+    cfg = json.loads(_cfg(tmp_path, ["hostile.global_state", "scratch.explicit", "scratch.taubin"]).read_text())
+    frames = harness.run(cfg, out="rel", executor="serial", quiet=True)
+    assert Path.cwd() == tmp_path and np.geterr() == err
+    assert (frames["smoothing"]["status"] == "ok").all() and len(frames["smoothing"]) == 3
+    meta = json.loads((tmp_path / "rel" / "run.json").read_text())
+    assert meta["status"] == "finished" and meta["workers"] == 1 and meta["timeout_s"] is None
+    for bad in ({"timeout": 5}, {"workers": 4}, {"scheduler": "tcp://1.2.3.4:1"}):
+        with pytest.raises(ShootoutError, match="--timeout|--workers|--scheduler"):
+            harness.run(cfg, out="rel2", executor="serial", **bad)
+    assert not (tmp_path / "rel2").exists()
+
+
 def test_ctrl_c_always_stops_the_run(tmp_path):
     """SIGINT at random moments, 20 times: exit 130 and run.json 'interrupted' (or, if the signal
     came before run.json was written, exit 130 and nothing claimed finished). The first five

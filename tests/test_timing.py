@@ -174,12 +174,17 @@ def test_a_forked_case_inherits_the_drivers_limit_and_starts_no_spinning_pool():
 def test_a_run_leaves_the_callers_thread_pools_as_they_were(tmp_path, executor):
     """The cases' thread limit is undone when the run ends: an in-process (serial) run left the
     caller's BLAS pools at the case's thread count."""
+    import contextlib
+
     import threadpoolctl
-    before = {p["filepath"]: p["num_threads"] for p in threadpoolctl.threadpool_info()}
-    harness.run({"name": "t", "meshes": ["knight"], "noise": [{"model": "none"}], "time_budget": 0,
-                 "tasks": {"laplacian": {"methods": ["scratch.uniform"]}}}, out=tmp_path / "r",
-                workers=max(2, os.cpu_count() or 1), executor=executor)
-    after = {p["filepath"]: p["num_threads"] for p in threadpoolctl.threadpool_info()}
+    # serial: one case at a time with every core, under a caller limited to 1 thread; local: two
+    # workers of one thread each, under an unlimited caller
+    with threadpoolctl.threadpool_limits(1) if executor == "serial" else contextlib.nullcontext():
+        before = {p["filepath"]: p["num_threads"] for p in threadpoolctl.threadpool_info()}
+        harness.run({"name": "t", "meshes": ["knight"], "noise": [{"model": "none"}], "time_budget": 0,
+                     "tasks": {"laplacian": {"methods": ["scratch.uniform"]}}}, out=tmp_path / "r",
+                    workers=1 if executor == "serial" else max(2, os.cpu_count() or 1), executor=executor)
+        after = {p["filepath"]: p["num_threads"] for p in threadpoolctl.threadpool_info()}
     assert before and {k: after[k] for k in before} == before
 
 

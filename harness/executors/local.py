@@ -24,7 +24,8 @@ POLL_S = 0.5
 
 
 class SerialExecutor:
-    """In-process, one case at a time, no isolation or timeout (for debugging)."""
+    """In-process, one case at a time, no isolation or timeout (for debugging): a crash ends the
+    run; the working directory and numpy's error state are restored after each case."""
 
     name = "serial"
 
@@ -32,9 +33,15 @@ class SerialExecutor:
         pass
 
     def run(self, cases, want_meshes=False):
+        import numpy as np
         with input_store.session():
             for c in cases:
-                row, extras = run_case(c, want_meshes=want_meshes)
+                cwd, err = os.getcwd(), np.geterr()
+                try:
+                    row, extras = run_case(c, want_meshes=want_meshes)
+                finally:                 # what one case changes in the shared process, the next does not see
+                    os.chdir(cwd)
+                    np.seterr(**err)
                 yield c, row, extras
 
     def close(self):

@@ -136,3 +136,11 @@ def nul_warning(V, F):
 def surrogate_raise(V, F):
     """Raises with a lone surrogate in its message (a path decoded with ``surrogateescape``)."""
     raise FileNotFoundError("cannot open " + b"/data/scan\xff.obj".decode("utf-8", "surrogateescape"))
+
+
+@register("hostile.global_state", task="smoothing", library="hostile")
+def global_state(V, F):
+    """Changes the process's working directory and numpy's error state, then returns a good result."""
+    os.chdir("/")
+    np.seterr(all="raise")
+    return SmoothingResult(V=V.copy())
