@@ -134,7 +134,7 @@ class Task:
         try:
             return self.check_result(result, V, F)
         except MethodFailed as exc:
-            raise MethodFailed(f"{name} {exc}") from None
+            raise MethodFailed(f"{name} {str(exc).lstrip()}") from None
 
     def measured(self, inp: CaseInput, result, params: dict) -> dict:
         """``measure``'s columns, checked: only declared metrics (a key of a common column or a
