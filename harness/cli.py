@@ -247,9 +247,13 @@ def _cmd_report(a) -> int:
     why = folder.readable_problem()
     if why:
         raise ShootoutError(why + "; nothing written")
-    for note in _rules_changed(d):
-        print(f"note: {note}", file=sys.stderr)
-    print(build_report(d))
+    lock = folder.lock()                    # not beside a run writing the folder
+    try:
+        for note in _rules_changed(d):
+            print(f"note: {note}", file=sys.stderr)
+        print(build_report(d))
+    finally:
+        lock.close()
     return 0
 
 
@@ -279,16 +283,25 @@ def _rules_changed(run_dir: Path) -> list[str]:
 
 def _cmd_views(a) -> int:
     from .session import recompute_views
+    from .results import RunFolder
     d = Path(a.run_dir)
     if not (d / "run.json").exists():
         raise ShootoutError(f"{d}: not a run folder (no run.json)")
-    print(f"shootout views: rebuilding the cases from {d / 'run.json'} and running the chosen ones again "
-          "(this executes the methods, including plugins named there)", file=sys.stderr)
-    views = recompute_views(d)
-    from .report import build_report
-    failed = [v for v in views if v.get("error")]
-    print(f"{len(views)} view(s) written to {d / 'views'}" + (f", {len(failed)} of them failed (first: case "
-          f"{failed[0].get('case_id')}: {failed[0]['error'][:300]})" if failed else "") + f"; report: {build_report(d)}")
+    if (RunFolder(d).read_run_json() or {}).get("kind") == "eval":
+        raise ShootoutError(f"{d}: holds the scores of `shootout eval`, which has no cases to run again; its "
+                            "report is `shootout report`")
+    lock = RunFolder(d).lock()              # not beside a run writing the folder
+    try:
+        print(f"shootout views: rebuilding the cases from {d / 'run.json'} and running the chosen ones again "
+              "(this executes the methods, including plugins named there)", file=sys.stderr)
+        views = recompute_views(d)
+        from .report import build_report
+        failed = [v for v in views if v.get("error")]
+        print(f"{len(views)} view(s) written to {d / 'views'}" + (f", {len(failed)} of them failed (first: case "
+              f"{failed[0].get('case_id')}: {failed[0]['error'][:300]})" if failed else "")
+              + f"; report: {build_report(d)}")
+    finally:
+        lock.close()
     return 0
 
 

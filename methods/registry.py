@@ -131,4 +131,7 @@ def get(name: str) -> Method:
     except KeyError:
         close = difflib.get_close_matches(name, list(_REGISTRY), n=3, cutoff=0.5)
         hint = f"; did you mean {', '.join(close)}?" if close else ""
+        eps = [f"{k}: {v}" for k, v in BROKEN.items() if k.startswith("entry point")]
+        if eps:                        # the method may live in the module that failed
+            hint += f" (not imported: {'; '.join(eps)})"
         raise KeyError(f"unknown method {name!r}{hint}") from None
