@@ -125,8 +125,18 @@ def _cmd_run(a) -> int:
         P.append(str(exc))
     from .session import _results_config, run
     if _results_config(Path(a.config)) is not None:          # results: score files made elsewhere
+        given = [f for f, on in (("--resume", a.resume), ("--timeout", a.timeout is not None),
+                                 ("--executor", a.executor != "local"), ("--scheduler", bool(a.scheduler)),
+                                 ("--workers", a.workers is not None),
+                                 ("--export-benchmark-json", bool(a.export_benchmark_json))) if on]
+        if given:                        # scoring files runs no case: these would be silently ignored
+            P.append(f"{', '.join(given)}: {a.config} is a results: config (it scores files made elsewhere and "
+                     "runs no case); drop these flags")
+        if a.out:
+            from .results import out_dir_problems
+            P += out_dir_problems(Path(a.out))
         if P:
-            raise problems_error(P)
+            raise problems_error(list(dict.fromkeys(P)))
         frames = run(Path(a.config), out=a.out)
         out = Path(a.out) if a.out else Path("results") / (_results_config(Path(a.config))[0].get("name") or "eval")
         print(_eval_summary(frames, out))

@@ -76,6 +76,11 @@ def test_a_results_config_gives_the_same_numbers(run_with_meshes, tmp_path):
     path.write_text(yaml.safe_dump(bad))
     assert cli(["run", str(path), "--out", str(tmp_path / "bad")]) == 2
     assert not (tmp_path / "bad").exists()
+    path.write_text(yaml.safe_dump(cfg))           # flags a results: config cannot honour were ignored
+    for flags in (["--resume"], ["--timeout", "5"], ["--export-benchmark-json", str(tmp_path / "b.json")],
+                  ["--workers", "2"]):
+        assert cli(["run", str(path), "--out", str(tmp_path / "bad"), *flags]) == 2, flags
+    assert not (tmp_path / "bad").exists() and not (tmp_path / "b.json").exists()
 
 
 def test_a_simplified_mesh_on_the_clean_vertex_buffer_is_scored_as_simplification(tmp_path):
