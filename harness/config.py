@@ -220,7 +220,9 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
 
     name = raw.get("name", Path(label).stem if label != "<config>" else "run")
     if name_problem(name):
-        P.append(f"name: {name_problem(name)}")
+        given = "name" in raw
+        P.append(f"name: {name_problem(name)}" + ("" if given else
+                 f" (no name: in the config, so it came from the file name {Path(label).name!r}; set one)"))
     repeats = raw.get("repeats", 1)
     if not _is_int(repeats) or not 1 <= repeats <= MAX_REPEATS:
         P.append(f"repeats: expected an integer in [1, {MAX_REPEATS}], got {yaml_input.short(repeats)}")
@@ -300,6 +302,13 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
         raise ConfigError(label, [f"the grid expands to {n:,} cases, more than {MAX_CASES:,}: split the config or "
                                   "narrow its parameter lists"])
     unique = expand_cases(meshes, noises, tasks, *common)
+    wanted = report.get("views") if isinstance(report, dict) else None
+    if wanted and tune is None:                      # a tuned case's id is known only after the tuning
+        ids = {c.case_id for c in unique}
+        unknown = [v for v in wanted if v not in ids]
+        if unknown:
+            raise ConfigError(label, [f"report.views: {yaml_input.short(unknown)} are not case ids of this config "
+                                      "(each view names a case_id of its CSVs)"])
     if tune is not None:
         nt = _count_cases(tune.train, noises, tune.n_training_settings())
         if nt > MAX_CASES:

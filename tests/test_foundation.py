@@ -199,8 +199,8 @@ def test_driver_computes_the_noise_frame_only_for_meshes_that_get_noise():
     clean_only, noisy = {"procedural": "sphere", "subdivisions": 2}, {"procedural": "sphere", "subdivisions": 3}
     datasets._load_cached.cache_clear()          # no frame left over from an earlier test
     _warm_mesh_cache([case(clean_only, 0.0), case(noisy, 0.0), case(noisy, 0.2)])
-    assert "noise_frame" not in vars(datasets.load(clean_only).clean)
-    assert "noise_frame" in vars(datasets.load(noisy).clean)
+    assert "noise_frame" not in vars(datasets.cached(clean_only).clean)
+    assert "noise_frame" in vars(datasets.cached(noisy).clean)
 
 
 @pytest.mark.parametrize("model", ["gaussian_normal", "gaussian_random", "impulsive"])
