@@ -344,7 +344,8 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
                                   if prev_meta.get("status") != "running" else None,
                                   "command": prev_meta.get("session_command") or prev_meta.get("command"),
                                   "status": "killed" if prev_meta.get("status") == "running"
-                                  else prev_meta.get("status")})
+                                  else prev_meta.get("status"), "executor": prev_meta.get("executor"),
+                                  "scheduler": prev_meta.get("scheduler"), "workers": prev_meta.get("workers")})
     src = Path(cfg.source) if cfg.source and cfg.source != "<config>" else None
     meta = {"name": cfg.name, "config_source": cfg.source,
             "config_dir": str(src.resolve().parent) if src is not None and src.is_file() else str(Path.cwd()),
@@ -430,6 +431,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         wall = round(time.perf_counter() - t0, 3)
         session = {"id": session_id, "started": session_started, "finished": now_iso(), "wall_s": wall,
                    "command": " ".join(sys.argv), "status": meta["status"], "resumed_ok_cases": len(done),
+                   "executor": meta.get("executor"), "scheduler": meta.get("scheduler"), "workers": meta.get("workers"),
                    "status_counts": counts, "load_average": meta["load_average"]}
         if overhead:
             fixed = [f for f, _, _ in overhead]

@@ -140,6 +140,20 @@ def test_shipped_file_needs_no_shared_filesystem(tmp_path):
     assert "fan-triangulated 9 polygon" in row["error"]        # the same repair note as a local run
 
 
+def test_the_worker_cache_is_private_and_checked_by_content(tmp_path):
+    """Before: a cached file of the right size was trusted, so bytes planted or changed in the
+    shared /tmp cache were measured under the case's id (25 cells differed from a local run)."""
+    cfg = load_config(config(tmp_path))
+    case = next(c for c in cfg.cases if c.mesh_key == "grid")
+    (sent,), blobs = ship_files([case])
+    target = Path(materialize(sent, blobs).mesh["file"])
+    good = target.read_bytes()
+    target.write_bytes(good.replace(b"v 0", b"v 7"))              # same size, other mesh
+    assert len(target.read_bytes()) == len(good) and target.read_bytes() != good
+    assert Path(materialize(sent, blobs).mesh["file"]).read_bytes() == good
+    assert (target.parents[1].stat().st_mode & 0o077) == 0 and str(os.getuid()) in target.parents[1].name
+
+
 def test_daemonic_worker_fallback_isolates_too(tmp_path):
     """`run_in_subprocess` (used on daemonic workers): crash, timeout and ok rows as locally."""
     cfg = load_config({"plugins": ["tests.plugins.crashy"], "meshes": ["knight"],
@@ -147,6 +161,12 @@ def test_daemonic_worker_fallback_isolates_too(tmp_path):
     rows = {c.method: run_in_subprocess(c, timeout=4)[0] for c in cfg.cases}
     assert rows["crashy.segfault"]["status"] == "error" and "SIGSEGV" in rows["crashy.segfault"]["error"]
     assert rows["crashy.sleep"]["status"] == "timeout"      # (an ok row: the shipped-file test)
+    # its own session: os.killpg(0, SIGTERM) in the case reaches the case, not the worker (it killed
+    # a daemonic worker and its nanny)
+    cfg = load_config({"plugins": ["tests.plugins.hostile"], "meshes": ["knight"],
+                       "tasks": {"smoothing": {"methods": ["hostile.killpg"]}}})
+    row = run_in_subprocess(cfg.cases[0], timeout=30)[0]
+    assert row["status"] == "error" and "SIGTERM" in row["error"]
 
 
 def test_worker_death_is_one_error_row(cluster):
@@ -190,6 +210,42 @@ def test_worker_death_is_one_error_row(cluster):
     for p in alive:
         os.kill(p, signal.SIGKILL)
     assert not alive, "the case process outlived its worker"
+
+
+def test_a_restarted_worker_costs_no_shipped_file_case_but_its_own(tmp_path):
+    """Before: when the worker holding a `{file:}` mesh's scattered bytes was restarted, every
+    case still waiting for them became an error row ('cancelled ... already forgotten'), an
+    innocent method ranked last; now they are shipped and submitted again."""
+    (tmp_path / "shipped").mkdir()
+    quad_obj(tmp_path / "shipped" / "grid.obj")
+    cfg = load_config({"plugins": ["tests.plugins.slowdown"], "time_budget": 0,
+                       "meshes": [{"file": str(tmp_path / "shipped" / "grid.obj")}],
+                       "noise": [{"model": "gaussian_normal", "levels": [0.1], "seeds": 4}],
+                       "tasks": {"smoothing": {"methods": [{"name": "slowdown.sleep", "params": {"ms": 1500.0}}]}}})
+    with dask.config.set({"distributed.worker.daemon": False}):     # Dask's default retries of a lost task
+        cl = distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None,
+                                      silence_logs=logging.CRITICAL)
+    ex = DaskExecutor(timeout=120, scheduler=cl.scheduler_address)
+
+    def kill_the_worker_once_busy():
+        t0 = time.time()
+        while time.time() - t0 < 60:
+            busy = [w for w, keys in ex.client.processing().items() if keys]
+            if busy:
+                time.sleep(0.5)
+                os.kill(ex.client.run(os.getpid, workers=busy)[busy[0]], signal.SIGKILL)
+                return
+            time.sleep(0.05)
+    killer = threading.Thread(target=kill_the_worker_once_busy)
+    killer.start()
+    try:
+        rows = [row for _, row, _ in ex.run(cfg.cases)]
+    finally:
+        killer.join()
+        ex.close()
+        cl.close()
+    assert len(rows) == 4 and len({r["case_id"] for r in rows}) == 4
+    assert [r["error"] for r in rows if r["status"] != "ok"] == []
 
 
 def test_unreachable_scheduler_is_exit_2(tmp_path):

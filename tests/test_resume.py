@@ -117,6 +117,7 @@ def test_sigkill_mid_run_then_resume(tmp_path):
     killed, resumed = meta["sessions"]                   # the killed session is on record, as killed
     assert killed["status"] == "killed" and killed["wall_s"] is None and resumed["status"] == "finished"
     assert meta["wall_s"] == resumed["wall_s"]
+    assert killed["executor"] == resumed["executor"] == "local" and resumed["workers"] == meta["workers"]
 
 
 def test_resume_with_a_changed_config_is_refused(tmp_path):

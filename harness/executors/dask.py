@@ -11,9 +11,13 @@ Design
   regenerated on the worker (deterministically, from the package data and the spec). For
   ``{file: ...}`` meshes (and the ``clean:`` file of a pair) the *driver* reads the file's
   bytes and scatters them once per distinct file; the task materialises them in a worker-local
-  cache directory (``$TMPDIR/mesh-shootout-dask/<sha1>/<original name>``) and reads them there
+  cache directory (``$TMPDIR/mesh-shootout-dask-<uid>/<sha1>/<original name>``, private to the
+  user, its bytes checked against the sha1 before each use) and reads them there
   with the same reader and repair policy as a local run, so no shared filesystem is needed.
   The case id, mesh label and error messages (which name the file's base name) are unchanged.
+  Should the worker holding the scattered bytes leave (a restart, ``--lifetime``), the cases
+  still waiting for them are cancelled by Dask: they are shipped and submitted again (three
+  times at most) instead of becoming error rows.
 - Isolation and timeouts hold on the worker: every task runs its case in a child process of
   the worker via `harness.executors.isolation.run_isolated` (a crash is an ``error`` row naming the
   signal, a case past the timeout is killed and recorded as ``timeout``; the worker lives on).
@@ -138,30 +142,79 @@ class DaskExecutor:
         self._wait_for_workers()
         shipped, data = ship_files(cases)
         blobs = {h: self.client.scatter(b, hash=False) for h, b in data.items()}   # once per file
+        sent_of: dict = {}
+        tries: dict = {}
+
+        def submit(case, sent):
+            for h in _hashes(sent):          # scattered bytes lost with their worker: ship them again
+                if h in blobs and blobs[h].status != "finished":
+                    blobs[h] = self.client.scatter(data[h], hash=False)
+            need = {h: blobs[h] for h in _hashes(sent) if h in blobs}
+            return self.client.submit(run_task, sent, need, self.timeout, want_meshes,
+                                      key=f"shootout-{case.case_id}-{uuid.uuid4().hex[:12]}",
+                                      pure=False, retries=0)
         futures = {}
         for case, sent in zip(cases, shipped):
-            need = {h: blobs[h] for h in _hashes(sent) if h in blobs}
-            fut = self.client.submit(run_task, sent, need, self.timeout, want_meshes,
-                                     key=f"shootout-{case.case_id}-{uuid.uuid4().hex[:12]}",
-                                     pure=False, retries=0)
-            futures[fut] = case
+            sent_of[case.case_id] = sent
+            futures[submit(case, sent)] = case
         self._futures = futures
-        for fut in as_completed(list(futures)):
+        ac = as_completed(list(futures))
+        for fut in self._completed(ac):
             case = futures.pop(fut)
             try:
                 row, extras = fut.result()
             except Exception as exc:  # KilledWorker, CancelledError: one error row; a lost scheduler: stop
-                if type(exc).__name__ != "KilledWorker" and not self._scheduler_alive():
-                    raise RunInterrupted(f"lost the Dask scheduler {self.scheduler} ({type(exc).__name__}); the rows "
-                                         "finished so far are saved: continue with --resume") from None
-                row, extras = base_row(case), {}
                 name = type(exc).__name__
+                if name != "KilledWorker" and not self._scheduler_alive():
+                    raise RunInterrupted(f"lost the Dask scheduler {self.scheduler} ({name}); the rows "
+                                         "finished so far are saved: continue with --resume") from None
+                sent = sent_of[case.case_id]
+                if "Cancelled" in name and _hashes(sent) and tries.get(case.case_id, 0) < 3:
+                    # the worker holding the file's bytes left (restart, lifetime): the task never ran
+                    tries[case.case_id] = tries.get(case.case_id, 0) + 1
+                    fut.release()
+                    again = submit(case, sent)
+                    futures[again] = case
+                    ac.add(again)
+                    continue
+                row, extras = base_row(case), {}
                 what = ("the Dask worker running this case died" if name == "KilledWorker"
                         else "the Dask task failed")
                 row["error"] = f"{what} ({name}: {exc})"[:2000]
             fut.release()
             yield case, row, extras
         self._futures = {}
+
+    def _completed(self, ac):
+        """The futures of ``ac`` as they complete (it may grow meanwhile); while none completes
+        and the cluster has no worker, say so every few seconds and give up after
+        ``$MESH_SHOOTOUT_DASK_WAIT`` s (workers that all left mid-run would otherwise leave the
+        driver silent for ever)."""
+        import time
+        limit = float(os.environ.get("MESH_SHOOTOUT_DASK_WAIT", "120"))
+        empty_since = last_check = last_say = None
+        while not ac.is_empty():
+            batch = ac.next_batch(block=False)
+            if batch:
+                empty_since = None
+                yield from batch
+                continue
+            now = time.perf_counter()
+            if last_check is None or now - last_check >= 2:
+                last_check = now
+                if self.n_workers() > 0:
+                    empty_since = None
+                elif empty_since is None:
+                    empty_since = last_say = now
+            if empty_since is not None:
+                if now - empty_since >= limit:
+                    raise RunInterrupted(f"the Dask cluster has had no worker for {limit:.0f} s with cases left; "
+                                         "start workers and continue with --resume")
+                if now - last_say >= 5:
+                    print(f"shootout: the Dask cluster has no workers; waiting ({now - empty_since:.0f} s of "
+                          f"{limit:.0f})", file=sys.stderr, flush=True)
+                    last_say = now
+            time.sleep(0.1)
 
     def describe(self) -> dict:
         return {"executor": self.name, "workers": self.n_workers(), "scheduler": self.scheduler}
@@ -231,7 +284,11 @@ def materialize(case: Case, blobs: dict) -> Case:
     if not any(f"{k}_sha1" in case.mesh for k in FILE_KEYS):
         return case
     spec = dict(case.mesh)
-    root = Path(tempfile.gettempdir()) / CACHE_DIR_NAME
+    root = Path(tempfile.gettempdir()) / f"{CACHE_DIR_NAME}-{os.getuid()}"     # this user's, not shared
+    root.mkdir(mode=0o700, exist_ok=True)
+    if root.is_symlink() or root.stat().st_uid != os.getuid() or root.stat().st_mode & 0o077:
+        raise ShootoutError(f"{root}: not a private folder of this user (mode {oct(root.stat().st_mode & 0o777)}); "
+                            "remove it")
     for k in FILE_KEYS:
         h = spec.pop(f"{k}_sha1", None)
         if h is None:
@@ -243,7 +300,7 @@ def materialize(case: Case, blobs: dict) -> Case:
         if hashlib.sha1(data).hexdigest() != h:
             raise ShootoutError(f"shipped bytes of {spec[k]} do not match their sha1")
         target = root / h / Path(spec[k]).name
-        if not target.is_file() or target.stat().st_size != len(data):
+        if not target.is_file() or hashlib.sha1(target.read_bytes()).hexdigest() != h:   # never trust the cache
             target.parent.mkdir(parents=True, exist_ok=True)
             fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=".part.")
             with os.fdopen(fd, "wb") as fh:
@@ -314,7 +371,7 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
         env["PYTHONPATH"] = os.pathsep.join(dict.fromkeys(paths + env.get("PYTHONPATH", "").split(os.pathsep)))
         proc = subprocess.Popen([sys.executable, "-m", "harness.executors.dask", out_path],
                                 stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
-                                stderr=subprocess.PIPE, env=env)
+                                stderr=subprocess.PIPE, env=env, start_new_session=True)   # killpg(0) hits it alone
         err_chunks: list[bytes] = []
 
         def keep_tail():                 # a flood of output keeps only its last 64 KiB in memory
@@ -339,6 +396,10 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
             return row, {}
         finally:
             try:
+                os.killpg(proc.pid, 9)   # what the case left running in its session dies with it
+            except OSError:
+                pass
+            try:
                 proc.stdin.close()
             except BrokenPipeError:
                 pass
@@ -348,10 +409,11 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
             with open(out_path, "rb") as fh:
                 return pickle.load(fh)
         row = base_row(case)
+        tail = b"".join(err_chunks).decode(errors="replace").strip().splitlines()[-1:]
         if code < 0:
-            row["error"] = f"worker process died: {signal_name(code)} (the method crashed its process)"
+            row["error"] = (f"worker process died: {signal_name(code)} (the method crashed its process)"
+                            + (f"; last stderr: {tail[0]}" if tail else ""))[:2000]
         else:
-            tail = b"".join(err_chunks).decode(errors="replace").strip().splitlines()[-1:]
             row["error"] = (f"worker process exited with code {code} without a result"
                             + (f": {tail[0]}" if tail else ""))[:2000]
         return row, {}
