@@ -390,6 +390,7 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
     ``cores``, the core count both runs' machines share, lets `load_stretch` do so).
     """
     changes, input_changes = [], []
+    unmatched: set = set()
     drift = run_drift(rows_a, rows_b)
     used_drift = 1.0 if absolute_time else drift
     common = [c for c in rows_a if c in rows_b]
@@ -416,8 +417,11 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
                                 "note": _time_note(ra, rb, used_drift)})
         if sa != "ok" or sb != "ok":
             continue
-        for metric in ra:
+        for metric in {**ra, **rb}:
             if metric in SKIP or metric.startswith("_"):
+                continue
+            if metric not in ra or metric not in rb:     # a column one version writes and the other not
+                unmatched.add((ra["task"], metric, "A" if metric in ra else "B"))
                 continue
             a, b = ra.get(metric), rb.get(metric)
             rule = rule_for(metric, rb.get("task"), rules)
@@ -436,7 +440,8 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
         r = rows_a[cid]
         changes.append({"case_id": cid, "task": r["task"], "case": _label(r), "metric": "case", "a": r.get("status"),
                         "b": None, "verdict": "regression", "note": "missing in RUN_B"})
-    return {"changes": changes, "input_changes": input_changes, "common": len(common), "only_a": only_a,
+    return {"changes": changes, "input_changes": input_changes, "unmatched_columns": sorted(unmatched),
+            "common": len(common), "only_a": only_a,
             "only_b": only_b, "rows_a": rows_a, "rows_b": rows_b, "drift": drift, "absolute_time": absolute_time}
 
 
@@ -517,6 +522,11 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
           f"{len(res['only_a'])} only in A, {len(res['only_b'])} only in B", file=out)
     for note in (timing_notes(meta_a, meta_b, res) if time_factor else []):     # --no-time: no timing notes
         print(f"note: {note}", file=out)
+    if res["unmatched_columns"]:
+        cols = ", ".join(f"{t}.{m} (only in {w})" for t, m, w in res["unmatched_columns"][:8])
+        print(f"note: not compared, a column only one run's CSV has (another version wrote it?): {cols}"
+              + (f" and {len(res['unmatched_columns']) - 8} more" if len(res["unmatched_columns"]) > 8 else ""),
+              file=out)
     if other_rules:
         print(f"note: B declares other rules (direction or tolerance) for {len(other_rules)} metric(s), e.g. "
               f"{', '.join(other_rules[:5])}: A's (the baseline's) are used", file=out)

@@ -106,6 +106,22 @@ def test_a_regression_is_exit_1_even_when_no_one_reads_the_lines(run_a, tmp_path
     assert r.returncode == 0 and "2 ok" in r.stdout, r.stdout
 
 
+def test_a_column_only_one_run_has_is_a_note_not_a_regression(run_a, tmp_path):
+    """Before: a metric column missing from B's CSV (another version) was a REGRESSION to '—' in
+    every row; missing from A it was silently not compared."""
+    b = copy(run_a, tmp_path)
+    rows = list(csv.DictReader((b / "smoothing.csv").open()))
+    with (b / "smoothing.csv").open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=[c for c in rows[0] if c != "ev_mean"], extrasaction="ignore",
+                           lineterminator="\n")
+        w.writeheader()
+        w.writerows(rows)
+    for x, y, where in ((run_a, b, "only in A"), (b, run_a, "only in B")):
+        code, out = run_compare(x, y, time_factor=None)
+        assert code == 0 and "REGRESSION" not in out, out
+        assert f"smoothing.ev_mean ({where})" in out, out
+
+
 def test_changes_within_tolerance_and_improvements_exit_0(run_a, tmp_path):
     b = copy(run_a, tmp_path)
 
