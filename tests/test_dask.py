@@ -222,8 +222,9 @@ def test_a_restarted_worker_costs_no_shipped_file_case_but_its_own(tmp_path):
                        "meshes": [{"file": str(tmp_path / "shipped" / "grid.obj")}],
                        "noise": [{"model": "gaussian_normal", "levels": [0.1], "seeds": 4}],
                        "tasks": {"smoothing": {"methods": [{"name": "slowdown.sleep", "params": {"ms": 1500.0}}]}}})
-    with dask.config.set({"distributed.worker.daemon": False}):     # Dask's default retries of a lost task
-        cl = distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None,
+    # Dask's default retries of a task whose worker died (the module's cluster fixture sets 0 while it lives)
+    with dask.config.set({"distributed.worker.daemon": False, "distributed.scheduler.allowed-failures": 3}):
+        cl = distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0",
                                       silence_logs=logging.CRITICAL)
     ex = DaskExecutor(timeout=120, scheduler=cl.scheduler_address)
 
