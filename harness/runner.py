@@ -167,6 +167,9 @@ def release_thread_pools() -> None:
             _PARENT_LIMIT = None
 
 
+IGL_THREADS = "IGL_NUM_THREADS"   # read by libigl once per process, at its first parallel section
+
+
 def limit_threads(n: int | None):
     """Limit BLAS/OpenMP thread pools of this process to ``n`` (None or 0: leave them); returns the
     threadpoolctl limiter, whose ``restore_original_limits()`` undoes it (None: nothing was set).
@@ -314,6 +317,8 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
             row.update(status="unavailable", error=why)
             return row, extras
         limiters.append(limit_threads(case.threads))
+        if case.threads:                 # libigl's own std::threads, which threadpoolctl does not see
+            os.environ[IGL_THREADS] = str(case.threads)
         loaded = _loaded_objects()
         with warnings.catch_warnings(record=True) as said:
             warnings.simplefilter("always")

@@ -181,6 +181,9 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
     except BaseException:
         ex.close()
         raise
+    from .runner import IGL_THREADS
+    igl_before = os.environ.get(IGL_THREADS)
+    os.environ[IGL_THREADS] = str(threads)   # inherited by the forked cases (libigl reads it at its first use)
     try:
         return _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, executor, scheduler,
                            resume, quiet, export_benchmark_json, ex)
@@ -192,6 +195,10 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
         raise
     finally:
         lock.close()
+        if igl_before is None:
+            os.environ.pop(IGL_THREADS, None)
+        else:
+            os.environ[IGL_THREADS] = igl_before
 
 
 def _fixed_cost(row: dict, extras: dict) -> tuple[float, float, float] | None:
@@ -363,7 +370,8 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
                        "protocol": "one untimed cold call on the case's own input (time_cold_s), then samples "
                                    "until both repeats and time_budget_s are reached; median and quartiles; each sample's "
                                    "process CPU time kept too (cpu_times); "
-                                   "BLAS/OpenMP pools limited to threads_per_case (by the local driver before "
+                                   "BLAS/OpenMP pools and libigl's own threads (IGL_NUM_THREADS) limited to "
+                                   "threads_per_case (pools by the local driver before "
                                    "it forks, inherited; else in the case; in the case for libraries loaded since)"}}
     meta["load_average"] = [_load()]
     meta["sessions"] = prev_sessions          # kept if this session's driver is killed

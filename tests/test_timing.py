@@ -188,6 +188,24 @@ def test_a_run_leaves_the_callers_thread_pools_as_they_were(tmp_path, executor):
     assert before and {k: after[k] for k in before} == before
 
 
+def test_libigls_own_threads_get_the_cases_limit(tmp_path, monkeypatch):
+    """libigl starts std::threads that threadpoolctl does not see: with 2 workers on 2 cores
+    libigl.cotan's wall time was 1.5-2x its CPU time on bunny, beside a single-threaded peer at 1x
+    (the order of the two flipped with --workers). Its own knob is IGL_NUM_THREADS, read once per
+    process: every case process sees threads_per_case, and the caller's value comes back."""
+    monkeypatch.syspath_prepend(str(Path(__file__).resolve().parents[1]))
+    monkeypatch.setenv("HOSTILE_MARK_DIR", str(tmp_path))
+    monkeypatch.setenv("IGL_NUM_THREADS", "7")
+    cfg = {"name": "t", "meshes": ["knight"], "time_budget": 0, "plugins": ["tests.plugins.hostile"],
+           "noise": [{"model": "gaussian_normal", "levels": [0.1], "seeds": 2}],
+           "tasks": {"smoothing": {"methods": ["hostile.report_igl_threads"]}}}
+    harness.run(cfg, out=tmp_path / "r", workers=2, quiet=True)
+    seen = {p.read_text() for p in tmp_path.glob("igl-threads-*.txt")}
+    assert seen == {str(max(1, (os.cpu_count() or 1) // 2))}, seen
+    assert os.environ["IGL_NUM_THREADS"] == "7"
+    assert "IGL_NUM_THREADS" in json.loads((tmp_path / "r" / "run.json").read_text())["timing"]["protocol"]
+
+
 def test_timed_calls_do_not_reuse_a_previous_calls_symbolic_analysis(monkeypatch):
     """The solvers' pattern-keyed symbolic analyses are dropped before the cold call and every
     sample: a sample of an implicit step pays for its ordering like a first call on the mesh

@@ -144,3 +144,11 @@ def global_state(V, F):
     os.chdir("/")
     np.seterr(all="raise")
     return SmoothingResult(V=V.copy())
+
+
+@register("hostile.report_igl_threads", task="smoothing", library="hostile")
+def report_igl_threads(V, F):
+    """Writes the IGL_NUM_THREADS its process sees into the mark directory."""
+    with open(os.path.join(MARK, f"igl-threads-{os.getpid()}.txt"), "w") as fh:
+        fh.write(os.environ.get("IGL_NUM_THREADS", "unset"))
+    return SmoothingResult(V=V.copy())
