@@ -292,6 +292,26 @@
     });
     return n === 0 || all;
   }
+  // the variants whose time is not told apart from the fastest's: on some seed they share, the
+  // fastest's interquartile range reaches the other's, or its median is less than 10% lower (the
+  // spread between two runs of the same code on a shared machine); no shared seed: tied
+  var TIME_GAP = 1.1;
+  function timeTiedWith(rows, fast, v) {
+    var a = new Map(), b = new Map(), n = 0, apart = true;
+    rows.forEach(function (r) {
+      if (!isNum(r.time_s)) return;
+      var s = r.seed === undefined || r.seed === null ? '' : String(r.seed);
+      if (r._variant === fast) a.set(s, r); else if (r._variant === v) b.set(s, r);
+    });
+    a.forEach(function (ra, s) {
+      var rb = b.get(s);
+      if (!rb) return;
+      n++;
+      var q3 = isNum(ra.time_q3_s) ? ra.time_q3_s : ra.time_s, q1 = isNum(rb.time_q1_s) ? rb.time_q1_s : rb.time_s;
+      if (!(q3 < q1 && rb.time_s >= TIME_GAP * ra.time_s)) apart = false;
+    });
+    return n === 0 || !apart;
+  }
   // the variants of a cell that can win, as in winners.csv: every row of the variant in the cell has a
   // value and, unless invalid results are shown, none is invalid (one failed, diverged or invalid seed
   // takes the variant out of the cell: no mean over the seeds that happen to be good)
@@ -332,6 +352,12 @@
     if (!names.length) return '';
     return ' <span class="muted" title="within the metric\'s tolerance of the best, or not beaten on every seed: ' +
       esc(names.join(', ')) +
+      '">(tied: ' + (names.length <= 2 ? esc(names.join(', ')) : names.length + ' others') + ')</span>';
+  }
+  function timeTiedNote(names) { // ' (tied: a)': times the samples do not tell apart from the fastest
+    if (!names.length) return '';
+    return ' <span class="muted" title="not told apart from the fastest: on some seed the interquartile ranges ' +
+      'of the samples overlap or the medians are less than 10% apart: ' + esc(names.join(', ')) +
       '">(tied: ' + (names.length <= 2 ? esc(names.join(', ')) : names.length + ' others') + ')</span>';
   }
   function noValidRow(rs, ncol, target) { // a cell whose every result is invalid: said, not left out
@@ -720,10 +746,14 @@
         });
         var best = pickBest(rs, function (r) { return r[key]; }, function (r) { return r._variant; }, true);
         var tied = tiedWith(rs, best, function (r) { return r[key]; }, function (r) { return r._variant; }, rows, key, tol, true);
-        var fast = rs.filter(function (r) { return isNum(r.time_s); }).reduce(function (a, b) { return b.time_s < a.time_s ? b : a; }, rs[0]);
+        var timed = rs.filter(function (r) { return isNum(r.time_s); });
+        var fast = timed.length ? pickBest(timed, function (r) { return r.time_s; }, function (r) { return r._variant; }, true) : rs[0];
+        var fastTied = timed.filter(function (r) { return r !== fast && timeTiedWith(rows, fast._variant, r._variant); })
+          .map(function (r) { return r._variant; });
         bt.appendChild(el('tr', {html: '<td>' + esc(best.mesh) + '</td><td>' + esc(best._noise) + '</td><td>' + esc(fmt(best._target)) +
           '</td><td><i style="color:' + d.colors[best._variant] + '">●</i> ' + esc(best._variant) + tiedNote(tied) + '</td><td class="num">' + fmt(best[key], 4) +
           '</td><td class="num">' + best.out_faces + '</td><td class="num">' + fmtTime(best.time_s) + '</td><td>' + esc(fast._variant) +
+          timeTiedNote(fastTied) +
           '</td><td class="num">' + fmt(fast[key], 4) + '</td><td class="num">' + fmtTime(fast.time_s) + '</td>'}));
       });
       plots.appendChild(el('h4', {text: 'Most accurate and fastest method per mesh, noise level and target (mean over seeds)'}));
