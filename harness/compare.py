@@ -333,7 +333,8 @@ def _time_note(ra: dict, rb: dict, drift: float = 1.0) -> str:
     c, d = cpu_ratio(ra, rb), busier(ra, rb)
     load = "" if d is None else (f"other processes kept {_num(ra.get('others_cpu')):.2g} / "
                                  f"{_num(rb.get('others_cpu')):.2g} cores busy (A / B), ")
-    return (f"B/A {eff['ratio']:.3g}x{rel} [95% CI {lo:.3g}, {hi:.3g}], fastest {eff['min_ratio']:.3g}x, "
+    return (f"B/A {eff['ratio']:.3g}x{rel} [95% CI over these samples {lo:.3g}, {hi:.3g}; two runs of "
+            f"the same code differ more], fastest {eff['min_ratio']:.3g}x, "
             f"Mann-Whitney p={p:.2g}, " + ("" if c is None else f"CPU time B/A {c:.3g}x, ") + load +
             f"{eff['n'][0]} vs {eff['n'][1]} samples" + ("" if eff["conclusive"] else " (too few to decide)"))
 
