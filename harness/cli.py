@@ -95,8 +95,9 @@ def _check_output_file(path, flag: str, protect=(), run_dirs=()) -> None:
         rd, rp = Path(d).resolve(), p.resolve()
         if rp == rd:
             raise ShootoutError(f"{flag} {path}: is the run folder itself; give a file name")
-        if rd in rp.parents and (rp.parent != rd or p.exists() or p.name in run_file_names()
-                                 or p.name in ("views", "tune", "meshes")):
+        inner = rp.relative_to(rd).parts if rd in rp.parents else ()
+        if inner and (inner[0] in ("views", "tune", "meshes")
+                      or (len(inner) == 1 and (p.exists() or p.name in run_file_names()))):
             raise ShootoutError(f"{flag} {path}: is inside the run folder {d} (its views/, tune/ or meshes/, or one "
                                 "of its files); writing it would overwrite the run's own files")
     d = p.resolve().parent
@@ -356,7 +357,14 @@ class _PipeSafe:
         if not self.broken:
             try:
                 return self._inner.write(s)
-            except (BrokenPipeError, ValueError):          # ValueError: the stream was closed
+            except UnicodeEncodeError:        # a name the terminal's encoding lacks: escaped, not lost
+                enc = getattr(self._inner, "encoding", None) or "utf-8"
+                return self.write(s.encode(enc, "backslashreplace").decode(enc))
+            except BrokenPipeError:
+                self._broke()
+            except ValueError:
+                if not getattr(self._inner, "closed", False):
+                    raise
                 self._broke()
         return len(s)
 
@@ -364,7 +372,11 @@ class _PipeSafe:
         if not self.broken:
             try:
                 self._inner.flush()
-            except (BrokenPipeError, ValueError):
+            except BrokenPipeError:
+                self._broke()
+            except ValueError:
+                if not getattr(self._inner, "closed", False):
+                    raise
                 self._broke()
 
     def isatty(self) -> bool:
@@ -408,6 +420,8 @@ def main(argv=None) -> int:
     try:
         return _main(argv)
     finally:
+        sys.stdout.flush()               # a pipe is block-buffered: its break shows here, not at exit
+        sys.stderr.flush()
         sys.stdout, sys.stderr = streams
         if saved is not None:                   # an embedding process gets its handlers back
             signal.signal(signal.SIGTERM, saved[0])

@@ -255,7 +255,10 @@ class RunFolder:
             if not p.is_file() or p.stat().st_size == 0:
                 continue
             with p.open(newline="", encoding="utf-8", errors="replace") as fh:
-                head = next(csv.reader(fh), [])
+                line = fh.readline()
+            if not line.endswith("\n"):          # a header torn by a full disk: no row to keep
+                continue
+            head = next(csv.reader([line]), [])
             want = columns(task)
             if head != want:
                 missing, extra = [c for c in want if c not in head], [c for c in head if c not in want]
@@ -387,14 +390,28 @@ class RunFolder:
         return out
 
 
+class Frames(dict):
+    """``{task: DataFrame}`` of a run folder's rows, and ``not_written``: what the end of the run
+    could not (re)write (3D views, leaderboard, report), empty when everything was written."""
+
+    def __init__(self, frames: dict, not_written=()):
+        super().__init__(frames)
+        self.not_written = list(not_written)
+
+
 def check_out_dir(out_dir: Path) -> None:
     """``--out`` must be a folder we can write, or creatable in one (exit 2 before anything is written)."""
     out_dir = Path(out_dir)
     if out_dir.exists() and not out_dir.is_dir():
         raise ShootoutError(f"--out {out_dir}: exists and is not a folder")
     try:
+        os.stat(out_dir)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            raise ShootoutError(f"--out {out_dir}: a loop of symbolic links") from None
+    try:
         p = out_dir.resolve()
-    except (RuntimeError, OSError) as exc:           # a symbolic link loop
+    except (RuntimeError, OSError) as exc:           # a symbolic link loop (Python < 3.13)
         raise ShootoutError(f"--out {out_dir}: cannot be resolved ({exc})") from None
     while not p.exists():
         p = p.parent

@@ -21,7 +21,7 @@ from .config import name_problem, samples_problem
 from .errors import ShootoutError, problems_error
 from .mesh import Mesh, read_mesh, validate
 from .provenance import git_commit, git_dirty, machine_info, now_iso, package_versions
-from .results import RunFolder, out_dir_problems
+from .results import Frames, RunFolder, out_dir_problems
 from .tasks.base import CaseInput
 
 
@@ -197,7 +197,7 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
             "machine": machine_info(), "command": " ".join(sys.argv),
             "tasks": {t: tasks.get(t).spec() for t in rows_by_task}})
         build_report(out)
-        return folder.frames()
+        return Frames(folder.frames())
     finally:
         lock.close()
 

@@ -19,7 +19,7 @@ from .errors import ShootoutError, check_interrupt, problems_error
 from .executors import EXECUTORS, make_executor
 from .mesh import write_ply
 from .provenance import git_commit, git_dirty, machine_info, now_iso, package_versions
-from .results import RunFolder, out_dir_problems
+from .results import Frames, RunFolder, out_dir_problems
 
 
 def config_hash(cfg: Config) -> str:
@@ -493,15 +493,6 @@ def _tune(cfg: Config, ex, out_dir: Path, meta: dict, threads: int, resume: bool
     return tuned
 
 
-class Frames(dict):
-    """``{task: DataFrame}`` of a run folder's rows, and ``not_written``: what the end of the run
-    could not (re)write (3D views, leaderboard, report), empty when everything was written."""
-
-    def __init__(self, frames: dict, not_written=()):
-        super().__init__(frames)
-        self.not_written = list(not_written)
-
-
 def finish(out_dir, cfg: Config, timeout=None, export_benchmark_json=None, extra_cases=()) -> list[str]:
     """After the last row: the 3D views (views/), the report and the optional benchmark export.
     The rows are safe on disk; a failure here is a warning and an entry of the returned list of
@@ -553,7 +544,11 @@ def recompute_views(run_dir) -> list[dict]:
         base = Path(where)
     else:
         base = Path(src).parent if src and Path(src).parent.is_dir() else Path.cwd()
-    cfg = load_config(meta["config"], base_dir=base.resolve())
-    views = compute_views({c.case_id: c for c in cfg.cases}, folder.frames(), cfg.report)
+    raw = dict(meta["config"])
+    report = raw.pop("report", None)     # a listed id no longer a case (its file changed): its view says so
+    cfg = load_config({**raw, "report": {k: v for k, v in report.items() if k != "views"}} if isinstance(report, dict)
+                      else raw, base_dir=base.resolve())
+    views = compute_views({c.case_id: c for c in cfg.cases}, folder.frames(), report if isinstance(report, dict)
+                          else cfg.report)
     folder.write_views(views)
     return views

@@ -30,10 +30,12 @@ class _Loader(yaml.SafeLoader):
         return super().compose_node(parent, index)
 
 
-# YAML 1.1 reads `1e-3` and `1E5` (no dot, or no exponent sign) as text; a config means the number
+# YAML 1.1 reads `1e-3` and `1E5` (no dot, or no exponent sign) as text; a config means the number.
+# Without a dot only short forms (up to 3 digits each side): a 12-hex case id such as
+# 123e45678901 stays text.
 _Loader.add_implicit_resolver(
     "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
+    re.compile(r"^[-+]?(?:(?:[0-9][0-9_]*\.[0-9_]*|\.[0-9_]+)[eE][-+]?[0-9]+|[0-9]{1,3}[eE][-+]?[0-9]{1,3})$"),
     list("-+0123456789."))
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import os
 
 import numpy as np
 import shutil
@@ -91,14 +92,26 @@ def test_a_regression_is_exit_1_even_when_no_one_reads_the_lines(run_a, tmp_path
     edit(b / "smoothing.csv", lambda rows: rows[0].update(dist_mean=str(float(rows[0]["dist_mean"]) * 1.5)))
     html = tmp_path / "d.html"
     cmd = [sys.executable, "-m", "harness.cli", "compare", str(run_a), str(b), "--no-time", "--html", str(html)]
-    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=Path(harness.__file__).parents[1])
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}   # a pipe is block-buffered then
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=Path(harness.__file__).parents[1],
+                         env=env)
     p.stdout.close()                                  # the reader is gone before the first line
     _, err = p.communicate(timeout=120)
     assert p.returncode == 1, err
     assert "<b>1 regression(s)</b>" in html.read_text()
     r = subprocess.run([sys.executable, "-m", "harness.cli", "compare", str(run_a), str(b), "--no-time"],
-                       stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, timeout=120)
+                       stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, timeout=120, env=env)
     assert r.returncode == 1 and "REGRESSION" in r.stdout
+    r = subprocess.run(f"{sys.executable} -m harness.cli datasets | true", shell=True, capture_output=True, text=True,
+                       timeout=120, env=env, executable="/bin/bash")
+    assert r.returncode == 0 and "BrokenPipe" not in r.stderr, r.stderr
+    from harness.cli import _PipeSafe                 # a character the terminal lacks is escaped, not the rest lost
+    raw = io.BytesIO()
+    out = _PipeSafe(io.TextIOWrapper(raw, encoding="ascii"))
+    out.write("case \u2026 done\n")
+    out.write("next\n")
+    out.flush()
+    assert raw.getvalue() == b"case \\u2026 done\nnext\n" and not out.broken
     cfg = tmp_path / "c.json"
     cfg.write_text(json.dumps({**SMALL, "tasks": {"smoothing": SMALL["tasks"]["smoothing"]}}))
     r = subprocess.run(f"{sys.executable} -m harness.cli run {cfg} --out {tmp_path / 'o'} 2>&-", shell=True,
@@ -377,6 +390,9 @@ def test_output_files_are_checked_before_any_work(run_a, tmp_path):
     index = (run_a / "views" / "index.json").read_bytes()
     assert cli(["compare", str(run_a), str(run_a), "--html", str(run_a / "views" / "index.json")]) == 2
     assert (run_a / "views" / "index.json").read_bytes() == index
+    exports = run_a / "exports" / "d.html"            # another folder of the user's inside it: allowed
+    assert cli(["compare", str(run_a), str(run_a), "--html", str(exports)]) == 0 and exports.is_file()
+    shutil.rmtree(run_a / "exports")
     loop = tmp_path / "loop"
     loop.symlink_to(loop)
     assert cli(["run", str(cfg), "--out", str(loop)]) == 2

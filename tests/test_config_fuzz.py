@@ -263,6 +263,7 @@ def test_numbers_yaml_11_reads_otherwise_and_deep_nesting_are_refused(tmp_path):
         yaml_input.load("a: 1\ntimeout: 1:30\n")
     assert yaml_input.load("a: [0, 0.5, '010', 0x10, 1_000, 08, 1.5e3, 1e-3, -2E+2, '1e3', 1e3x]\n") == {
         "a": [0, 0.5, "010", 16, 1000, "08", 1500.0, 0.001, -200.0, "1e3", "1e3x"]}      # 1e-3 was text
+    assert yaml_input.load("views: [123e45678901, 1e5]\n") == {"views": ["123e45678901", 100000.0]}   # a case id
     deep = tmp_path / "deep.yaml"
     deep.write_text("name: x\nmeshes: [knight]\ntasks: " + "[" * 400 + "]" * 400 + "\n")
     r = subprocess.run([str(SHOOTOUT), "run", str(deep), "--out", str(tmp_path / "o")],

@@ -69,6 +69,7 @@ def test_a_results_config_gives_the_same_numbers(run_with_meshes, tmp_path):
     path = tmp_path / "scored.yaml"
     path.write_text(yaml.safe_dump(cfg))
     assert cli(["run", str(path), "--out", str(tmp_path / "out")]) == 0
+    assert harness.run(str(path), out=tmp_path / "out2").not_written == []
     ev = pd.read_csv(tmp_path / "out" / "smoothing.csv")
     metrics = list(tasks.get("smoothing").columns)
     pd.testing.assert_frame_equal(ev.set_index("method")[metrics], rows.set_index("method")[metrics], check_exact=True)

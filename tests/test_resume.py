@@ -168,6 +168,8 @@ def test_resume_of_a_csv_with_other_columns_is_refused_and_keeps_it(tmp_path):
                        r"\(without \['others_cpu'\]\).*would drop its rows"):
         harness.run(cfg, out=out, workers=2, resume=True)
     assert p.read_bytes() == before
+    p.write_text(",".join(columns("laplacian"))[:40])      # a header torn by a full disk: nothing to keep
+    assert RunFolder(out).column_problems() == []
     mine = tmp_path / "mine"
     mine.mkdir()
     (mine / "laplacian.csv").write_text("a,b\n1,2\n")

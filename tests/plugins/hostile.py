@@ -149,6 +149,7 @@ def global_state(V, F):
 @register("hostile.report_igl_threads", task="smoothing", library="hostile")
 def report_igl_threads(V, F):
     """Writes the IGL_NUM_THREADS its process sees into the mark directory."""
-    with open(os.path.join(MARK, f"igl-threads-{os.getpid()}.txt"), "w") as fh:
+    mark = os.environ.get("HOSTILE_MARK_DIR", MARK)          # at call time: the module may be older
+    with open(os.path.join(mark, f"igl-threads-{os.getpid()}.txt"), "w") as fh:
         fh.write(os.environ.get("IGL_NUM_THREADS", "unset"))
     return SmoothingResult(V=V.copy())
