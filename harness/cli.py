@@ -353,31 +353,31 @@ class _PipeSafe:
     def __init__(self, inner):
         self._inner, self.broken = inner, inner is None
 
+    def _call(self, fn, *args):
+        """``fn(*args)`` on the inner stream; a reader gone (broken pipe, closed stream) ends it."""
+        try:
+            return fn(*args)
+        except BrokenPipeError:
+            self._broke()
+        except ValueError:                    # also an encoding error, which is not a reader gone
+            if not getattr(self._inner, "closed", False):
+                raise
+            self._broke()
+        return None
+
     def write(self, s):
-        if not self.broken:
-            try:
-                return self._inner.write(s)
-            except UnicodeEncodeError:        # a name the terminal's encoding lacks: escaped, not lost
-                enc = getattr(self._inner, "encoding", None) or "utf-8"
-                return self.write(s.encode(enc, "backslashreplace").decode(enc))
-            except BrokenPipeError:
-                self._broke()
-            except ValueError:
-                if not getattr(self._inner, "closed", False):
-                    raise
-                self._broke()
-        return len(s)
+        if self.broken:
+            return len(s)
+        try:
+            n = self._call(self._inner.write, s)
+        except UnicodeEncodeError:            # a name the terminal's encoding lacks: escaped, not lost
+            enc = getattr(self._inner, "encoding", None) or "utf-8"
+            return self.write(s.encode(enc, "backslashreplace").decode(enc))
+        return len(s) if n is None else n
 
     def flush(self):
         if not self.broken:
-            try:
-                self._inner.flush()
-            except BrokenPipeError:
-                self._broke()
-            except ValueError:
-                if not getattr(self._inner, "closed", False):
-                    raise
-                self._broke()
+            self._call(self._inner.flush)
 
     def isatty(self) -> bool:
         try:

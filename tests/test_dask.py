@@ -169,6 +169,27 @@ def test_daemonic_worker_fallback_isolates_too(tmp_path):
     assert row["status"] == "error" and "SIGTERM" in row["error"]
 
 
+def _run_killing_a_busy_worker(ex, cases, before_kill):
+    """The rows of ``ex.run(cases)`` while another thread SIGKILLs the first worker process that
+    has a task, after ``before_kill(pid)``."""
+    def kill():
+        t0 = time.time()
+        while time.time() - t0 < 60:
+            busy = [w for w, keys in ex.client.processing().items() if keys]
+            if busy:
+                pid = ex.client.run(os.getpid, workers=busy)[busy[0]]
+                before_kill(pid)
+                os.kill(pid, signal.SIGKILL)
+                return
+            time.sleep(0.05)
+    killer = threading.Thread(target=kill)
+    killer.start()
+    try:
+        return [row for _, row, _ in ex.run(cases)]
+    finally:
+        killer.join()
+
+
 def test_worker_death_is_one_error_row(cluster):
     """Kill the worker process running a case: one error row naming it, no retry, no second row;
     the case's own process goes with the worker; the cluster recovers (nanny restart)."""
@@ -177,27 +198,16 @@ def test_worker_death_is_one_error_row(cluster):
     ex = DaskExecutor(timeout=120, scheduler=cluster.scheduler_address)
     victims = {}
 
-    def kill_worker_when_running():
-        t0 = time.time()
-        while time.time() - t0 < 60:
-            busy = [w for w, keys in ex.client.processing().items() if keys]
-            if busy:
-                pid = ex.client.run(os.getpid, workers=busy)[busy[0]]
-                proc = psutil.Process(pid)
-                t1 = time.time()
-                while not proc.children(recursive=True) and time.time() - t1 < 30:
-                    time.sleep(0.05)
-                victims["kids"] = [k.pid for k in proc.children(recursive=True)]
-                os.kill(pid, signal.SIGKILL)
-                return
+    def wait_for_its_case(pid):
+        proc = psutil.Process(pid)
+        t1 = time.time()
+        while not proc.children(recursive=True) and time.time() - t1 < 30:
             time.sleep(0.05)
+        victims["kids"] = [k.pid for k in proc.children(recursive=True)]
 
-    killer = threading.Thread(target=kill_worker_when_running)
-    killer.start()
     try:
-        rows = [row for _, row, _ in ex.run(cfg.cases)]
+        rows = _run_killing_a_busy_worker(ex, cfg.cases, before_kill=wait_for_its_case)
     finally:
-        killer.join()
         ex.close()
     assert len(rows) == 1
     assert rows[0]["status"] == "error" and "worker" in rows[0]["error"] and "died" in rows[0]["error"]
@@ -228,21 +238,9 @@ def test_a_restarted_worker_costs_no_shipped_file_case_but_its_own(tmp_path):
                                       silence_logs=logging.CRITICAL)
     ex = DaskExecutor(timeout=120, scheduler=cl.scheduler_address)
 
-    def kill_the_worker_once_busy():
-        t0 = time.time()
-        while time.time() - t0 < 60:
-            busy = [w for w, keys in ex.client.processing().items() if keys]
-            if busy:
-                time.sleep(0.5)
-                os.kill(ex.client.run(os.getpid, workers=busy)[busy[0]], signal.SIGKILL)
-                return
-            time.sleep(0.05)
-    killer = threading.Thread(target=kill_the_worker_once_busy)
-    killer.start()
     try:
-        rows = [row for _, row, _ in ex.run(cfg.cases)]
+        rows = _run_killing_a_busy_worker(ex, cfg.cases, before_kill=lambda pid: time.sleep(0.5))
     finally:
-        killer.join()
         ex.close()
         cl.close()
     assert len(rows) == 4 and len({r["case_id"] for r in rows}) == 4

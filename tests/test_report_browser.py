@@ -289,6 +289,14 @@ def test_generic_section_plots_parameter_sweeps_and_level_lines(tmp_path):
     assert any("vs t_factor" in t for t in cdp_titles), cdp_titles
 
 
+def _write_rows(path, rows):
+    import csv
+    with path.open("w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]), lineterminator="\n")
+        w.writeheader()
+        w.writerows(rows)
+
+
 def test_winner_tables_show_ties_and_cells_without_a_valid_result(tiny_run, tmp_path):
     """The report's winner tables use the leaderboard's tie rule (within the metric's declared
     tolerance of the best) and say so; a cell whose every result is invalid (smoothing a clean
@@ -313,10 +321,7 @@ def test_winner_tables_show_ties_and_cells_without_a_valid_result(tiny_run, tmp_
     for method, seed, f in (("fast_simplification.qem", 1, 1.2), ("seedy.qem", 0, 1.1), ("seedy.qem", 1, 1.0)):
         rows.append(dict(plane[0], method=method, seed=str(seed), hausdorff=repr(h * f),
                          case_id=f"{plane[0]['case_id'][:-3]}{seed}{len(method)}"))
-    with path.open("w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]), lineterminator="\n")
-        w.writeheader()
-        w.writerows(rows)
+    _write_rows(path, rows)
     sm = run / "smoothing.csv"                  # a cell whose every case failed: also a row saying so
     rows = list(csv.DictReader(sm.open()))
     for r in rows:
@@ -333,10 +338,7 @@ def test_winner_tables_show_ties_and_cells_without_a_valid_result(tiny_run, tmp_
         bad = json.loads(r["params"])["iterations"] == 6
         rows.append(dict(r, seed="1", case_id=r["case_id"][:-1] + "x",
                          dist_mean=repr(float(r["input_dist_mean"]) * (2.0 if bad else 0.9))))
-    with sm.open("w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]), lineterminator="\n")
-        w.writeheader()
-        w.writerows(rows)
+    _write_rows(sm, rows)
     build_report(run)
     s = check_report_in_browser(run / "report.html", interact=False)
     assert s["console_errors"] == [] and s["exceptions"] == [] and s["jserrors"] == 0
@@ -359,10 +361,7 @@ def test_winner_tables_show_ties_and_cells_without_a_valid_result(tiny_run, tmp_
     for r in rows:
         if r["method"] == "copy.qem":
             r.update({k: repr(3 * float(r[k])) for k in ("time_s", "time_q1_s", "time_q3_s")})
-    with path.open("w", newline="") as fh:
-        w = csv.DictWriter(fh, fieldnames=list(rows[0]), lineterminator="\n")
-        w.writeheader()
-        w.writerows(rows)
+    _write_rows(path, rows)
     build_report(run)
     s = check_report_in_browser(run / "report.html", interact=False)
     (qem,) = [r for r in s["bestRows"] if "fast_simplification.qem (tied: copy.qem)" in r]
