@@ -67,51 +67,10 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-def _check_output_file(path, flag: str, protect=(), run_dirs=()) -> None:
-    """An output file named on the command line can be written: not a folder, not one of the
-    ``protect``ed inputs (e.g. the config being run), not an existing file or a run's own file
-    name inside one of the ``run_dirs`` (the runs compared, the run folder written), under a
-    writable folder (missing folders are made). Checked before any work, so a typo costs exit
-    2, not a finished run or an overwritten input."""
-    if path is None:
-        return
-    p = Path(path)
-    try:
-        p.resolve()
-    except (RuntimeError, OSError) as exc:           # a symbolic link loop
-        raise ShootoutError(f"{flag} {path}: cannot be resolved ({exc})") from None
-    if p.is_dir():
-        raise ShootoutError(f"{flag} {path}: is a folder; give a file name")
-    for q in protect:
-        try:
-            if q is not None and Path(q).exists() and p.exists() and p.resolve() == Path(q).resolve():
-                raise ShootoutError(f"{flag} {path}: is an input of this command; writing it would overwrite it")
-        except OSError:
-            pass
-    from .results import run_file_names
-    for d in run_dirs:
-        if d is None:
-            continue
-        rd, rp = Path(d).resolve(), p.resolve()
-        if rp == rd:
-            raise ShootoutError(f"{flag} {path}: is the run folder itself; give a file name")
-        inner = rp.relative_to(rd).parts if rd in rp.parents else ()
-        if inner and (inner[0] in ("views", "tune", "meshes")
-                      or (len(inner) == 1 and (p.exists() or p.name in run_file_names()))):
-            raise ShootoutError(f"{flag} {path}: is inside the run folder {d} (its views/, tune/ or meshes/, or one "
-                                "of its files); writing it would overwrite the run's own files")
-    d = p.resolve().parent
-    while not d.exists():
-        d = d.parent
-    if not d.is_dir() or not os.access(d, os.W_OK | os.X_OK):
-        raise ShootoutError(f"{flag} {path}: {d} is not a writable folder")
-    import tempfile
-    try:                                  # access() says yes to root everywhere (/proc too): try it
-        fd, probe = tempfile.mkstemp(dir=d, prefix=".shootout-probe-")
-        os.close(fd)
-        os.unlink(probe)
-    except OSError as exc:
-        raise ShootoutError(f"{flag} {path}: cannot write in {d} ({exc.strerror or exc})") from None
+def check_output_file(path, flag: str, protect=(), run_dirs=()) -> None:
+    """`harness.results.check_output_file`, imported when a command needs it."""
+    from .results import check_output_file as check
+    check(path, flag, protect=protect, run_dirs=run_dirs)
 
 
 def _cmd_run(a) -> int:
@@ -121,7 +80,7 @@ def _cmd_run(a) -> int:
     from .session import run_args_problems
     P = run_args_problems(a.workers, a.timeout, a.executor, a.scheduler)   # every problem, then one message
     try:
-        _check_output_file(a.export_benchmark_json, "--export-benchmark-json", protect=[a.config])
+        check_output_file(a.export_benchmark_json, "--export-benchmark-json", protect=[a.config])
     except ShootoutError as exc:
         P.append(str(exc))
     from .session import _results_config, run
@@ -151,7 +110,7 @@ def _cmd_run(a) -> int:
     if out_dir is not None:
         P += out_dir_problems(out_dir, a.resume)
         try:
-            _check_output_file(a.export_benchmark_json, "--export-benchmark-json", run_dirs=(out_dir,))
+            check_output_file(a.export_benchmark_json, "--export-benchmark-json", run_dirs=(out_dir,))
         except ShootoutError as exc:
             P.append(str(exc))
     if bad_config is not None and not P:
@@ -339,7 +298,7 @@ def _cmd_compare(a) -> int:
             raise ShootoutError(f"compare: {d} is not a run folder")
     if a.time_factor is not None and not 1 < a.time_factor < float("inf"):
         raise ShootoutError(f"--time-factor: expected a finite number > 1, got {a.time_factor}")
-    _check_output_file(a.html, "--html", run_dirs=(a.run_a, a.run_b))
+    check_output_file(a.html, "--html", run_dirs=(a.run_a, a.run_b))
     factor = None if a.no_time else (a.time_factor or TIME_FACTOR)
     return compare_runs(a.run_a, a.run_b, html_out=a.html, time_factor=factor, absolute_time=a.absolute_time)
 

@@ -399,6 +399,56 @@ class Frames(dict):
         self.not_written = list(not_written)
 
 
+def check_output_file(path, flag: str, protect=(), run_dirs=()) -> None:
+    """An output file named on the command line can be written: not a folder, not one of the
+    ``protect``ed inputs (e.g. the config being run), not an existing file or a run's own file
+    name inside one of the ``run_dirs`` (the runs compared, the run folder written), under a
+    writable folder (missing folders are made). Checked before any work, so a typo costs exit
+    2, not a finished run or an overwritten input."""
+    if path is None:
+        return
+    p = Path(path)
+    try:
+        os.stat(p)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            raise ShootoutError(f"{flag} {path}: a loop of symbolic links") from None
+    try:
+        p.resolve()
+    except (RuntimeError, OSError) as exc:           # a symbolic link loop
+        raise ShootoutError(f"{flag} {path}: cannot be resolved ({exc})") from None
+    if p.is_dir():
+        raise ShootoutError(f"{flag} {path}: is a folder; give a file name")
+    for q in protect:
+        try:
+            if q is not None and Path(q).exists() and p.exists() and p.resolve() == Path(q).resolve():
+                raise ShootoutError(f"{flag} {path}: is an input of this command; writing it would overwrite it")
+        except OSError:
+            pass
+    for d in run_dirs:
+        if d is None:
+            continue
+        rd, rp = Path(d).resolve(), p.resolve()
+        if rp == rd:
+            raise ShootoutError(f"{flag} {path}: is the run folder itself; give a file name")
+        inner = rp.relative_to(rd).parts if rd in rp.parents else ()
+        if inner and (inner[0] in ("views", "tune", "meshes")
+                      or (len(inner) == 1 and (p.exists() or p.name in run_file_names()))):
+            raise ShootoutError(f"{flag} {path}: is inside the run folder {d} (its views/, tune/ or meshes/, or one "
+                                "of its files); writing it would overwrite the run's own files")
+    d = p.resolve().parent
+    while not d.exists():
+        d = d.parent
+    if not d.is_dir() or not os.access(d, os.W_OK | os.X_OK):
+        raise ShootoutError(f"{flag} {path}: {d} is not a writable folder")
+    try:                                  # access() says yes to root everywhere (/proc too): try it
+        fd, probe = tempfile.mkstemp(dir=d, prefix=".shootout-probe-")
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise ShootoutError(f"{flag} {path}: cannot write in {d} ({exc.strerror or exc})") from None
+
+
 def check_out_dir(out_dir: Path) -> None:
     """``--out`` must be a folder we can write, or creatable in one (exit 2 before anything is written)."""
     out_dir = Path(out_dir)

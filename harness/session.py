@@ -19,7 +19,7 @@ from .errors import ShootoutError, check_interrupt, problems_error
 from .executors import EXECUTORS, make_executor
 from .mesh import write_ply
 from .provenance import git_commit, git_dirty, machine_info, now_iso, package_versions
-from .results import Frames, RunFolder, out_dir_problems
+from .results import Frames, RunFolder, check_output_file, out_dir_problems
 
 
 def config_hash(cfg: Config) -> str:
@@ -170,6 +170,10 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
     cases = [dataclasses.replace(c, threads=threads) for c in cfg.cases]
     done: set[str] = set()
     problems = out_dir_problems(out_dir, resume)     # refused before the folder or its lock is made
+    try:
+        check_output_file(export_benchmark_json, "export_benchmark_json", run_dirs=(out_dir,))
+    except ShootoutError as exc:
+        problems.append(str(exc))
     if not problems and out_dir.is_dir():
         problems = folder_problems(folder, out_dir, chash, resume)
     if problems:

@@ -390,6 +390,9 @@ def test_output_files_are_checked_before_any_work(run_a, tmp_path):
     index = (run_a / "views" / "index.json").read_bytes()
     assert cli(["compare", str(run_a), str(run_a), "--html", str(run_a / "views" / "index.json")]) == 2
     assert (run_a / "views" / "index.json").read_bytes() == index
+    with pytest.raises(harness.errors.ShootoutError, match="is the run folder itself"):   # from Python too
+        harness.run(SMALL, out=o, export_benchmark_json=o)
+    assert not o.exists()
     exports = run_a / "exports" / "d.html"            # another folder of the user's inside it: allowed
     assert cli(["compare", str(run_a), str(run_a), "--html", str(exports)]) == 0 and exports.is_file()
     shutil.rmtree(run_a / "exports")
