@@ -399,6 +399,20 @@ class Frames(dict):
         self.not_written = list(not_written)
 
 
+def _resolved(p: Path, what: str) -> Path:
+    """``p.resolve()``; `ShootoutError` naming ``what`` for a loop of symbolic links (an ELOOP
+    from stat; Python < 3.13 raises from resolve itself)."""
+    try:
+        os.stat(p)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            raise ShootoutError(f"{what}: a loop of symbolic links") from None
+    try:
+        return p.resolve()
+    except (RuntimeError, OSError) as exc:
+        raise ShootoutError(f"{what}: cannot be resolved ({exc})") from None
+
+
 def check_output_file(path, flag: str, protect=(), run_dirs=()) -> None:
     """An output file named on the command line can be written: not a folder, not one of the
     ``protect``ed inputs (e.g. the config being run), not an existing file or a run's own file
@@ -408,15 +422,7 @@ def check_output_file(path, flag: str, protect=(), run_dirs=()) -> None:
     if path is None:
         return
     p = Path(path)
-    try:
-        os.stat(p)
-    except OSError as exc:
-        if exc.errno == errno.ELOOP:
-            raise ShootoutError(f"{flag} {path}: a loop of symbolic links") from None
-    try:
-        p.resolve()
-    except (RuntimeError, OSError) as exc:           # a symbolic link loop
-        raise ShootoutError(f"{flag} {path}: cannot be resolved ({exc})") from None
+    _resolved(p, f"{flag} {path}")
     if p.is_dir():
         raise ShootoutError(f"{flag} {path}: is a folder; give a file name")
     for q in protect:
@@ -454,15 +460,7 @@ def check_out_dir(out_dir: Path) -> None:
     out_dir = Path(out_dir)
     if out_dir.exists() and not out_dir.is_dir():
         raise ShootoutError(f"--out {out_dir}: exists and is not a folder")
-    try:
-        os.stat(out_dir)
-    except OSError as exc:
-        if exc.errno == errno.ELOOP:
-            raise ShootoutError(f"--out {out_dir}: a loop of symbolic links") from None
-    try:
-        p = out_dir.resolve()
-    except (RuntimeError, OSError) as exc:           # a symbolic link loop (Python < 3.13)
-        raise ShootoutError(f"--out {out_dir}: cannot be resolved ({exc})") from None
+    p = _resolved(out_dir, f"--out {out_dir}")
     while not p.exists():
         p = p.parent
     if not p.is_dir():
