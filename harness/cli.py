@@ -217,7 +217,7 @@ def _cmd_report(a) -> int:
     why = folder.readable_problem()
     if why:
         raise ShootoutError(why + "; nothing written")
-    lock = folder.lock()                    # not beside a run writing the folder
+    lock = folder.lock("wait for it to finish: its end rebuilds the report")
     try:
         for note in _rules_changed(d):
             print(f"note: {note}", file=sys.stderr)
@@ -260,7 +260,7 @@ def _cmd_views(a) -> int:
     if (RunFolder(d).read_run_json() or {}).get("kind") == "eval":
         raise ShootoutError(f"{d}: holds the scores of `shootout eval`, which has no cases to run again; its "
                             "report is `shootout report`")
-    lock = RunFolder(d).lock()              # not beside a run writing the folder
+    lock = RunFolder(d).lock("wait for it to finish: its end rebuilds the views and the report")
     try:
         print(f"shootout views: rebuilding the cases from {d / 'run.json'} and running the chosen ones again "
               "(this executes the methods, including plugins named there)", file=sys.stderr)

@@ -135,10 +135,10 @@ class RunFolder:
 
     # ------------------------------------------------------------------------- ownership
 
-    def lock(self):
+    def lock(self, advice: str = "wait for it to finish or choose another --out"):
         """Take the folder's exclusive lock (held until the returned file is closed or the process
-        ends); `ShootoutError` naming the holder's pid when another run holds it, or saying why the
-        folder cannot be made."""
+        ends); `ShootoutError` naming the holder's pid and ``advice`` when another run holds it, or
+        saying why the folder cannot be made."""
         try:
             self.path.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
@@ -153,8 +153,7 @@ class RunFolder:
             fh.seek(0)
             holder = fh.read().strip() or "unknown"
             fh.close()
-            raise ShootoutError(f"{self.path}: another run is using this folder (pid {holder}); wait for it to "
-                                "finish or choose another --out") from None
+            raise ShootoutError(f"{self.path}: another run is using this folder (pid {holder}); {advice}") from None
         fh.seek(0)
         fh.truncate()
         fh.write(str(os.getpid()))

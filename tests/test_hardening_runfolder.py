@@ -60,7 +60,7 @@ def test_a_second_run_into_a_busy_folder_is_refused_naming_the_pid(tmp_path):
             assert r.returncode == 2 and f"pid {first.pid}" in r.stderr, r.stderr
         for cmd in ("views", "report"):            # both rewrote views/ or the report beside the run
             r = cli([cmd, tmp_path / "o"])
-            assert r.returncode == 2 and f"pid {first.pid}" in r.stderr, r.stderr
+            assert r.returncode == 2 and f"pid {first.pid}" in r.stderr and "--out" not in r.stderr, r.stderr
     finally:
         first.wait(timeout=120)
     df = pd.read_csv(tmp_path / "o" / "smoothing.csv")
