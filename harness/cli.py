@@ -255,12 +255,13 @@ def _cmd_views(a) -> int:
     from .session import recompute_views
     from .results import RunFolder
     d = Path(a.run_dir)
-    if not (d / "run.json").exists():
+    folder = RunFolder(d)
+    if not folder.run_json.exists():
         raise ShootoutError(f"{d}: not a run folder (no run.json)")
-    if (RunFolder(d).read_run_json() or {}).get("kind") == "eval":
+    if (folder.read_run_json() or {}).get("kind") == "eval":
         raise ShootoutError(f"{d}: holds the scores of `shootout eval`, which has no cases to run again; its "
                             "report is `shootout report`")
-    lock = RunFolder(d).lock("wait for it to finish: its end rebuilds the views and the report")
+    lock = folder.lock("wait for it to finish: its end rebuilds the views and the report")
     try:
         print(f"shootout views: rebuilding the cases from {d / 'run.json'} and running the chosen ones again "
               "(this executes the methods, including plugins named there)", file=sys.stderr)

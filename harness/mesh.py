@@ -67,11 +67,9 @@ class Mesh:
         """'' when every edge has at most one face on each side (edge-manifold and consistently
         oriented), else what a row on this mesh should say: normals, and whatever a method derives
         from them (curvature estimates, enclosed volumes), depend on the faces' orientation."""
-        from .core.geometry import repeated_half_edges
-        k = repeated_half_edges(self.F)
-        return (f"{k} directed edge(s) in more than one face (faces not consistently oriented, or an edge of more "
-                "than two faces): normals, and curvatures or volumes derived from them, are not defined "
-                "there") if k else ""
+        from .core.geometry import orientation_problem
+        why = orientation_problem(self.F)
+        return f"{why}: normals, and curvatures or volumes derived from them, are not defined there" if why else ""
 
 
 # ----------------------------------------------------------------------------- reading

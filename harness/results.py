@@ -270,7 +270,8 @@ class RunFolder:
         """Remove what a previous run in this folder wrote (a fresh run); never a user's file."""
         ours = self.run_json_state() == "ok"
         if ours:
-            for task in dict.fromkeys(tasks.names() + self.recorded_tasks()):  # also kinds not installed now
+            kinds = list(dict.fromkeys(tasks.names() + self.recorded_tasks()))   # also kinds not installed now
+            for task in kinds:
                 self.csv_path(task).unlink(missing_ok=True)
             for name in REPORT_FILES:
                 (self.path / name).unlink(missing_ok=True)
@@ -278,7 +279,7 @@ class RunFolder:
             if vdir.is_dir():
                 for f in vdir.glob("*.json"):
                     f.unlink()
-            for task in dict.fromkeys(tasks.names() + self.recorded_tasks()):   # a tuned run's training rows
+            for task in kinds:                           # a tuned run's training rows
                 (self.path / "tune" / task_file(task)).unlink(missing_ok=True)
         self.remove_temporaries()                # first: the manifest names the meshes' temporaries
         mdir = self.path / "meshes"
@@ -421,19 +422,19 @@ def check_output_file(path, flag: str, protect=(), run_dirs=()) -> None:
     if path is None:
         return
     p = Path(path)
-    _resolved(p, f"{flag} {path}")
+    rp = _resolved(p, f"{flag} {path}")
     if p.is_dir():
         raise ShootoutError(f"{flag} {path}: is a folder; give a file name")
     for q in protect:
         try:
-            if q is not None and Path(q).exists() and p.exists() and p.resolve() == Path(q).resolve():
+            if q is not None and Path(q).exists() and p.exists() and rp == Path(q).resolve():
                 raise ShootoutError(f"{flag} {path}: is an input of this command; writing it would overwrite it")
         except OSError:
             pass
     for d in run_dirs:
         if d is None:
             continue
-        rd, rp = Path(d).resolve(), p.resolve()
+        rd = Path(d).resolve()
         if rp == rd:
             raise ShootoutError(f"{flag} {path}: is the run folder itself; give a file name")
         inner = rp.relative_to(rd).parts if rd in rp.parents else ()
@@ -441,7 +442,7 @@ def check_output_file(path, flag: str, protect=(), run_dirs=()) -> None:
                       or (len(inner) == 1 and (p.exists() or p.name in run_file_names()))):
             raise ShootoutError(f"{flag} {path}: is inside the run folder {d} (its views/, tune/ or meshes/, or one "
                                 "of its files); writing it would overwrite the run's own files")
-    d = p.resolve().parent
+    d = rp.parent
     while not d.exists():
         d = d.parent
     if not d.is_dir() or not os.access(d, os.W_OK | os.X_OK):

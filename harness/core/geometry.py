@@ -44,6 +44,14 @@ def repeated_half_edges(F: np.ndarray) -> int:
     return int(np.count_nonzero(dup & ~np.r_[False, dup[:-1]]))    # the first repeat of each key
 
 
+def orientation_problem(F: np.ndarray) -> str | None:
+    """What `repeated_half_edges` finds, in words (None when it finds nothing): the shared start
+    of the messages of the inputs that need consistently oriented edge-manifold faces."""
+    k = repeated_half_edges(F)
+    return (f"{k} directed edge(s) in more than one face (faces not consistently oriented, or an edge of more "
+            "than two faces)") if k else None
+
+
 def edge_face_counts(F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Unique undirected edges (e, 2) (``E[:, 0] < E[:, 1]``, lexicographic order) and the
     number of faces using each (e,)."""

@@ -15,12 +15,10 @@ def oriented_manifold(V, F, name) -> None:
     edge on at most two faces traversed in opposite directions (with a third of a sphere's faces
     reversed, ``qslim`` allocated until the machine ran out of memory; on an edge of three faces
     it returned an empty mesh)."""
-    from harness.core.geometry import repeated_half_edges
-    bad = repeated_half_edges(np.asarray(F))
-    if bad:
-        raise ValueError(f"{name}: {bad} directed edge(s) in more than one face (faces not consistently oriented, "
-                         "or an edge of more than two faces): libigl's decimation needs a consistently oriented "
-                         "edge-manifold mesh")
+    from harness.core.geometry import orientation_problem
+    why = orientation_problem(np.asarray(F))
+    if why:
+        raise ValueError(f"{name}: {why}: libigl's decimation needs a consistently oriented edge-manifold mesh")
 
 
 @register("libigl.qslim", task="simplification", library="libigl", params={},
