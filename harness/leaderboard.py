@@ -18,8 +18,13 @@ and counted in ``missing_cells``; a variant with no value in any cell (e.g. its 
 installed) is left out of the ranking altogether instead of emptying it. With N complete cells
 and k variants:
 
-- Friedman: ``chi2_F = 12 N / (k (k+1)) [sum_j R_j^2 - k (k+1)^2 / 4]``, R_j the mean ranks,
+- Friedman: ``chi2_F = 12 N / (k (k+1)) [sum_j R_j^2 - k (k+1)^2 / 4] / C``, R_j the mean ranks,
   p from chi-square with k - 1 degrees of freedom (Demšar eq. 1; valid for N and k not tiny).
+  ``C = 1 - sum_ties (t^3 - t) / (N k (k^2 - 1))``, t the size of each group of tied ranks in a
+  cell, is the usual correction for ties (Hollander & Wolfe; as in scipy's
+  ``friedmanchisquare`` and R's ``friedman.test``): without it the many ties of tolerance and
+  invalid results would make p too large. A table where every cell is a full tie gives
+  ``chi2_F = 0``, p = 1.
 - Nemenyi: two variants differ significantly (alpha = 0.05) when their mean ranks differ by more
   than ``CD = q_0.05 sqrt(k (k+1) / (6 N))``, ``q_0.05`` the studentized range quantile over
   sqrt(2) (Demšar eq. 5).
@@ -332,10 +337,20 @@ def friedman_nemenyi(ranks: pd.DataFrame, alpha: float = 0.05) -> tuple[float | 
         return None, None, None
     R = ranks.mean(axis=0).to_numpy()
     chi2 = 12.0 * N / (k * (k + 1)) * (np.sum(R ** 2) - k * (k + 1) ** 2 / 4.0)
+    ties = sum(float(np.sum(t ** 3 - t)) for t in (np.unique(row, return_counts=True)[1].astype(float)
+                                                     for row in ranks.to_numpy()))
+    correction = 1.0 - ties / (N * k * (k * k - 1.0))
+    if correction <= 1e-12:                  # every cell a full tie: no evidence of any difference
+        return 0.0, 1.0, _critical_difference(N, k, alpha)
+    chi2 = max(chi2 / correction, 0.0)
     p = float(stats.chi2.sf(chi2, k - 1))
+    return float(chi2), p, _critical_difference(N, k, alpha)
+
+
+def _critical_difference(N: int, k: int, alpha: float) -> float:
+    from scipy import stats
     q = float(stats.studentized_range.ppf(1 - alpha, k, np.inf)) / math.sqrt(2.0)
-    cd = q * math.sqrt(k * (k + 1) / (6.0 * N))
-    return float(chi2), p, cd
+    return q * math.sqrt(k * (k + 1) / (6.0 * N))
 
 
 def leaderboard(frames: dict, specs: dict) -> pd.DataFrame:

@@ -68,6 +68,19 @@ def test_friedman_and_nemenyi_match_demsar_and_scipy():
     assert cd == pytest.approx(2.569 * np.sqrt(4 * 5 / (6 * 12)), rel=1e-3)   # q_0.05 for k=4 (Demšar Table 5a)
 
 
+def test_friedman_is_corrected_for_ties_as_scipy_and_a_full_tie_is_p_one():
+    X = np.array([[1, 1, 2, 3], [2, 1, 1, 4], [1, 2, 3, 3], [1, 1, 1, 2], [0, 1, 2, 2], [3, 1, 1, 1]], float)
+    ranks = pd.DataFrame(X).rank(axis=1)
+    chi2, p, _ = L.friedman_nemenyi(ranks)
+    ref = stats.friedmanchisquare(*X.T)           # scipy applies the tie correction
+    assert chi2 == pytest.approx(ref.statistic, rel=1e-12) and p == pytest.approx(ref.pvalue, rel=1e-10)
+    R = ranks.mean(axis=0).to_numpy()
+    uncorrected = 12 * 6 / (4 * 5) * (np.sum(R ** 2) - 4 * 25 / 4)
+    assert chi2 > uncorrected * 1.05                 # ties shrink the rank variance; uncorrected p is too large
+    chi2, p, cd = L.friedman_nemenyi(pd.DataFrame(np.full((5, 3), 2.0)))
+    assert (chi2, p) == (0.0, 1.0) and cd > 0
+
+
 def test_invalid_rows_rank_last_and_missing_cells_are_stated():
     rows = []
     for mesh in ("a", "b", "c"):
