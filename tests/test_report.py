@@ -65,6 +65,18 @@ def test_report_is_self_contained_and_small(run_dir):
     assert "Cases by status" in text and "config (" in text
 
 
+def test_the_header_states_the_timing_protocol_of_run_json(run_dir):
+    meta = json.loads((run_dir / "run.json").read_text())
+    text = (run_dir / "report.html").read_text()
+    row = re.search(r"<th>timing protocol</th><td>(.*?)</td>", text)
+    assert row, "the report does not state how it timed"
+    t, fc = meta["timing"], meta["fixed_cost_per_case_s"]
+    assert f"{t['threads_per_case']} thread(s) per case" in row.group(1)
+    assert f"at least {t['min_repeats']} " in row.group(1)
+    assert f"load average {meta['load_average'][0]:.2f} at the start" in row.group(1)
+    assert f"fixed cost per case {rh._fmt(fc['mean'])} s mean" in row.group(1)
+
+
 def test_page_data_matches_the_csvs(run_dir):
     d = page_data(run_dir / "report.html")
     for task in ("laplacian", "smoothing", "simplification"):

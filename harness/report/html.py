@@ -194,6 +194,27 @@ def _solver_text(solver: dict) -> str:
     return "; ".join(parts)
 
 
+def _timing_text(meta) -> str:
+    """run.json's timing protocol in one line: threads per case, samples, load averages, fixed cost."""
+    t = meta.get("timing") if isinstance(meta.get("timing"), dict) else {}
+    parts = []
+    if t.get("threads_per_case") is not None:
+        parts.append(f"{t['threads_per_case']} thread(s) per case (BLAS/OpenMP pools and libigl's)")
+    if t.get("min_repeats") is not None or t.get("time_budget_s") is not None:
+        parts.append(f"one untimed cold call, then timed samples until there are at least {t.get('min_repeats', '?')} "
+                     f"and they sum to at least {_fmt(t.get('time_budget_s'))} s; median and quartiles")
+    loads = [float(x) for x in (meta.get("load_average") or []) if isinstance(x, (int, float))]
+    if loads:
+        parts.append("load average " + " at the start, ".join(f"{x:.2f}" for x in loads)
+                     + (" at the end" if len(loads) > 1 else " at the start") + " (1 min)")
+    fc = meta.get("fixed_cost_per_case_s")
+    if isinstance(fc, dict) and fc.get("mean") is not None:
+        share = fc.get("share_of_method_time")
+        parts.append(f"fixed cost per case {_fmt(fc['mean'])} s mean, {_fmt(fc.get('max'))} s max"
+                     + (f", {_fmt(share)} of the method time" if share is not None else ""))
+    return "; ".join(parts)
+
+
 def _header_html(meta, frames, run_dir) -> str:
     name = meta.get("name") or Path(run_dir).name
     mach = meta.get("machine") or {}
@@ -215,6 +236,9 @@ def _header_html(meta, frames, run_dir) -> str:
             ("commit", f"<span class='mono'>{_esc(meta.get('git_commit') or 'not a git checkout')}</span>"
                        + (" <b>with uncommitted changes to tracked files</b>" if meta.get("git_dirty") else "")),
             ("command", f"<span class='mono'>{_esc(meta.get('command', ''))}</span>")]
+    protocol = _timing_text(meta)
+    if protocol:
+        rows.append(("timing protocol", _esc(protocol)))
     if workers and cores and workers > 1:
         rows.append(("timing", f"<span class='warn'>{workers} cases ran in parallel on {cores} cores: timings include "
                                "contention; use <code>--workers 1</code> for timing-grade numbers.</span>"))
