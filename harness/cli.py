@@ -294,12 +294,19 @@ def _eval_summary(frames, out: Path) -> str:
 
 def _cmd_compare(a) -> int:
     from .compare import TIME_FACTOR, compare_runs
-    for d in (a.run_a, a.run_b):
-        if not Path(d).is_dir():
-            raise ShootoutError(f"compare: {d} is not a run folder")
+    from .errors import problems_error
+    problems = [f"compare: {d} is not a run folder" for d in (a.run_a, a.run_b) if not Path(d).is_dir()]
     if a.time_factor is not None and not 1 < a.time_factor < float("inf"):
-        raise ShootoutError(f"--time-factor: expected a finite number > 1, got {a.time_factor}")
-    check_output_file(a.html, "--html", run_dirs=(a.run_a, a.run_b))
+        problems.append(f"--time-factor: expected a finite number > 1, got {a.time_factor}")
+    if a.no_time and (a.time_factor is not None or a.absolute_time):
+        problems.append("--no-time compares no times: --time-factor and --absolute-time would be ignored; "
+                        "give one or the other")
+    try:
+        check_output_file(a.html, "--html", run_dirs=(a.run_a, a.run_b))
+    except ShootoutError as exc:
+        problems.append(str(exc))
+    if problems:
+        raise problems_error(problems)
     factor = None if a.no_time else (a.time_factor or TIME_FACTOR)
     return compare_runs(a.run_a, a.run_b, html_out=a.html, time_factor=factor, absolute_time=a.absolute_time)
 

@@ -363,7 +363,7 @@ def test_time_can_be_left_out(run_a, tmp_path):
     assert code == 0 and "time not compared" in out
 
 
-def test_output_files_are_checked_before_any_work(run_a, tmp_path):
+def test_output_files_are_checked_before_any_work(run_a, tmp_path, capsys):
     """--html on a folder and --time-factor nan are exit 2 (a traceback was exit 1, which CI reads
     as a regression; nan silently turned the time gate off); --export-benchmark-json naming a
     folder or the config being run is refused before the run."""
@@ -372,6 +372,12 @@ def test_output_files_are_checked_before_any_work(run_a, tmp_path):
     assert cli(["compare", str(run_a), str(run_a), "--html", str(run_a / "smoothing.csv")]) == 2
     assert (run_a / "smoothing.csv").read_bytes() == before
     assert cli(["compare", str(run_a), str(run_a), "--time-factor", "nan"]) == 2
+    capsys.readouterr()
+    assert cli(["compare", str(run_a), str(tmp_path / "nope"), "--time-factor", "0.5", "--no-time",
+                "--html", str(tmp_path)]) == 2
+    err = capsys.readouterr().err                   # every problem in one message
+    assert "4 problems" in err and "not a run folder" in err and "--time-factor: expected" in err
+    assert "--no-time compares no times" in err and "is a folder" in err
     assert cli(["compare", str(run_a), str(run_a), "--html", str(tmp_path / "new" / "d.html")]) == 0
     assert (tmp_path / "new" / "d.html").is_file()
     cfg = tmp_path / "c.json"
