@@ -326,6 +326,8 @@ def read_mesh(path, name: str | None = None, repair: bool = True, sha1: str | No
     ext = path.suffix.lower()
     if ext not in SUPPORTED:
         raise InvalidMeshError(f"{path.name}: unsupported extension {ext!r}; expected one of {SUPPORTED}")
+    if path.is_dir():
+        raise InvalidMeshError(f"{path}: is a folder; give a mesh file")
     if not path.is_file():
         raise InvalidMeshError(f"{path}: no such file")
     try:

@@ -135,7 +135,9 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
         P.append(f"--hausdorff-samples: {samples_problem(hausdorff_samples)}")
     for e in entries:
         for p in [e["file"], e["clean"]] + ([e["noisy"]] if e.get("noisy") else []):
-            if not Path(p).is_file():
+            if Path(p).is_dir():
+                P.append(f"{p}: is a folder; give a mesh file")
+            elif not Path(p).is_file():
                 P.append(f"{p}: no such file")
     if P:                                        # every problem at once, nothing written
         raise problems_error(list(dict.fromkeys(P)))

@@ -11,6 +11,8 @@ import pytest
 import harness
 from harness import tasks
 from harness.cli import main as cli
+from harness.errors import InvalidMeshError
+from harness.mesh import read_mesh
 
 PAIR = Path(harness.__file__).parent / "data" / "meshes" / "denoise" / "Fandisk0.3"
 
@@ -44,7 +46,7 @@ def test_eval_gives_exactly_the_numbers_of_a_run(run_with_meshes, tmp_path, task
     assert meta["kind"] == "eval" and (out / "report.html").is_file()
 
 
-def test_evaluate_from_python_and_errors(tmp_path):
+def test_evaluate_from_python_and_errors(tmp_path, capsys):
     from harness import datasets
     src = datasets.load("fandisk-noisy-0.3")
     row = harness.evaluate(src.noisy_V, src.clean.F, src.clean.V, src.clean.F, task="smoothing", V_noisy=src.noisy_V)
@@ -55,6 +57,11 @@ def test_evaluate_from_python_and_errors(tmp_path):
                 str(tmp_path / "o"), "--task", "smoothing"])
     row = pd.read_csv(tmp_path / "o" / "smoothing.csv").iloc[0]             # the file's own error row
     assert code == 0 and row["status"] == "error" and "keeps the clean mesh's" in row["error"], row["error"]
+    assert cli(["eval", str(tmp_path / "small.obj"), "--clean", str(tmp_path), "--out", str(tmp_path / "p")]) == 2
+    assert not (tmp_path / "p").exists() and "is a folder; give a mesh file" in capsys.readouterr().err
+    (tmp_path / "looks.obj").mkdir()
+    with pytest.raises(InvalidMeshError, match="is a folder; give a mesh file"):
+        read_mesh(tmp_path / "looks.obj")
 
 
 def test_a_results_config_gives_the_same_numbers(run_with_meshes, tmp_path):
