@@ -258,6 +258,25 @@ def test_unreachable_scheduler_is_exit_2(tmp_path):
     assert not (tmp_path / "out").exists()
 
 
+def test_a_server_that_is_not_dask_is_exit_2_within_the_connect_timeout(tmp_path):
+    """The dashboard's HTTP port (or any service that accepts and never answers as Dask) used to
+    block inside distributed.Client for ever."""
+    import socket
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("meshes: [knight]\ntasks: {laplacian: {methods: [scratch.uniform]}}\n")
+    env = dict(os.environ, DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT="2s")
+    with socket.socket() as srv:          # accepts (the kernel's backlog) and never answers
+        srv.bind(("127.0.0.1", 0))
+        srv.listen(4)
+        port = srv.getsockname()[1]
+        r = subprocess.run([str(SHOOTOUT), "run", str(cfg), "--out", str(tmp_path / "out"), "--executor", "dask",
+                            "--scheduler", f"tcp://127.0.0.1:{port}"], capture_output=True, text=True, env=env,
+                           timeout=60)
+    assert r.returncode == 2, r.stderr
+    assert "gave no Dask answer within 2 s" in r.stderr and "Traceback" not in r.stderr
+    assert not (tmp_path / "out").exists()
+
+
 def _scheduler(tmp_path):
     port_file = tmp_path / "sched.json"
     proc = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1",

@@ -57,6 +57,41 @@ CACHE_DIR_NAME = "mesh-shootout-dask"
 
 # ----------------------------------------------------------------------------- driver side
 
+def _probe_scheduler(address: str) -> None:
+    """Ask ``address`` who it is before `distributed.Client` connects: the Client's handshake
+    waits for ever on a server that accepts the connection and never answers as Dask (the
+    dashboard's HTTP port 8787, any other service). TLS and other schemes are left to the Client."""
+    import asyncio
+
+    import dask
+    from dask.utils import parse_timedelta
+    from distributed.comm import connect
+    if "://" in address and not address.startswith("tcp://"):
+        return
+    limit = float(parse_timedelta(dask.config.get("distributed.comm.timeouts.connect"), default="s"))
+
+    async def identity():
+        comm = await asyncio.wait_for(connect(address, timeout=limit), limit)
+        try:
+            await asyncio.wait_for(comm.write({"op": "identity"}), limit)
+            return await asyncio.wait_for(comm.read(), limit)
+        finally:
+            comm.abort()
+
+    try:
+        reply = asyncio.run(identity())
+    except (asyncio.TimeoutError, TimeoutError):
+        raise TimeoutError(f"it accepted the connection but gave no Dask answer within {limit:g} s "
+                           "(is it another service, e.g. the dashboard's HTTP port?)") from None
+    except OSError:
+        raise
+    except Exception as exc:        # distributed's comm errors (CommClosedError, ...) are not all OSErrors
+        raise OSError(f"{type(exc).__name__}: {exc}") from None
+    if not isinstance(reply, dict) or reply.get("type") != "Scheduler":
+        kind = reply.get("type") if isinstance(reply, dict) else type(reply).__name__
+        raise ValueError(f"it answered as a {kind}, not a scheduler")
+
+
 class DaskExecutor:
     """Run cases on a Dask cluster; yields ``(case, row, meshes)`` as each case completes.
 
@@ -98,6 +133,7 @@ class DaskExecutor:
             try:
                 # connect timeout: dask config distributed.comm.timeouts.connect (30 s by default;
                 # env DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT=5s)
+                _probe_scheduler(str(scheduler))
                 self.client = Client(scheduler)
             except (OSError, TimeoutError, ValueError, TypeError) as exc:
                 raise ShootoutError(f"--scheduler: cannot connect to a Dask scheduler at {scheduler!r} "
