@@ -11,6 +11,7 @@
 import json
 import logging
 import os
+import socket
 import shutil
 import signal
 import subprocess
@@ -114,7 +115,7 @@ def test_timeout_and_crash_on_workers_through_the_cli(cluster, tmp_path):
     its worker (timeout row), the segfault is an error row naming SIGSEGV, the rest is ok."""
     cfg = tmp_path / "c.yaml"
     cfg.write_text("plugins: [tests.plugins.crashy]\nmeshes: [knight]\n"
-                   "tasks: {laplacian: {methods: [crashy.sleep, crashy.segfault, scratch.uniform]}}\n")
+                   "tasks: {laplacian: {methods: [crashy.sleep, crashy.segfault, crashy.missing, scratch.uniform]}}\n")
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     r = subprocess.run([str(SHOOTOUT), "run", str(cfg), "--out", str(tmp_path / "out"), "--quiet",
                         "--executor", "dask", "--scheduler", cluster.scheduler_address, "--timeout", "3"],
@@ -124,6 +125,9 @@ def test_timeout_and_crash_on_workers_through_the_cli(cluster, tmp_path):
     assert st.loc["crashy.sleep", "status"] == "timeout"
     assert st.loc["crashy.segfault", "status"] == "error" and "SIGSEGV" in st.loc["crashy.segfault", "error"]
     assert st.loc["scratch.uniform", "status"] == "ok"
+    missing = st.loc["crashy.missing"]            # which machine lacks the library
+    assert missing["status"] == "unavailable" and "no_such_module_xyz" in missing["error"]
+    assert "(on the worker at tcp://" in missing["error"] and socket.gethostname() in missing["error"]
 
 
 def test_shipped_file_needs_no_shared_filesystem(tmp_path):

@@ -369,10 +369,23 @@ def run_task(case: Case, blobs: dict, timeout: float | None, want_meshes: bool):
         row["error"] = f"cannot materialise the shipped mesh file on the worker ({type(exc).__name__}: {exc})"
         return row, {}
     if _daemonic():
-        return run_in_subprocess(case, timeout, want_meshes)
-    _warm(case)
-    from .isolation import run_isolated
-    return run_isolated(case, timeout, want_meshes)
+        row, meshes = run_in_subprocess(case, timeout, want_meshes)
+    else:
+        _warm(case)
+        from .isolation import run_isolated
+        row, meshes = run_isolated(case, timeout, want_meshes)
+    if row.get("status") == "unavailable":      # which machine lacks the library
+        row["error"] = f"{row.get('error') or ''} (on the worker at {_worker_name()})".lstrip()
+    return row, meshes
+
+
+def _worker_name() -> str:
+    import socket
+    try:
+        from distributed import get_worker
+        return f"{get_worker().address}, host {socket.gethostname()}"
+    except Exception:  # noqa: BLE001 - not inside a worker (a test calling run_task)
+        return f"host {socket.gethostname()}"
 
 
 def _warm(case: Case) -> None:
