@@ -156,6 +156,15 @@ def test_the_worker_cache_is_private_and_checked_by_content(tmp_path):
     assert len(target.read_bytes()) == len(good) and target.read_bytes() != good
     assert Path(materialize(sent, blobs).mesh["file"]).read_bytes() == good
     assert (target.parents[1].stat().st_mode & 0o077) == 0 and str(os.getuid()) in target.parents[1].name
+    stale, fresh = target.parents[1] / ("0" * 40), target.parents[1] / ("1" * 40)   # unused for 8 days / 1 day
+    for d, days in ((stale, 8), (fresh, 1)):
+        d.mkdir(exist_ok=True)
+        (d / "x.obj").write_text("v 0 0 0\n")
+        os.utime(d, (time.time() - days * 86400,) * 2)
+    target.unlink()                                              # a new entry is written: the cache is pruned
+    os.utime(target.parent, (time.time() - 30 * 86400,) * 2)      # old, but this case uses it: kept
+    assert Path(materialize(sent, blobs).mesh["file"]).read_bytes() == good
+    assert not stale.exists() and fresh.exists() and target.is_file()
 
 
 def test_daemonic_worker_fallback_isolates_too(tmp_path):

@@ -43,6 +43,7 @@ import subprocess
 import sys
 import tempfile
 import threading
+import time
 import uuid
 from pathlib import Path
 
@@ -52,6 +53,7 @@ from ..runner import base_row
 from .isolation import signal_name
 
 FILE_KEYS = ("file", "clean")
+CACHE_MAX_AGE_S = 7 * 24 * 3600      # a worker's cached mesh file unused this long is removed
 CACHE_DIR_NAME = "mesh-shootout-dask"
 
 
@@ -341,14 +343,29 @@ def materialize(case: Case, blobs: dict) -> Case:
         if hashlib.sha1(data).hexdigest() != h:
             raise ShootoutError(f"shipped bytes of {spec[k]} do not match their sha1")
         target = root / h / Path(spec[k]).name
+        if target.parent.is_dir():
+            os.utime(target.parent)       # in use: not pruned
         if not target.is_file() or hashlib.sha1(target.read_bytes()).hexdigest() != h:   # never trust the cache
             target.parent.mkdir(parents=True, exist_ok=True)
             fd, tmp = tempfile.mkstemp(dir=target.parent, prefix=".part.")
             with os.fdopen(fd, "wb") as fh:
                 fh.write(data)
             os.replace(tmp, target)       # atomic: concurrent tasks on one machine never see a half file
+            _prune(root, keep=h)
         spec[k] = str(target)
     return dataclasses.replace(case, mesh=spec)
+
+
+def _prune(root: Path, keep: str) -> None:
+    """Remove cached files no case has used for `CACHE_MAX_AGE_S` (each use touches its folder)."""
+    import shutil
+    cutoff = time.time() - CACHE_MAX_AGE_S
+    for d in root.iterdir():
+        try:
+            if d.name != keep and d.is_dir() and not d.is_symlink() and d.stat().st_mtime < cutoff:
+                shutil.rmtree(d, ignore_errors=True)
+        except OSError:
+            pass
 
 
 def _daemonic() -> bool:
