@@ -461,6 +461,9 @@ def check_out_dir(out_dir: Path) -> None:
     if out_dir.exists() and not out_dir.is_dir():
         raise ShootoutError(f"--out {out_dir}: exists and is not a folder")
     p = _resolved(out_dir, f"--out {out_dir}")
+    if p == Path(p.anchor) or p == Path.home().resolve():
+        raise ShootoutError(f"--out {out_dir}: is {'the file system root' if p == Path(p.anchor) else 'your home folder'}"
+                            "; give a folder of its own for the run")
     while not p.exists():
         p = p.parent
     if not p.is_dir():

@@ -176,6 +176,9 @@ def test_out_on_a_file_or_a_read_only_place_and_a_huge_face_index(tmp_path, tiny
     (tmp_path / "afile").write_text("x")
     r = cli(["run", cfg, "--out", tmp_path / "afile"])
     assert r.returncode == 2 and "not a folder" in r.stderr and "Traceback" not in r.stderr
+    for root, what in (("/", "the file system root"), (Path.home(), "your home folder")):
+        r = cli(["run", cfg, "--out", root])
+        assert r.returncode == 2 and f"is {what}" in r.stderr and not (Path(root) / "run.json").exists()
     subprocess.run(["mount", "-o", "remount,ro", str(tiny_disk)], check=True)
     r = cli(["run", cfg, "--out", tiny_disk / "o"])
     assert r.returncode == 2 and ("read-only" in r.stderr or "not writable" in r.stderr) and "Traceback" not in r.stderr
