@@ -7,7 +7,6 @@ import os
 import sys
 from pathlib import Path
 
-from . import tasks
 from .errors import ConfigError, ShootoutError
 
 
@@ -34,6 +33,7 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.add_argument("--export-benchmark-json", metavar="FILE", help="also write timings in pytest-benchmark's JSON layout")
     m = sub.add_parser("methods", help="list registered methods")
+    from . import tasks                     # here, not at import: main's Ctrl-C handler is set by now
     m.add_argument("--task", choices=tasks.names())
     m.add_argument("--json", action="store_true", help="machine-readable: one JSON list")
     m.add_argument("--plugin", action="append", default=[], metavar="MODULE",
@@ -205,6 +205,7 @@ def _cmd_datasets(a) -> int:
 
 
 def _cmd_report(a) -> int:
+    from . import tasks
     from .report import build_report
     from .results import RunFolder
     d = Path(a.run_dir)
@@ -230,6 +231,7 @@ def _cmd_report(a) -> int:
 def _rules_changed(run_dir: Path) -> list[str]:
     """Tasks whose axis parameters or validity rules in the folder's run.json differ from this
     version's: the report keeps the recorded ones (it reads files only), a rerun applies these."""
+    from . import tasks
     from .results import RunFolder
     recorded = (RunFolder(run_dir).read_run_json() or {}).get("tasks") or {}
     if not isinstance(recorded, dict):
@@ -398,12 +400,12 @@ def main(argv=None) -> int:
 
 def _main(argv) -> int:
     from .errors import interrupt_seen
-    args = _parser().parse_args(argv)
-    args.command_process = argv is None          # the `shootout` command itself, not a call from Python
-    handler = {"run": _cmd_run, "methods": _cmd_methods, "datasets": _cmd_datasets,
-               "report": _cmd_report, "views": _cmd_views, "eval": _cmd_eval,
-               "compare": _cmd_compare}[args.command]
-    try:
+    try:                       # a Ctrl-C while the parser loads the task kinds is an interrupt too
+        args = _parser().parse_args(argv)
+        args.command_process = argv is None          # the `shootout` command itself, not a call from Python
+        handler = {"run": _cmd_run, "methods": _cmd_methods, "datasets": _cmd_datasets,
+                   "report": _cmd_report, "views": _cmd_views, "eval": _cmd_eval,
+                   "compare": _cmd_compare}[args.command]
         code = handler(args)
         if interrupt_seen():             # an interrupt swallowed where exceptions are ignored
             raise KeyboardInterrupt
@@ -424,4 +426,9 @@ def _main(argv) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    _code = main()
+    # Under `python -m`, CPython ends the process by SIGINT (not this exit code) when a
+    # KeyboardInterrupt ever left code run by a string exec, even one caught since: dataclasses
+    # build their methods that way, so a Ctrl-C during an import did it. A string exec resets that flag.
+    exec("pass")  # noqa: S102
+    sys.exit(_code)
