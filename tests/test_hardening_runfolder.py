@@ -44,12 +44,13 @@ def test_a_fresh_run_never_deletes_a_users_meshes(tmp_path):
 
 
 def test_a_second_run_into_a_busy_folder_is_refused_naming_the_pid(tmp_path):
-    slow = {**SMALL, "plugins": ["tests.plugins.slowdown"],
-            "tasks": {"smoothing": {"methods": [{"name": "slowdown.sleep", "params": {"ms": 4000.0}}]}}}
+    slow = {**SMALL, "plugins": ["tests.plugins.slowdown"], "repeats": 1,
+            "tasks": {"smoothing": {"methods": ["slowdown.until"]}}}
     cfg = write_cfg(tmp_path / "c.yaml", slow)
+    release = tmp_path / "release"                 # the first run's case waits for it
     first = subprocess.Popen([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(tmp_path / "o")],
-                             cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)}, stdout=subprocess.DEVNULL,
-                             stderr=subprocess.DEVNULL)
+                             cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT), "SLOWDOWN_RELEASE": str(release)},
+                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
         for _ in range(100):
             if (tmp_path / "o" / "run.json").exists():
@@ -61,10 +62,12 @@ def test_a_second_run_into_a_busy_folder_is_refused_naming_the_pid(tmp_path):
         for cmd in ("views", "report"):            # both rewrote views/ or the report beside the run
             r = cli([cmd, tmp_path / "o"])
             assert r.returncode == 2 and f"pid {first.pid}" in r.stderr and "--out" not in r.stderr, r.stderr
+        assert first.poll() is None                 # the refusals all came while it ran
     finally:
+        release.touch()
         first.wait(timeout=120)
     df = pd.read_csv(tmp_path / "o" / "smoothing.csv")
-    assert len(df) == 1 and df["case_id"].is_unique
+    assert len(df) == 1 and df["case_id"].is_unique and first.returncode == 0
 
 
 def test_resume_repairs_a_torn_saved_mesh(tmp_path):

@@ -225,6 +225,8 @@ def test_displaced_surface_reuses_the_tree_and_gives_the_same_distances(level):
     rng = np.random.default_rng(3)
     diag = m.diagonal()
     P = np.concatenate([sample_surface(V, m.F, 5000, 4) + rng.normal(scale=0.01 * diag, size=(5000, 3)), V])
+    if level > 10:           # every query meets hundreds of crossing triangles there: a tenth of the points
+        P = P[::10]
     ref = _Surface(V, m.F).query(P)[0]
     fresh = query_many(P, np.full(len(P), -1, np.int64), *_Surface(V, m.F).bvh())[0]
     d = query_many(P, np.full(len(P), -1, np.int64), *D.bvh())[0]

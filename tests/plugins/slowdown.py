@@ -14,3 +14,14 @@ def sleep(V, F, *, ms=4.0):
     """Identity smoothing after sleeping ``ms * $SLOWDOWN_FACTOR`` milliseconds."""
     time.sleep(ms * float(os.environ.get("SLOWDOWN_FACTOR", "1")) / 1000.0)
     return SmoothingResult(V=V.copy())
+
+
+@register("slowdown.until", task="smoothing", library="slowdown")
+def until(V, F):
+    """Identity smoothing that waits (at most 60 s) until the file ``$SLOWDOWN_RELEASE`` exists;
+    returns at once when that variable is not set."""
+    release = os.environ.get("SLOWDOWN_RELEASE")
+    deadline = time.monotonic() + 60
+    while release and not os.path.exists(release) and time.monotonic() < deadline:
+        time.sleep(0.02)
+    return SmoothingResult(V=V.copy())
