@@ -41,6 +41,7 @@ Timing protocol (the method call alone; metrics are not timed):
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -167,7 +168,28 @@ def release_thread_pools() -> None:
             _PARENT_LIMIT = None
 
 
-IGL_THREADS = "IGL_NUM_THREADS"   # read by libigl once per process, at its first parallel section
+# Read once, when the library loads or first goes parallel: libigl's own std::threads (which
+# threadpoolctl does not see), and MKL, OpenMP and OpenBLAS loaded by a method after the case's
+# pools were limited (pypardiso's MKL is loaded at its first solve, inside the cold call).
+THREAD_ENV = ("IGL_NUM_THREADS", "MKL_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS")
+
+
+@contextlib.contextmanager
+def thread_env(n: int | None):
+    """`THREAD_ENV` set to ``n`` inside (None or 0: left alone), the caller's values restored after."""
+    if not n:
+        yield
+        return
+    before = {k: os.environ.get(k) for k in THREAD_ENV}
+    os.environ.update({k: str(n) for k in THREAD_ENV})
+    try:
+        yield
+    finally:
+        for k, v in before.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
 
 
 def limit_threads(n: int | None):
@@ -317,8 +339,8 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
             row.update(status="unavailable", error=why)
             return row, extras
         limiters.append(limit_threads(case.threads))
-        if case.threads:                 # libigl's own std::threads, which threadpoolctl does not see
-            os.environ[IGL_THREADS] = str(case.threads)
+        if case.threads:                 # libraries that load or start their threads from here on
+            os.environ.update({k: str(case.threads) for k in THREAD_ENV})
         loaded = _loaded_objects()
         with warnings.catch_warnings(record=True) as said:
             warnings.simplefilter("always")

@@ -185,12 +185,11 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
     except BaseException:
         ex.close()
         raise
-    from .runner import IGL_THREADS
-    igl_before = os.environ.get(IGL_THREADS)
-    os.environ[IGL_THREADS] = str(threads)   # inherited by the forked cases (libigl reads it at its first use)
+    from .runner import thread_env
     try:
-        return _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, executor, scheduler,
-                           resume, quiet, export_benchmark_json, ex)
+        with thread_env(threads):            # inherited by the forked cases
+            return _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, executor, scheduler,
+                               resume, quiet, export_benchmark_json, ex)
     except BaseException:
         try:
             ex.close()
@@ -199,10 +198,6 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
         raise
     finally:
         lock.close()
-        if igl_before is None:
-            os.environ.pop(IGL_THREADS, None)
-        else:
-            os.environ[IGL_THREADS] = igl_before
 
 
 def _fixed_cost(row: dict, extras: dict) -> tuple[float, float, float] | None:
@@ -374,9 +369,11 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
                        "protocol": "one untimed cold call on the case's own input (time_cold_s), then samples "
                                    "until both repeats and time_budget_s are reached; median and quartiles; each sample's "
                                    "process CPU time kept too (cpu_times); "
-                                   "BLAS/OpenMP pools and libigl's own threads (IGL_NUM_THREADS) limited to "
+                                   "BLAS/OpenMP pools and libigl's own threads limited to "
                                    "threads_per_case (pools by the local driver before "
-                                   "it forks, inherited; else in the case; in the case for libraries loaded since)"}}
+                                   "it forks, inherited; else in the case; in the case for libraries loaded since); "
+                                   "IGL_NUM_THREADS, MKL_NUM_THREADS, OMP_NUM_THREADS and OPENBLAS_NUM_THREADS "
+                                   "set to it in every case, for libraries a method loads during its cold call"}}
     meta["load_average"] = [_load()]
     meta["sessions"] = prev_sessions          # kept if this session's driver is killed
     if resume:

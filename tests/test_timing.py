@@ -206,6 +206,26 @@ def test_libigls_own_threads_get_the_cases_limit(tmp_path, monkeypatch):
     assert "IGL_NUM_THREADS" in json.loads((tmp_path / "r" / "run.json").read_text())["timing"]["protocol"]
 
 
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="one core: one thread is also MKL's default")
+def test_a_library_loaded_in_the_cold_call_gets_the_cases_thread_limit(tmp_path):
+    """MKL loaded by a method's first pypardiso solve (after the case's pools were limited) ran
+    its cold call with every core, beside another case's timed samples; MKL_NUM_THREADS (with
+    OMP_ and OPENBLAS_) set in each case limits it from its first call."""
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text(json.dumps({"name": "t", "meshes": ["knight"], "time_budget": 0, "repeats": 1,
+                               "plugins": ["tests.plugins.hostile"],
+                               "noise": [{"model": "gaussian_normal", "levels": [0.1], "seeds": 2}],
+                               "tasks": {"smoothing": {"methods": ["hostile.lazy_mkl"]}}}))
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "HOSTILE_MARK_DIR": str(tmp_path)}
+    for k in ("MKL_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+        env.pop(k, None)
+    r = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(tmp_path / "r"),
+                        "--workers", "2", "--quiet"], cwd=ROOT, env=env, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    calls = [ln for p in sorted(tmp_path.glob("mkl-threads-*.txt")) for ln in p.read_text().split()]
+    assert len(calls) >= 4 and set(calls) == {str(max(1, os.cpu_count() // 2))}, calls   # cold calls and samples
+
+
 def test_timed_calls_do_not_reuse_a_previous_calls_symbolic_analysis(monkeypatch):
     """The solvers' pattern-keyed symbolic analyses are dropped before the cold call and every
     sample: a sample of an implicit step pays for its ordering like a first call on the mesh

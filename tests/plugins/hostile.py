@@ -153,3 +153,20 @@ def report_igl_threads(V, F):
     with open(os.path.join(mark, f"igl-threads-{os.getpid()}.txt"), "w") as fh:
         fh.write(os.environ.get("IGL_NUM_THREADS", "unset"))
     return SmoothingResult(V=V.copy())
+
+
+@register("hostile.lazy_mkl", task="smoothing", library="hostile")
+def lazy_mkl(V, F):
+    """Loads MKL by a first pypardiso solve (as scratch.implicit's PARDISO backend does inside its
+    cold call) and writes the threads MKL then has, per call, into the mark directory."""
+    import numpy as np
+    import pypardiso
+    import scipy.sparse as sp
+    import threadpoolctl
+    A = sp.eye(50, format="csr") * 2.0
+    pypardiso.spsolve(A, np.ones(50))
+    mkl = [p["num_threads"] for p in threadpoolctl.threadpool_info() if p["internal_api"] == "mkl"]
+    mark = os.environ.get("HOSTILE_MARK_DIR", MARK)
+    with open(os.path.join(mark, f"mkl-threads-{os.getpid()}.txt"), "a") as fh:
+        fh.write(f"{max(mkl) if mkl else 'none'}\n")
+    return SmoothingResult(V=V.copy())
