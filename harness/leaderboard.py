@@ -84,18 +84,31 @@ def validity(spec: dict, df: pd.DataFrame) -> pd.Series:
     return why
 
 
-def _variant(df: pd.DataFrame, axis: set) -> pd.Series:
-    """Method plus the parameters (other than axis parameters) that vary between its rows."""
-    ps = [json.loads(p) if isinstance(p, str) and p else {} for p in df["params"]]
-    out = []
-    varying: dict[str, set] = {}
-    for m, p in zip(df["method"], ps):
+def label_keys(methods, params, axis=(), defaults=None) -> dict[str, list[str]]:
+    """Per method, the parameters its variants' labels name: those (other than axis parameters)
+    that vary between its rows, and those set away from the method's default (``defaults``:
+    ``{method: {param: default}}`` as run.json's task declaration records it), so a label without
+    a parameter means that parameter's default."""
+    def key(v):
+        return json.dumps(v, sort_keys=True, default=str)
+    seen: dict[str, dict[str, set]] = {}
+    for m, p in zip(methods, params):
         for k, v in p.items():
             if k not in axis:
-                varying.setdefault(m, {}).setdefault(k, set()).add(json.dumps(v, sort_keys=True))
-    for m, p in zip(df["method"], ps):
-        keys = sorted(k for k, vals in varying.get(m, {}).items() if len(vals) > 1)
-        out.append(m + "".join(f" {k}={json.dumps(p.get(k))}" for k in keys))
+                seen.setdefault(m, {}).setdefault(k, set()).add(key(v))
+    defaults = defaults if isinstance(defaults, dict) else {}
+    out = {}
+    for m, ks in seen.items():
+        d = defaults.get(m) if isinstance(defaults.get(m), dict) else {}
+        out[m] = sorted(k for k, vals in ks.items() if len(vals) > 1 or (k in d and vals != {key(d[k])}))
+    return out
+
+
+def _variant(df: pd.DataFrame, axis: set, defaults=None) -> pd.Series:
+    """Method plus the parameters `label_keys` names."""
+    ps = [json.loads(p) if isinstance(p, str) and p else {} for p in df["params"]]
+    keys = label_keys(df["method"], ps, axis, defaults)
+    out = [m + "".join(f" {k}={json.dumps(p.get(k))}" for k in keys.get(m, ())) for m, p in zip(df["method"], ps)]
     return pd.Series(out, index=df.index)
 
 
@@ -137,7 +150,7 @@ def _cells(spec: dict, df: pd.DataFrame, axis_params=()) -> pd.DataFrame:
     """``df`` with ``_variant``, ``_invalid`` and ``_cell`` (see `cell_values`): the same for
     every metric of the task."""
     d = df.copy()
-    d["_variant"] = _variant(d, set(axis_params))
+    d["_variant"] = _variant(d, set(axis_params), (spec or {}).get("method_defaults"))
     d["_invalid"] = (validity(spec, d) != "") & d["status"].isin(FAILED + ("ok",))
     ps = [json.loads(p) if isinstance(p, str) and p else {} for p in d["params"]]
     text = lambda col: [("" if pd.isna(v) else str(v)) for v in d[col]] if col in d else [""] * len(d)  # noqa: E731

@@ -112,8 +112,19 @@ def method_sources(cfg: Config) -> dict:
 
 def task_specs(cfg: Config) -> dict:
     """The declarations of the tasks this run uses (the report and compare read them)."""
+    from .plugins import import_methods
+    methods = import_methods()
     used = sorted({c.task for c in cfg.cases})
-    return {t: tasks.get(t).spec() for t in used}
+    specs = {t: tasks.get(t).spec() for t in used}
+    for t in used:                  # labels name a parameter only where it is not the default
+        defaults = {}
+        for name in sorted({c.method for c in cfg.cases if c.task == t}):
+            try:
+                defaults[name] = json.loads(json.dumps(methods.get(name).with_defaults({}), default=str))
+            except KeyError:
+                continue
+        specs[t]["method_defaults"] = defaults
+    return specs
 
 
 def run_args_problems(workers, timeout, executor, scheduler) -> list[str]:

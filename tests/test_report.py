@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 import harness
@@ -75,6 +76,24 @@ def test_the_header_states_the_timing_protocol_of_run_json(run_dir):
     assert f"at least {t['min_repeats']} " in row.group(1)
     assert f"load average {meta['load_average'][0]:.2f} at the start" in row.group(1)
     assert f"fixed cost per case {rh._fmt(fc['mean'])} s mean" in row.group(1)
+
+
+def test_a_method_run_only_away_from_its_defaults_is_labelled_so(tmp_path):
+    """A label without a parameter means that parameter's default: `scratch.taubin` run only with
+    `iterations: 3` used to be labelled plain "scratch.taubin" in the report, the leaderboard and
+    the winners, a number a reader would take for the default's."""
+    cfg = {"name": "labels", "time_budget": 0, "hausdorff_samples": 200, "meshes": ["knight", "woody"],
+           "noise": [{"model": "gaussian_normal", "levels": [0.2]}],
+           "tasks": {"smoothing": {"methods": [{"name": "scratch.taubin", "params": {"iterations": 3}},
+                                               {"name": "scratch.explicit", "params": {"step": 0.25}}]}}}
+    out = tmp_path / "r"
+    harness.run(cfg, out=out, quiet=True)
+    labels = set(page_data(out / "report.html")["tasks"]["smoothing"]["variants"])
+    assert labels == {"scratch.taubin iterations=3", "scratch.explicit"}, labels     # 0.25 is explicit's default
+    board = pd.read_csv(out / "leaderboard.csv")
+    assert set(board["method"]) == {"scratch.taubin iterations=3", "scratch.explicit"}
+    meta = json.loads((out / "run.json").read_text())
+    assert meta["tasks"]["smoothing"]["method_defaults"]["scratch.taubin"]["iterations"] == 10
 
 
 def test_page_data_matches_the_csvs(run_dir):

@@ -5,7 +5,6 @@ import html
 import json
 import math
 import re
-from collections import defaultdict
 
 import numpy as np
 
@@ -28,20 +27,15 @@ def short(v) -> str:
     return json.dumps(v) if isinstance(v, (dict, list)) else str(v)
 
 
-def variant_labels(df, axis_params=frozenset()) -> list[str]:
-    """Method name plus the parameters that vary between this method's rows (axis params excluded)."""
-    skip = set(axis_params)
+def variant_labels(df, axis_params=frozenset(), defaults=None) -> list[str]:
+    """Method name plus the parameters `harness.leaderboard.label_keys` names: those that vary
+    between this method's rows and those set away from its default (axis params excluded)."""
+    from ..leaderboard import label_keys
     ps = [params_of(s) for s in df["params"]] if "params" in df else [{} for _ in range(len(df))]
-    varying: dict[str, set] = defaultdict(set)
-    by_method: dict[str, list[dict]] = defaultdict(list)
-    for m, p in zip(df["method"], ps):
-        by_method[m].append(p)
-    for m, plist in by_method.items():
-        keys = set().union(*plist) if plist else set()
-        varying[m] = {k for k in keys - skip if len({short(p.get(k)) for p in plist}) > 1}
+    keys = label_keys(df["method"], ps, set(axis_params), defaults)
     out = []
     for m, p in zip(df["method"], ps):
-        extra = " ".join(f"{k}={short(p.get(k))}" for k in sorted(varying[m]))
+        extra = " ".join(f"{k}={short(p.get(k))}" for k in keys.get(m, ()))
         out.append(f"{m} {extra}".strip())
     return out
 

@@ -50,7 +50,7 @@ def _frame_payload(spec, df) -> dict:
     """Columns and rows of one task CSV plus derived columns (prefixed with _)."""
     cols = list(df.columns)
     rows = [[_clean(v) for v in rec] for rec in df.itertuples(index=False, name=None)]
-    variants = variant_labels(df, spec.get("axis_params") or ())
+    variants = variant_labels(df, spec.get("axis_params") or (), spec.get("method_defaults"))
     noise = [noise_label(m, lv) for m, lv in zip(df["noise_model"], df["noise_level"])]
     hist = []
     for h in (df["min_angle_hist"] if "min_angle_hist" in df else [None] * len(df)):
