@@ -17,6 +17,19 @@ class _Parser(argparse.ArgumentParser):
         raise SystemExit(2)
 
 
+def _number(kind):
+    """An argparse type that converts to ``kind`` when it can and keeps the text otherwise, so a
+    malformed number is listed with the config's and the other flags' problems in one message
+    (argparse would stop at the first)."""
+    def convert(text: str):
+        try:
+            return kind(text)
+        except ValueError:
+            return text
+    convert.__name__ = kind.__name__
+    return convert
+
+
 def _parser() -> argparse.ArgumentParser:
     p = _Parser(prog="shootout", description="Compare geometry-processing methods (Laplacians, smoothing, simplification, geodesics, curvature, spectra).")
     from . import __version__
@@ -25,11 +38,11 @@ def _parser() -> argparse.ArgumentParser:
     r = sub.add_parser("run", help="run a config and write its run folder")
     r.add_argument("config")
     r.add_argument("--out", help="run folder (default results/<name>)")
-    r.add_argument("--workers", type=int, help="cases in parallel (default: number of cores; 1 for timing-grade numbers)")
+    r.add_argument("--workers", type=_number(int), help="cases in parallel (default: number of cores; 1 for timing-grade numbers)")
     r.add_argument("--executor", choices=["local", "dask", "serial"], default="local")
     r.add_argument("--scheduler", help="Dask scheduler address, e.g. tcp://host:8786")
     r.add_argument("--resume", action="store_true", help="skip cases already recorded with status ok")
-    r.add_argument("--timeout", type=float, help="seconds per case before it is killed (status timeout)")
+    r.add_argument("--timeout", type=_number(float), help="seconds per case before it is killed (status timeout)")
     r.add_argument("--quiet", action="store_true", help="no progress bar")
     r.add_argument("--export-benchmark-json", metavar="FILE", help="also write timings in pytest-benchmark's JSON layout")
     m = sub.add_parser("methods", help="list registered methods")
@@ -53,12 +66,12 @@ def _parser() -> argparse.ArgumentParser:
     ev.add_argument("--task", choices=["smoothing", "simplification"],
                     help="default: smoothing when a result has the clean mesh's vertex and face counts, else simplification")
     ev.add_argument("--label", action="append", help="method label of each result, in order (default: file stem)")
-    ev.add_argument("--hausdorff-samples", type=int, default=20000, help="area samples per side (as in a config)")
+    ev.add_argument("--hausdorff-samples", type=_number(int), default=20000, help="area samples per side (as in a config)")
     c = sub.add_parser("compare", help="compare two run folders; exit 1 on a regression")
     c.add_argument("run_a")
     c.add_argument("run_b")
     c.add_argument("--html", metavar="FILE", help="also write an HTML diff")
-    c.add_argument("--time-factor", type=float, default=None, metavar="X",
+    c.add_argument("--time-factor", type=_number(float), default=None, metavar="X",
                    help="a time regression needs B slower than X times A (default 1.5)")
     c.add_argument("--absolute-time", action="store_true",
                    help="judge raw times (default: relative to the whole run's drift, the median B/A over cases)")
@@ -298,7 +311,7 @@ def _cmd_compare(a) -> int:
     from .compare import TIME_FACTOR, compare_runs
     from .errors import problems_error
     problems = [f"compare: {d} is not a run folder" for d in (a.run_a, a.run_b) if not Path(d).is_dir()]
-    if a.time_factor is not None and not 1 < a.time_factor < float("inf"):
+    if a.time_factor is not None and (isinstance(a.time_factor, str) or not 1 < a.time_factor < float("inf")):
         problems.append(f"--time-factor: expected a finite number > 1, got {a.time_factor}")
     if a.no_time and (a.time_factor is not None or a.absolute_time):
         problems.append("--no-time compares no times: --time-factor and --absolute-time would be ignored; "

@@ -312,6 +312,14 @@ def test_bad_flags_config_and_out_folder_are_one_message(tmp_path, capsys):
         assert what in err, (what, err)
     assert "5 problems" in err
     assert sorted(p.name for p in out.iterdir()) == ["smoothing.csv"] and (out / "smoothing.csv").read_text() == "mine\n"
+    # a flag that is not a number at all joins the same message (argparse used to stop at it alone)
+    assert cli(["run", str(bad), "--out", str(out), "--timeout", "1:30", "--workers", "two"]) == 2
+    err = capsys.readouterr().err
+    assert "5 problems" in err and "got 'two'" in err and "got '1:30'" in err and "meshes[0]" in err, err
+    assert cli(["eval", "--clean", str(tmp_path / "nothere.obj"), str(tmp_path / "a.obj"), "--hausdorff-samples",
+                "many", "--out", str(tmp_path / "e")]) == 2
+    err = capsys.readouterr().err
+    assert "3 problems" in err and "--hausdorff-samples" in err and "got 'many'" in err, err
     assert cli(["eval", "--clean", str(tmp_path / "nothere.obj"), str(tmp_path / "a.obj"), str(tmp_path / "b.obj"),
                 "--out", str(tmp_path / "e")]) == 2
     err = capsys.readouterr().err
