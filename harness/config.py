@@ -293,14 +293,17 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
                     P.append(f"tune.train: {what} is also a test mesh (meshes:); tuning on the meshes a method "
                              "is judged on favours the tuned setting: train on other meshes")
 
+    try:                       # counted whenever the meshes and tasks allow, to join the other problems
+        n = _count_cases(meshes, noises, tasks)
+    except Exception:  # noqa: BLE001 - a part already listed as a problem
+        n = None
+    if n is not None and n > MAX_CASES:
+        P.append(f"the grid expands to {n:,} cases, more than {MAX_CASES:,}: split the config or "
+                 "narrow its parameter lists")
     if P:
         raise ConfigError(label, P)
 
     common = (seed, repeats, tuple(plugins), hs, float(budget), float(eps))
-    n = _count_cases(meshes, noises, tasks)
-    if n > MAX_CASES:
-        raise ConfigError(label, [f"the grid expands to {n:,} cases, more than {MAX_CASES:,}: split the config or "
-                                  "narrow its parameter lists"])
     unique = expand_cases(meshes, noises, tasks, *common)
     wanted = report.get("views") if isinstance(report, dict) else None
     if wanted and tune is None:                      # a tuned case's id is known only after the tuning

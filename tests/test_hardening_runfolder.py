@@ -153,6 +153,10 @@ def test_a_long_mesh_list_validates_in_seconds():
     with pytest.raises(ConfigError, match="expands to 1,250,000 cases"):
         load_config({"meshes": ["knight"] * 1_250_000, "tasks": {"laplacian": {"methods": ["scratch.uniform"]}}})
     assert time.time() - t0 < 20
+    with pytest.raises(ConfigError) as err:        # listed with the config's other problems
+        load_config({"meshes": ["knight"] * 200_000, "repeats": -1,
+                     "tasks": {"laplacian": {"methods": ["scratch.uniform"]}}})
+    assert len(err.value.problems) == 2 and "expands to 200,000 cases" in str(err.value) and "repeats" in str(err.value)
 
 
 def test_a_rejected_config_imports_no_plugin(tmp_path):
