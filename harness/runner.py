@@ -175,13 +175,14 @@ THREAD_ENV = ("IGL_NUM_THREADS", "MKL_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS
 
 
 @contextlib.contextmanager
-def thread_env(n: int | None):
-    """`THREAD_ENV` set to ``n`` inside (None or 0: left alone), the caller's values restored after."""
+def thread_env(n: int | None, keys=THREAD_ENV):
+    """``keys`` (of `THREAD_ENV`) set to ``n`` inside (None or 0: left alone), the caller's values
+    restored after. Only a library that loads (or first goes parallel) inside keeps the count."""
     if not n:
         yield
         return
-    before = {k: os.environ.get(k) for k in THREAD_ENV}
-    os.environ.update({k: str(n) for k in THREAD_ENV})
+    before = {k: os.environ.get(k) for k in keys}
+    os.environ.update({k: str(n) for k in keys})
     try:
         yield
     finally:
@@ -312,6 +313,7 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
     row = base_row(case)
     extras: dict = {}
     limiters: list = []
+    env = contextlib.ExitStack()          # the thread variables, restored for an in-process (serial) caller
     t_case = time.perf_counter()
     try:
         from .plugins import import_methods
@@ -339,8 +341,7 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
             row.update(status="unavailable", error=why)
             return row, extras
         limiters.append(limit_threads(case.threads))
-        if case.threads:                 # libraries that load or start their threads from here on
-            os.environ.update({k: str(case.threads) for k in THREAD_ENV})
+        env.enter_context(thread_env(case.threads))    # libraries that load or start their threads from here on
         loaded = _loaded_objects()
         with warnings.catch_warnings(record=True) as said:
             warnings.simplefilter("always")
@@ -403,6 +404,7 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
     finally:
         row["peak_rss_mb"] = round(peak_rss_mb(), 1)
         extras["case_wall_s"] = time.perf_counter() - t_case
+        env.close()
         for lim in reversed(limiters):      # in-process (serial) runs leave the caller's pools as they were
             if lim is not None:
                 try:

@@ -198,7 +198,9 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
         raise
     from .runner import thread_env
     try:
-        with thread_env(threads):            # inherited by the forked cases
+        # libigl's count, inherited by forked cases should the driver start libigl's threads during
+        # the run; the other variables are set in each case only (MKL loaded here would keep them)
+        with thread_env(threads, ("IGL_NUM_THREADS",)):
             return _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, executor, scheduler,
                                resume, quiet, export_benchmark_json, ex)
     except BaseException:
@@ -476,7 +478,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
             folder.remove_temporaries()
             _write_status_in_place(folder, meta["status"])
     not_written = finish(out_dir, cfg, timeout=timeout, export_benchmark_json=export_benchmark_json,
-                         extra_cases=extra_cases)
+                         extra_cases=extra_cases, threads=threads)
     return Frames(folder.frames(), not_written)
 
 
@@ -505,8 +507,9 @@ def _tune(cfg: Config, ex, out_dir: Path, meta: dict, threads: int, resume: bool
     return tuned
 
 
-def finish(out_dir, cfg: Config, timeout=None, export_benchmark_json=None, extra_cases=()) -> list[str]:
-    """After the last row: the 3D views (views/), the report and the optional benchmark export.
+def finish(out_dir, cfg: Config, timeout=None, export_benchmark_json=None, extra_cases=(), threads=None) -> list[str]:
+    """After the last row: the 3D views (views/, each case run again with the run's ``threads``
+    per case, so its result is the measured one), the report and the optional benchmark export.
     The rows are safe on disk; a failure here is a warning and an entry of the returned list of
     what was not written, never a lost run."""
     from .report import build_report
@@ -518,7 +521,8 @@ def finish(out_dir, cfg: Config, timeout=None, export_benchmark_json=None, extra
         problems.append(what)
         print(f"shootout: warning: {what} ({type(exc).__name__}: {exc}){extra}", file=sys.stderr)
     try:
-        views = compute_views({c.case_id: c for c in list(cfg.cases) + list(extra_cases)}, folder.frames(), cfg.report,
+        views = compute_views({c.case_id: dataclasses.replace(c, threads=threads or c.threads)
+                               for c in list(cfg.cases) + list(extra_cases)}, folder.frames(), cfg.report,
                               timeout=timeout)
         folder.write_views(views)
     except Exception as exc:  # noqa: BLE001
