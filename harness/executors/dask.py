@@ -64,31 +64,49 @@ def _probe_scheduler(address: str) -> None:
     waits for ever on a server that accepts the connection and never answers as Dask (the
     dashboard's HTTP port 8787, any other service). TLS and other schemes are left to the Client."""
     import asyncio
+    import socket
 
     import dask
     from dask.utils import parse_timedelta
     from distributed.comm import connect
-    if "://" in address and not address.startswith("tcp://"):
+    from distributed.comm.addressing import parse_address, parse_host_port
+    try:
+        scheme, where = parse_address(address)
+    except ValueError:
+        return                          # the Client names what is wrong with it
+    if scheme != "tcp":
         return
     limit = float(parse_timedelta(dask.config.get("distributed.comm.timeouts.connect"), default="s"))
+    try:                                # can it be reached at all?
+        socket.create_connection(parse_host_port(where), timeout=limit).close()
+    except (OSError, ValueError) as exc:
+        raise OSError(f"cannot reach {where} ({exc})") from None
+    outcome: dict = {}
 
     async def identity():
-        comm = await asyncio.wait_for(connect(address, timeout=limit), limit)
+        comm = await connect(address, timeout=limit)
         try:
             await asyncio.wait_for(comm.write({"op": "identity"}), limit)
             return await asyncio.wait_for(comm.read(), limit)
         finally:
             comm.abort()
 
-    try:
-        reply = asyncio.run(identity())
-    except (asyncio.TimeoutError, TimeoutError):
-        raise TimeoutError(f"it accepted the connection but gave no Dask answer within {limit:g} s "
+    def probe():                        # a thread of its own: the caller may be inside an event loop (Jupyter)
+        try:
+            outcome["reply"] = asyncio.run(asyncio.wait_for(identity(), 2 * limit + 1))
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller's thread
+            outcome["error"] = exc
+
+    t = threading.Thread(target=probe, name="dask-probe", daemon=True)
+    t.start()
+    t.join(2 * limit + 5)
+    exc = outcome.get("error")
+    if t.is_alive() or isinstance(exc, (OSError, asyncio.TimeoutError)):     # it accepted the connection above
+        raise TimeoutError(f"it accepts connections but gave no Dask answer within {2 * limit + 1:g} s "
                            "(is it another service, e.g. the dashboard's HTTP port?)") from None
-    except OSError:
-        raise
-    except Exception as exc:        # distributed's comm errors (CommClosedError, ...) are not all OSErrors
+    if exc is not None:                 # distributed's comm errors (CommClosedError, ...) are not all OSErrors
         raise OSError(f"{type(exc).__name__}: {exc}") from None
+    reply = outcome.get("reply")
     if not isinstance(reply, dict) or reply.get("type") != "Scheduler":
         kind = reply.get("type") if isinstance(reply, dict) else type(reply).__name__
         raise ValueError(f"it answered as a {kind}, not a scheduler")
