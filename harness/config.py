@@ -434,6 +434,9 @@ def _check_meshes(meshes, base_dir: Path, P: list) -> list[dict]:
                 path = Path(f) if Path(f).is_absolute() else base_dir / f
                 if not path.is_file() and Path(f).is_file():
                     path = Path(f).resolve()
+                if path.is_dir():
+                    P.append(f"{at}.{k}: {f} is a folder; give a mesh file")
+                    continue
                 if not path.is_file():
                     P.append(f"{at}.{k}: file not found: {f} (relative paths are resolved against {base_dir})")
                     continue

@@ -461,7 +461,11 @@ def check_out_dir(out_dir: Path) -> None:
     if out_dir.exists() and not out_dir.is_dir():
         raise ShootoutError(f"--out {out_dir}: exists and is not a folder")
     p = _resolved(out_dir, f"--out {out_dir}")
-    if p == Path(p.anchor) or p == Path.home().resolve():
+    try:
+        home = Path.home().resolve()
+    except (RuntimeError, KeyError, OSError):      # no HOME and no passwd entry (a container's uid)
+        home = None
+    if p == Path(p.anchor) or p == home:
         raise ShootoutError(f"--out {out_dir}: is {'the file system root' if p == Path(p.anchor) else 'your home folder'}"
                             "; give a folder of its own for the run")
     while not p.exists():

@@ -320,6 +320,11 @@ def test_bad_flags_config_and_out_folder_are_one_message(tmp_path, capsys):
                 "many", "--out", str(tmp_path / "e")]) == 2
     err = capsys.readouterr().err
     assert "3 problems" in err and "--hausdorff-samples" in err and "got 'many'" in err, err
+    (tmp_path / "looks.obj").mkdir()                # a folder named like a mesh
+    folder = tmp_path / "folder.yaml"
+    folder.write_text(f"meshes: [{{file: {tmp_path / 'looks.obj'}}}]\ntasks:\n  smoothing: {{methods: [scratch.taubin]}}\n")
+    assert cli(["run", str(folder), "--out", str(tmp_path / "f")]) == 2
+    assert "meshes[0].file: " in (err := capsys.readouterr().err) and "is a folder; give a mesh file" in err, err
     assert cli(["eval", "--clean", str(tmp_path / "nothere.obj"), str(tmp_path / "a.obj"), str(tmp_path / "b.obj"),
                 "--out", str(tmp_path / "e")]) == 2
     err = capsys.readouterr().err

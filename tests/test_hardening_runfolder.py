@@ -186,6 +186,12 @@ def test_out_on_a_file_or_a_read_only_place_and_a_huge_face_index(tmp_path, tiny
     for root, what in (("/", "the file system root"), (Path.home(), "your home folder")):
         r = cli(["run", cfg, "--out", root])
         assert r.returncode == 2 and f"is {what}" in r.stderr and not (Path(root) / "run.json").exists()
+    nohome = subprocess.run(                       # no HOME and no passwd entry: no home folder to refuse
+        [sys.executable, "-c", "import pathlib; pathlib.Path.home = lambda: (_ for _ in ()).throw("
+         "RuntimeError('Could not determine home directory.')); from harness.results import check_out_dir; "
+         f"check_out_dir(pathlib.Path({str(tmp_path / 'h')!r})); print('ok')"],
+        cwd=ROOT, capture_output=True, text=True, timeout=60)
+    assert nohome.stdout.strip() == "ok", nohome.stderr
     subprocess.run(["mount", "-o", "remount,ro", str(tiny_disk)], check=True)
     r = cli(["run", cfg, "--out", tiny_disk / "o"])
     assert r.returncode == 2 and ("read-only" in r.stderr or "not writable" in r.stderr) and "Traceback" not in r.stderr
