@@ -104,11 +104,20 @@ def label_keys(methods, params, axis=(), defaults=None) -> dict[str, list[str]]:
     return out
 
 
+def label_text(method: str, params: dict, keys) -> str:
+    """A variant's label: ``method k=v ...`` for the ``keys`` (`label_keys`); text values as they
+    are, others as JSON (``true``, ``null``, ``0.25``) as a config writes them. The report, the
+    leaderboard and the winners all label variants this way."""
+    def value(v):
+        return v if isinstance(v, str) else json.dumps(v, sort_keys=True, default=str)
+    return method + "".join(f" {k}={value(params.get(k))}" for k in keys)
+
+
 def _variant(df: pd.DataFrame, axis: set, defaults=None) -> pd.Series:
-    """Method plus the parameters `label_keys` names."""
+    """Method plus the parameters `label_keys` names (`label_text`)."""
     ps = [json.loads(p) if isinstance(p, str) and p else {} for p in df["params"]]
     keys = label_keys(df["method"], ps, axis, defaults)
-    out = [m + "".join(f" {k}={json.dumps(p.get(k))}" for k in keys.get(m, ())) for m, p in zip(df["method"], ps)]
+    out = [label_text(m, p, keys.get(m, ())) for m, p in zip(df["method"], ps)]
     return pd.Series(out, index=df.index)
 
 

@@ -81,17 +81,27 @@ def test_the_header_states_the_timing_protocol_of_run_json(run_dir):
 def test_a_method_run_only_away_from_its_defaults_is_labelled_so(tmp_path):
     """A label without a parameter means that parameter's default: `scratch.taubin` run only with
     `iterations: 3` used to be labelled plain "scratch.taubin" in the report, the leaderboard and
-    the winners, a number a reader would take for the default's."""
+    the winners, a number a reader would take for the default's. The report's tables, its
+    property matrix, the leaderboard and the winners write one label alike."""
     cfg = {"name": "labels", "time_budget": 0, "hausdorff_samples": 200, "meshes": ["knight", "woody"],
            "noise": [{"model": "gaussian_normal", "levels": [0.2]}],
            "tasks": {"smoothing": {"methods": [{"name": "scratch.taubin", "params": {"iterations": 3}},
-                                               {"name": "scratch.explicit", "params": {"step": 0.25}}]}}}
+                                               {"name": "scratch.explicit", "params": {"step": 0.25,
+                                                                                       "weights": "cotan"}}]},
+                     "laplacian": {"methods": [{"name": "libigl.cotan", "params": {"mass": "barycentric"}},
+                                               "scratch.cotan"]}}}
     out = tmp_path / "r"
     harness.run(cfg, out=out, quiet=True)
-    labels = set(page_data(out / "report.html")["tasks"]["smoothing"]["variants"])
-    assert labels == {"scratch.taubin iterations=3", "scratch.explicit"}, labels     # 0.25 is explicit's default
+    want = {"scratch.taubin iterations=3", "scratch.explicit weights=cotan"}      # 0.25 is explicit's default step
+    assert set(page_data(out / "report.html")["tasks"]["smoothing"]["variants"]) == want
     board = pd.read_csv(out / "leaderboard.csv")
-    assert set(board["method"]) == {"scratch.taubin iterations=3", "scratch.explicit"}
+    assert set(board[board.task == "smoothing"]["method"]) == want
+    winners = pd.read_csv(out / "winners.csv")
+    assert set(winners[winners.task == "smoothing"]["best"]) <= want
+    lap = {"libigl.cotan mass=barycentric", "scratch.cotan"}
+    assert set(page_data(out / "report.html")["tasks"]["laplacian"]["variants"]) == lap
+    matrix = (out / "report.html").read_text().split("Property matrix", 1)[1].split("</table>", 1)[0]
+    assert "libigl.cotan mass=barycentric" in matrix and "scratch.cotan" in matrix
     meta = json.loads((out / "run.json").read_text())
     assert meta["tasks"]["smoothing"]["method_defaults"]["scratch.taubin"]["iterations"] == 10
 

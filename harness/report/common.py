@@ -30,14 +30,10 @@ def short(v) -> str:
 def variant_labels(df, axis_params=frozenset(), defaults=None) -> list[str]:
     """Method name plus the parameters `harness.leaderboard.label_keys` names: those that vary
     between this method's rows and those set away from its default (axis params excluded)."""
-    from ..leaderboard import label_keys
+    from ..leaderboard import label_keys, label_text
     ps = [params_of(s) for s in df["params"]] if "params" in df else [{} for _ in range(len(df))]
     keys = label_keys(df["method"], ps, set(axis_params), defaults)
-    out = []
-    for m, p in zip(df["method"], ps):
-        extra = " ".join(f"{k}={short(p.get(k))}" for k in keys.get(m, ()))
-        out.append(f"{m} {extra}".strip())
-    return out
+    return [label_text(m, p, keys.get(m, ())) for m, p in zip(df["method"], ps)]
 
 
 def natural_key(s: str):

@@ -157,24 +157,25 @@ def _tune_html(meta, frames) -> str:
             every = df[df["method"] == m]
             is_tuned = every["case_id"].astype(str).isin(tuned_ids)
             test_default = _test_mean(every[~is_tuned], metric)
-            # the chosen setting equal to the defaults runs no tuned case: its test value is the defaults'
-            test_tuned = _test_mean(every[is_tuned], metric) if ch.get("chosen") else "= defaults"
+            # the chosen setting equal to the configured one runs no tuned case: its test value is that one's
+            test_tuned = _test_mean(every[is_tuned], metric) if ch.get("chosen") else "= as configured"
             ok = every[every["status"] == "ok"]
             if f"input_{metric}" in ok and len(ok):
                 test_input = _fmt(float(ok[f"input_{metric}"].mean()), 4)
-        chosen = ", ".join(f"{k}={v}" for k, v in (ch.get("chosen") or {}).items()) or "the defaults"
+        chosen = ", ".join(f"{k}={v}" for k, v in (ch.get("chosen") or {}).items()) or "as configured"
         dtrain = "invalid or failed" if ch.get("default_train_score") is None else _fmt(ch["default_train_score"], 4)
         body.append(f"<tr><td>{_esc(m)}</td><td>{_esc(chosen)}</td><td class='num'>{_esc(ch.get('candidates'))}</td>"
                     f"<td class='num'>{_esc(dtrain)}</td><td class='num'>{_fmt(ch.get('train_score'), 4)}</td>"
                     f"<td class='num'>{_esc(test_default)}</td><td class='num'>{_esc(test_tuned)}</td>"
                     f"<td class='num'>{_esc(test_input)}</td></tr>")
     better = next((c.get("better") for c in tune["methods"].values() if isinstance(c, dict)), "")
-    return (f"<h3>Tuning: default vs tuned (by {_esc(metric)}, {_esc(better)} is better)</h3>"
+    return (f"<h3>Tuning: as configured vs tuned (by {_esc(metric)}, {_esc(better)} is better)</h3>"
             f"<p>Parameters searched on the training meshes ({_esc(', '.join(tune.get('train_meshes') or []))}), "
             "then run on this report's (test) meshes. A setting with a failed or invalid training case (diverged, worse "
-            "than its noisy input) is never chosen. Rows of other methods are ranked on their defaults.</p>"
-            "<table class='best tune'><tr><th>method</th><th>chosen</th><th>settings tried</th><th>train, defaults</th>"
-            f"<th>train, chosen</th><th>test, defaults</th><th>test, tuned</th><th>test, noisy input</th></tr>"
+            "than its noisy input) is never chosen. <i>As configured</i>: the method's parameters in the config, its "
+            "defaults where the config sets none. Rows of other methods are ranked as configured.</p>"
+            "<table class='best tune'><tr><th>method</th><th>chosen</th><th>settings tried</th><th>train, as configured</th>"
+            f"<th>train, chosen</th><th>test, as configured</th><th>test, tuned</th><th>test, noisy input</th></tr>"
             f"{''.join(body)}</table>")
 
 
@@ -270,7 +271,8 @@ def collect(run_dir) -> dict:
     frames = folder.frames()
     specs = task_specs(meta, frames)
     tasks = {t: _frame_payload(specs[t], frames[t]) for t in specs if t in frames}
-    mat = property_matrix(frames["laplacian"]) if "laplacian" in frames else []
+    mat = (property_matrix(frames["laplacian"], (specs.get("laplacian") or {}).get("method_defaults"))
+           if "laplacian" in frames else [])
     return {"meta": meta, "frames": frames, "specs": specs, "tasks": tasks, "matrix": mat,
             "views": folder.read_views(), "leaderboard": _leaderboard_payload(frames, specs)}
 
@@ -292,7 +294,7 @@ def _task_section(task, spec, frames) -> str:
     if task not in frames:
         return (f"<section id='task-{task}' class='task' data-task='{task}'><h2>{title}</h2>"
                 f"<p class='muted'>This run has no {task} cases.</p></section>")
-    extra = "".join(SECTIONS[s](frames[task]) for s in spec.get("sections") or () if s in SECTIONS)
+    extra = "".join(SECTIONS[s](frames[task], spec) for s in spec.get("sections") or () if s in SECTIONS)
     return (f"<section id='task-{task}' class='task' data-task='{task}'><h2>{title}</h2><p>{intro}</p>{extra}"
             f"<div class='plots' id='plots-{task}'></div>"
             f"<h3>All {task} rows</h3><div class='rows' id='rows-{task}'></div></section>")

@@ -14,10 +14,11 @@ PROPS = [("SYM", "SYM", "sym_error", "max |W-Wᵀ| / max|W|"),
                                    "eigenvalue of -W has a non-negative real part (exact certificate, else blank)")]
 
 
-def property_matrix(df) -> list[dict]:
-    """Per operator variant: for each property, whether it holds on every measured row and the worst size."""
+def property_matrix(df, defaults=None) -> list[dict]:
+    """Per operator variant (labelled as everywhere in the report: ``defaults`` are the methods'
+    defaults from run.json): for each property, whether it holds on every measured row and the worst size."""
     ok = df[df["status"] == "ok"].copy()
-    ok["_variant"] = variant_labels(ok) if len(ok) else []
+    ok["_variant"] = variant_labels(ok, (), defaults) if len(ok) else []
     out = []
     for var in sorted(ok["_variant"].unique(), key=natural_key) if len(ok) else []:
         g = ok[ok["_variant"] == var]
@@ -40,8 +41,8 @@ def property_matrix(df) -> list[dict]:
     return out
 
 
-def _matrix_html(df) -> str:
-    mat = property_matrix(df)
+def _matrix_html(df, defaults=None) -> str:
+    mat = property_matrix(df, defaults)
     if not mat:
         return "<p class='warn'>No Laplacian row with status ok: no property matrix.</p>"
     labels = [p[0] for p in PROPS] + ["M⁻¹W sym"]
@@ -99,12 +100,12 @@ def _uniform_note(df) -> str:
     return "".join(parts)
 
 
-def _all_four_html(df) -> str:
+def _all_four_html(df, defaults=None) -> str:
     """Which operators have SYM, LOC, LIN and POS at once on each planar mesh of the run (from the rows)."""
     ok = df[(df["status"] == "ok") & df["lin_error"].notna()] if "lin_error" in df else df.iloc[0:0]
     if not len(ok):
         return ""
-    ok = ok.assign(_variant=variant_labels(ok))
+    ok = ok.assign(_variant=variant_labels(ok, (), defaults))
     items = []
     for (mesh, nz), g in ok.groupby([ok["mesh"].astype(str), [noise_label(m, lv) for m, lv in
                                                              zip(ok["noise_model"], ok["noise_level"])]]):
@@ -117,12 +118,14 @@ def _all_four_html(df) -> str:
             f"LIN is measured):</p><ul class='allfour'>{''.join(items)}</ul>")
 
 
-def property_matrix_section(df) -> str:
-    """HTML of the property matrix, the all-four list and the note on the uniform Laplacian."""
+def property_matrix_section(df, spec=None) -> str:
+    """HTML of the property matrix, the all-four list and the note on the uniform Laplacian
+    (``spec``: the task's declaration from run.json, for the methods' defaults in the labels)."""
+    defaults = (spec or {}).get("method_defaults")
     return ("<h3>Property matrix (Wardetzky et al. 2007)</h3>"
             "<p class='theorem'><b>Theorem</b> (Wardetzky, Mathur, Kälberer &amp; Grinspun, <i>Discrete Laplace "
             "operators: no free lunch</i>, SGP 2007): no discrete Laplacian satisfies symmetry (SYM), locality (LOC), "
             "linear precision (LIN) and positive weights (POS) on all triangle meshes. On the plane, all four hold "
             "at once exactly on regular / weighted Delaunay triangulations, where the cotangent weights are "
             "non-negative; PSD follows from SYM and POS.</p>"
-            + _matrix_html(df) + _all_four_html(df) + _uniform_note(df))
+            + _matrix_html(df, defaults) + _all_four_html(df, defaults) + _uniform_note(df))
