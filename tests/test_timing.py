@@ -224,6 +224,13 @@ def test_a_library_loaded_in_the_cold_call_gets_the_cases_thread_limit(tmp_path)
     assert r.returncode == 0, r.stderr
     calls = [ln for p in sorted(tmp_path.glob("mkl-threads-*.txt")) for ln in p.read_text().split()]
     assert len(calls) >= 4 and set(calls) == {str(max(1, os.cpu_count() // 2))}, calls   # cold calls and samples
+    for p in tmp_path.glob("mkl-threads-*.txt"):
+        p.unlink()
+    r = subprocess.run([sys.executable, "-m", "harness.cli", "views", str(tmp_path / "r")], cwd=ROOT, env=env,
+                       capture_output=True, text=True, timeout=300)       # views recomputed later: the run's threads
+    assert r.returncode == 0, r.stderr
+    calls = [ln for p in sorted(tmp_path.glob("mkl-threads-*.txt")) for ln in p.read_text().split()]
+    assert calls and set(calls) == {str(max(1, os.cpu_count() // 2))}, calls
 
 
 def test_timed_calls_do_not_reuse_a_previous_calls_symbolic_analysis(monkeypatch):
