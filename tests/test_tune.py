@@ -40,7 +40,7 @@ def test_tuned_rows_and_the_default_vs_tuned_comparison(tmp_path):
     assert (tuned["dist_mean"] < tuned["input_dist_mean"]).all()
     assert tuned["dist_mean"].mean() < default["dist_mean"].mean()
     html = (out / "report.html").read_text()
-    assert "Tuning: default vs tuned" in html and "test, tuned" in html
+    assert "Tuning: as configured vs tuned" in html and "test, tuned" in html
     # --resume of the finished run keeps every row, the tuned test rows (not cases of the config
     # itself: the tuning makes them) included, and runs nothing again
     before = (out / "smoothing.csv").read_text()
