@@ -312,7 +312,7 @@ def _cmd_compare(a) -> int:
     from .errors import problems_error
     problems = [f"compare: {d} is not a run folder" for d in (a.run_a, a.run_b) if not Path(d).is_dir()]
     if a.time_factor is not None and (isinstance(a.time_factor, str) or not 1 < a.time_factor < float("inf")):
-        problems.append(f"--time-factor: expected a finite number > 1, got {a.time_factor}")
+        problems.append(f"--time-factor: expected a finite number > 1, got {a.time_factor!r}")
     if a.no_time and (a.time_factor is not None or a.absolute_time):
         problems.append("--no-time compares no times: --time-factor and --absolute-time would be ignored; "
                         "give one or the other")

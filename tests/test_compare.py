@@ -377,7 +377,7 @@ def test_output_files_are_checked_before_any_work(run_a, tmp_path, capsys):
                 "--html", str(tmp_path)]) == 2
     err = capsys.readouterr().err                   # every problem in one message
     assert "4 problems" in err and "not a run folder" in err and "--time-factor: expected" in err
-    assert "--no-time compares no times" in err and "is a folder" in err
+    assert "--no-time compares no times" in err and "is a folder" in err and "got 0.5" in err
     assert cli(["compare", str(run_a), str(run_a), "--html", str(tmp_path / "new" / "d.html")]) == 0
     assert (tmp_path / "new" / "d.html").is_file()
     cfg = tmp_path / "c.json"

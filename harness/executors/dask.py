@@ -100,12 +100,16 @@ def _probe_scheduler(address: str) -> None:
     t = threading.Thread(target=probe, name="dask-probe", daemon=True)
     t.start()
     t.join(2 * limit + 5)
-    exc = outcome.get("error")
-    if t.is_alive() or isinstance(exc, (OSError, asyncio.TimeoutError)):     # it accepted the connection above
+    exc = outcome.get("error")          # it accepted a connection above: what it did with Dask's
+    if t.is_alive() or isinstance(exc, asyncio.TimeoutError):
         raise TimeoutError(f"it accepts connections but gave no Dask answer within {2 * limit + 1:g} s "
                            "(is it another service, e.g. the dashboard's HTTP port?)") from None
-    if exc is not None:                 # distributed's comm errors (CommClosedError, ...) are not all OSErrors
-        raise OSError(f"{type(exc).__name__}: {exc}") from None
+    if isinstance(exc, OSError):        # CommClosedError too
+        raise OSError(f"it accepts connections but closed Dask's without an answer ({type(exc).__name__}: "
+                      f"{exc}); is it another service?") from None
+    if exc is not None:                 # bytes that are not Dask's protocol (a banner read as a frame length)
+        raise ValueError(f"it answered, but not in Dask's protocol ({type(exc).__name__}: {str(exc)[:100]}); "
+                         "is it another service?") from None
     reply = outcome.get("reply")
     if not isinstance(reply, dict) or reply.get("type") != "Scheduler":
         kind = reply.get("type") if isinstance(reply, dict) else type(reply).__name__
