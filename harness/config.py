@@ -300,6 +300,14 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
     if n is not None and n > MAX_CASES:
         P.append(f"the grid expands to {n:,} cases, more than {MAX_CASES:,}: split the config or "
                  "narrow its parameter lists")
+    if tune is not None:
+        try:
+            nt = _count_cases(tune.train, noises, tune.n_training_settings())
+        except Exception:  # noqa: BLE001 - a part already listed as a problem
+            nt = None
+        if nt is not None and nt > MAX_CASES:
+            P.append(f"tune: the training grid expands to {nt:,} cases, more than {MAX_CASES:,}: "
+                     "lower tune.budget, or use fewer tune.train meshes or parameter values")
     if P:
         raise ConfigError(label, P)
 
@@ -313,10 +321,6 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
             raise ConfigError(label, [f"report.views: {yaml_input.short(unknown)} are not case ids of this config "
                                       "(each view names a case_id of its CSVs)"])
     if tune is not None:
-        nt = _count_cases(tune.train, noises, tune.n_training_settings())
-        if nt > MAX_CASES:
-            raise ConfigError(label, [f"tune: the training grid expands to {nt:,} cases, more than {MAX_CASES:,}: "
-                                      "lower tune.budget, or use fewer tune.train meshes or parameter values"])
         tune.common = common
         tune.noises = noises
         tune.cases = expand_cases(tune.train, noises, tune.grid_tasks(), *common)

@@ -99,8 +99,10 @@ MAX_SETTINGS = 10 ** 15      # a tune.params product above this is refused (samp
 
 
 def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | None:
-    """Validate the ``tune:`` section (problems appended to ``P`` with their key paths)."""
+    """Validate the ``tune:`` section (problems appended to ``P`` with their key paths); None
+    when it has problems of its own (others already in ``P`` do not count)."""
     import methods
+    n0 = len(P)
     if not isinstance(raw, dict):
         P.append(f"tune: expected a mapping with {sorted(TUNE_KEYS)}, got {type(raw).__name__}")
         return None
@@ -159,7 +161,7 @@ def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | 
             names = [x.name for x in spec.metrics if x.better in ("lower", "higher")]
             P.append(f"tune.metric: expected a metric of {spec.name} with a direction ({', '.join(names)}), "
                      f"got {metric!r}")
-    if P:
+    if len(P) > n0:
         return None
     return TuneSpec(metric=metric, train=train, budget=budget, seed=seed, params=out_params, configured=configured)
 

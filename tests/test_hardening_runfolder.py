@@ -328,6 +328,9 @@ def test_grids_too_large_duplicate_keys_and_exiting_plugins_are_config_errors(tm
             "noise": [{"model": "gaussian_normal", "levels": [0.1, 0.2, 0.3]}] * 40}
     with pytest.raises(ConfigError, match="training grid expands to"):
         load_config(tune)
+    with pytest.raises(ConfigError) as err:                     # with the config's other problems
+        load_config({**tune, "hausdorff_samples": -1})
+    assert "training grid expands to" in str(err.value) and "hausdorff_samples" in str(err.value)
     huge = {**tune, "noise": [{"model": "gaussian_normal", "levels": [0.3]}],
             "tune": {**tune["tune"], "budget": 5, "params": {"scratch.explicit": {
                 "step": [0.001 * i for i in range(1, 1001)], "iterations": list(range(1, 1001)),
