@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 
 import numpy as np
 import pandas as pd
@@ -104,13 +105,20 @@ def label_keys(methods, params, axis=(), defaults=None) -> dict[str, list[str]]:
     return out
 
 
+def label_value(v) -> str:
+    """A parameter value in a label: JSON (``true``, ``null``, ``0.25``) as a config writes it;
+    text bare where it cannot be read as anything else (``scipy``), quoted where it could
+    (``"null"``, ``"3"``, one with a space, ``=`` or quote), so two settings never share a label."""
+    if isinstance(v, str):
+        bare = v and re.fullmatch(r"[A-Za-z_][A-Za-z0-9_.:/+-]*", v) and v not in ("true", "false", "null", "NaN", "Infinity")
+        return v if bare else json.dumps(v)
+    return json.dumps(v, sort_keys=True, default=str)
+
+
 def label_text(method: str, params: dict, keys) -> str:
-    """A variant's label: ``method k=v ...`` for the ``keys`` (`label_keys`); text values as they
-    are, others as JSON (``true``, ``null``, ``0.25``) as a config writes them. The report, the
-    leaderboard and the winners all label variants this way."""
-    def value(v):
-        return v if isinstance(v, str) else json.dumps(v, sort_keys=True, default=str)
-    return method + "".join(f" {k}={value(params.get(k))}" for k in keys)
+    """A variant's label: ``method k=v ...`` for the ``keys`` (`label_keys`), values by
+    `label_value`. The report, the leaderboard and the winners all label variants this way."""
+    return method + "".join(f" {k}={label_value(params.get(k))}" for k in keys)
 
 
 def _variant(df: pd.DataFrame, axis: set, defaults=None) -> pd.Series:

@@ -565,7 +565,7 @@ def recompute_views(run_dir) -> list[dict]:
     cfg = load_config({**raw, "report": {k: v for k, v in report.items() if k != "views"}} if isinstance(report, dict)
                       else raw, base_dir=base.resolve())
     threads = (meta.get("timing") or {}).get("threads_per_case") if isinstance(meta.get("timing"), dict) else None
-    threads = threads if isinstance(threads, int) and not isinstance(threads, bool) and threads > 0 else None
+    threads = threads if isinstance(threads, int) and not isinstance(threads, bool) and 0 < threads <= 4096 else None
     views = compute_views({c.case_id: dataclasses.replace(c, threads=threads or c.threads) for c in cfg.cases},
                           folder.frames(), report if isinstance(report, dict) else cfg.report)
     folder.write_views(views)

@@ -81,6 +81,27 @@ def test_friedman_is_corrected_for_ties_as_scipy_and_a_full_tie_is_p_one():
     assert (chi2, p) == (0.0, 1.0) and cd > 0
 
 
+def test_two_settings_never_share_a_label_and_the_property_matrix_labels_as_the_tables():
+    """Text values were written bare, so a plugin's ``tag: null`` and ``tag: "null"`` shared one label
+    and were ranked as one variant; the property matrix labelled from its ok rows alone, so a
+    setting that failed everywhere dropped out of its labels."""
+    from harness.report.common import variant_labels
+    from harness.report.laplacian import property_matrix
+    params = [{"tag": None}, {"tag": "null"}, {"tag": "3"}, {"tag": 3}, {"tag": "a b"}, {"tag": "a"},
+              {"tag": "NaN"}, {"tag": float("nan")}]
+    keys = L.label_keys(["m"] * len(params), params)
+    labels = [L.label_text("m", p, keys["m"]) for p in params]
+    assert len(set(labels)) == len(params), labels
+    assert labels[5] == "m tag=a" and labels[0] == "m tag=null" and labels[1] == 'm tag="null"'
+    df = pd.DataFrame({"method": ["m", "m", "m"], "status": ["error", "ok", "ok"],
+                       "params": [json.dumps({"mode": "a", "tag": "x"}), json.dumps({"mode": "b", "tag": "x"}),
+                                  json.dumps({"mode": "b", "tag": "y"})],
+                       "mesh": ["p", "p", "q"], "noise_model": ["none"] * 3, "noise_level": [None] * 3,
+                       "symmetric": [True, True, True]})
+    tables = set(variant_labels(df)[1:])
+    assert {e["variant"] for e in property_matrix(df)} == tables == {"m mode=b tag=x", "m mode=b tag=y"}
+
+
 def test_invalid_rows_rank_last_and_missing_cells_are_stated():
     rows = []
     for mesh in ("a", "b", "c"):

@@ -41,6 +41,8 @@ def test_tuned_rows_and_the_default_vs_tuned_comparison(tmp_path):
     assert tuned["dist_mean"].mean() < default["dist_mean"].mean()
     html = (out / "report.html").read_text()
     assert "Tuning: as configured vs tuned" in html and "test, tuned" in html
+    from harness.leaderboard import label_text                 # the chosen setting written as the labels write it
+    assert f"<td>{label_text('', ch['chosen'], sorted(ch['chosen'])).strip()}</td>" in html
     # --resume of the finished run keeps every row, the tuned test rows (not cases of the config
     # itself: the tuning makes them) included, and runs nothing again
     before = (out / "smoothing.csv").read_text()

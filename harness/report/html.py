@@ -23,7 +23,7 @@ from pathlib import Path
 
 
 from .. import tasks as _tasks
-from ..leaderboard import leaderboard, validity
+from ..leaderboard import label_text, leaderboard, validity
 from ..results import RunFolder
 from ..schema import scalar as _clean
 from .common import esc as _esc
@@ -162,7 +162,8 @@ def _tune_html(meta, frames) -> str:
             ok = every[every["status"] == "ok"]
             if f"input_{metric}" in ok and len(ok):
                 test_input = _fmt(float(ok[f"input_{metric}"].mean()), 4)
-        chosen = ", ".join(f"{k}={v}" for k, v in (ch.get("chosen") or {}).items()) or "as configured"
+        picked = ch.get("chosen") if isinstance(ch.get("chosen"), dict) else {}
+        chosen = label_text("", picked, sorted(picked)).strip() or "as configured"    # as the labels write it
         dtrain = "invalid or failed" if ch.get("default_train_score") is None else _fmt(ch["default_train_score"], 4)
         body.append(f"<tr><td>{_esc(m)}</td><td>{_esc(chosen)}</td><td class='num'>{_esc(ch.get('candidates'))}</td>"
                     f"<td class='num'>{_esc(dtrain)}</td><td class='num'>{_fmt(ch.get('train_score'), 4)}</td>"

@@ -17,8 +17,8 @@ PROPS = [("SYM", "SYM", "sym_error", "max |W-Wᵀ| / max|W|"),
 def property_matrix(df, defaults=None) -> list[dict]:
     """Per operator variant (labelled as everywhere in the report: ``defaults`` are the methods'
     defaults from run.json): for each property, whether it holds on every measured row and the worst size."""
-    ok = df[df["status"] == "ok"].copy()
-    ok["_variant"] = variant_labels(ok, (), defaults) if len(ok) else []
+    labels = variant_labels(df, (), defaults) if len(df) else []     # from every row, as the tables label them
+    ok = df.assign(_variant=labels)[df["status"] == "ok"].copy()
     out = []
     for var in sorted(ok["_variant"].unique(), key=natural_key) if len(ok) else []:
         g = ok[ok["_variant"] == var]
@@ -102,10 +102,12 @@ def _uniform_note(df) -> str:
 
 def _all_four_html(df, defaults=None) -> str:
     """Which operators have SYM, LOC, LIN and POS at once on each planar mesh of the run (from the rows)."""
-    ok = df[(df["status"] == "ok") & df["lin_error"].notna()] if "lin_error" in df else df.iloc[0:0]
+    if "lin_error" not in df or not len(df):
+        return ""
+    labelled = df.assign(_variant=variant_labels(df, (), defaults))        # from every row, as the tables
+    ok = labelled[(labelled["status"] == "ok") & labelled["lin_error"].notna()]
     if not len(ok):
         return ""
-    ok = ok.assign(_variant=variant_labels(ok, (), defaults))
     items = []
     for (mesh, nz), g in ok.groupby([ok["mesh"].astype(str), [noise_label(m, lv) for m, lv in
                                                              zip(ok["noise_model"], ok["noise_level"])]]):
