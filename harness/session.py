@@ -543,6 +543,22 @@ def finish(out_dir, cfg: Config, timeout=None, export_benchmark_json=None, extra
     return problems
 
 
+def _recorded_tuned_cases(cfg: Config, meta: dict) -> list:
+    """The tuned test cases of a run (its config's ``tune:`` and the settings run.json records as
+    chosen): the tuning is not run again. [] when there are none or the record is unusable."""
+    from .config import expand_cases
+    from .tune import tuned_cases
+    methods = ((meta.get("tune") or {}).get("methods") if isinstance(meta.get("tune"), dict) else None) or {}
+    if cfg.tune is None or not isinstance(methods, dict):
+        return []
+    choice = {m: {"chosen": ch["chosen"]} for m, ch in methods.items()
+              if m in cfg.tune.configured and isinstance(ch, dict) and isinstance(ch.get("chosen"), dict)}
+    try:
+        return tuned_cases(cfg, cfg.tune, choice, expand_cases)
+    except Exception:  # noqa: BLE001 - a damaged record: those views say their case is not among the run's
+        return []
+
+
 def recompute_views(run_dir) -> list[dict]:
     """Rebuild the cases from run.json's config and compute the 3D views again (this runs the
     chosen methods, including any plugin named in run.json). Returns the views written (a
@@ -566,7 +582,8 @@ def recompute_views(run_dir) -> list[dict]:
                       else raw, base_dir=base.resolve())
     threads = (meta.get("timing") or {}).get("threads_per_case") if isinstance(meta.get("timing"), dict) else None
     threads = threads if isinstance(threads, int) and not isinstance(threads, bool) and 0 < threads <= 4096 else None
-    views = compute_views({c.case_id: dataclasses.replace(c, threads=threads or c.threads) for c in cfg.cases},
+    cases = list(cfg.cases) + _recorded_tuned_cases(cfg, meta)
+    views = compute_views({c.case_id: dataclasses.replace(c, threads=threads or c.threads) for c in cases},
                           folder.frames(), report if isinstance(report, dict) else cfg.report)
     folder.write_views(views)
     return views

@@ -48,6 +48,14 @@ def test_tuned_rows_and_the_default_vs_tuned_comparison(tmp_path):
     before = (out / "smoothing.csv").read_text()
     harness.run(CFG, out=out, quiet=True, resume=True)
     assert (out / "smoothing.csv").read_text() == before
+    # `shootout views` rebuilds the tuned test cases from run.json's choice, without tuning again
+    # (a tuned case's view used to say "this case is not among the run's cases")
+    from harness.session import recompute_views
+    meta = json.loads((out / "run.json").read_text())
+    meta["config"]["report"] = {"views": ch["test_case_ids"][:1]}
+    (out / "run.json").write_text(json.dumps(meta))
+    views = recompute_views(out)
+    assert len(views) == 1 and views[0]["case_id"] == ch["test_case_ids"][0] and not views[0].get("error"), views
 
 
 def test_tune_section_is_validated_with_key_paths():
