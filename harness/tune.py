@@ -143,6 +143,11 @@ def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | 
                 P.append(f"{at}.{k}: {k} is an axis of the {configured[m][0]} task (rows with other values are "
                          "other cells, not competitors): it cannot be tuned; list its values under the task's params")
                 continue
+            listed = {json.dumps(g.get(k), sort_keys=True, default=str) for g in configured[m][1]}
+            if len(listed) > 1:             # "as configured" would be one value in training, all on the test
+                P.append(f"{at}.{k}: the run lists several values of {k} for {m} under tasks:; tuning compares "
+                         "one configured setting with the chosen one: list one value there, or tune another parameter")
+                continue
             vals = vals if isinstance(vals, list) else [vals]
             bad = [p for v in vals for p in meth.param_problems({k: v})]
             if not vals or bad:

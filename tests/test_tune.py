@@ -71,6 +71,9 @@ def test_tune_section_is_validated_with_key_paths():
                      "params": {"scratch.qem": {"target_ratio": [0.5, 0.9]}}}}   # won a cell of its own
     with pytest.raises(ConfigError, match="tune.params.scratch.qem.target_ratio: target_ratio is an axis"):
         load_config(axis)
+    several = {**CFG, "tasks": {"smoothing": {"methods": ["scratch.implicit"], "params": {"step": [0.01, 0.1]}}}}
+    with pytest.raises(ConfigError, match="tune.params.scratch.implicit.step: the run lists several values of step"):
+        load_config(several)                 # 'as configured' would be step 0.01 in training, both on the test
 
 
 def test_sampled_settings_are_the_products_positions():
