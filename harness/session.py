@@ -508,8 +508,8 @@ def _tune(cfg: Config, ex, out_dir: Path, meta: dict, threads: int, resume: bool
 
 
 def finish(out_dir, cfg: Config, timeout=None, export_benchmark_json=None, extra_cases=(), threads=None) -> list[str]:
-    """After the last row: the 3D views (views/, each case run again with the run's ``threads``
-    per case, so its result is the measured one), the report and the optional benchmark export.
+    """After the last row: the 3D views (views/, with the run's ``threads`` per case), the report
+    and the optional benchmark export.
     The rows are safe on disk; a failure here is a warning and an entry of the returned list of
     what was not written, never a lost run."""
     from .report import build_report
@@ -521,9 +521,8 @@ def finish(out_dir, cfg: Config, timeout=None, export_benchmark_json=None, extra
         problems.append(what)
         print(f"shootout: warning: {what} ({type(exc).__name__}: {exc}){extra}", file=sys.stderr)
     try:
-        views = compute_views({c.case_id: dataclasses.replace(c, threads=threads or c.threads)
-                               for c in list(cfg.cases) + list(extra_cases)}, folder.frames(), cfg.report,
-                              timeout=timeout)
+        views = compute_views({c.case_id: c for c in list(cfg.cases) + list(extra_cases)}, folder.frames(), cfg.report,
+                              timeout=timeout, threads=threads)
         folder.write_views(views)
     except Exception as exc:  # noqa: BLE001
         warn("3D views could not be computed", exc)
@@ -583,7 +582,7 @@ def recompute_views(run_dir) -> list[dict]:
     threads = (meta.get("timing") or {}).get("threads_per_case") if isinstance(meta.get("timing"), dict) else None
     threads = threads if isinstance(threads, int) and not isinstance(threads, bool) and 0 < threads <= 4096 else None
     cases = list(cfg.cases) + _recorded_tuned_cases(cfg, meta)
-    views = compute_views({c.case_id: dataclasses.replace(c, threads=threads or c.threads) for c in cases},
-                          folder.frames(), report if isinstance(report, dict) else cfg.report)
+    views = compute_views({c.case_id: c for c in cases}, folder.frames(),
+                          report if isinstance(report, dict) else cfg.report, threads=threads)
     folder.write_views(views)
     return views

@@ -130,8 +130,9 @@ def _title(row) -> str:
 
 
 def compute_views(cases_by_id: dict, frames, report_cfg: dict, budget_s: float = VIEW_BUDGET_S,
-                  timeout: float | None = None) -> list[dict]:
-    """View payloads of the chosen cases; each failure is a view with an ``error`` text."""
+                  timeout: float | None = None, threads: int | None = None) -> list[dict]:
+    """View payloads of the chosen cases, each run again with the run's ``threads`` per case (so
+    its result is the measured one); each failure is a view with an ``error`` text."""
     from .executors.isolation import run_isolated
     rows = {str(r["case_id"]): r for df in frames.values() for r in df.to_dict("records")}
     views, t0 = [], time.perf_counter()
@@ -162,7 +163,7 @@ def compute_views(cases_by_id: dict, frames, report_cfg: dict, budget_s: float =
             continue
         left = min(left, timeout) if timeout else left
         try:
-            new_row, extras = run_isolated(dataclasses.replace(case, repeats=1), timeout=max(left, 5.0),
+            new_row, extras = run_isolated(dataclasses.replace(case, repeats=1, threads=threads or case.threads), timeout=max(left, 5.0),
                                            want_view=True)
             if new_row.get("status") != "ok" or "view" not in extras:
                 v["error"] = f"computing the view failed ({new_row.get('status')}): {new_row.get('error')}"
