@@ -19,7 +19,7 @@ import yaml
 
 from . import datasets, yaml_input
 from .errors import ConfigError, ShootoutError
-from .mesh import SUPPORTED
+from .mesh import SUPPORTED, missing_file_problem
 from .noise import MODELS
 
 TOP_KEYS = {"name", "repeats", "save_meshes", "plugins", "seed", "meshes", "noise", "tasks",
@@ -439,7 +439,7 @@ def _check_meshes(meshes, base_dir: Path, P: list) -> list[dict]:
                 if not path.is_file() and Path(f).is_file():
                     path = Path(f).resolve()
                 if path.is_dir():
-                    P.append(f"{at}.{k}: {f} is a folder; give a mesh file")
+                    P.append(f"{at}.{k}: {f} {missing_file_problem(path)}")
                     continue
                 if not path.is_file():
                     P.append(f"{at}.{k}: file not found: {f} (relative paths are resolved against {base_dir})")

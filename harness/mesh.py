@@ -317,6 +317,14 @@ def _read_stl(data: bytes):
     return V, np.arange(len(V), dtype=np.int64).reshape(-1, 3)
 
 
+def missing_file_problem(path) -> str | None:
+    """Why ``path`` is not a mesh file to read ("is a folder; ...", "no such file"), or None."""
+    path = Path(path)
+    if path.is_dir():
+        return "is a folder; give a mesh file"
+    return None if path.is_file() else "no such file"
+
+
 def read_mesh(path, name: str | None = None, repair: bool = True, sha1: str | None = None) -> Mesh:
     """Read a triangle mesh file and validate it (see the module docstring for the policy).
 
@@ -326,10 +334,9 @@ def read_mesh(path, name: str | None = None, repair: bool = True, sha1: str | No
     ext = path.suffix.lower()
     if ext not in SUPPORTED:
         raise InvalidMeshError(f"{path.name}: unsupported extension {ext!r}; expected one of {SUPPORTED}")
-    if path.is_dir():
-        raise InvalidMeshError(f"{path}: is a folder; give a mesh file")
-    if not path.is_file():
-        raise InvalidMeshError(f"{path}: no such file")
+    why = missing_file_problem(path)
+    if why:
+        raise InvalidMeshError(f"{path}: {why}")
     try:
         data = path.read_bytes()
     except OSError as exc:

@@ -19,7 +19,7 @@ import numpy as np
 from . import tasks
 from .config import name_problem, samples_problem
 from .errors import ShootoutError, problems_error
-from .mesh import Mesh, read_mesh, validate
+from .mesh import Mesh, missing_file_problem, read_mesh, validate
 from .provenance import git_commit, git_dirty, machine_info, now_iso, package_versions
 from .results import Frames, RunFolder, out_dir_problems
 from .tasks.base import CaseInput
@@ -135,10 +135,9 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
         P.append(f"--hausdorff-samples: {samples_problem(hausdorff_samples)}")
     for e in entries:
         for p in [e["file"], e["clean"]] + ([e["noisy"]] if e.get("noisy") else []):
-            if Path(p).is_dir():
-                P.append(f"{p}: is a folder; give a mesh file")
-            elif not Path(p).is_file():
-                P.append(f"{p}: no such file")
+            why = missing_file_problem(p)
+            if why:
+                P.append(f"{p}: {why}")
     if P:                                        # every problem at once, nothing written
         raise problems_error(list(dict.fromkeys(P)))
     rows: list[tuple[dict, bool]] = []          # each file's row, and whether its task was given
