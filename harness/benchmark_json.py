@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .leaderboard import params_text
 from .results import RunFolder
 from .schema import number, scalar
 
@@ -115,7 +116,7 @@ def build(run_dir) -> dict:
             except json.JSONDecodeError:
                 params = {}
             noise = _noise(rec)
-            pstr = ",".join(f"{k}={params[k]}" for k in sorted(params) if params[k] is not None)
+            pstr = params_text(params if isinstance(params, dict) else {})
             name = f"{rec['method']}[{pstr}]" if pstr else str(rec["method"])
             if len(seeds[(rec.get("mesh"), noise)]) > 1:                 # several seeds: each its own name
                 name += f"[seed={rec.get('seed')}]"

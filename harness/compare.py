@@ -67,6 +67,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from .errors import ShootoutError
+from .leaderboard import params_text
 from .results import RunFolder
 from .schema import fmt
 from .schema import number as _num
@@ -375,7 +376,7 @@ def _label(r: dict) -> str:
         p = json.loads(r.get("params") or "{}")
     except json.JSONDecodeError:
         p = {}
-    ps = ",".join(f"{k}={v}" for k, v in sorted(p.items()) if v is not None)
+    ps = params_text(p if isinstance(p, dict) else {})
     lvl = r.get("noise_level")
     noise = r.get("noise_model") if _blank(lvl) else f"{r.get('noise_model')} {lvl:g}"
     return f"{r.get('mesh')} {noise} {r.get('method')}[{ps}]"

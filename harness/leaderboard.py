@@ -121,6 +121,12 @@ def label_text(method: str, params: dict, keys) -> str:
     return method + "".join(f" {k}={label_value(params.get(k))}" for k in keys)
 
 
+def params_text(params: dict) -> str:
+    """A case's parameters as ``k=v,k=v`` (sorted keys, values by `label_value`, unset ones
+    left out): how `shootout compare` and the benchmark JSON name a case's setting."""
+    return ",".join(f"{k}={label_value(params[k])}" for k in sorted(params) if params[k] is not None)
+
+
 def _variant(df: pd.DataFrame, axis: set, defaults=None) -> pd.Series:
     """Method plus the parameters `label_keys` names (`label_text`)."""
     ps = [json.loads(p) if isinstance(p, str) and p else {} for p in df["params"]]

@@ -536,3 +536,19 @@ def test_benchmark_export_names_each_seed(tmp_path):
     names = [(b["group"], b["name"]) for b in doc["benchmarks"]]
     assert len(names) == 2 and len(set(names)) == 2, names
     assert all("[seed=" in n for _, n in names)
+
+
+def test_compare_and_the_export_write_settings_as_a_config_does(run_a, tmp_path):
+    """compare's case names and the benchmark JSON's names wrote Python's ``True`` and left text
+    unquoted, so ``tag: "true"`` and ``tag: true`` had one name; they now write each value as the
+    report's labels do (`label_value`)."""
+    from harness.benchmark_json import build
+    from harness.compare import _label
+    row = {"mesh": "m", "noise_model": "none", "noise_level": "", "method": "x",
+           "params": json.dumps({"flag": True, "tag": "true", "none": None, "solver": "scipy"})}
+    assert _label(row) == 'm none x[flag=true,solver=scipy,tag="true"]'
+    b = copy(run_a, tmp_path)
+    edit(b / "smoothing.csv", lambda rows: [r.update(params=json.dumps({**json.loads(r["params"]), "flag": True,
+                                                                         "tag": "null"})) for r in rows])
+    names = [x["name"] for x in build(b)["benchmarks"] if x["group"].startswith("smoothing/")]
+    assert names and all('flag=true' in n and 'tag="null"' in n for n in names), names
