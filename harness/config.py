@@ -284,7 +284,7 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
     tune = None
     if raw.get("tune") is not None:
         from .tune import check_tune
-        tune = check_tune(raw["tune"], base_dir, P, tasks, lambda m: _check_meshes(m, base_dir, P))
+        tune = check_tune(raw["tune"], base_dir, P, tasks, lambda m: _check_meshes(m, base_dir, P, "tune.train"))
         if tune is not None:                      # searched on the meshes it is judged on: not a fair test
             judged = {json.dumps(_identity(m), sort_keys=True) for m in meshes}
             for m in tune.train:
@@ -372,13 +372,15 @@ def expand_cases(meshes: list, noises, tasks: dict, seed: int, repeats: int, plu
     return [c for c in cases if not (c.case_id in seen or seen.add(c.case_id))]
 
 
-def _check_meshes(meshes, base_dir: Path, P: list) -> list[dict]:
+def _check_meshes(meshes, base_dir: Path, P: list, key: str = "meshes") -> list[dict]:
+    """The mesh list at ``key`` (``meshes``, ``tune.train``): specs of the good entries, a problem
+    in ``P`` for each bad one, named by its key path."""
     out = []
     if not isinstance(meshes, list) or not meshes:
-        P.append("meshes: expected a non-empty list of meshes")
+        P.append(f"{key}: expected a non-empty list of meshes")
         return out
     for i, m in enumerate(meshes):
-        at = f"meshes[{i}]"
+        at = f"{key}[{i}]"
         if isinstance(m, str):
             if datasets.resolve_bundled(m):
                 out.append({"bundled": datasets.resolve_bundled(m)})

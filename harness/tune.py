@@ -117,8 +117,6 @@ def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | 
         P.append(f"tune.seed: expected an integer >= 0, got {seed!r}")
         seed = 0
     train = check_meshes(raw.get("train"))
-    if raw.get("train") is None:
-        P.append("tune.train: expected a non-empty list of training meshes")
     configured = {m: (t, [g for g in grid]) for t, entries in tasks.items() for m, grid in entries}
     params = raw.get("params")
     out_params: dict = {}

@@ -74,6 +74,14 @@ def test_tune_section_is_validated_with_key_paths():
     several = {**CFG, "tasks": {"smoothing": {"methods": ["scratch.implicit"], "params": {"step": [0.01, 0.1]}}}}
     with pytest.raises(ConfigError, match="tune.params.scratch.implicit.step: the run lists several values of step"):
         load_config(several)                 # 'as configured' would be step 0.01 in training, both on the test
+    train = {**CFG, "tune": {**CFG["tune"], "train": ["spot", {"file": "/nonexistent/x.obj"}, "nosuchmesh"]}}
+    with pytest.raises(ConfigError) as e:             # a training mesh was named as the test list's meshes[i]
+        load_config(train)
+    msg = str(e.value)
+    assert "tune.train[1].file: file not found" in msg and "tune.train[2]: unknown mesh" in msg and "meshes[" not in msg, msg
+    with pytest.raises(ConfigError) as e:
+        load_config({**CFG, "tune": {k: v for k, v in CFG["tune"].items() if k != "train"}})
+    assert str(e.value).count("train") == 1 and "tune.train: expected a non-empty list" in str(e.value), str(e.value)
 
 
 def test_sampled_settings_are_the_products_positions():
