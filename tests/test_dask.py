@@ -239,7 +239,20 @@ def test_worker_death_is_one_error_row(cluster):
     assert not alive, "the case process outlived its worker"
 
 
-def test_a_restarted_worker_costs_no_shipped_file_case_but_its_own(tmp_path):
+@pytest.fixture(scope="module")
+def one_worker():
+    """One worker, with Dask's default retries of a task whose worker died (the module's
+    `cluster` sets 0)."""
+    with dask.config.set({"distributed.worker.daemon": False, "distributed.scheduler.allowed-failures": 3}):
+        cl = distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0",
+                                      silence_logs=logging.CRITICAL)
+    try:
+        yield cl
+    finally:
+        cl.close()
+
+
+def test_a_restarted_worker_costs_no_shipped_file_case_but_its_own(one_worker, tmp_path):
     """Before: when the worker holding a `{file:}` mesh's scattered bytes was restarted, every
     case still waiting for them became an error row ('cancelled ... already forgotten'), an
     innocent method ranked last; now they are shipped and submitted again."""
@@ -249,19 +262,39 @@ def test_a_restarted_worker_costs_no_shipped_file_case_but_its_own(tmp_path):
                        "meshes": [{"file": str(tmp_path / "shipped" / "grid.obj")}],
                        "noise": [{"model": "gaussian_normal", "levels": [0.1], "seeds": 4}],
                        "tasks": {"smoothing": {"methods": [{"name": "slowdown.sleep", "params": {"ms": 1500.0}}]}}})
-    # Dask's default retries of a task whose worker died (the module's cluster fixture sets 0 while it lives)
-    with dask.config.set({"distributed.worker.daemon": False, "distributed.scheduler.allowed-failures": 3}):
-        cl = distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0",
-                                      silence_logs=logging.CRITICAL)
-    ex = DaskExecutor(timeout=120, scheduler=cl.scheduler_address)
-
+    ex = DaskExecutor(timeout=120, scheduler=one_worker.scheduler_address)
     try:
         rows = _run_killing_a_busy_worker(ex, cfg.cases, before_kill=lambda pid: time.sleep(0.5))
     finally:
         ex.close()
-        cl.close()
     assert len(rows) == 4 and len({r["case_id"] for r in rows}) == 4
     assert [r["error"] for r in rows if r["status"] != "ok"] == []
+
+
+def test_a_case_that_kills_its_worker_costs_its_own_row_only(one_worker, tmp_path):
+    """Two cases that kill their worker each time they run, beside shipped-file cases waiting on
+    one worker: each kill lost the file's bytes and cancelled every waiting case, and after three
+    such kills all of them were error rows saying 'FutureCancelledError ... already forgotten'.
+    Now a case cancelled while it ran is retried once and then named as killing its worker; the
+    waiting cases run."""
+    (tmp_path / "shipped").mkdir()
+    quad_obj(tmp_path / "shipped" / "grid.obj")
+    cfg = load_config({"plugins": ["tests.plugins.worker_killer", "tests.plugins.slowdown"], "time_budget": 0,
+                       "meshes": [{"file": str(tmp_path / "shipped" / "grid.obj")}],
+                       "noise": [{"model": "gaussian_normal", "levels": [0.1], "seeds": 2}],
+                       "tasks": {"smoothing": {"methods": ["worker_killer.parent", "slowdown.sleep"]}}})
+    ex = DaskExecutor(timeout=120, scheduler=one_worker.scheduler_address)
+    try:
+        rows = [row for _, row, _ in ex.run(cfg.cases)]
+    finally:
+        ex.close()
+    by = {}
+    for r in rows:
+        by.setdefault(r["method"], []).append(r)
+    assert len(rows) == 4 and len({r["case_id"] for r in rows}) == 4
+    assert [r["status"] for r in by["slowdown.sleep"]] == ["ok", "ok"], by["slowdown.sleep"]
+    for r in by["worker_killer.parent"]:
+        assert r["status"] == "error" and "worker running this case died each of the 2 times" in r["error"], r
 
 
 def test_unreachable_scheduler_is_exit_2(tmp_path):

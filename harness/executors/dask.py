@@ -55,6 +55,7 @@ from .isolation import signal_name
 FILE_KEYS = ("file", "clean")
 CACHE_MAX_AGE_S = 7 * 24 * 3600      # a worker's cached mesh file unused this long is removed
 CACHE_DIR_NAME = "mesh-shootout-dask"
+STARTED_TOPIC = "mesh-shootout-case-started"   # scheduler event topic: a task began its case
 
 
 # ----------------------------------------------------------------------------- driver side
@@ -203,7 +204,8 @@ class DaskExecutor:
         shipped, data = ship_files(cases)
         blobs = {h: self.client.scatter(b, hash=False) for h, b in data.items()}   # once per file
         sent_of: dict = {}
-        tries: dict = {}
+        tries: dict = {}       # per case: cancellations before it ran (its file's holder left)
+        died: dict = {}        # per case: cancellations while it ran (its worker died under it)
 
         def submit(case, sent):
             for h in _hashes(sent):          # scattered bytes lost with their worker: ship them again
@@ -233,22 +235,41 @@ class DaskExecutor:
                 if name != "KilledWorker" and not self._scheduler_alive():
                     raise RunInterrupted(f"lost the Dask scheduler {self.scheduler} ({name}); the rows "
                                          "finished so far are saved: continue with --resume") from None
-                sent = sent_of[case.case_id]
-                if "Cancelled" in name and _hashes(sent) and tries.get(case.case_id, 0) < 3:
-                    # the worker holding the file's bytes left (restart, lifetime): the task never ran
-                    tries[case.case_id] = tries.get(case.case_id, 0) + 1
-                    fut.release()
-                    again = submit(case, sent)
-                    futures[again] = case
-                    ac.add(again)
-                    continue
+                sent, cid = sent_of[case.case_id], case.case_id
+                what = None
+                if "Cancelled" in name and _hashes(sent):
+                    # the worker holding the file's bytes left (a restart, --lifetime, or a case that
+                    # killed it): every task waiting for them is cancelled, whether it ran or not
+                    if fut.key in self._started():
+                        died[cid] = died.get(cid, 0) + 1
+                        if died[cid] >= 2:
+                            what = (f"the Dask worker running this case died each of the {died[cid]} times it ran "
+                                    "it (the case may kill its worker: memory, a signal to its parent process)")
+                    else:
+                        tries[cid] = tries.get(cid, 0) + 1
+                        if tries[cid] > 3 + sum(died.values()):
+                            what = (f"cancelled by Dask {tries[cid]} times before it ran: each time the worker "
+                                    "holding its mesh file's bytes left (died or restarted); --resume runs it again")
+                    if what is None:
+                        fut.release()
+                        again = submit(case, sent)
+                        futures[again] = case
+                        ac.add(again)
+                        continue
                 row, extras = base_row(case), {}
-                what = ("the Dask worker running this case died" if name == "KilledWorker"
-                        else "the Dask task failed")
-                row["error"] = f"{what} ({name}: {exc})"[:2000]
+                what = what or (("the Dask worker running this case died" if name == "KilledWorker"
+                                 else "the Dask task failed") + f" ({name}: {exc})")
+                row["error"] = what[:2000]
             fut.release()
             yield case, row, extras
         self._futures = {}
+
+    def _started(self) -> set:
+        """Keys of the tasks that began their case on a worker (`run_task` logs each start)."""
+        try:
+            return {msg for _, msg in self.client.get_events(STARTED_TOPIC)}
+        except Exception:  # noqa: BLE001 - no record: the cancellation counts as one before it ran
+            return set()
 
     def _completed(self, ac):
         """The futures of ``ac`` as they complete (it may grow meanwhile); while none completes
@@ -407,6 +428,7 @@ def run_task(case: Case, blobs: dict, timeout: float | None, want_meshes: bool):
         row = base_row(case)
         row["error"] = f"cannot materialise the shipped mesh file on the worker ({type(exc).__name__}: {exc})"
         return row, {}
+    _log_start()
     if _daemonic():
         row, meshes = run_in_subprocess(case, timeout, want_meshes)
     else:
@@ -416,6 +438,17 @@ def run_task(case: Case, blobs: dict, timeout: float | None, want_meshes: bool):
     if row.get("status") == "unavailable":      # which machine lacks the library
         row["error"] = f"{row.get('error') or ''} (on the worker at {_worker_name()})".lstrip()
     return row, meshes
+
+
+def _log_start() -> None:
+    """Tell the scheduler this task's case begins (topic `STARTED_TOPIC`, the task's key): a task
+    cancelled later ran when its worker died, rather than waited for a worker that left."""
+    try:
+        from distributed import get_worker
+        w = get_worker()
+        w.log_event(STARTED_TOPIC, w.get_current_task())
+    except Exception:  # noqa: BLE001 - not inside a worker (a test calling run_task)
+        pass
 
 
 def _worker_name() -> str:
