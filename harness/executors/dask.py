@@ -306,13 +306,26 @@ class DaskExecutor:
         return {"executor": self.name, "workers": self.n_workers(), "scheduler": self.scheduler}
 
     def close(self):
-        if self._futures:
-            self.client.cancel(list(self._futures))
-            self._futures = {}
-        if self._own_client:
-            self.client.close()
-        if self._cluster is not None:
-            self._cluster.close()
+        """Cancel the futures still out and close what this executor opened. Closing a client
+        whose scheduler is gone cancels its reconnection loop, which distributed logs as an
+        error with its traceback; the run has said so in one line, so those logs are muted."""
+        import logging
+        quiet = [logging.getLogger(n) for n in ("distributed.client", "distributed.utils", "distributed.core",
+                                                "distributed.batched")]
+        levels = [lg.level for lg in quiet]
+        for lg in quiet:
+            lg.setLevel(logging.CRITICAL)
+        try:
+            if self._futures:
+                self.client.cancel(list(self._futures))
+                self._futures = {}
+            if self._own_client:
+                self.client.close()
+            if self._cluster is not None:
+                self._cluster.close()
+        finally:
+            for lg, lv in zip(quiet, levels):
+                lg.setLevel(lv)
 
 
 def ship_files(cases):
