@@ -36,6 +36,7 @@ import harness  # noqa: E402
 from harness.config import load_config  # noqa: E402
 from harness.executors.dask import _prune, DaskExecutor, materialize, run_in_subprocess, ship_files  # noqa: E402
 from harness import tasks  # noqa: E402
+from harness.errors import RunInterrupted  # noqa: E402
 
 SHOOTOUT = Path(sys.executable).with_name("shootout")
 NOT_COMPARED = {"time_s", "time_min_s", "time_max_s", "time_q1_s", "time_q3_s", "time_cold_s", "times", "repeats",
@@ -184,6 +185,11 @@ def test_daemonic_worker_fallback_isolates_too(tmp_path):
                        "tasks": {"smoothing": {"methods": ["hostile.killpg"]}}})
     row = run_in_subprocess(cfg.cases[0], timeout=30)[0]
     assert row["status"] == "error" and "SIGTERM" in row["error"]
+    sleeper = next(c for c in load_config({"plugins": ["tests.plugins.crashy"], "meshes": ["knight"],
+                                           "tasks": {"laplacian": {"methods": ["crashy.sleep"]}}}).cases)
+    t0 = time.monotonic()                          # a cancelled task's case is killed, not left to its timeout
+    row = run_in_subprocess(sleeper, timeout=60, stop=lambda: time.monotonic() > t0 + 1)[0]
+    assert "cancelled" in row["error"] and time.monotonic() - t0 < 10, row
 
 
 def _run_killing_a_busy_worker(ex, cases, before_kill):
@@ -237,6 +243,34 @@ def test_worker_death_is_one_error_row(cluster):
     for p in alive:
         os.kill(p, signal.SIGKILL)
     assert not alive, "the case process outlived its worker"
+
+
+def test_an_interrupted_driver_leaves_no_case_running_on_the_workers(cluster):
+    """Ctrl-C (or any exit) closes the executor, which cancels its futures; Dask lets a running
+    task's thread go on, so its case process ran to the end (or its timeout) on the worker. The
+    task now polls for the cancellation and kills its case."""
+    cfg = load_config({"plugins": ["tests.plugins.crashy"], "meshes": ["knight"],
+                       "tasks": {"laplacian": {"methods": ["crashy.sleep"]}}})
+    ex = DaskExecutor(timeout=120, scheduler=cluster.scheduler_address)
+    def drive():
+        try:
+            for _ in ex.run(cfg.cases):
+                pass
+        except RunInterrupted:                   # the executor closed under it: how the driver stops
+            pass
+    threading.Thread(target=drive, daemon=True).start()
+    workers = [psutil.Process(p) for p in ex.client.run(os.getpid).values()]
+    kids: list = []
+    t0 = time.time()
+    while not kids and time.time() - t0 < 60:
+        kids = [k for w in workers for k in w.children(recursive=True)]
+        time.sleep(0.05)
+    assert kids, "the case never started"
+    ex.close()
+    gone, alive = psutil.wait_procs(kids, timeout=10)
+    for k in alive:
+        k.kill()
+    assert not alive, "the case ran on after its driver gave up on it"
 
 
 @pytest.fixture(scope="module")

@@ -50,7 +50,7 @@ from pathlib import Path
 from ..config import Case
 from ..errors import InvalidMeshError, RunInterrupted, ShootoutError
 from ..runner import base_row
-from .isolation import signal_name
+from .isolation import cancelled_row, signal_name
 
 FILE_KEYS = ("file", "clean")
 CACHE_MAX_AGE_S = 7 * 24 * 3600      # a worker's cached mesh file unused this long is removed
@@ -443,11 +443,11 @@ def run_task(case: Case, blobs: dict, timeout: float | None, want_meshes: bool):
         return row, {}
     _log_start()
     if _daemonic():
-        row, meshes = run_in_subprocess(case, timeout, want_meshes)
+        row, meshes = run_in_subprocess(case, timeout, want_meshes, stop=_cancelled)
     else:
         _warm(case)
         from .isolation import run_isolated
-        row, meshes = run_isolated(case, timeout, want_meshes)
+        row, meshes = run_isolated(case, timeout, want_meshes, stop=_cancelled)
     if row.get("status") == "unavailable":      # which machine lacks the library
         row["error"] = f"{row.get('error') or ''} (on the worker at {_worker_name()})".lstrip()
     return row, meshes
@@ -462,6 +462,18 @@ def _log_start() -> None:
         w.log_event(STARTED_TOPIC, w.get_current_task())
     except Exception:  # noqa: BLE001 - not inside a worker (a test calling run_task)
         pass
+
+
+def _cancelled() -> bool:
+    """Whether the client gave up on the task this worker thread runs (it cancelled the future:
+    the driver was interrupted, or closed): Dask lets the thread run on, so its case is killed."""
+    try:
+        from distributed import get_worker
+        w = get_worker()
+        ts = w.state.tasks.get(w.get_current_task())
+    except Exception:  # noqa: BLE001 - not inside a worker (a test calling run_task)
+        return False
+    return ts is None or ts.state == "cancelled"
 
 
 def _worker_name() -> str:
@@ -493,14 +505,14 @@ def _warm(case: Case) -> None:
         pass
 
 
-def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: bool = False):
+def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: bool = False, stop=None):
     """Run one case in a fresh ``python -m harness.executors.dask`` process; ``(row, meshes)``.
 
     For processes that may not fork multiprocessing children (daemonic Dask workers). The
     case goes in on stdin (pickled) and the result comes back through a temporary file (the
     method may print to stdout). The child holds stdin open and exits when it reaches EOF,
     so it dies with this process. Crash -> ``error`` row naming the signal; past ``timeout``
-    -> killed, ``timeout`` row.
+    -> killed, ``timeout`` row; ``stop()`` true (polled twice a second) -> killed.
     """
     fd, out_path = tempfile.mkstemp(prefix="shootout-case-", suffix=".pkl")
     os.close(fd)
@@ -526,13 +538,24 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
         except BrokenPipeError:
             pass
         try:
-            proc.wait(timeout)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
-            row = base_row(case)
-            row.update(status="timeout", error=f"killed after {timeout:g} s (timeout)")
-            return row, {}
+            deadline = None if timeout is None else time.monotonic() + timeout
+            while True:
+                left = None if deadline is None else deadline - time.monotonic()
+                if left is not None and left <= 0:
+                    proc.kill()
+                    proc.wait()
+                    row = base_row(case)
+                    row.update(status="timeout", error=f"killed after {timeout:g} s (timeout)")
+                    return row, {}
+                if stop is not None and stop():
+                    proc.kill()
+                    proc.wait()
+                    return cancelled_row(case), {}
+                try:
+                    proc.wait(0.5 if left is None else min(0.5, left))
+                    break
+                except subprocess.TimeoutExpired:
+                    continue
         finally:
             try:
                 os.killpg(proc.pid, 9)   # what the case left running in its session dies with it

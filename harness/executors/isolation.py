@@ -348,8 +348,18 @@ class _Job:
         self._cleanup()
 
 
-def run_isolated(case: Case, timeout: float | None = None, want_meshes: bool = False, want_view: bool = False):
-    """Run one case in a fresh child process; returns ``(row, extras)``, never raises."""
+def cancelled_row(case: Case) -> dict:
+    """The row of a case killed because its caller gave up on it (nobody records it)."""
+    row = base_row(case)
+    row["error"] = "cancelled: the run that asked for this case stopped waiting for it"
+    return row
+
+
+def run_isolated(case: Case, timeout: float | None = None, want_meshes: bool = False, want_view: bool = False,
+                 stop=None):
+    """Run one case in a fresh child process; returns ``(row, extras)``, never raises.
+    ``stop``: a callable polled twice a second; when it returns true the case is killed (its
+    caller gave up on it) and the row says so."""
     from multiprocessing.connection import wait as mp_wait
     with signals_blocked():
         job = _Job(case, want_meshes, want_view)
@@ -359,6 +369,9 @@ def run_isolated(case: Case, timeout: float | None = None, want_meshes: bool = F
             left = None if deadline is None else deadline - time.perf_counter()
             if left is not None and left <= 0:
                 return job.kill_timeout(timeout)
+            if stop is not None and stop():
+                job.abort()
+                return cancelled_row(case), {}
             if mp_wait([job.conn, job.sentinel], 0.5 if left is None else min(0.5, left)) or job.ended():
                 return job.collect()
             job.keep_tail()
