@@ -24,13 +24,15 @@ from .results import Frames, RunFolder, check_output_file, out_dir_problems
 
 def config_hash(cfg: Config) -> str:
     """sha1 of what the rows depend on (case ids, repeats, Hausdorff samples and gap, the timing
-    budget), so a resume with a changed config is detected. Settings at their defaults are left
+    budget; with ``tune:``, its training cases and metric), so a resume with a changed config is detected. Settings at their defaults are left
     out of the key, so that folders of versions that did not count them still resume."""
     hs = cfg.cases[0].hausdorff_samples if cfg.cases else None
     eps = cfg.cases[0].hausdorff_eps if cfg.cases else 1e-3
     budget = cfg.cases[0].time_budget if cfg.cases else 0.25
     key = ([sorted(c.case_id for c in cfg.cases), cfg.repeats, hs] + ([eps] if eps != 1e-3 else [])
            + ([["time_budget", budget]] if budget != 0.25 else []))
+    if cfg.tune is not None:             # the training cases and the metric decide the tuned cases
+        key.append(["tune", cfg.tune.metric, sorted(c.case_id for c in cfg.tune.cases)])
     blob = json.dumps(key).encode()
     return hashlib.sha1(blob).hexdigest()[:16]
 
@@ -301,12 +303,30 @@ def folder_problems(folder, out_dir, chash: str, resume: bool) -> list[str]:
                 "they cannot be matched to this config"]
     if prev and prev.get("config_hash") != chash:
         return [f"--resume: the config changed since the run in {out_dir} started "
-                "(cases, repeats, time_budget, hausdorff_samples or hausdorff_eps differ; a case id also changes when a "
+                "(cases, tune:, repeats, time_budget, hausdorff_samples or hausdorff_eps differ; a case id also changes when a "
                 "mesh file's contents or a method's default parameters do); run without --resume to start over, "
                 "or use a new --out folder"]
     return [f"--resume: {p}: written by another version of mesh-shootout or of its task kind, so resuming would "
             "drop its rows; run without --resume (a fresh run replaces them) or use a new --out folder"
             for p in folder.column_problems()]
+
+
+def relabelled_meshes(folder, cases) -> list[str]:
+    """For --resume: meshes whose label changed since their rows were written (a file's ``name:``
+    or file name). A case id leaves the label out, but the noise is seeded by it, so the
+    recorded noisy inputs differ from the ones this config would make."""
+    label = {c.case_id: c.mesh_key for c in cases}
+    seen: dict = {}
+    for sub in (folder, RunFolder(folder.path / "tune")):
+        for task in tasks.names():
+            for r in sub.read_rows(task):
+                now = label.get(r.get("case_id"))
+                if now is not None and r.get("mesh") not in (None, "", now):
+                    seen.setdefault((r["mesh"], now), r.get("noise_model"))
+    return [f"--resume: the mesh labelled {old!r} in the run's rows is labelled {new!r} by this config (its "
+            "name: or file name changed); the noise is seeded by the label, so the rows would mix two different "
+            "noisy inputs of one mesh: label it as before, or run without --resume"
+            for (old, new) in sorted(seen)]
 
 
 def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, executor, scheduler, resume, quiet,
@@ -317,6 +337,9 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         raise problems_error(refused)
     try:
         if resume:
+            relabelled = relabelled_meshes(folder, list(cfg.cases) + (list(cfg.tune.cases) if cfg.tune else []))
+            if relabelled:
+                raise problems_error(relabelled)
             try:
                 known = None if cfg.tune is not None else {c.case_id for c in cfg.cases}   # tuned cases come later
                 done = folder.keep_ok_rows(known=known)
@@ -411,6 +434,10 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
     try:
         if cfg.tune is not None:
             extra_cases = _tune(cfg, ex, out_dir, meta, threads, resume, quiet)
+            if resume:                   # rows of tuned settings this choice no longer makes are not this run's
+                ours = {c.case_id for c in list(cfg.cases) + extra_cases}
+                folder.drop_rows(lambda r: r["case_id"] not in ours)
+                done &= ours
             todo = [c for c in extra_cases if c.case_id not in done]
             cases = cases + todo
             meta["n_cases"] = len(cfg.cases) + len(extra_cases)
@@ -487,7 +514,7 @@ def _tune(cfg: Config, ex, out_dir: Path, meta: dict, threads: int, resume: bool
     the tuned test cases (see `harness.tune`)."""
     from .tune import choose, tuned_cases
     tfolder = RunFolder(out_dir / "tune")
-    done = tfolder.keep_ok_rows() if resume else set()
+    done = tfolder.keep_ok_rows(known={c.case_id for c in cfg.tune.cases}) if resume else set()
     if not resume:
         tfolder.reset()
     todo = [dataclasses.replace(c, threads=threads) for c in cfg.tune.cases if c.case_id not in done]

@@ -297,3 +297,52 @@ def test_a_killed_session_started_in_the_same_second_is_still_recorded(tmp_path)
     sessions = json.loads((out / "run.json").read_text())["sessions"]
     assert [(s["id"], s["status"]) for s in sessions[:2]] == [(first["id"], "finished"), ("feedfacefeedface", "killed")]
     assert len(sessions) == 3 and sessions[2]["status"] == "finished"
+
+
+TUNE = {"name": "tuned", "time_budget": 0, "hausdorff_samples": 200,
+        "meshes": [{"procedural": "sphere", "subdivisions": 2}], "noise": [{"model": "gaussian_normal", "levels": [0.3]}],
+        "tasks": {"smoothing": {"methods": ["scratch.taubin"]}},
+        "tune": {"metric": "dist_mean", "train": [{"procedural": "torus", "resolution": 12}],
+                 "budget": 2, "params": {"scratch.taubin": {"iterations": [3, 12]}}}}
+
+
+def test_resume_of_a_tuned_run_refuses_another_tune_section_and_drops_rows_not_its_own(tmp_path):
+    """--resume kept the training rows of another tune.train and averaged them into the choice,
+    and kept a tuned row of another choice beside the new one (more rows than cases)."""
+    from harness.session import config_hash
+    base = config_hash(load_config(TUNE))
+    assert config_hash(load_config({**TUNE, "tune": {**TUNE["tune"], "train": ["knight"]}})) != base
+    assert config_hash(load_config({**TUNE, "tune": {**TUNE["tune"], "metric": "hausdorff"}})) != base
+    assert config_hash(load_config({**TUNE, "tune": {**TUNE["tune"], "params": {"scratch.taubin": {"iterations": [3, 11]}}}})) != base
+    notune = {k: v for k, v in TUNE.items() if k != "tune"}
+    assert config_hash(load_config(notune)) == config_hash(load_config({**notune, "name": "x"}))
+    out = tmp_path / "out"
+    first = harness.run(TUNE, out=out, workers=1)["smoothing"]
+    p = out / "smoothing.csv"
+    lines = p.read_text().splitlines(keepends=True)
+    p.write_text("".join(lines + ["deadbeef0000" + lines[-1][lines[-1].index(","):]]))   # another choice's row
+    again = harness.run(TUNE, out=out, workers=1, resume=True)["smoothing"]
+    assert "deadbeef0000" not in set(again["case_id"]) and sorted(again["case_id"]) == sorted(first["case_id"])
+
+
+def test_resume_refuses_a_mesh_whose_label_changed(tmp_path):
+    """A file mesh's name: is not part of its case ids, but its noise is seeded by it: a resume
+    under another name mixed rows of two different noisy inputs, as two meshes."""
+    from harness.errors import ShootoutError
+    mesh = tmp_path / "kn.obj"
+    from harness import datasets
+    m = datasets.cached({"procedural": "sphere", **datasets.PROCEDURAL["sphere"], "subdivisions": 2}).clean
+    mesh.write_text("".join(f"v {x} {y} {z}\n" for x, y, z in m.V) + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in m.F))
+    cfg = {"name": "n", "time_budget": 0, "hausdorff_samples": 200, "meshes": [{"file": str(mesh), "name": "alpha"}],
+           "noise": [{"model": "gaussian_normal", "levels": [0.3]}],
+           "tasks": {"smoothing": {"methods": ["scratch.taubin", "scratch.explicit"]}}}
+    out = tmp_path / "out"
+    harness.run(cfg, out=out, workers=1)
+    p = out / "smoothing.csv"
+    p.write_text("".join(p.read_text().splitlines(keepends=True)[:-1]))          # a killed run's last row missing
+    before = p.read_bytes()
+    with pytest.raises(ShootoutError, match="labelled 'alpha' in the run's rows is labelled 'beta'"):
+        harness.run({**cfg, "meshes": [{"file": str(mesh), "name": "beta"}]}, out=out, workers=1, resume=True)
+    assert p.read_bytes() == before
+    df = harness.run(cfg, out=out, workers=1, resume=True)["smoothing"]           # under its old name it resumes
+    assert len(df) == 2 and set(df["mesh"]) == {"alpha"}
