@@ -32,7 +32,7 @@ def gaussian_curvature(V, F):
 
 
 @register("libigl.principal_curvature", task="curvature", library="libigl", requires=("igl",),
-          params={"radius": Param("radius", 5, "int", low=1, high=100,
+          params={"radius": Param("radius", 5, "int", low=2, high=100,
                                   doc="neighbourhood size in average edge lengths (igl's radius)")})
 def principal_curvature(V, F, *, radius=5):
     """``igl.principal_curvature(V, F, radius)`` values (module docstring)."""

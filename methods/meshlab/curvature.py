@@ -5,11 +5,17 @@
 angle defect and cotangent mean curvature over mixed Voronoi areas); pointwise values, H > 0 on a
 sphere with outward normals, as the task's (checked in tests on a sphere and a torus).
 ``meshlab.principal_curvature``: ``compute_curvature_principal_directions_per_vertex`` with the
-chosen ``method`` (VCGLib's quadric fitting, Taubin's approximation, PCA, normal cycles or
-scale-dependent quadric fitting: the labels PyMeshLab 2025.7 accepts) and neighbourhood
-``scale`` (percent of the bounding-box diagonal), reading its two principal values through ``curvcolormethod`` ``Min Curvature`` and
+chosen ``method`` (VCGLib's quadric fitting or scale-dependent quadric fitting), reading its two principal values through ``curvcolormethod`` ``Min Curvature`` and
 ``Max Curvature`` (VCGLib's labels do not follow the sign order: the adapter sorts them,
-``k1 >= k2``). MeshLab holds vertex quality in single precision.
+``k1 >= k2``). ``scale`` (the neighbourhood radius, percent of the bounding-box diagonal) is read
+by scale-dependent quadric fitting alone: the filter ignores it otherwise (results equal for every
+scale), so it is refused with the other method. PyMeshLab's three other labels are left out: its
+"Normal Cycles" values are curvature integrated over a vertex's area (they grow with the
+radius of a sphere and shrink as it is refined), its "Principal Component Analysis" values
+have another sign and a scale that depends on the resolution (neither is the task's pointwise
+curvature), and "Taubin approximation" corrupts the heap (a double free aborts about half of
+its calls on an icosphere in PyMeshLab 2025.7, so the values of the other half are not to be
+trusted either). MeshLab holds vertex quality in single precision.
 """
 from __future__ import annotations
 
@@ -41,8 +47,9 @@ def discrete_curvature(V, F):
     return CurvatureResult(K=out["K"], H=out["H"])
 
 
-_METHODS = ("Quadric Fitting", "Taubin approximation", "Principal Component Analysis", "Normal Cycles",
-            "Scale Dependent Quadric Fitting")
+_METHODS = ("Quadric Fitting", "Scale Dependent Quadric Fitting")
+_SCALED = "Scale Dependent Quadric Fitting"        # the one label that reads ``scale``
+_SCALE = 10.0                                      # its default: percent of the bounding-box diagonal
 
 
 def _no_zero_area(V, F, name) -> None:
@@ -55,11 +62,16 @@ def _no_zero_area(V, F, name) -> None:
 @register("meshlab.principal_curvature", task="curvature", library="pymeshlab", requires=("pymeshlab",),
           precheck=_no_zero_area,
           params={"method": Param("method", "Quadric Fitting", choices=_METHODS, doc="VCGLib's estimator"),
-                  "scale": Param("scale", 10.0, "float", low=0.01, high=100.0,
-                                 doc="neighbourhood radius, percent of the bounding-box diagonal")})
-def principal_curvature(V, F, *, method="Quadric Fitting", scale=10.0):
+                  "scale": Param("scale", None, "float", low=0.01, high=100.0, optional=True,
+                                 doc="neighbourhood radius, percent of the bounding-box diagonal; read by "
+                                     f"{_SCALED!r} alone ({_SCALE:g} when not given)")})
+def principal_curvature(V, F, *, method="Quadric Fitting", scale=None):
     """Principal curvatures from MeshLab's principal-directions filter (module docstring)."""
     import pymeshlab
+    if scale is not None and method != _SCALED:
+        raise ValueError(f"meshlab.principal_curvature: scale is read by method {_SCALED!r} alone; "
+                         f"{method!r} ignores it (every scale gives the same values): leave it out")
+    scale = _SCALE if scale is None else scale
     vals = []
     ms = _meshset(V, F)                  # one mesh: the filter writes directions and quality only
     for kind in ("Min Curvature", "Max Curvature"):
