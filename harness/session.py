@@ -311,6 +311,45 @@ def folder_problems(folder, out_dir, chash: str, resume: bool) -> list[str]:
             for p in folder.column_problems()]
 
 
+PROVENANCE = ("git_commit", "git_dirty", "versions")
+
+
+def _keep_first_provenance(meta: dict, prev: dict, session_id: str, quiet: bool) -> None:
+    """On --resume: run.json's top-level commit and package versions stay the first run's (as
+    ``started`` and ``command`` do; each session records its own), and a session whose code or
+    packages differ is listed in ``provenance_changed`` and said on stderr: the folder then
+    holds rows of both."""
+    now = {k: meta[k] for k in PROVENANCE}
+    first = {k: prev.get(k) for k in PROVENANCE}
+    if not isinstance(first["versions"], dict):
+        first["versions"] = {}
+    diff: dict = {}
+    for k in ("git_commit", "git_dirty"):
+        if first[k] != now[k]:
+            diff[k] = [first[k], now[k]]
+    vers = {p: [first["versions"].get(p), now["versions"].get(p)]
+            for p in sorted(set(first["versions"]) | set(now["versions"]))
+            if first["versions"].get(p) != now["versions"].get(p)}
+    if vers:
+        diff["versions"] = vers
+    meta.update(first)
+    changed = [x for x in prev.get("provenance_changed") or [] if isinstance(x, dict)]
+    if diff:
+        changed.append({"session": session_id, **diff})
+        if not quiet:
+            what = ([f"commit {diff['git_commit'][0]} -> {diff['git_commit'][1]}"] if "git_commit" in diff else []) \
+                + (["uncommitted changes " + ("now" if now["git_dirty"] else "then")] if "git_dirty" in diff else []) \
+                + [f"{p} {a} -> {b}" for p, (a, b) in vers.items()]
+            print("shootout: warning: this session's code or packages differ from the run's first ("
+                  + "; ".join(what) + "): the folder will hold rows of both (run.json provenance_changed)",
+                  file=sys.stderr, flush=True)
+    if changed:
+        meta["provenance_changed"] = changed
+    loads = prev.get("load_average")
+    if isinstance(loads, list) and loads and isinstance(loads[0], (int, float)):
+        meta["load_average"] = [loads[0]] + meta["load_average"][-1:]    # the run's start, this session's
+
+
 def relabelled_meshes(folder, cases) -> list[str]:
     """For --resume: meshes whose label changed since their rows were written (a file's ``name:``
     or file name). A case id leaves the label out, but the noise is seeded by it, so the
@@ -411,6 +450,10 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
                                    "IGL_NUM_THREADS, MKL_NUM_THREADS, OMP_NUM_THREADS and OPENBLAS_NUM_THREADS "
                                    "set to it in every case, for libraries a method loads during its cold call"}}
     meta["load_average"] = [_load()]
+    load0 = meta["load_average"][0]             # this session's start (the run's stays first in run.json)
+    own = {k: meta[k] for k in PROVENANCE}        # this session's code and packages, in its own record
+    if prev_meta:
+        _keep_first_provenance(meta, prev_meta, session_id, quiet)
     meta["sessions"] = prev_sessions          # kept if this session's driver is killed
     if resume:
         meta["resumed_at"] = now_iso()
@@ -481,7 +524,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         session = {"id": session_id, "started": session_started, "finished": now_iso(), "wall_s": wall,
                    "command": " ".join(sys.argv), "status": meta["status"], "resumed_ok_cases": len(done),
                    "executor": meta.get("executor"), "scheduler": meta.get("scheduler"), "workers": meta.get("workers"),
-                   "status_counts": counts, "load_average": meta["load_average"]}
+                   "status_counts": counts, "load_average": [load0, meta["load_average"][-1]], **own}
         if overhead:
             fixed = [f for f, _, _ in overhead]
             spent = sum(m for _, m, _ in overhead)
@@ -496,6 +539,9 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
                               "share_of_method_time: the cases' summed fixed cost over their summed method time "
                               "(samples + cold call); median_case_share: the median of that ratio per case; "
                               "measuring_mean: the part of the mean spent measuring the results (the task's metrics)"}
+            session["fixed_cost_per_case_s"] = meta["fixed_cost_per_case_s"]
+        elif prev_meta and isinstance(prev_meta.get("fixed_cost_per_case_s"), dict):
+            meta["fixed_cost_per_case_s"] = prev_meta["fixed_cost_per_case_s"]   # the last session that ran cases
         meta.update(finished=session["finished"], status_counts=folder.status_counts(),
                     status_counts_this_session=counts, sessions=prev_sessions + [session],
                     wall_s=round(wall + sum(x.get("wall_s") or 0 for x in prev_sessions), 3))

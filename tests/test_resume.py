@@ -277,6 +277,34 @@ def test_resume_keeps_the_first_session_and_says_what_it_skipped(tmp_path):
     assert len(s) == 2 and s[0]["started"] == first["started"] and "--resume" in s[1]["command"]
     assert s[1]["resumed_ok_cases"] == 2 and s[1]["status"] == "finished"
     assert abs(meta["wall_s"] - (s[0]["wall_s"] + s[1]["wall_s"])) < 1e-6
+    # a resume that ran nothing kept the first run's fixed cost, commit and versions (it wrote
+    # null and its own), and the run's load at the start; each session has its own
+    assert meta["fixed_cost_per_case_s"] == first["fixed_cost_per_case_s"] is not None
+    assert meta["load_average"][0] == first["load_average"][0] and "provenance_changed" not in meta
+    assert all(x["versions"] == first["versions"] and x["git_commit"] == first["git_commit"] for x in s)
+
+
+def test_a_resume_with_other_code_or_packages_keeps_the_first_and_says_so(tmp_path):
+    """--resume replaced run.json's commit and package versions with its own: rows made by the
+    first run's code were credited to the resume's, and nothing recorded the first."""
+    import json
+    cfg = slow_config(seconds=(0.0, 0.01))
+    out = tmp_path / "out"
+    harness.run(cfg, out=out, workers=1)
+    meta = json.loads((out / "run.json").read_text())
+    meta["versions"]["numpy"] = "1.0.0-OLD"
+    meta["git_commit"] = "0ldc0mmit"
+    (out / "run.json").write_text(json.dumps(meta))
+    p = out / "laplacian.csv"
+    p.write_text("".join(p.read_text().splitlines(keepends=True)[:-1]))
+    harness.run(cfg, out=out, workers=1, resume=True, quiet=False)
+    after = json.loads((out / "run.json").read_text())
+    assert after["versions"]["numpy"] == "1.0.0-OLD" and after["git_commit"] == "0ldc0mmit"
+    (ch,) = after["provenance_changed"]
+    assert ch["session"] == after["sessions"][-1]["id"] and ch["git_commit"][0] == "0ldc0mmit"
+    assert ch["versions"]["numpy"][0] == "1.0.0-OLD" and after["sessions"][-1]["versions"]["numpy"] != "1.0.0-OLD"
+    html = (out / "report.html").read_text()
+    assert "provenance" in html and "1.0.0-OLD" in html
 
 
 def test_a_killed_session_started_in_the_same_second_is_still_recorded(tmp_path):

@@ -217,6 +217,18 @@ def _timing_text(meta) -> str:
     return "; ".join(parts)
 
 
+def _provenance_text(x: dict) -> str:
+    """One entry of run.json's ``provenance_changed``: what a resumed session ran otherwise."""
+    parts = []
+    if isinstance(x.get("git_commit"), list):
+        parts.append("commit {} -> {}".format(*(x["git_commit"] + [None, None])[:2]))
+    if isinstance(x.get("git_dirty"), list):
+        parts.append("uncommitted changes {} -> {}".format(*(x["git_dirty"] + [None, None])[:2]))
+    if isinstance(x.get("versions"), dict):
+        parts += [f"{p} {v[0]} -> {v[1]}" for p, v in x["versions"].items() if isinstance(v, list) and len(v) == 2]
+    return f"session {x.get('session')}: " + ", ".join(parts)
+
+
 def _header_html(meta, frames, run_dir) -> str:
     name = meta.get("name") or Path(run_dir).name
     mach = meta.get("machine") or {}
@@ -246,6 +258,11 @@ def _header_html(meta, frames, run_dir) -> str:
                                "contention; use <code>--workers 1</code> for timing-grade numbers.</span>"))
     key_vers = ", ".join(f"{k} {v}" for k, v in vers.items() if v)
     rows.append(("versions", _esc(key_vers)))
+    changed = [x for x in meta.get("provenance_changed") or [] if isinstance(x, dict)]
+    if changed:
+        rows.append(("provenance", "<span class='warn'>" + _esc(
+            f"{len(changed)} later session(s) ran other code or packages than the commit and versions above, "
+            "so the rows mix both: " + "; ".join(_provenance_text(x) for x in changed)) + "</span>"))
     solver = meta.get("solver")
     if isinstance(solver, dict) and solver:
         rows.append(("linear solvers", _esc(_solver_text(solver))))
