@@ -80,10 +80,10 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
-def check_output_file(path, flag: str, protect=(), run_dirs=()) -> None:
+def check_output_file(path, flag: str, protect=(), run_dirs=(), kind=None) -> None:
     """`harness.results.check_output_file`, imported when a command needs it."""
     from .results import check_output_file as check
-    check(path, flag, protect=protect, run_dirs=run_dirs)
+    check(path, flag, protect=protect, run_dirs=run_dirs, kind=kind)
 
 
 def _cmd_run(a) -> int:
@@ -93,7 +93,7 @@ def _cmd_run(a) -> int:
     from .session import run_args_problems
     P = run_args_problems(a.workers, a.timeout, a.executor, a.scheduler)   # every problem, then one message
     try:
-        check_output_file(a.export_benchmark_json, "--export-benchmark-json", protect=[a.config])
+        check_output_file(a.export_benchmark_json, "--export-benchmark-json", protect=[a.config], kind="json")
     except ShootoutError as exc:
         P.append(str(exc))
     from .session import _results_config, run
@@ -123,7 +123,7 @@ def _cmd_run(a) -> int:
     if out_dir is not None:
         P += out_dir_problems(out_dir, a.resume)
         try:
-            check_output_file(a.export_benchmark_json, "--export-benchmark-json", run_dirs=(out_dir,))
+            check_output_file(a.export_benchmark_json, "--export-benchmark-json", run_dirs=(out_dir,), kind="json")
         except ShootoutError as exc:
             P.append(str(exc))
     if bad_config is not None and not P:
@@ -317,7 +317,7 @@ def _cmd_compare(a) -> int:
         problems.append("--no-time compares no times: --time-factor and --absolute-time would be ignored; "
                         "give one or the other")
     try:
-        check_output_file(a.html, "--html", run_dirs=(a.run_a, a.run_b))
+        check_output_file(a.html, "--html", run_dirs=(a.run_a, a.run_b), kind="html")
     except ShootoutError as exc:
         problems.append(str(exc))
     if problems:

@@ -413,18 +413,38 @@ def _resolved(p: Path, what: str) -> Path:
         raise ShootoutError(f"{what}: cannot be resolved ({exc})") from None
 
 
-def check_output_file(path, flag: str, protect=(), run_dirs=()) -> None:
+def _sniff(p: Path, n: int = 4096) -> bytes:
+    try:
+        with open(p, "rb") as fh:
+            return fh.read(n)
+    except OSError:
+        return b""
+
+
+OUTPUT_KINDS = {   # what an existing file must look like to be replaced by an output of that kind
+    "json": ("a benchmark export (JSON with 'benchmarks')",
+             lambda p: _sniff(p).lstrip().startswith(b"{") and b'"benchmarks"' in _sniff(p, 1 << 20)),
+    "html": ("an HTML page", lambda p: _sniff(p, 512).lstrip()[:15].lower().startswith((b"<!doctype html", b"<html"))),
+}
+
+
+def check_output_file(path, flag: str, protect=(), run_dirs=(), kind: str | None = None) -> None:
     """An output file named on the command line can be written: not a folder, not one of the
     ``protect``ed inputs (e.g. the config being run), not an existing file or a run's own file
-    name inside one of the ``run_dirs`` (the runs compared, the run folder written), under a
-    writable folder (missing folders are made). Checked before any work, so a typo costs exit
-    2, not a finished run or an overwritten input."""
+    name inside one of the ``run_dirs`` (the runs compared, the run folder written), not an
+    existing file of another kind than the output's (``kind``, a key of `OUTPUT_KINDS`: a mesh
+    or a config named by mistake is never overwritten), under a writable folder (missing folders
+    are made). Checked before any work, so a typo costs exit 2, not a finished run or an
+    overwritten input."""
     if path is None:
         return
     p = Path(path)
     rp = _resolved(p, f"{flag} {path}")
     if p.is_dir():
         raise ShootoutError(f"{flag} {path}: is a folder; give a file name")
+    if kind is not None and p.is_file() and p.stat().st_size > 0 and not OUTPUT_KINDS[kind][1](p):
+        raise ShootoutError(f"{flag} {path}: exists and is not {OUTPUT_KINDS[kind][0]}, so it is not overwritten; "
+                            "name a new file or remove it first")
     for q in protect:
         try:
             if q is not None and Path(q).exists() and p.exists() and rp == Path(q).resolve():

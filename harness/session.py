@@ -184,7 +184,7 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
     done: set[str] = set()
     problems = out_dir_problems(out_dir, resume)     # refused before the folder or its lock is made
     try:
-        check_output_file(export_benchmark_json, "export_benchmark_json", run_dirs=(out_dir,))
+        check_output_file(export_benchmark_json, "export_benchmark_json", run_dirs=(out_dir,), kind="json")
     except ShootoutError as exc:
         problems.append(str(exc))
     if not problems and out_dir.is_dir():

@@ -402,6 +402,16 @@ def test_output_files_are_checked_before_any_work(run_a, tmp_path, capsys):
     exports = run_a / "exports" / "d.html"            # another folder of the user's inside it: allowed
     assert cli(["compare", str(run_a), str(run_a), "--html", str(exports)]) == 0 and exports.is_file()
     shutil.rmtree(run_a / "exports")
+    # an existing file of another kind (a config's mesh, notes) is never overwritten by an export
+    mesh = tmp_path / "myscan.obj"
+    mesh.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    with pytest.raises(harness.errors.ShootoutError, match="is not a benchmark export"):
+        harness.run(SMALL, out=tmp_path / "o2", export_benchmark_json=mesh)
+    assert cli(["compare", str(run_a), str(run_a), "--html", str(mesh)]) == 2
+    assert mesh.read_text().startswith("v 0 0 0") and not (tmp_path / "o2").exists()
+    from harness.results import OUTPUT_KINDS
+    assert OUTPUT_KINDS["json"][1](run_a.parent / "bench.json")                    # an export is replaced
+    assert cli(["compare", str(run_a), str(run_a), "--html", str(tmp_path / "new" / "d.html")]) == 0   # its own: again
     loop = tmp_path / "loop"
     loop.symlink_to(loop)
     assert cli(["run", str(cfg), "--out", str(loop)]) == 2
