@@ -209,13 +209,18 @@ class DaskExecutor:
 
         def submit(case, sent):
             for h in _hashes(sent):          # scattered bytes lost with their worker: ship them again
-                if h in blobs and blobs[h].status != "finished":
+                for attempt in range(3):
+                    if h not in blobs or blobs[h].status == "finished":
+                        break
+                    self._wait_for_workers()     # a restarting worker (nanny) takes a while to come back
                     try:
                         blobs[h] = self.client.scatter(data[h], hash=False)
                     except (OSError, TimeoutError) as exc:     # no worker left to take them
-                        raise RunInterrupted(f"cannot ship {Path(sent.mesh.get('file', '?')).name} to the Dask "
-                                             f"cluster again ({type(exc).__name__}: {exc}); start workers and "
-                                             "continue with --resume") from None
+                        if attempt == 2:
+                            raise RunInterrupted(f"cannot ship {Path(sent.mesh.get('file', '?')).name} to the Dask "
+                                                 f"cluster again ({type(exc).__name__}: {exc}); start workers and "
+                                                 "continue with --resume") from None
+                        time.sleep(1)
             need = {h: blobs[h] for h in _hashes(sent) if h in blobs}
             return self.client.submit(run_task, sent, need, self.timeout, want_meshes,
                                       key=f"shootout-{case.case_id}-{uuid.uuid4().hex[:12]}",
