@@ -283,8 +283,11 @@ def _cmd_views(a) -> int:
         views = recompute_views(d)
         from .report import build_report
         failed = [v for v in views if v.get("error")]
+        kept = [v for v in views if v.get("kept")]
         print(f"{len(views)} view(s) written to {d / 'views'}" + (f", {len(failed)} of them failed (first: case "
               f"{failed[0].get('case_id')}: {failed[0]['error'][:300]})" if failed else "")
+              + (f", {len(kept)} kept as the run made them (first: case {kept[0].get('case_id')}: "
+                 f"{kept[0]['kept'][:300]})" if kept else "")
               + f"; report: {build_report(d)}")
     finally:
         lock.close()

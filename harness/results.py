@@ -97,6 +97,9 @@ def _is_ours(data) -> bool:
     return data.get("kind") == "eval" or "config_hash" in data
 
 
+VIEW_FILE = re.compile(r"\d{2,}(-[0-9A-Za-z]+)?\.json")   # the views' names (`write_views`); others are the user's
+
+
 class RunFolder:
     """Files of one run: ``<task>.csv``, ``run.json``, ``report.html``, ``meshes/``."""
 
@@ -278,7 +281,8 @@ class RunFolder:
             vdir = self.path / "views"
             if vdir.is_dir():
                 for f in vdir.glob("*.json"):
-                    f.unlink()
+                    if VIEW_FILE.fullmatch(f.name) or f.name == "index.json":
+                        f.unlink()
             for task in kinds:                           # a tuned run's training rows
                 (self.path / "tune" / task_file(task)).unlink(missing_ok=True)
         self.remove_temporaries()                # first: the manifest names the meshes' temporaries
@@ -369,7 +373,7 @@ class RunFolder:
             index.append({"file": name, "case_id": cid, "why": v.get("why")})
         keep = {e["file"] for e in index} | {"index.json"}
         for old in vdir.glob("*.json"):
-            if old.name not in keep:
+            if old.name not in keep and VIEW_FILE.fullmatch(old.name):
                 old.unlink()
         _atomic_json(vdir / "index.json", {"views": index})
 

@@ -657,5 +657,8 @@ def recompute_views(run_dir) -> list[dict]:
     cases = list(cfg.cases) + _recorded_tuned_cases(cfg, meta)
     views = compute_views({c.case_id: c for c in cases}, folder.frames(),
                           report if isinstance(report, dict) else cfg.report, threads=threads)
+    stored = {v.get("case_id"): v for v in folder.read_views() if isinstance(v, dict) and not v.get("error")}
+    views = [{**stored[v["case_id"]], "why": v.get("why"), "kept": v["error"]}     # the run's own view stays
+             if v.get("not_rebuilt") and v.get("case_id") in stored else v for v in views]
     folder.write_views(views)
     return views

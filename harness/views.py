@@ -155,7 +155,9 @@ def compute_views(cases_by_id: dict, frames, report_cfg: dict, budget_s: float =
             continue
         case = cases_by_id.get(cid)
         if case is None:
-            v["error"] = "this case is not among the run's cases"
+            v["error"] = ("this case is not among the cases rebuilt from run.json: a mesh file it reads changed "
+                          "since the run (a case id includes the file's sha1) or is gone")
+            v["not_rebuilt"] = True
             continue
         left = budget_s - (time.perf_counter() - t0)
         if left <= 0:

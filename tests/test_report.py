@@ -193,6 +193,34 @@ def test_views_chosen_in_the_config_and_their_errors(run_dir, tmp_path):
         load_config(meta["config"])
 
 
+def test_views_of_a_changed_file_are_kept_and_a_users_files_in_views_stay(tmp_path, capsys):
+    """`shootout views` after a mesh file changed replaced the run's views with stubs saying the
+    case 'is not among the run's cases'; and it deleted every *.json in views/, the user's too."""
+    from harness import datasets
+    s = datasets.load({"procedural": "sphere", "subdivisions": 2}).clean
+    mesh = tmp_path / "kn.obj"
+    write_obj(mesh, s.V, s.F)
+    out = tmp_path / "o"
+    harness.run({"name": "v", "time_budget": 0, "hausdorff_samples": 200, "meshes": [{"file": str(mesh)}],
+                 "noise": [{"model": "gaussian_normal", "levels": [0.3]}],
+                 "tasks": {"smoothing": {"methods": ["scratch.taubin"]}}}, out=out)
+    before = page_data(out / "report.html")["views"]
+    assert before and not any(v.get("error") for v in before)
+    (out / "views" / "camera.json").write_text("{}")
+    (out / "views" / "notes.json").write_text("{}")
+    with mesh.open("a") as fh:
+        fh.write("# re-saved\n")
+    assert cli(["views", str(out)]) == 0
+    assert "kept as the run made them" in capsys.readouterr().out
+    after = page_data(out / "report.html")["views"]
+    assert [v["case_id"] for v in after] == [v["case_id"] for v in before]
+    assert all(not v.get("error") and "sha1" in v["kept"] and v.get("meshes") for v in after), after
+    assert (out / "views" / "camera.json").exists() and (out / "views" / "notes.json").exists()
+    harness.run({"name": "v", "time_budget": 0, "hausdorff_samples": 200, "meshes": [{"file": str(mesh)}],
+                 "tasks": {"smoothing": {"methods": ["scratch.taubin"]}}}, out=out)       # a fresh run: theirs stay
+    assert (out / "views" / "camera.json").exists() and (out / "views" / "notes.json").exists()
+
+
 def test_report_reads_files_only_even_when_the_config_no_longer_loads(run_dir, tmp_path, capsys):
     dst = copy_run(run_dir, tmp_path)
     before = page_data(build_report(dst))["views"]
