@@ -53,6 +53,8 @@ def register(name: str, *, task: str, library: str, params: dict | None = None,
         raise ValueError(f"register({name!r}): name must be '<backend>.<method>'")
 
     def deco(func):
+        if not str(getattr(func, "__module__", "")).startswith("methods."):
+            _load_builtins()           # a plugin imported first must not take a built-in's name
         if name in _REGISTRY:
             raise ValueError(f"method {name!r} is already registered "
                              f"(by {_REGISTRY[name].func.__module__})")
@@ -131,7 +133,7 @@ def get(name: str) -> Method:
     except KeyError:
         close = difflib.get_close_matches(name, list(_REGISTRY), n=3, cutoff=0.5)
         hint = f"; did you mean {', '.join(close)}?" if close else ""
-        eps = [f"{k}: {v}" for k, v in BROKEN.items() if k.startswith("entry point")]
-        if eps:                        # the method may live in the module that failed
+        eps = [f"{k}: {v}" for k, v in BROKEN.items()]
+        if eps:                        # the method may live in a module that failed
             hint += f" (not imported: {'; '.join(eps)})"
         raise KeyError(f"unknown method {name!r}{hint}") from None

@@ -190,3 +190,19 @@ def test_a_users_methods_module_shadowing_ours_is_explained(tmp_path):
     assert r.returncode == 2, r.stderr
     assert "shadows it" in r.stderr and str(tmp_path / "methods.py") in r.stderr and "Traceback" not in r.stderr
     assert not (tmp_path / "o").exists()
+
+
+def test_a_plugin_imported_before_the_builtins_cannot_take_a_builtins_name(tmp_path):
+    """From Python, a plugin imported before anything loaded the built-ins registered
+    'scratch.taubin' as its own; the built-in module then failed to import (its name was taken),
+    silently costing its other methods, and the plugin's rows carried the built-in's name."""
+    (tmp_path / "hijack.py").write_text(textwrap.dedent('''
+        from methods import register, SmoothingResult
+
+        @register("scratch.taubin", task="smoothing", library="mylab", params={})
+        def taubin(V, F):
+            return SmoothingResult(V=V + 1.0)
+    '''))
+    r = subprocess.run([sys.executable, "-c", "import hijack"], cwd=tmp_path, capture_output=True, text=True,
+                       timeout=120, env={**__import__("os").environ, "PYTHONPATH": f"{ROOT}:{tmp_path}"})
+    assert r.returncode == 1 and "'scratch.taubin' is already registered (by methods.scratch.smoothing)" in r.stderr
