@@ -68,3 +68,24 @@ def test_a_task_module_that_does_not_import_costs_that_task_kind_only(tmp_path):
     assert "broken_kind.py is not loaded as a task kind: importing it failed (ModuleNotFoundError" in r.stderr
     assert "scratch.taubin" in r.stdout and "'smoothing'" in r.stdout
     assert "tasks.broken_kind: unknown task" in r.stdout and "is not loaded: importing it failed" in r.stdout
+
+
+def test_a_task_kinds_name_is_an_identifier_and_taken_once(tmp_path):
+    """A task module named 'brokene.py' declaring name='smoothing' replaced or dropped the built-in
+    kind by the order of the file names, with no word; name='../escaped' wrote its CSV outside the
+    run folder. Now the module named after a kind keeps it, the other is named as not loaded, and
+    a name that is not an identifier is refused."""
+    assert "not a lower-case identifier" in declaration_problems(replace(SMOOTHING, name="../escaped"))[0]
+    extra = tmp_path / "extra"
+    extra.mkdir()
+    (extra / "brokene.py").write_text("from dataclasses import replace\nfrom harness.tasks.smoothing import TASK as T\n"
+                                      "TASK = replace(T, name='smoothing', order=-1)\n")
+    (extra / "zz_twin.py").write_text("from dataclasses import replace\nfrom harness.tasks.laplacian import TASK as T\n"
+                                      "TASK = replace(T, name='laplacian')\n")
+    code = ("import sys, harness.tasks as t; t.__path__.append(sys.argv[1]); "
+            "print(sorted((k, v.order) for k, v in t.all_tasks().items()), sorted(t.BROKEN))")
+    r = subprocess.run([sys.executable, "-c", code, str(extra)], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert "('smoothing', -1)" not in r.stdout and "['brokene', 'zz_twin']" in r.stdout, r.stdout
+    assert "brokene.py is not loaded as a task kind: its name 'smoothing' is the task kind of smoothing.py" in r.stderr
+    assert "zz_twin.py is not loaded as a task kind: its name 'laplacian' is the task kind of laplacian.py" in r.stderr

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib
 import pkgutil
+import re
 import sys
 
 from .base import COMMON_COLUMNS, CaseInput, Invalid, Metric, Task
@@ -13,9 +14,12 @@ BROKEN: dict[str, str] = {}         # module name -> why it is not a task kind (
 
 
 def declaration_problems(task: Task) -> list[str]:
-    """What is wrong with a `Task` declaration: metrics that are not a tuple of `Metric`, metric
-    names repeated or taken by a common column, a view metric or ``Invalid`` column that is not
-    a column."""
+    """What is wrong with a `Task` declaration: a name that is not a plain identifier (it names the
+    task's CSV in the run folder), metrics that are not a tuple of `Metric`, metric names repeated
+    or taken by a common column, a view metric or ``Invalid`` column that is not a column."""
+    if not isinstance(task.name, str) or not re.fullmatch(r"[a-z][a-z0-9_]{0,39}", task.name):
+        return [f"name {task.name!r} is not a lower-case identifier (letters, digits, '_'; it names the task's "
+                "CSV file in the run folder)"]
     if not isinstance(task.metrics, (tuple, list)) or not all(isinstance(m, Metric) for m in task.metrics):
         return [f"metrics must be a tuple of Metric, got {type(task.metrics).__name__} (one Metric needs a "
                 "trailing comma: metrics=(Metric(...),))"]
@@ -42,13 +46,23 @@ def _load() -> dict[str, Task]:
                 problems = declaration_problems(task) if isinstance(task, Task) else []
             except Exception as exc:  # noqa: BLE001
                 task, problems = None, [f"importing it failed ({type(exc).__name__}: {exc})"]
+            if isinstance(task, Task) and not problems and task.name in found:
+                # two modules declare one name: the module named after it keeps it (the other could
+                # otherwise replace a built-in kind by the order of the file names)
+                other = found[task.name][1]
+                if info.name == task.name:
+                    BROKEN[other] = f"its name {task.name!r} is the task kind of {info.name}.py"
+                    print(f"shootout: warning: harness/tasks/{other}.py is not loaded as a task kind: "
+                          f"{BROKEN[other]}", file=sys.stderr)
+                else:
+                    problems = [f"its name {task.name!r} is the task kind of {other}.py"]
             if problems:
                 BROKEN[info.name] = "; ".join(problems)
                 print(f"shootout: warning: harness/tasks/{info.name}.py is not loaded as a task kind: "
                       f"{BROKEN[info.name]}", file=sys.stderr)
             elif isinstance(task, Task):
-                found[task.name] = task
-        _TASKS.update(found)
+                found[task.name] = (task, info.name)
+        _TASKS.update({name: task for name, (task, _) in found.items()})
     return _TASKS
 
 
