@@ -146,7 +146,13 @@ class RunFolder:
             self.path.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
             raise ShootoutError(f"--out {self.path}: cannot make this folder ({exc.strerror or exc})") from None
-        fh = open(self.path / ".shootout.lock", "a+")
+        try:                             # never through a symlink (it would truncate its target)
+            fd = os.open(self.path / ".shootout.lock", os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o644)
+            fh = os.fdopen(fd, "r+")
+        except OSError as exc:
+            why = "it is a symbolic link" if exc.errno == errno.ELOOP else (exc.strerror or str(exc))
+            raise ShootoutError(f"{self.path}: cannot take the run folder's lock {self.path / '.shootout.lock'} "
+                                f"({why}); every command that writes in a run folder takes it") from None
         try:
             fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError as exc:

@@ -70,6 +70,22 @@ def test_a_second_run_into_a_busy_folder_is_refused_naming_the_pid(tmp_path):
     assert len(df) == 1 and df["case_id"].is_unique and first.returncode == 0
 
 
+def test_a_lock_file_that_cannot_be_opened_is_a_message_and_a_link_is_not_followed(tmp_path):
+    """A `.shootout.lock` that was a folder was a traceback (IsADirectoryError); a symbolic link was
+    followed and its target truncated to the pid."""
+    from harness.errors import ShootoutError
+    from harness.results import RunFolder
+    target = tmp_path / "notes.txt"
+    target.write_text("mine")
+    for make in (lambda p: p.mkdir(), lambda p: p.symlink_to(target)):
+        d = tmp_path / f"o{len(list(tmp_path.iterdir()))}"
+        d.mkdir()
+        make(d / ".shootout.lock")
+        with pytest.raises(ShootoutError, match="cannot take the run folder's lock"):
+            RunFolder(d).lock()
+    assert target.read_text() == "mine"
+
+
 def test_resume_repairs_a_torn_saved_mesh(tmp_path):
     cfg = write_cfg(tmp_path / "c.yaml", {**SMALL, "save_meshes": True})
     out = tmp_path / "o"
