@@ -550,8 +550,16 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         except OSError:                       # disk full: the status below is the best we can record
             folder.remove_temporaries()
             _write_status_in_place(folder, meta["status"])
-    not_written = finish(out_dir, cfg, timeout=timeout, export_benchmark_json=export_benchmark_json,
-                         extra_cases=extra_cases, threads=threads)
+    try:
+        not_written = finish(out_dir, cfg, timeout=timeout, export_benchmark_json=export_benchmark_json,
+                             extra_cases=extra_cases, threads=threads)
+    except KeyboardInterrupt:               # the rows are whole; the views, report or export are not
+        meta["status"] = meta["sessions"][-1]["status"] = "interrupted"
+        try:
+            folder.write_run_json(meta)
+        except OSError:
+            pass
+        raise
     return Frames(folder.frames(), not_written)
 
 

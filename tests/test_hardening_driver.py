@@ -238,3 +238,23 @@ def test_the_cli_gives_back_the_signal_handlers_and_clears_the_flag(capsys):
     assert cli.main(["methods"]) == 0            # cleared at the start: not an interrupt
     assert (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)) == before
     assert not errors.interrupt_seen()
+
+
+def test_an_interrupt_after_the_last_row_marks_the_run_interrupted(tmp_path, monkeypatch):
+    """Ctrl-C while the views, report or export were being made (every row written) exited 130
+    but left run.json and its session saying 'finished', with no report: --resume makes them."""
+    import harness
+    from harness import session
+
+    def interrupted(*a, **k):
+        raise KeyboardInterrupt
+    monkeypatch.setattr(session, "finish", interrupted)
+    cfg = {"time_budget": 0, "hausdorff_samples": 100, "meshes": ["knight"],
+           "tasks": {"smoothing": {"methods": ["scratch.explicit"]}}}
+    with pytest.raises(KeyboardInterrupt):
+        harness.run(cfg, out=tmp_path / "o", workers=1)
+    meta = json.loads((tmp_path / "o" / "run.json").read_text())
+    assert meta["status"] == meta["sessions"][-1]["status"] == "interrupted"
+    monkeypatch.undo()
+    harness.run(cfg, out=tmp_path / "o", workers=1, resume=True)
+    assert (tmp_path / "o" / "report.html").exists()
