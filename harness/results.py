@@ -97,6 +97,38 @@ def _is_ours(data) -> bool:
     return data.get("kind") == "eval" or "config_hash" in data
 
 
+_NUM = (int, float)
+_META_TYPES = {      # run.json's keys and the types its readers rely on
+    "name": str, "status": str, "started": str, "finished": str, "command": str, "config_source": str,
+    "config_dir": str, "config_hash": str, "git_commit": str, "executor": str, "scheduler": str, "kind": str,
+    "config": dict, "machine": dict, "versions": dict, "tasks": dict, "timing": dict, "solver": dict, "tune": dict,
+    "fixed_cost_per_case_s": dict, "status_counts": dict, "method_sources": dict,
+    "workers": int, "n_cases": int, "resumed_ok_cases": int, "wall_s": _NUM, "timeout_s": _NUM,
+    "git_dirty": bool, "load_average": list, "sessions": list, "provenance_changed": list,
+}
+_SESSION_NUMBERS = ("wall_s", "resumed_ok_cases")
+
+
+def _sane(meta: dict) -> dict:
+    """run.json with every value of a wrong type left out (a hand-edited ``machine: "x"`` or
+    ``sessions: 5``), so that its readers see a missing value, never a value they would crash on;
+    non-numbers in ``load_average`` and sessions that are not objects are dropped the same way."""
+    out = {}
+    for k, v in meta.items():
+        want = _META_TYPES.get(k)
+        if v is None or want is None:
+            out[k] = v
+        elif isinstance(v, want) and not (isinstance(v, bool) and want in (int, _NUM)):
+            out[k] = v
+    if "load_average" in out:
+        out["load_average"] = [x for x in out["load_average"] if isinstance(x, _NUM) and not isinstance(x, bool)]
+    if "sessions" in out:
+        out["sessions"] = [{**x, **{k: None for k in _SESSION_NUMBERS
+                                    if k in x and (not isinstance(x[k], _NUM) or isinstance(x[k], bool))}}
+                           for x in out["sessions"] if isinstance(x, dict)]
+    return out
+
+
 VIEW_FILE = re.compile(r"\d{2,}(-[0-9A-Za-z]+)?\.json")   # the views' names (`write_views`); others are the user's
 
 
@@ -120,7 +152,7 @@ class RunFolder:
             data = json.loads(self.run_json.read_text())
         except (OSError, ValueError):
             return None
-        return data if _is_ours(data) else None
+        return _sane(data) if _is_ours(data) else None
 
     def run_json_state(self) -> str:
         """``missing``, ``ok`` (a run.json this project wrote) or ``corrupt`` (unreadable, or

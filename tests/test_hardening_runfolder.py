@@ -477,3 +477,49 @@ def test_compare_refuses_a_folder_with_a_case_id_in_two_rows(tmp_path):
     lines = p.read_text().splitlines(keepends=True)
     p.write_text("".join(lines) + lines[1])
     assert main(["compare", str(out), str(out), "--no-time"]) == 2
+
+
+def test_a_hand_edited_run_json_of_wrong_types_is_read_without_a_traceback(tmp_path):
+    """`machine: "x"`, `tasks: []`, `load_average: 5`, `sessions: 5`, a session's `wall_s: "12.5"`
+    and the like made report, compare and --resume crash (54 of 696 single-value edits of a
+    run.json did, in report or compare); a value of the wrong type now reads as missing."""
+    import copy
+    import io
+
+    import harness
+    from harness.compare import compare_runs
+    from harness.report import build_report
+    base = tmp_path / "base"
+    cfg = {**SMALL, "tasks": {"smoothing": {"methods": ["scratch.explicit"]}}}
+    harness.run(cfg, out=base, workers=1)
+    meta0 = json.loads((base / "run.json").read_text())
+    from harness.results import _META_TYPES, _sane
+    for k, want in _META_TYPES.items():           # every typed key: a value of another type is left out
+        for bad in (5, "x", ["x"], {"a": 1}, True):
+            if not isinstance(bad, want) or (isinstance(bad, bool) and want is not bool):
+                assert k not in _sane({k: bad}), (k, bad)
+    edits = [(("machine",), "x"), (("tasks",), []), (("versions",), "x"), (("workers",), "x"),
+             (("load_average",), 5), (("timing",), ["x"]), (("solver", "versions"), 5), (("solver", "last_used"), "x"),
+             (("sessions", 0), 5), (("sessions", 0, "wall_s"), "12.5"), (("load_average", 0), "x")]
+    d = tmp_path / "d"
+    shutil.copytree(base, d)
+    for path, bad in edits:
+        m = copy.deepcopy(meta0)
+        tgt = m
+        for p in path[:-1]:
+            tgt = tgt[p]
+        tgt[path[-1]] = bad
+        (d / "run.json").write_text(json.dumps(m))
+        try:
+            build_report(d)
+            compare_runs(base, d, out=io.StringIO())
+        except harness.errors.ShootoutError:
+            pass
+    m = copy.deepcopy(meta0)
+    m["sessions"] = [{**m["sessions"][0], "wall_s": "12.5"}, 5]
+    (d / "run.json").write_text(json.dumps(m))
+    p = d / "smoothing.csv"
+    p.write_text("".join(p.read_text().splitlines(keepends=True)[:-1]))
+    harness.run(cfg, out=d, workers=1, resume=True)
+    after = json.loads((d / "run.json").read_text())
+    assert after["status"] == "finished" and len(after["sessions"]) == 2 and after["sessions"][0]["wall_s"] is None

@@ -182,8 +182,9 @@ def _tune_html(meta, frames) -> str:
 
 def _solver_text(solver: dict) -> str:
     """The sparse solvers the run could use and which the automatic choice takes, in words."""
-    vers = solver.get("versions") or {}
-    inst = ", ".join(f"{n} {vers.get(n, '')}".strip() for n in solver.get("installed") or [])
+    vers = solver.get("versions") if isinstance(solver.get("versions"), dict) else {}
+    installed = solver.get("installed") if isinstance(solver.get("installed"), list) else []
+    inst = ", ".join(f"{n} {vers.get(n, '')}".strip() for n in installed if isinstance(n, str))
     parts = [f"automatic: {solver.get('auto_small', '?')} below {solver.get('auto_small_max_n', '?')} unknowns, "
              f"else {solver.get('auto', '?')}"]
     if solver.get("env_override"):
@@ -191,7 +192,7 @@ def _solver_text(solver: dict) -> str:
     if inst:
         parts.append(f"installed: {inst}")
     used = solver.get("last_used")
-    if used:
+    if isinstance(used, dict) and used:
         parts.append("used: " + ", ".join(f"{k}: {v}" for k, v in sorted(used.items())))
     return "; ".join(parts)
 
