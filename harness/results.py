@@ -31,7 +31,7 @@ import pandas as pd
 
 from . import tasks
 from .errors import ShootoutError
-from .schema import cell, columns, scalar, task_file
+from .schema import STATUSES, cell, columns, scalar, task_file
 
 MANIFEST = ".written"
 
@@ -556,7 +556,30 @@ def load_csv(path) -> pd.DataFrame:
     if "error" in df:
         df["error"] = df["error"].fillna("")
     _check_numbers(Path(path), df)
+    _check_identity(Path(path), df)
     return df
+
+
+def _check_identity(path: Path, df: pd.DataFrame) -> None:
+    """`ShootoutError` naming the first row whose ``params`` is not a JSON object, whose
+    ``method`` is empty or whose ``status`` is not one a run writes: a hand-edited file the
+    rankings would otherwise fail on deep in the report."""
+    def not_object(v) -> bool:
+        try:
+            return not isinstance(json.loads(v), dict)
+        except (TypeError, ValueError):
+            return True
+    checks = (("params", lambda v: isinstance(v, str) and not_object(v), "a JSON object ({} when a method has none)"),
+              ("method", lambda v: not isinstance(v, str) or not v.strip(), "a method's name"),
+              ("status", lambda v: v not in STATUSES, f"one of {', '.join(STATUSES)}"))
+    for col, bad, want in checks:
+        if col not in df:
+            continue
+        for i, v in enumerate(df[col].tolist()):
+            if bad(v):
+                shown = "" if not isinstance(v, str) and pd.isna(v) else str(v)[:40]
+                raise ShootoutError(f"{path}: damaged CSV: column {col} holds {shown!r} on line {i + 2}, "
+                                    f"expected {want}")
 
 
 NUMERIC_COMMON = ("n_vertices", "n_faces", "noise_level", "seed", "time_s", "time_min_s", "time_max_s", "time_q1_s",

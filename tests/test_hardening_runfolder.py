@@ -220,7 +220,7 @@ def test_out_on_a_file_or_a_read_only_place_and_a_huge_face_index(tmp_path, tiny
     assert r.returncode == 2 and "noisy.obj" in r.stderr and "Traceback" not in r.stderr
 
 
-@pytest.mark.parametrize("damage", ["ragged", "quote", "binary", "empty", "torn", "text_in_a_number"])
+@pytest.mark.parametrize("damage", ["ragged", "quote", "binary", "empty", "torn", "text_in_a_number", "params"])
 def test_damaged_csvs_are_a_message_not_a_traceback_or_a_false_regression(tmp_path, damage):
     cfg = write_cfg(tmp_path / "c.yaml", SMALL)
     a, b = tmp_path / "a", tmp_path / "b"
@@ -236,6 +236,24 @@ def test_damaged_csvs_are_a_message_not_a_traceback_or_a_false_regression(tmp_pa
         p.write_bytes(p.read_bytes() + b"\x00\xff\xfe junk\n")
     elif damage == "empty":
         p.write_text("")
+    elif damage == "params":                          # hand-edited cells the rankings read
+        import csv
+        import io
+
+        from harness.errors import ShootoutError
+        from harness.results import load_csv
+
+        def edited(col, value):
+            rows = list(csv.reader(io.StringIO(text)))
+            rows[1][rows[0].index(col)] = value
+            buf = io.StringIO()
+            csv.writer(buf, lineterminator="\n").writerows(rows)
+            p.write_text(buf.getvalue())
+        for col, value in (("params", "abc"), ("params", "-1"), ("method", ""), ("status", ""), ("status", "done")):
+            edited(col, value)
+            with pytest.raises(ShootoutError, match=f"column {col} holds {value!r} on line 2"):
+                load_csv(p)
+        edited("params", "[1,2")
     elif damage == "text_in_a_number":               # a hand-edited cell of a metric column
         import csv
         import io
@@ -257,6 +275,8 @@ def test_damaged_csvs_are_a_message_not_a_traceback_or_a_false_regression(tmp_pa
     assert "Traceback" not in r.stderr and r.returncode in (0, 2)
     if damage == "text_in_a_number":
         assert r.returncode == 2 and "column ev_rms holds 'notanumber' on line 2" in r.stderr, r.stderr
+    if damage == "params":                            # a traceback of json, leaderboard or the page's data
+        assert r.returncode == 2 and "column params holds '[1,2' on line 2" in r.stderr, r.stderr
 
 
 def test_files_follow_the_umask(tmp_path):
