@@ -7,8 +7,10 @@ operators are built on the intrinsic Delaunay triangulation of the tufted cover 
 open mesh it uses the Neumann heat solution alone (the lumped barycentric mass), not the paper's
 average of the Neumann and Dirichlet ones that ``scratch.heat`` and ``libigl.heat`` use by
 default: with ``use_robust`` off it is ``scratch.heat`` with ``boundary: neumann, mass:
-barycentric`` (to 1e-4 of the largest distance, `tests/test_geodesics.py`); its like-for-like
-peer on open meshes is that setting.
+barycentric`` (to 1e-4 of the largest distance on a cylinder and on Delaunay and non-Delaunay
+planes, `tests/test_geodesics.py`; 9e-4 on camelhead); with it on, the nearest setting is
+``scratch.heat`` with ``laplacian: tufted, boundary: neumann, mass: barycentric``, which is not
+the same operator (2e-5 to 5e-3 of the largest distance apart on those meshes and woody).
 ``pygeodesic.exact``: ``pygeodesic.geodesic.PyGeodesicAlgorithmExact`` (the exact MMP algorithm
 of Surazhsky et al. 2005, the ``geodesic`` C++ library by Kirsanov), distances to all vertices.
 """
