@@ -46,8 +46,17 @@ def evaluate(V, F, V_clean, F_clean, task: str = "smoothing", V_noisy=None, haus
     of the clean mesh's bounding-box diagonal, as in a run. `ShootoutError` on input that breaks
     these preconditions.
     """
+    P = []
+    if task not in ("smoothing", "simplification"):
+        P.append(f"task: eval scores smoothing and simplification results, not {task!r}")
     if samples_problem(hausdorff_samples):
-        raise ShootoutError(f"hausdorff_samples: {samples_problem(hausdorff_samples)}")
+        P.append(f"hausdorff_samples: {samples_problem(hausdorff_samples)}")
+    if target_faces is not None and (isinstance(target_faces, bool) or not isinstance(target_faces, (int, np.integer))
+                                     or target_faces < 1):
+        P.append(f"target_faces: expected an integer >= 1 (the face count the simplification was asked for), "
+                 f"got {target_faces!r}")
+    if P:
+        raise ShootoutError("; ".join(P))
     clean = validate(V_clean, F_clean, name="clean", repair=False)
     V_in = clean.V if V_noisy is None else np.asarray(V_noisy, dtype=np.float64)
     if V_in.shape != clean.V.shape:
@@ -68,7 +77,7 @@ def evaluate(V, F, V_clean, F_clean, task: str = "smoothing", V_noisy=None, haus
     res = t.validate_result("result", res, inp.V, inp.F)
     params = {}
     if task == "simplification":
-        params = {"target_ratio": None, "target_faces": int(target_faces or len(res.F))}
+        params = {"target_ratio": None, "target_faces": int(len(res.F) if target_faces is None else target_faces)}
     row = t.measured(inp, res, params)
     if V_noisy is None:
         for k in [k for k in row if k.startswith("input_")]:

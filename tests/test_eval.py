@@ -201,6 +201,9 @@ def test_evaluate_refuses_input_it_cannot_score_honestly():
                            ({"F": F + 1000000}, "F: a smoothing result keeps"),
                            ({"F": F + 0.5, "task": "simplification"}, "F: expected integer"),
                            ({"F": F, "V_noisy": bad_noisy}, "NaN or inf"),
-                           ({"F": F, "hausdorff_samples": 10**9}, "hausdorff_samples")):
+                           ({"F": F, "hausdorff_samples": 10**9}, "hausdorff_samples"),
+                           # scored against the result's own face count; a KeyError for a task name
+                           ({"F": F, "task": "simplification", "target_faces": 0}, "target_faces: expected"),
+                           ({"F": F, "task": "area"}, "eval scores smoothing and simplification")):
         with pytest.raises(ShootoutError, match=needle):
             harness.evaluate(V, V_clean=V, F_clean=F, **kwargs)
