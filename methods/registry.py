@@ -63,6 +63,9 @@ def register(name: str, *, task: str, library: str, params: dict | None = None,
             # a shared Param (e.g. `methods.vocabulary.solver_param`) takes the key it is declared
             # under: listings, errors and the run's rows all name the parameter the user passes
             declared[k] = (v if v.name == k else dataclasses.replace(v, name=k)) if isinstance(v, Param) else Param(k, v)
+        problems = _signature_problems(func, declared)
+        if problems:
+            raise ValueError(f"register({name!r}): " + "; ".join(problems))
         declared = {**_tasks.get(task).params, **declared}
         _REGISTRY[name] = Method(name=name, task=task, library=library, func=func,
                                  params=declared, requires=tuple(requires or ()),
@@ -79,6 +82,24 @@ def register(name: str, *, task: str, library: str, params: dict | None = None,
         return checked
 
     return deco
+
+
+def _signature_problems(func, declared: dict) -> list[str]:
+    """What would make every call of ``func`` with its declared parameters fail: a parameter it
+    does not take as a keyword (nor through ``**kwargs``), or a default its own bounds refuse."""
+    import inspect
+    try:
+        sig = inspect.signature(func)
+    except (TypeError, ValueError):
+        return []
+    ps = sig.parameters
+    keyword_ok = any(p.kind is inspect.Parameter.VAR_KEYWORD for p in ps.values())
+    P = [f"the function does not take parameter {k!r} as a keyword" for k in declared
+         if not keyword_ok and (k not in ps or ps[k].kind not in (inspect.Parameter.KEYWORD_ONLY,
+                                                                   inspect.Parameter.POSITIONAL_OR_KEYWORD))]
+    P += [f"the default of {k!r} is refused by its own declaration: {p.problem(p.default)}"
+          for k, p in declared.items() if not (p.default is None and p.optional) and p.problem(p.default)]
+    return P
 
 
 def _load_builtins() -> None:

@@ -206,3 +206,29 @@ def test_a_plugin_imported_before_the_builtins_cannot_take_a_builtins_name(tmp_p
     r = subprocess.run([sys.executable, "-c", "import hijack"], cwd=tmp_path, capture_output=True, text=True,
                        timeout=120, env={**__import__("os").environ, "PYTHONPATH": f"{ROOT}:{tmp_path}"})
     assert r.returncode == 1 and "'scratch.taubin' is already registered (by methods.scratch.smoothing)" in r.stderr
+
+
+def test_register_refuses_parameters_the_function_cannot_take_or_defaults_out_of_bounds():
+    """A function declaring Param('amount') but taking amt=, or a default of 5.0 beyond high=1.0,
+    registered fine and every case was then an error row."""
+    from methods import Param, SmoothingResult, register
+    with pytest.raises(ValueError, match="does not take parameter 'amount'"):
+        @register("archtest.misnamed", task="smoothing", library="archtest", params={"amount": Param("amount", 0.1)})
+        def misnamed(V, F, *, amt=0.1):
+            return SmoothingResult(V=V)
+    with pytest.raises(ValueError, match="default of 'amount' is refused"):
+        @register("archtest.outofbounds", task="smoothing", library="archtest",
+                  params={"amount": Param("amount", 5.0, high=1.0)})
+        def outofbounds(V, F, *, amount=5.0):
+            return SmoothingResult(V=V)
+
+    @register("archtest.kwargs", task="smoothing", library="archtest", params={"amount": 0.1})
+    def kwargs(V, F, **kw):                        # **kwargs takes every keyword
+        return SmoothingResult(V=V)
+    import methods
+    from methods.registry import _REGISTRY
+    try:
+        assert "archtest.kwargs" in [m.name for m in methods.all_methods("smoothing")]
+        assert not {"archtest.misnamed", "archtest.outofbounds"} & {m.name for m in methods.all_methods()}
+    finally:
+        _REGISTRY.pop("archtest.kwargs", None)            # other tests list every method
