@@ -524,6 +524,13 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
           f"{len(res['only_a'])} only in A, {len(res['only_b'])} only in B", file=out)
     for note in (timing_notes(meta_a, meta_b, res) if time_factor else []):     # --no-time: no timing notes
         print(f"note: {note}", file=out)
+    for which, meta in (("A", meta_a), ("B", meta_b)):
+        if meta.get("status") in ("running", "interrupted"):
+            print(f"note: {which}'s run.json says {meta['status']}: the run is still going, was killed or was "
+                  "interrupted, so a case missing from it may not have run yet (--resume finishes it)", file=out)
+    if res["common"] == 0 and res["only_a"] and res["only_b"]:
+        print("note: the runs share no case: they ran other configs (or meshes whose files changed), so every case "
+              "of A counts as missing in B", file=out)
     if res["unmatched_columns"]:
         cols = ", ".join(f"{t}.{m} (only in {w})" for t, m, w in res["unmatched_columns"][:8])
         print(f"note: not compared, a column only one run's CSV has (another version wrote it?): {cols}"

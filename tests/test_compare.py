@@ -170,6 +170,15 @@ def test_missing_case_is_a_regression_new_case_is_not(run_a, tmp_path):
     assert code == 1 and "missing in RUN_B" in out
     code, out = run_compare(b, run_a)          # the extra case in the candidate is only listed
     assert code == 0 and "new in B: 1 case(s)" in out
+    assert "share no case" not in out and "says running" not in out
+    meta = json.loads((b / "run.json").read_text())      # a run still going: its missing cases are said to be so
+    (b / "run.json").write_text(json.dumps({**meta, "status": "running"}))
+    code, out = run_compare(run_a, b)
+    assert code == 1 and "B's run.json says running" in out
+    for k, name in enumerate(("laplacian.csv", "smoothing.csv", "simplification.csv")):     # nothing in common
+        edit(b / name, lambda rows, k=k: [r.update(case_id=f"e{k}{i:010d}") for i, r in enumerate(rows)])
+    code, out = run_compare(run_a, b)
+    assert code == 1 and "the runs share no case" in out
 
 
 def test_time_needs_factor_and_spread(run_a, tmp_path):
