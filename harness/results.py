@@ -258,7 +258,7 @@ class RunFolder:
         p = self.csv_path(task)
         if not p.exists():
             return []
-        text = p.read_text()
+        text = p.read_text(encoding="utf-8-sig")            # a BOM is not part of the first column's name
         lines = text.splitlines(keepends=True)
         if lines and not lines[-1].endswith("\n"):
             lines = lines[:-1]
@@ -294,7 +294,7 @@ class RunFolder:
             p = self.csv_path(task)
             if not p.is_file() or p.stat().st_size == 0:
                 continue
-            with p.open(newline="", encoding="utf-8", errors="replace") as fh:
+            with p.open(newline="", encoding="utf-8-sig", errors="replace") as fh:   # a BOM (saved by a spreadsheet)
                 line = fh.readline()
             if not line.endswith("\n"):          # a header torn by a full disk: no row to keep
                 continue
@@ -610,7 +610,7 @@ def _checked_csv_text(path: Path) -> str:
     """The CSV's text without a torn last line; `ShootoutError` naming what is damaged otherwise
     (not UTF-8 text, empty, or lines whose field count differs from the header's)."""
     try:
-        text = path.read_bytes().decode("utf-8")
+        text = path.read_bytes().decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise ShootoutError(f"{path}: damaged CSV (byte {exc.start} is not UTF-8 text)") from None
     except OSError as exc:

@@ -374,3 +374,18 @@ def test_resume_refuses_a_mesh_whose_label_changed(tmp_path):
     assert p.read_bytes() == before
     df = harness.run(cfg, out=out, workers=1, resume=True)["smoothing"]           # under its old name it resumes
     assert len(df) == 2 and set(df["mesh"]) == {"alpha"}
+
+
+def test_resume_of_a_csv_saved_with_a_byte_order_mark_keeps_its_rows(tmp_path):
+    """A task CSV saved by a spreadsheet starts with a BOM: --resume called it another version's
+    file and advised a fresh run, which would have deleted its rows."""
+    cfg = load_config(slow_config(seconds=(0.0, 0.01)))
+    out = tmp_path / "out"
+    harness.run(cfg, out=out, workers=1)
+    p = out / "laplacian.csv"
+    lines = p.read_text().splitlines(keepends=True)
+    p.write_bytes(b"\xef\xbb\xbf" + "".join(lines[:-1]).encode())      # and a killed run's last row missing
+    kept = {r["case_id"] for r in csv.DictReader(io.StringIO("".join(lines[1:-1])), fieldnames=lines[0].strip().split(","))}
+    df = harness.run(cfg, out=out, workers=1, resume=True)["laplacian"]
+    assert kept < set(df["case_id"]) and len(df) == sum(c.task == "laplacian" for c in cfg.cases)
+    assert not p.read_bytes().startswith(b"\xef\xbb\xbf")
