@@ -427,13 +427,16 @@ def to_markdown(lb: pd.DataFrame) -> str:
 
 def _md(s) -> str:
     """A table cell's text for Markdown: ``|`` escaped (it ends a cell), ``<`` ``>`` ``&`` as HTML
-    entities (Markdown renderers pass raw HTML through; a mesh's file stem is free text)."""
-    return (str(s).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;").replace("|", "\\|"))
+    entities (Markdown renderers pass raw HTML through; a mesh's file stem is free text), a line
+    break as ``<br>`` (it ends the table row)."""
+    t = str(s).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;").replace("|", "\\|")
+    return t.replace("\r\n", "<br>").replace("\n", "<br>").replace("\r", "<br>")
 
 
 def _tex(s: str) -> str:
     return "".join({"_": r"\_", "&": r"\&", "%": r"\%", "#": r"\#", "$": r"\$", "{": r"\{", "}": r"\}",
-                    "~": r"\textasciitilde{}", "^": r"\textasciicircum{}", "\\": r"\textbackslash{}"}.get(c, c)
+                    "~": r"\textasciitilde{}", "^": r"\textasciicircum{}", "\\": r"\textbackslash{}",
+                    "\n": " ", "\r": " "}.get(c, c)           # a blank line would end the tabular's paragraph
                    for c in str(s))
 
 

@@ -306,19 +306,20 @@ def test_the_runner_up_shows_its_own_ties():
 
 
 def test_markdown_tables_escape_a_mesh_name_that_is_free_text(tmp_path):
-    """A mesh's label is its file's stem: '|' would split a table cell and '<img ...>' would be
-    raw HTML to a Markdown renderer; winners.md and leaderboard.md escape both."""
+    """A mesh's label is its file's stem: '|' would split a table cell, '<img ...>' would be raw
+    HTML to a Markdown renderer and a line break would end the row; winners.md and leaderboard.md
+    escape all three (and the LaTeX export turns the break into a space)."""
     from harness.datasets import load
     from harness.mesh import write_obj
     src = load("knight").clean
-    p = tmp_path / "k<img src=x>|y.obj"
+    p = tmp_path / "k<img src=x>|y\nz.obj"           # a line break ended the table row
     write_obj(p, src.V, src.F)
     harness.run({"name": "md", "repeats": 1, "time_budget": 0, "meshes": [{"file": str(p)}],
                  "noise": [{"model": "gaussian_normal", "levels": [0.3]}],
                  "tasks": {"smoothing": {"methods": ["scratch.taubin", "scratch.implicit"]}}},
                 out=tmp_path / "o", quiet=True, workers=1)
     md = (tmp_path / "o" / "winners.md").read_text()
-    assert "<img" not in md and "k&lt;img src=x&gt;\\|y" in md, md
+    assert "<img" not in md and "k&lt;img src=x&gt;\\|y<br>z" in md, md
     head, n = None, 0
     for ln in md.splitlines():                       # every row has its table header's cell count
         if ln.startswith("| mesh"):
@@ -328,5 +329,7 @@ def test_markdown_tables_escape_a_mesh_name_that_is_free_text(tmp_path):
             assert ln.replace("\\|", "").count("|") == head.count("|"), (ln, head)
     assert n >= 3
     win = pd.read_csv(tmp_path / "o" / "winners.csv")
-    assert set(win["mesh"]) == {"k<img src=x>|y"} and set(win["noise_model"]) == {"gaussian_normal"}
+    assert set(win["mesh"]) == {"k<img src=x>|y\nz"} and set(win["noise_model"]) == {"gaussian_normal"}
     assert not list((tmp_path / "o").glob(".*.tmp"))
+    from harness.leaderboard import _tex
+    assert _tex("y\n\nz") == "y  z"
