@@ -423,6 +423,9 @@ def write_ply(path_or_file, V: np.ndarray, F: np.ndarray, quality: np.ndarray | 
 
 # ----------------------------------------------------------------------------- validation
 
+COORD_LIMIT = 1e60        # |coordinate| at most this, extent at least its inverse: length^4 stays a finite double
+
+
 def validate(V, F, name: str = "", repair: bool = True) -> Mesh:
     """Check arrays and apply the documented repairs; raises InvalidMeshError."""
     V = np.asarray(V, dtype=np.float64)
@@ -442,6 +445,11 @@ def validate(V, F, name: str = "", repair: bool = True) -> Mesh:
     if F.min() < 0 or F.max() >= len(V):
         raise InvalidMeshError(f"{label}face indices out of range [0, {len(V)}): "
                                f"min {int(F.min())}, max {int(F.max())}")
+    big, span = float(np.abs(V).max()), float((V.max(axis=0) - V.min(axis=0)).max())
+    if big > COORD_LIMIT or 0 < span < 1 / COORD_LIMIT:
+        raise InvalidMeshError(f"{label}coordinates up to {big:.3g} over a span of {span:.3g}: beyond "
+                               f"{COORD_LIMIT:g} (or a span below {1 / COORD_LIMIT:g}) the fourth powers of lengths "
+                               "that areas and angles use overflow (or underflow) double precision; rescale the mesh")
     notes = []
     vmap = np.arange(len(V))
     if repair:

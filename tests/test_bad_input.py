@@ -89,6 +89,9 @@ def _files() -> dict[str, str | bytes]:
     out["octa_binary.stl"] = stl
     out["truncated_binary.stl"] = stl[: 84 + 50 * 3 + 20]
     out["out_of_range.obj"] = _obj(V, OCTA_F + [(0, 1, 98)])
+    # finite, but length^4 overflows or underflows: zero-area faces, NaN noise, crashes in libraries
+    out["huge_coords.obj"] = _obj([[x * 1e100 for x in v] for v in V], OCTA_F)
+    out["tiny_coords.obj"] = _obj([[x * 1e-100 for x in v] for v in V], OCTA_F)
     # unit cube of quads
     CV = [(x, y, z) for x in (0, 1) for y in (0, 1) for z in (0, 1)]
     out["quads.obj"] = _obj(CV, [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)])
@@ -167,6 +170,8 @@ LOAD_ERRORS = {
     "truncated_binary": "unreadable",            # .ply and .stl: both stems map here
     "lying_header": "truncated PLY: the header's elements need at least",
     "out_of_range": "face indices out of range",
+    "huge_coords": "overflow (or underflow) double precision; rescale the mesh",
+    "tiny_coords": "span of 2e-100: beyond",
     "huge_count": "truncated PLY: the header's elements need at least",
     "extra_faces": "OFF header promises 7 faces, but 1 more data line(s) follow them",
     "collinear": "every face has zero area",
