@@ -22,7 +22,7 @@ from .provenance import git_commit, git_dirty, machine_info, now_iso, package_ve
 from .results import Frames, RunFolder, check_output_file, out_dir_problems
 
 
-def config_hash(cfg: Config) -> str:
+def config_hash(cfg: Config, with_tune: bool = True) -> str:
     """sha1 of what the rows depend on (case ids, repeats, Hausdorff samples and gap, the timing
     budget; with ``tune:``, its training cases and metric), so a resume with a changed config is detected. Settings at their defaults are left
     out of the key, so that folders of versions that did not count them still resume."""
@@ -31,7 +31,7 @@ def config_hash(cfg: Config) -> str:
     budget = cfg.cases[0].time_budget if cfg.cases else 0.25
     key = ([sorted(c.case_id for c in cfg.cases), cfg.repeats, hs] + ([eps] if eps != 1e-3 else [])
            + ([["time_budget", budget]] if budget != 0.25 else []))
-    if cfg.tune is not None:             # the training cases and the metric decide the tuned cases
+    if cfg.tune is not None and with_tune:   # the training cases and the metric decide the tuned cases
         key.append(["tune", cfg.tune.metric, sorted(c.case_id for c in cfg.tune.cases)])
     blob = json.dumps(key).encode()
     return hashlib.sha1(blob).hexdigest()[:16]
@@ -188,7 +188,7 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
     except ShootoutError as exc:
         problems.append(str(exc))
     if not problems and out_dir.is_dir():
-        problems = folder_problems(folder, out_dir, chash, resume)
+        problems = folder_problems(folder, out_dir, _accepted(cfg, chash), resume)
     if problems:
         raise problems_error(problems)
     # before anything is written: an unreachable Dask scheduler is exit 2 with the folder untouched
@@ -284,7 +284,14 @@ def _write_status_in_place(folder, status: str) -> None:
         pass
 
 
-def folder_problems(folder, out_dir, chash: str, resume: bool) -> list[str]:
+def _accepted(cfg: Config, chash: str) -> tuple:
+    """The config hashes a folder to resume may hold: this version's, and for a tuned run the one
+    versions before it wrote without the tune section (its training rows are kept by case id, so a
+    changed tune section still cannot mix rows)."""
+    return (chash,) if cfg.tune is None else (chash, config_hash(cfg, with_tune=False))
+
+
+def folder_problems(folder, out_dir, chash, resume: bool) -> list[str]:
     """Why this run may not write into ``folder``: another program's files there (a fresh run), or
     (``--resume``) a run.json that is damaged, missing beside output files or of another config,
     or a task CSV whose columns are not this version's (resuming would drop its rows)."""
@@ -301,7 +308,8 @@ def folder_problems(folder, out_dir, chash: str, resume: bool) -> list[str]:
     if state == "missing" and folder.foreign_files():
         return [f"--resume: {out_dir} has {', '.join(folder.foreign_files())} but no run.json; "
                 "they cannot be matched to this config"]
-    if prev and prev.get("config_hash") != chash:
+    accepted = (chash,) if isinstance(chash, str) else tuple(chash)
+    if prev and prev.get("config_hash") not in accepted:
         return [f"--resume: the config changed since the run in {out_dir} started "
                 "(cases, tune:, repeats, time_budget, hausdorff_samples or hausdorff_eps differ; a case id also changes when a "
                 "mesh file's contents or a method's default parameters do); run without --resume to start over, "
@@ -371,7 +379,7 @@ def relabelled_meshes(folder, cases) -> list[str]:
 def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, executor, scheduler, resume, quiet,
                 export_benchmark_json, ex):
     done: set[str] = set()
-    refused = folder_problems(folder, out_dir, chash, resume)     # checked before the lock too; again under it
+    refused = folder_problems(folder, out_dir, _accepted(cfg, chash), resume)   # before the lock too; again under it
     if refused:
         raise problems_error(refused)
     try:

@@ -351,6 +351,13 @@ def test_resume_of_a_tuned_run_refuses_another_tune_section_and_drops_rows_not_i
     p.write_text("".join(lines + ["deadbeef0000" + lines[-1][lines[-1].index(","):]]))   # another choice's row
     again = harness.run(TUNE, out=out, workers=1, resume=True)["smoothing"]
     assert "deadbeef0000" not in set(again["case_id"]) and sorted(again["case_id"]) == sorted(first["case_id"])
+    import json                                    # a folder of a version whose hash left tune: out resumes
+    meta = json.loads((out / "run.json").read_text())
+    (out / "run.json").write_text(json.dumps({**meta, "config_hash": config_hash(load_config(TUNE), with_tune=False)}))
+    assert len(harness.run(TUNE, out=out, workers=1, resume=True)["smoothing"]) == len(first)
+    other = {**TUNE, "tune": {**TUNE["tune"], "metric": "hausdorff"}}   # but not with another tune: section
+    with pytest.raises(harness.errors.ShootoutError, match="config changed"):
+        harness.run(other, out=out, workers=1, resume=True)
 
 
 def test_resume_refuses_a_mesh_whose_label_changed(tmp_path):
