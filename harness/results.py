@@ -551,7 +551,8 @@ def load_csv(path) -> pd.DataFrame:
     ``nan``, ``NA`` or ``null`` keeps its name.
     """
     text = _checked_csv_text(Path(path))
-    df = pd.read_csv(io.StringIO(text), dtype={"case_id": str, "error": str, "params": str},
+    text_cols = ("case_id", "error", "params", "method", "mesh", "library", "task", "status", "noise_model", "file")
+    df = pd.read_csv(io.StringIO(text), dtype={c: str for c in text_cols},      # a file '10.obj' is method "10"
                      keep_default_na=False, na_values=[""], true_values=["true"], false_values=["false"])
     if "error" in df:
         df["error"] = df["error"].fillna("")

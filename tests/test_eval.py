@@ -207,3 +207,20 @@ def test_evaluate_refuses_input_it_cannot_score_honestly():
                            ({"F": F, "task": "area"}, "eval scores smoothing and simplification")):
         with pytest.raises(ShootoutError, match=needle):
             harness.evaluate(V, V_clean=V, F_clean=F, **kwargs)
+
+
+def test_results_named_like_numbers_are_method_names(tmp_path):
+    """`shootout eval ... 10.obj 20.obj`: the method column read back as integers, so the report
+    crashed (and then the CSV check called the folder it had just written damaged)."""
+    from harness import datasets
+    from harness.cli import main
+    from harness.mesh import write_obj
+    s = datasets.load({"procedural": "sphere", "subdivisions": 2}).clean
+    write_obj(tmp_path / "clean.obj", s.V, s.F)
+    for name, k in (("10", 1.01), ("20", 0.99)):
+        write_obj(tmp_path / f"{name}.obj", s.V * k, s.F)
+    assert main(["eval", "--clean", str(tmp_path / "clean.obj"), "--out", str(tmp_path / "o"), "--hausdorff-samples",
+                 "200", str(tmp_path / "10.obj"), str(tmp_path / "20.obj")]) == 0
+    assert main(["report", str(tmp_path / "o")]) == 0
+    from harness.results import load_csv
+    assert list(load_csv(tmp_path / "o" / "smoothing.csv")["method"]) == ["10", "20"]
