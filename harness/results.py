@@ -129,9 +129,6 @@ def _sane(meta: dict) -> dict:
     return out
 
 
-VIEW_FILE = re.compile(r"\d{2,}(-[0-9A-Za-z]+)?\.json")   # the views' names (`write_views`); others are the user's
-
-
 class RunFolder:
     """Files of one run: ``<task>.csv``, ``run.json``, ``report.html``, ``meshes/``."""
 
@@ -318,9 +315,8 @@ class RunFolder:
                 (self.path / name).unlink(missing_ok=True)
             vdir = self.path / "views"
             if vdir.is_dir():
-                for f in vdir.glob("*.json"):
-                    if VIEW_FILE.fullmatch(f.name) or f.name == "index.json":
-                        f.unlink()
+                for name in self._written_views() | {"index.json"}:
+                    (vdir / name).unlink(missing_ok=True)
             for task in kinds:                           # a tuned run's training rows
                 (self.path / "tune" / task_file(task)).unlink(missing_ok=True)
         self.remove_temporaries()                # first: the manifest names the meshes' temporaries
@@ -410,10 +406,17 @@ class RunFolder:
             _atomic_json(vdir / name, v)
             index.append({"file": name, "case_id": cid, "why": v.get("why")})
         keep = {e["file"] for e in index} | {"index.json"}
-        for old in vdir.glob("*.json"):
-            if old.name not in keep and VIEW_FILE.fullmatch(old.name):
-                old.unlink()
+        for name in self._written_views() - keep:
+            (vdir / name).unlink(missing_ok=True)
         _atomic_json(vdir / "index.json", {"views": index})
+
+    def _written_views(self) -> set[str]:
+        """The view files the stored ``views/index.json`` lists (ours: every other file there is the user's)."""
+        try:
+            index = json.loads((self.path / "views" / "index.json").read_text())["views"]
+        except (OSError, ValueError, KeyError, TypeError):
+            return set()
+        return {Path(str(e["file"])).name for e in index if isinstance(e, dict) and "file" in e} if isinstance(index, list) else set()
 
     def read_views(self) -> list[dict]:
         """The stored views in order ([] when there are none); an unreadable one is a view with an error."""
