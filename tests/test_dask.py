@@ -273,7 +273,7 @@ def test_an_interrupted_driver_leaves_no_case_running_on_the_workers(cluster):
     assert not alive, "the case ran on after its driver gave up on it"
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture
 def one_worker():
     """One worker, with Dask's default retries of a task whose worker died (the module's
     `cluster` sets 0)."""
@@ -326,7 +326,7 @@ def test_a_case_that_kills_its_worker_costs_its_own_row_only(one_worker, tmp_pat
     for r in rows:
         by.setdefault(r["method"], []).append(r)
     assert len(rows) == 4 and len({r["case_id"] for r in rows}) == 4
-    assert [r["status"] for r in by["slowdown.sleep"]] == ["ok", "ok"], by["slowdown.sleep"]
+    assert [r["status"] for r in by["slowdown.sleep"]] == ["ok", "ok"], [r["error"] for r in by["slowdown.sleep"]]
     for r in by["worker_killer.parent"]:
         assert r["status"] == "error" and "worker running this case died each of the 2 times" in r["error"], r
 

@@ -56,6 +56,7 @@ FILE_KEYS = ("file", "clean")
 CACHE_MAX_AGE_S = 7 * 24 * 3600      # a worker's cached mesh file unused this long is removed
 CACHE_DIR_NAME = "mesh-shootout-dask"
 STARTED_TOPIC = "mesh-shootout-case-started"   # scheduler event topic: a task began its case
+ENDED_TOPIC = "mesh-shootout-case-ended"       # ... and ended it (its result may still be lost with its worker)
 
 
 # ----------------------------------------------------------------------------- driver side
@@ -144,6 +145,8 @@ class DaskExecutor:
         self._cluster = None
         self._own_client = True
         self._futures: dict = {}
+        self._started_keys: set = set()       # task keys the scheduler's log says began their case
+        self._ended_keys: set = set()         # ... and ended it
         if scheduler is None:
             with dask.config.set({"distributed.worker.daemon": False}):
                 self._cluster = LocalCluster(n_workers=max(1, int(workers or os.cpu_count() or 1)),
@@ -245,16 +248,18 @@ class DaskExecutor:
                 if "Cancelled" in name and _hashes(sent):
                     # the worker holding the file's bytes left (a restart, --lifetime, or a case that
                     # killed it): every task waiting for them is cancelled, whether it ran or not
-                    if fut.key in self._started():
+                    if self._ran_when_lost(fut.key):
                         died[cid] = died.get(cid, 0) + 1
                         if died[cid] >= 2:
                             what = (f"the Dask worker running this case died each of the {died[cid]} times it ran "
-                                    "it (the case may kill its worker: memory, a signal to its parent process)")
+                                    "it (this case, or another one running beside it on that worker, may kill it: "
+                                    "memory, a signal to its parent process)")
                     else:
                         tries[cid] = tries.get(cid, 0) + 1
                         if tries[cid] > 3 + sum(died.values()):
-                            what = (f"cancelled by Dask {tries[cid]} times before it ran: each time the worker "
-                                    "holding its mesh file's bytes left (died or restarted); --resume runs it again")
+                            what = (f"cancelled by Dask {tries[cid]} times before its result reached the driver: "
+                                    "each time the worker holding its mesh file's bytes (or its result) left (died or "
+                                    "restarted); --resume runs it again")
                     if what is None:
                         fut.release()
                         again = submit(case, sent)
@@ -269,12 +274,19 @@ class DaskExecutor:
             yield case, row, extras
         self._futures = {}
 
-    def _started(self) -> set:
-        """Keys of the tasks that began their case on a worker (`run_task` logs each start)."""
-        try:
-            return {msg for _, msg in self.client.get_events(STARTED_TOPIC)}
-        except Exception:  # noqa: BLE001 - no record: the cancellation counts as one before it ran
-            return set()
+    def _ran_when_lost(self, key) -> bool:
+        """Whether the cancelled task ``key`` was running its case when its worker went: `run_task`
+        logs each start and each end to the scheduler, and a task that ended there but whose
+        result was lost with the worker before the driver fetched it ran innocently. The log is
+        fetched again only for a key whose end is not known yet."""
+        started, ended = self._started_keys, self._ended_keys
+        if key not in ended:
+            try:
+                started.update(msg for _, msg in self.client.get_events(STARTED_TOPIC))
+                ended.update(msg for _, msg in self.client.get_events(ENDED_TOPIC))
+            except Exception:  # noqa: BLE001 - no record: the cancellation counts as one before it ran
+                pass
+        return key in started and key not in ended
 
     def _completed(self, ac):
         """The futures of ``ac`` as they complete (it may grow meanwhile); while none completes
@@ -446,7 +458,7 @@ def run_task(case: Case, blobs: dict, timeout: float | None, want_meshes: bool):
         row = base_row(case)
         row["error"] = f"cannot materialise the shipped mesh file on the worker ({type(exc).__name__}: {exc})"
         return row, {}
-    _log_start()
+    _log(STARTED_TOPIC)
     if _daemonic():
         row, meshes = run_in_subprocess(case, timeout, want_meshes, stop=_cancelled)
     else:
@@ -455,16 +467,18 @@ def run_task(case: Case, blobs: dict, timeout: float | None, want_meshes: bool):
         row, meshes = run_isolated(case, timeout, want_meshes, stop=_cancelled)
     if row.get("status") == "unavailable":      # which machine lacks the library
         row["error"] = f"{row.get('error') or ''} (on the worker at {_worker_name()})".lstrip()
+    _log(ENDED_TOPIC)
     return row, meshes
 
 
-def _log_start() -> None:
-    """Tell the scheduler this task's case begins (topic `STARTED_TOPIC`, the task's key): a task
-    cancelled later ran when its worker died, rather than waited for a worker that left."""
+def _log(topic: str) -> None:
+    """Tell the scheduler this task's case begins (`STARTED_TOPIC`) or ended (`ENDED_TOPIC`), with
+    the task's key: a task cancelled between the two ran when its worker died, rather than
+    waited for a worker that left or finished before it left."""
     try:
         from distributed import get_worker
         w = get_worker()
-        w.log_event(STARTED_TOPIC, w.get_current_task())
+        w.log_event(topic, w.get_current_task())
     except Exception:  # noqa: BLE001 - not inside a worker (a test calling run_task)
         pass
 
