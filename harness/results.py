@@ -120,8 +120,9 @@ def _sane(meta: dict) -> dict:
             out[k] = v
         elif isinstance(v, want) and not (isinstance(v, bool) and want in (int, _NUM)):
             out[k] = v
-    if "load_average" in out:
-        out["load_average"] = [x for x in out["load_average"] if isinstance(x, _NUM) and not isinstance(x, bool)]
+    if "load_average" in out:         # [start, end]: a bad entry is None in its place
+        out["load_average"] = [x if isinstance(x, _NUM) and not isinstance(x, bool) else None
+                                for x in out["load_average"]]
     if "sessions" in out:
         out["sessions"] = [{**x, **{k: None for k in _SESSION_NUMBERS
                                     if k in x and (not isinstance(x[k], _NUM) or isinstance(x[k], bool))}}

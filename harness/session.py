@@ -331,16 +331,17 @@ def _keep_first_provenance(meta: dict, prev: dict, session_id: str, quiet: bool)
     first = {k: prev.get(k) for k in PROVENANCE}
     if not isinstance(first["versions"], dict):
         first["versions"] = {}
-    diff: dict = {}
+    diff: dict = {}                 # a value the first run did not record (an older version's run.json) is no change
     for k in ("git_commit", "git_dirty"):
-        if first[k] != now[k]:
+        if first[k] is not None and first[k] != now[k]:
             diff[k] = [first[k], now[k]]
-    vers = {p: [first["versions"].get(p), now["versions"].get(p)]
-            for p in sorted(set(first["versions"]) | set(now["versions"]))
-            if first["versions"].get(p) != now["versions"].get(p)}
+    vers = {p: [first["versions"][p], now["versions"].get(p)]
+            for p in sorted(first["versions"])
+            if first["versions"][p] is not None and now["versions"].get(p) is not None
+            and first["versions"][p] != now["versions"].get(p)}
     if vers:
         diff["versions"] = vers
-    meta.update(first)
+    meta.update({k: v for k, v in first.items() if v is not None and v != {}})
     changed = [x for x in prev.get("provenance_changed") or [] if isinstance(x, dict)]
     if diff:
         changed.append({"session": session_id, **diff})
