@@ -574,6 +574,7 @@ def _check_tasks(tasks, P: list, skip_unknown: bool = False, noise: dict | None 
                 P.append(f"{mat}: {mname} is a {meth.task} method, not {task}")
                 continue
             params = {**shared, **own}
+            n_before = len(P)
             for k, v in params.items():
                 src = f"{mat}.params.{k}" if k in own else f"{at}.params.{k}"
                 values = v if isinstance(v, list) else [v]
@@ -586,6 +587,13 @@ def _check_tasks(tasks, P: list, skip_unknown: bool = False, noise: dict | None 
             if size > MAX_CASES:             # refused before the product is built in memory
                 P.append(f"{mat}: its parameter lists expand to {size:,} settings, more than {MAX_CASES:,} cases")
                 continue
-            entries.append((mname, [_resolved(meth, g) for g in _grid(params)]))
+            grid = list(_grid(params))
+            bad = [(g, meth.setting_problem(g)) for g in grid] if len(P) == n_before else []
+            bad = [(g, why) for g, why in bad if why]
+            if bad:
+                P.append(f"{mat}: {len(bad)} of its {len(grid)} setting(s) cannot run, e.g. "
+                         f"{json.dumps(bad[0][0], sort_keys=True, default=str)}: {bad[0][1]}")
+                continue
+            entries.append((mname, [_resolved(meth, g) for g in grid]))
         out[task] = entries
     return out

@@ -68,6 +68,7 @@ class Method:
     expected_failures: dict = field(default_factory=dict, compare=False)
     extra: str = ""             # optional-dependency extra that installs its library ("" = default install)
     precheck: Callable | None = field(default=None, repr=False, compare=False)
+    setting_check: Callable | None = field(default=None, repr=False, compare=False)   # full params -> problem or None
 
     @property
     def backend(self) -> str:
@@ -107,10 +108,17 @@ class Method:
                 out.append(f"parameter {k!r}: {why}")
         return out
 
+    def setting_problem(self, params: dict) -> str | None:
+        """What is wrong with a whole setting (values that are each fine but not together, e.g. a
+        parameter the chosen variant ignores), by the method's ``setting_check``; None if nothing."""
+        return None if self.setting_check is None else self.setting_check(self.with_defaults(params))
+
     def resolve_params(self, params: dict) -> dict:
         """Defaults filled in and values checked; raises ValueError listing every problem."""
         params = {ALIASES.get(k, k) if ALIASES.get(k) in self.params else k: v for k, v in params.items()}
         problems = self.param_problems(params)
+        if not problems and self.setting_problem(params):
+            problems = [self.setting_problem(params)]
         if problems:
             raise ValueError(f"{self.name}: " + "; ".join(problems))
         return self.with_defaults(params)

@@ -30,7 +30,7 @@ BROKEN: dict[str, str] = {}
 
 def register(name: str, *, task: str, library: str, params: dict | None = None,
              requires: tuple | list | None = None, doc: str | None = None, cite: str = "",
-             expected_failures: dict | None = None, extra: str = "", precheck=None):
+             expected_failures: dict | None = None, extra: str = "", precheck=None, setting_check=None):
     """Decorator registering ``func(V, F, **params)`` as method ``name``.
 
     ``params`` maps each parameter name to its default or to a `Param` (bounds, choices).
@@ -45,7 +45,9 @@ def register(name: str, *, task: str, library: str, params: dict | None = None,
     zero-area faces for libigl's cotangents); run with the harness's own checks, untimed, before
     every call, so a method's time is its library's alone. The decorator then returns the
     function wrapped so that a direct call screens too (``Method.func`` stays the bare function,
-    which the runner times).
+    which the runner times). ``setting_check(params)``: given a whole setting (defaults filled
+    in), the reason it is refused (values fine alone but not together) or None; a config with
+    such a setting is refused when it loads, and a direct call raises.
     """
     if task not in _tasks.names():
         raise ValueError(f"register({name!r}): task must be one of {_tasks.names()}, got {task!r}")
@@ -71,7 +73,7 @@ def register(name: str, *, task: str, library: str, params: dict | None = None,
                                  params=declared, requires=tuple(requires or ()),
                                  doc=(doc or (func.__doc__ or "")).strip(), cite=cite,
                                  expected_failures=dict(expected_failures or {}), extra=extra,
-                                 precheck=precheck)
+                                 precheck=precheck, setting_check=setting_check)
         if precheck is None:
             return func
 

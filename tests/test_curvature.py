@@ -136,15 +136,17 @@ def test_meshlab_principal_curvature_accepts_every_declared_method(tmp_path):
     choices = list(m.params["method"].choices)
     scaled = "Scale Dependent Quadric Fitting"
     spheres = [{"procedural": "sphere", "subdivisions": 3, "radius": r} for r in (1.0, 2.0)]
+    from harness.config import load_config
+    from harness.errors import ConfigError
+    with pytest.raises(ConfigError, match=r"1 of its 2 setting\(s\) cannot run.*scale is read by method"):
+        load_config({"meshes": spheres, "tasks": {"curvature": {"methods": [
+            {"name": m.name, "params": {"method": ["Quadric Fitting", scaled], "scale": 2.0}}]}}})
+    with pytest.raises(ValueError, match="ignores it"):
+        m(*datasets.icosphere(2, 1.0), method="Quadric Fitting", scale=2.0)
     cfg = {"name": "pc", "meshes": spheres, "time_budget": 0,
            "tasks": {"curvature": {"methods": [{"name": m.name, "params": {"method": choices}},
-                                               {"name": m.name, "params": {"method": [scaled], "scale": [2.0, 30.0]}},
-                                               {"name": m.name, "params": {"method": ["Quadric Fitting"], "scale": [2.0]}}]}}}
-    df = run(cfg, out=tmp_path / "run", quiet=True)["curvature"]
-    ps = df["params"].map(json.loads)
-    ignored = ps.map(lambda p: p["method"] != scaled and p.get("scale") is not None)
-    assert (df.loc[ignored, "status"] == "error").all() and df.loc[ignored, "error"].str.contains("alone").all()
-    ok = df[~ignored]
+                                               {"name": m.name, "params": {"method": [scaled], "scale": [2.0, 30.0]}}]}}}
+    ok = run(cfg, out=tmp_path / "run", quiet=True)["curvature"]
     assert len(ok) == 2 * (len(choices) + 2) and (ok["status"] == "ok").all(), ok[["params", "error"]].to_string()
     assert (ok["k1_rel_l2"] < 0.5).all() and (ok["k2_rel_l2"] < 0.5).all(), ok[["params", "k1_rel_l2"]].to_string()
     sd = ok[ok["params"].map(lambda p: json.loads(p).get("scale") is not None)]

@@ -9,7 +9,7 @@ chosen ``method`` (VCGLib's quadric fitting or scale-dependent quadric fitting),
 ``Max Curvature`` (VCGLib's labels do not follow the sign order: the adapter sorts them,
 ``k1 >= k2``). ``scale`` (the neighbourhood radius, percent of the bounding-box diagonal) is read
 by scale-dependent quadric fitting alone: the filter ignores it otherwise (results equal for every
-scale), so it is refused with the other method. PyMeshLab's three other labels are left out: its
+scale), so a setting giving it with the other method is refused (a config naming one, when it loads). PyMeshLab's three other labels are left out: its
 "Normal Cycles" values are curvature integrated over a vertex's area (they grow with the
 radius of a sphere and shrink as it is refined), its "Principal Component Analysis" values
 have another sign and a scale that depends on the resolution (neither is the task's pointwise
@@ -59,8 +59,16 @@ def _no_zero_area(V, F, name) -> None:
     refuse_zero_area(V, F, name, "VCGLib's principal-curvature filter aborts on them")
 
 
+def _scale_read(params) -> str | None:
+    """``setting_check``: ``scale`` given with a method that ignores it."""
+    if params.get("scale") is not None and params.get("method") != _SCALED:
+        return (f"scale is read by method {_SCALED!r} alone; {params.get('method')!r} ignores it (every scale "
+                "gives the same values): leave it out")
+    return None
+
+
 @register("meshlab.principal_curvature", task="curvature", library="pymeshlab", requires=("pymeshlab",),
-          precheck=_no_zero_area,
+          precheck=_no_zero_area, setting_check=_scale_read,
           params={"method": Param("method", "Quadric Fitting", choices=_METHODS, doc="VCGLib's estimator"),
                   "scale": Param("scale", None, "float", low=0.01, high=100.0, optional=True,
                                  doc="neighbourhood radius, percent of the bounding-box diagonal; read by "
@@ -68,9 +76,9 @@ def _no_zero_area(V, F, name) -> None:
 def principal_curvature(V, F, *, method="Quadric Fitting", scale=None):
     """Principal curvatures from MeshLab's principal-directions filter (module docstring)."""
     import pymeshlab
-    if scale is not None and method != _SCALED:
-        raise ValueError(f"meshlab.principal_curvature: scale is read by method {_SCALED!r} alone; "
-                         f"{method!r} ignores it (every scale gives the same values): leave it out")
+    why = _scale_read({"method": method, "scale": scale})
+    if why:
+        raise ValueError(f"meshlab.principal_curvature: {why}")
     scale = _SCALE if scale is None else scale
     vals = []
     ms = _meshset(V, F)                  # one mesh: the filter writes directions and quality only
