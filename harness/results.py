@@ -112,7 +112,8 @@ _SESSION_NUMBERS = ("wall_s", "resumed_ok_cases")
 def _sane(meta: dict) -> dict:
     """run.json with every value of a wrong type left out (a hand-edited ``machine: "x"`` or
     ``sessions: 5``), so that its readers see a missing value, never a value they would crash on;
-    non-numbers in ``load_average`` and sessions that are not objects are dropped the same way."""
+    a non-number in ``load_average`` is None in its place, sessions that are not objects are
+    dropped, and a session's non-numeric ``wall_s`` is None."""
     out = {}
     for k, v in meta.items():
         want = _META_TYPES.get(k)
