@@ -418,7 +418,11 @@ class RunFolder:
             index = json.loads((self.path / "views" / "index.json").read_text())["views"]
         except (OSError, ValueError, KeyError, TypeError):
             return set()
-        return {Path(str(e["file"])).name for e in index if isinstance(e, dict) and "file" in e} if isinstance(index, list) else set()
+        if not isinstance(index, list):
+            return set()
+        vdir = self.path / "views"
+        names = {Path(str(e["file"])).name for e in index if isinstance(e, dict) and "file" in e}
+        return {n for n in names if n not in ("", ".", "..") and ((vdir / n).is_file() or (vdir / n).is_symlink())}
 
     def read_views(self) -> list[dict]:
         """The stored views in order ([] when there are none); an unreadable one is a view with an error."""

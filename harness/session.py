@@ -309,6 +309,8 @@ def folder_problems(folder, out_dir, chash, resume: bool) -> list[str]:
         return [f"--resume: {out_dir} has {', '.join(folder.foreign_files())} but no run.json; "
                 "they cannot be matched to this config"]
     accepted = (chash,) if isinstance(chash, str) else tuple(chash)
+    if len(accepted) > 1 and not (isinstance(prev.get("config"), dict) and prev["config"].get("tune")):
+        accepted = accepted[:1]             # the tune-less hash stands for an older tuned run only
     if prev and prev.get("config_hash") not in accepted:
         return [f"--resume: the config changed since the run in {out_dir} started "
                 "(cases, tune:, repeats, time_budget, hausdorff_samples or hausdorff_eps differ; a case id also changes when a "
@@ -328,20 +330,17 @@ def _keep_first_provenance(meta: dict, prev: dict, session_id: str, quiet: bool)
     packages differ is listed in ``provenance_changed`` and said on stderr: the folder then
     holds rows of both."""
     now = {k: meta[k] for k in PROVENANCE}
-    first = {k: prev.get(k) for k in PROVENANCE}
-    if not isinstance(first["versions"], dict):
-        first["versions"] = {}
-    diff: dict = {}                 # a value the first run did not record (an older version's run.json) is no change
-    for k in ("git_commit", "git_dirty"):
-        if first[k] is not None and first[k] != now[k]:
+    first = {k: prev[k] for k in PROVENANCE if k in prev}     # what the first run recorded (None is a value:
+    diff: dict = {}                                           # not installed, not a git checkout); a key an
+    for k in ("git_commit", "git_dirty"):                     # older version did not write is no change
+        if k in first and first[k] != now[k]:
             diff[k] = [first[k], now[k]]
-    vers = {p: [first["versions"][p], now["versions"].get(p)]
-            for p in sorted(first["versions"])
-            if first["versions"][p] is not None and now["versions"].get(p) is not None
-            and first["versions"][p] != now["versions"].get(p)}
+    fv = first.get("versions") if isinstance(first.get("versions"), dict) else {}
+    vers = {p: [fv[p], now["versions"].get(p)] for p in sorted(fv)
+            if p in now["versions"] and fv[p] != now["versions"][p]}
     if vers:
         diff["versions"] = vers
-    meta.update({k: v for k, v in first.items() if v is not None and v != {}})
+    meta.update(first)
     changed = [x for x in prev.get("provenance_changed") or [] if isinstance(x, dict)]
     if diff:
         changed.append({"session": session_id, **diff})

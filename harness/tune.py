@@ -157,6 +157,15 @@ def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | 
             P.append(f"{at}: its value lists expand to {size:.3g} settings, more than {MAX_SETTINGS:.0e}")
             continue
         out_params[m] = ok
+        if meth.setting_check is not None and size <= 100_000:     # candidates the method refuses as a whole
+            import itertools
+            base = configured[m][1][0] if configured[m][1] else {}
+            for combo in itertools.product(*ok.values()):
+                why = meth.setting_problem({**base, **dict(zip(ok, combo))})
+                if why:
+                    P.append(f"{at}: a candidate setting {json.dumps(dict(zip(ok, combo)), default=str)} cannot "
+                             f"run: {why}")
+                    break
         from . import tasks as _tasks
         spec = _tasks.get(configured[m][0])
         mt = spec.metric(metric) if isinstance(metric, str) else None

@@ -111,7 +111,12 @@ class Method:
     def setting_problem(self, params: dict) -> str | None:
         """What is wrong with a whole setting (values that are each fine but not together, e.g. a
         parameter the chosen variant ignores), by the method's ``setting_check``; None if nothing."""
-        return None if self.setting_check is None else self.setting_check(self.with_defaults(params))
+        if self.setting_check is None:
+            return None
+        try:
+            return self.setting_check(self.with_defaults(params))
+        except Exception as exc:  # noqa: BLE001 - a plugin's check that fails refuses the setting, naming why
+            return f"its setting_check failed on this setting ({type(exc).__name__}: {exc})"
 
     def resolve_params(self, params: dict) -> dict:
         """Defaults filled in and values checked; raises ValueError listing every problem."""

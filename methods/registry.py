@@ -74,12 +74,17 @@ def register(name: str, *, task: str, library: str, params: dict | None = None,
                                  doc=(doc or (func.__doc__ or "")).strip(), cite=cite,
                                  expected_failures=dict(expected_failures or {}), extra=extra,
                                  precheck=precheck, setting_check=setting_check)
-        if precheck is None:
+        if precheck is None and setting_check is None:
             return func
+        method = _REGISTRY[name]
 
         @functools.wraps(func)
         def checked(V, F, *args, **kwargs):          # a direct call of the function screens too
-            precheck(V, F, name)
+            if precheck is not None:
+                precheck(V, F, name)
+            why = method.setting_problem(kwargs)
+            if why:
+                raise ValueError(f"{name}: {why}")
             return func(V, F, *args, **kwargs)
         return checked
 

@@ -225,10 +225,39 @@ def test_register_refuses_parameters_the_function_cannot_take_or_defaults_out_of
     @register("archtest.kwargs", task="smoothing", library="archtest", params={"amount": 0.1})
     def kwargs(V, F, **kw):                        # **kwargs takes every keyword
         return SmoothingResult(V=V)
+    def refuse_big(p):
+        return "amount above 0.5 needs mode 'b'" if p["amount"] > 0.5 and p["mode"] != "b" else None
+
+    @register("archtest.combo", task="smoothing", library="archtest", setting_check=refuse_big,
+              params={"amount": Param("amount", 0.1, high=1.0), "mode": Param("mode", "a", choices=("a", "b"))})
+    def combo(V, F, *, amount=0.1, mode="a"):
+        return SmoothingResult(V=V)
+
+    @register("archtest.raising", task="smoothing", library="archtest", setting_check=lambda p: p["nope"],
+              params={"amount": 0.1})
+    def raising(V, F, *, amount=0.1):
+        return SmoothingResult(V=V)
+    import numpy as np
+
+    from harness.config import load_config
+    from harness.errors import ConfigError
+    V, F = np.eye(3), np.array([[0, 1, 2]])
+    with pytest.raises(ValueError, match="needs mode 'b'"):
+        combo(V, F, amount=0.9)                    # the decorated function, called directly
+    base = {"meshes": ["knight"], "tasks": {"smoothing": {"methods": [
+        {"name": "archtest.combo", "params": {"amount": [0.1, 0.9]}}, {"name": "archtest.raising"}]}}}
+    with pytest.raises(ConfigError) as e:
+        load_config(base)
+    assert "1 of its 2 setting(s) cannot run" in str(e.value) and "setting_check failed" in str(e.value), str(e.value)
+    tuned = {"meshes": ["knight"], "tasks": {"smoothing": {"methods": ["archtest.combo"]}},
+             "tune": {"metric": "dist_mean", "train": ["spot"], "params": {"archtest.combo": {"amount": [0.2, 0.9]}}}}
+    with pytest.raises(ConfigError, match="a candidate setting .* cannot run: amount above 0.5"):
+        load_config(tuned)
     import methods
     from methods.registry import _REGISTRY
     try:
         assert "archtest.kwargs" in [m.name for m in methods.all_methods("smoothing")]
         assert not {"archtest.misnamed", "archtest.outofbounds"} & {m.name for m in methods.all_methods()}
     finally:
-        _REGISTRY.pop("archtest.kwargs", None)            # other tests list every method
+        for n in ("archtest.kwargs", "archtest.combo", "archtest.raising"):
+            _REGISTRY.pop(n, None)                         # other tests list every method

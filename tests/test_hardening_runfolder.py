@@ -519,6 +519,8 @@ def test_a_hand_edited_run_json_of_wrong_types_is_read_without_a_traceback(tmp_p
             if not isinstance(bad, want) or (isinstance(bad, bool) and want is not bool):
                 assert k not in _sane({k: bad}), (k, bad)
     assert _sane({"load_average": [None, 0.5, "x"]})["load_average"] == [None, 0.5, None]   # positions kept
+    from harness.report.html import _timing_text
+    assert "unknown at the start, 0.50 at the end" in _timing_text({"load_average": [None, 0.5]})
     edits = [(("machine",), "x"), (("tasks",), []), (("versions",), "x"), (("workers",), "x"),
              (("load_average",), 5), (("timing",), ["x"]), (("solver", "versions"), 5), (("solver", "last_used"), "x"),
              (("sessions", 0), 5), (("sessions", 0, "wall_s"), "12.5"), (("load_average", 0), "x")]

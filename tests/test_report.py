@@ -217,6 +217,9 @@ def test_views_of_a_changed_file_are_kept_and_a_users_files_in_views_stay(tmp_pa
     assert [v["case_id"] for v in after] == [v["case_id"] for v in before]
     assert all(not v.get("error") and "sha1" in v["kept"] and v.get("meshes") for v in after), after
     assert all((out / "views" / name).exists() for name in mine)
+    index = json.loads((out / "views" / "index.json").read_text())        # a damaged index names no folder
+    index["views"] += [{"file": ".."}, {"file": ""}, {"file": "."}]
+    (out / "views" / "index.json").write_text(json.dumps(index))
     harness.run({"name": "v", "time_budget": 0, "hausdorff_samples": 200, "meshes": [{"file": str(mesh)}],
                  "tasks": {"smoothing": {"methods": ["scratch.taubin"]}}}, out=out)       # a fresh run: theirs stay
     assert all((out / "views" / name).exists() for name in mine)

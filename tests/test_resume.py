@@ -296,6 +296,7 @@ def test_a_resume_with_other_code_or_packages_keeps_the_first_and_says_so(tmp_pa
     meta["git_commit"] = "0ldc0mmit"
     del meta["git_dirty"]                          # what older versions did not record is no change
     meta["versions"].pop("scipy")
+    meta["versions"]["numba"] = None               # recorded as not installed then: a change
     (out / "run.json").write_text(json.dumps(meta))
     p = out / "laplacian.csv"
     p.write_text("".join(p.read_text().splitlines(keepends=True)[:-1]))
@@ -305,7 +306,7 @@ def test_a_resume_with_other_code_or_packages_keeps_the_first_and_says_so(tmp_pa
     (ch,) = after["provenance_changed"]
     assert ch["session"] == after["sessions"][-1]["id"] and ch["git_commit"][0] == "0ldc0mmit"
     assert ch["versions"]["numpy"][0] == "1.0.0-OLD" and after["sessions"][-1]["versions"]["numpy"] != "1.0.0-OLD"
-    assert "git_dirty" not in ch and set(ch["versions"]) == {"numpy"}
+    assert "git_dirty" not in ch and set(ch["versions"]) == {"numpy", "numba"} and ch["versions"]["numba"][0] is None
     html = (out / "report.html").read_text()
     assert "provenance" in html and "1.0.0-OLD" in html
 
@@ -358,6 +359,10 @@ def test_resume_of_a_tuned_run_refuses_another_tune_section_and_drops_rows_not_i
     meta = json.loads((out / "run.json").read_text())
     (out / "run.json").write_text(json.dumps({**meta, "config_hash": config_hash(load_config(TUNE), with_tune=False)}))
     assert len(harness.run(TUNE, out=out, workers=1, resume=True)["smoothing"]) == len(first)
+    untuned = tmp_path / "untuned"                 # an untuned run's folder does not resume with a tune: section
+    harness.run({k: v for k, v in TUNE.items() if k != "tune"}, out=untuned, workers=1)
+    with pytest.raises(harness.errors.ShootoutError, match="config changed"):
+        harness.run(TUNE, out=untuned, workers=1, resume=True)
     other = {**TUNE, "tune": {**TUNE["tune"], "metric": "hausdorff"}}   # but not with another tune: section
     with pytest.raises(harness.errors.ShootoutError, match="config changed"):
         harness.run(other, out=out, workers=1, resume=True)

@@ -277,16 +277,23 @@ class DaskExecutor:
     def _ran_when_lost(self, key) -> bool:
         """Whether the cancelled task ``key`` was running its case when its worker went: `run_task`
         logs each start and each end to the scheduler, and a task that ended there but whose
-        result was lost with the worker before the driver fetched it ran innocently. The log is
-        fetched again only for a key whose end is not known yet."""
+        result was lost with the worker before the driver fetched it ran innocently (the log is
+        read again a second later before a started task is blamed). The scheduler keeps the last
+        ``distributed.admin.low-level-log-length`` events of a topic (1000): a task whose start
+        left the log counts as one that had not started."""
         started, ended = self._started_keys, self._ended_keys
-        if key not in ended:
+        for wait in (0.0, 1.0):              # an end on a surviving worker may reach the log a moment later
+            if key in ended:
+                return False
+            time.sleep(wait)
             try:
                 started.update(msg for _, msg in self.client.get_events(STARTED_TOPIC))
                 ended.update(msg for _, msg in self.client.get_events(ENDED_TOPIC))
             except Exception:  # noqa: BLE001 - no record: the cancellation counts as one before it ran
-                pass
-        return key in started and key not in ended
+                return False
+            if key not in started:
+                return False
+        return key not in ended
 
     def _completed(self, ac):
         """The futures of ``ac`` as they complete (it may grow meanwhile); while none completes

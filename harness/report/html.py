@@ -206,10 +206,11 @@ def _timing_text(meta) -> str:
     if t.get("min_repeats") is not None or t.get("time_budget_s") is not None:
         parts.append(f"one untimed cold call, then timed samples until there are at least {t.get('min_repeats', '?')} "
                      f"and they sum to at least {_fmt(t.get('time_budget_s'))} s; median and quartiles")
-    loads = [float(x) for x in (meta.get("load_average") or []) if isinstance(x, (int, float))]
-    if loads:
-        parts.append("load average " + " at the start, ".join(f"{x:.2f}" for x in loads)
-                     + (" at the end" if len(loads) > 1 else " at the start") + " (1 min)")
+    loads = meta.get("load_average") if isinstance(meta.get("load_average"), list) else []
+    said = [f"{x:.2f} at the {when}" if isinstance(x, (int, float)) and not isinstance(x, bool) else f"unknown at the {when}"
+            for x, when in zip(loads[:2], ("start", "end"))]
+    if any(not s.startswith("unknown") for s in said):
+        parts.append("load average " + ", ".join(said) + " (1 min)")
     fc = meta.get("fixed_cost_per_case_s")
     if isinstance(fc, dict) and fc.get("mean") is not None:
         share = fc.get("share_of_method_time")
