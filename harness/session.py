@@ -309,7 +309,7 @@ def folder_problems(folder, out_dir, chash, resume: bool) -> list[str]:
         return [f"--resume: {out_dir} has {', '.join(folder.foreign_files())} but no run.json; "
                 "they cannot be matched to this config"]
     accepted = (chash,) if isinstance(chash, str) else tuple(chash)
-    if len(accepted) > 1 and not (isinstance(prev.get("config"), dict) and prev["config"].get("tune")):
+    if prev and len(accepted) > 1 and not (isinstance(prev.get("config"), dict) and prev["config"].get("tune")):
         accepted = accepted[:1]             # the tune-less hash stands for an older tuned run only
     if prev and prev.get("config_hash") not in accepted:
         return [f"--resume: the config changed since the run in {out_dir} started "

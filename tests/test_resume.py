@@ -359,6 +359,8 @@ def test_resume_of_a_tuned_run_refuses_another_tune_section_and_drops_rows_not_i
     meta = json.loads((out / "run.json").read_text())
     (out / "run.json").write_text(json.dumps({**meta, "config_hash": config_hash(load_config(TUNE), with_tune=False)}))
     assert len(harness.run(TUNE, out=out, workers=1, resume=True)["smoothing"]) == len(first)
+    fresh = harness.run(TUNE, out=tmp_path / "fresh", workers=1, resume=True)["smoothing"]   # nothing to resume yet
+    assert len(fresh) == len(first)
     untuned = tmp_path / "untuned"                 # an untuned run's folder does not resume with a tune: section
     harness.run({k: v for k, v in TUNE.items() if k != "tune"}, out=untuned, workers=1)
     with pytest.raises(harness.errors.ShootoutError, match="config changed"):
