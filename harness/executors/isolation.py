@@ -208,12 +208,16 @@ def _child(conn, case, want_meshes, own_reader_fd=None, want_view=False, stderr_
         result = run_case(case, want_meshes=want_meshes, want_view=want_view)
         if os.getpid() != pid:            # a copy the method forked: only the case process answers
             os._exit(0)
+        # every process the case left behind, in or out of its group, before the result goes: once
+        # the driver has it, it closes its end and the die-with-driver watch ends this process
+        # (closing our own end ends it too), which left such processes to whoever reaps orphans
+        reap_strays()
         conn.send(result)
     finally:
         if os.getpid() != pid:
             os._exit(0)
+        reap_strays()
         conn.close()
-        reap_strays()                     # every process the case left behind, in or out of its group
 
 
 def _tail(path: str | None, n: int = 3) -> str:
