@@ -122,8 +122,9 @@ class Method:
         """Defaults filled in and values checked; raises ValueError listing every problem."""
         params = {ALIASES.get(k, k) if ALIASES.get(k) in self.params else k: v for k, v in params.items()}
         problems = self.param_problems(params)
-        if not problems and self.setting_problem(params):
-            problems = [self.setting_problem(params)]
+        if not problems:
+            why = self.setting_problem(params)
+            problems = [why] if why else []
         if problems:
             raise ValueError(f"{self.name}: " + "; ".join(problems))
         return self.with_defaults(params)
