@@ -474,7 +474,7 @@ def _sniff(p: Path, n: int = 4096) -> bytes:
 
 OUTPUT_KINDS = {   # what an existing file must look like to be replaced by an output of that kind
     "json": ("a benchmark export (JSON with 'benchmarks')",
-             lambda p: _sniff(p).lstrip().startswith(b"{") and b'"benchmarks"' in _sniff(p, 1 << 20)),
+             lambda p: (lambda b: b[:4096].lstrip().startswith(b"{") and b'"benchmarks"' in b)(_sniff(p, 1 << 20))),
     "html": ("an HTML page", lambda p: _sniff(p, 512).lstrip()[:15].lower().startswith((b"<!doctype html", b"<html"))),
 }
 
