@@ -331,6 +331,36 @@ def test_a_case_that_kills_its_worker_costs_its_own_row_only(one_worker, tmp_pat
         assert r["status"] == "error" and "worker running this case died each of the 2 times" in r["error"], r
 
 
+def _log_as(*events):
+    from harness.executors.dask import _log
+    for e in events:
+        _log(e)
+
+
+def test_a_cases_start_is_not_pushed_out_of_the_schedulers_log_by_later_cases():
+    """The scheduler keeps the last ``distributed.admin.low-level-log-length`` events of a topic
+    (1000 by default): with every task's start in one topic, a long case whose start was
+    followed by that many others' counted as one that had not started when its worker died, and
+    the worker killer was retried without end. Each task now logs under its own topic."""
+    from harness.executors.dask import ENDED, STARTED
+    with dask.config.set({"distributed.worker.daemon": False, "distributed.admin.low-level-log-length": 2}):
+        cl = distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0",
+                                      silence_logs=logging.CRITICAL)
+    ex = DaskExecutor(timeout=60, scheduler=cl.scheduler_address)
+    try:
+        first = ex.client.submit(_log_as, STARTED, key="long-case", pure=False)
+        first.result()
+        later = [ex.client.submit(_log_as, STARTED, key=f"later-{i}", pure=False) for i in range(5)]
+        ex.client.gather(later)
+        ex.client.submit(_log_as, STARTED, ENDED, key="ended-case", pure=False).result()
+        assert ex._ran_when_lost("long-case")            # started, never ended: it ran when its worker went
+        assert not ex._ran_when_lost("never-ran")        # no start logged: it waited
+        assert not ex._ran_when_lost("ended-case")       # ended: its result was lost, not its run
+    finally:
+        ex.close()
+        cl.close()
+
+
 def test_unreachable_scheduler_is_exit_2(tmp_path):
     cfg = tmp_path / "c.yaml"
     cfg.write_text("meshes: [knight]\ntasks: {laplacian: {methods: [scratch.uniform]}}\n")

@@ -55,8 +55,7 @@ from .isolation import cancelled_row, signal_name
 FILE_KEYS = ("file", "clean")
 CACHE_MAX_AGE_S = 7 * 24 * 3600      # a worker's cached mesh file unused this long is removed
 CACHE_DIR_NAME = "mesh-shootout-dask"
-STARTED_TOPIC = "mesh-shootout-case-started"   # scheduler event topic: a task began its case
-ENDED_TOPIC = "mesh-shootout-case-ended"       # ... and ended it (its result may still be lost with its worker)
+STARTED, ENDED = "started", "ended"   # the events of a task's topic (`_topic`): it began its case, it ended it
 
 
 # ----------------------------------------------------------------------------- driver side
@@ -145,8 +144,6 @@ class DaskExecutor:
         self._cluster = None
         self._own_client = True
         self._futures: dict = {}
-        self._started_keys: set = set()       # task keys the scheduler's log says began their case
-        self._ended_keys: set = set()         # ... and ended it
         if scheduler is None:
             with dask.config.set({"distributed.worker.daemon": False}):
                 self._cluster = LocalCluster(n_workers=max(1, int(workers or os.cpu_count() or 1)),
@@ -276,24 +273,19 @@ class DaskExecutor:
 
     def _ran_when_lost(self, key) -> bool:
         """Whether the cancelled task ``key`` was running its case when its worker went: `run_task`
-        logs each start and each end to the scheduler, and a task that ended there but whose
-        result was lost with the worker before the driver fetched it ran innocently (the log is
-        read again a second later before a started task is blamed). The scheduler keeps the last
-        ``distributed.admin.low-level-log-length`` events of a topic (1000): a task whose start
-        left the log counts as one that had not started."""
-        started, ended = self._started_keys, self._ended_keys
+        logs its start and its end to the scheduler, under a topic of its own (`_topic`, so no
+        other task's events push them out of the scheduler's bounded log), and a task that ended
+        there but whose result was lost with the worker before the driver fetched it ran
+        innocently (the log is read again a second later before a started task is blamed)."""
         for wait in (0.0, 1.0):              # an end on a surviving worker may reach the log a moment later
-            if key in ended:
-                return False
             time.sleep(wait)
             try:
-                started.update(msg for _, msg in self.client.get_events(STARTED_TOPIC))
-                ended.update(msg for _, msg in self.client.get_events(ENDED_TOPIC))
+                events = {msg for _, msg in self.client.get_events(_topic(key))}
             except Exception:  # noqa: BLE001 - no record: the cancellation counts as one before it ran
                 return False
-            if key not in started:
+            if ENDED in events or STARTED not in events:
                 return False
-        return key not in ended
+        return True
 
     def _completed(self, ac):
         """The futures of ``ac`` as they complete (it may grow meanwhile); while none completes
@@ -465,7 +457,7 @@ def run_task(case: Case, blobs: dict, timeout: float | None, want_meshes: bool):
         row = base_row(case)
         row["error"] = f"cannot materialise the shipped mesh file on the worker ({type(exc).__name__}: {exc})"
         return row, {}
-    _log(STARTED_TOPIC)
+    _log(STARTED)
     if _daemonic():
         row, meshes = run_in_subprocess(case, timeout, want_meshes, stop=_cancelled)
     else:
@@ -474,18 +466,25 @@ def run_task(case: Case, blobs: dict, timeout: float | None, want_meshes: bool):
         row, meshes = run_isolated(case, timeout, want_meshes, stop=_cancelled)
     if row.get("status") == "unavailable":      # which machine lacks the library
         row["error"] = f"{row.get('error') or ''} (on the worker at {_worker_name()})".lstrip()
-    _log(ENDED_TOPIC)
+    _log(ENDED)
     return row, meshes
 
 
-def _log(topic: str) -> None:
-    """Tell the scheduler this task's case begins (`STARTED_TOPIC`) or ended (`ENDED_TOPIC`), with
-    the task's key: a task cancelled between the two ran when its worker died, rather than
-    waited for a worker that left or finished before it left."""
+def _topic(key) -> str:
+    """The scheduler event topic of the task ``key``: one per task, holding its `STARTED` and
+    `ENDED` events (a few hundred bytes on the scheduler per task, kept until it restarts)."""
+    return f"mesh-shootout-case:{key}"
+
+
+def _log(event: str) -> None:
+    """Tell the scheduler this task's case begins (`STARTED`) or ended (`ENDED`): a task
+    cancelled between the two ran when its worker died, rather than waited for a worker that
+    left or finished before it left."""
     try:
         from distributed import get_worker
         w = get_worker()
-        w.log_event(topic, w.get_current_task())
+        key = w.get_current_task()
+        w.log_event(_topic(key), event)
     except Exception:  # noqa: BLE001 - not inside a worker (a test calling run_task)
         pass
 
