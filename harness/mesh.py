@@ -325,11 +325,12 @@ def missing_file_problem(path) -> str | None:
     return None if path.is_file() else "no such file"
 
 
-def read_mesh(path, name: str | None = None, repair: bool = True, sha1: str | None = None) -> Mesh:
+def read_mesh(path, name: str | None = None, repair: bool = True, sha1: str | None = None,
+              finite: bool = True) -> Mesh:
     """Read a triangle mesh file and validate it (see the module docstring for the policy).
 
     ``sha1``: the hex digest the file's bytes must have (a file that changed since its run
-    started is an error, not another mesh under the same name)."""
+    started is an error, not another mesh under the same name). ``finite``: `validate`'s."""
     path = Path(path)
     ext = path.suffix.lower()
     if ext not in SUPPORTED:
@@ -376,7 +377,7 @@ def read_mesh(path, name: str | None = None, repair: bool = True, sha1: str | No
     except (ValueError, IndexError, KeyError, TypeError, UnicodeDecodeError, RuntimeError, OverflowError,
             MemoryError) as exc:
         raise InvalidMeshError(f"{path.name}: unreadable ({type(exc).__name__}: {str(exc)[:200]})") from None
-    mesh = validate(V, F, name=name or path.stem, repair=repair)
+    mesh = validate(V, F, name=name or path.stem, repair=repair, finite=finite)
     mesh.repairs[:0] = notes
     return mesh
 
@@ -426,8 +427,10 @@ def write_ply(path_or_file, V: np.ndarray, F: np.ndarray, quality: np.ndarray | 
 COORD_LIMIT = 1e60        # |coordinate| at most this, extent at least its inverse: length^4 stays a finite double
 
 
-def validate(V, F, name: str = "", repair: bool = True) -> Mesh:
-    """Check arrays and apply the documented repairs; raises InvalidMeshError."""
+def validate(V, F, name: str = "", repair: bool = True, finite: bool = True) -> Mesh:
+    """Check arrays and apply the documented repairs; raises InvalidMeshError. ``finite=False``
+    keeps NaN, inf and out-of-range coordinates (a method's output read back from a file, which
+    its task scores as it scores the method's arrays: e.g. a smoothing result is ``diverged``)."""
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F)
     label = f"{name}: " if name else ""
@@ -438,7 +441,7 @@ def validate(V, F, name: str = "", repair: bool = True) -> Mesh:
     if F.shape[1] != 3:
         raise InvalidMeshError(f"{label}faces must be triangles, got {F.shape[1]} corners")
     F = F.astype(np.int64)
-    if not np.isfinite(V).all():
+    if finite and not np.isfinite(V).all():
         bad = ~np.isfinite(V).all(axis=1)
         raise InvalidMeshError(f"{label}{int(bad.sum())} vertices with NaN or inf coordinates "
                                f"(first: {np.flatnonzero(bad)[:5].tolist()})")
@@ -446,7 +449,7 @@ def validate(V, F, name: str = "", repair: bool = True) -> Mesh:
         raise InvalidMeshError(f"{label}face indices out of range [0, {len(V)}): "
                                f"min {int(F.min())}, max {int(F.max())}")
     big, span = float(np.abs(V).max()), float((V.max(axis=0) - V.min(axis=0)).max())
-    if big > COORD_LIMIT or 0 < span < 1 / COORD_LIMIT:
+    if finite and big > COORD_LIMIT or 0 < span < 1 / COORD_LIMIT:
         raise InvalidMeshError(f"{label}coordinates up to {big:.3g} over a span of {span:.3g}: beyond "
                                f"{COORD_LIMIT:g} (or a span below {1 / COORD_LIMIT:g}) the fourth powers of lengths "
                                "that areas and angles use overflow (or underflow) double precision; rescale the mesh")

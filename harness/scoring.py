@@ -170,7 +170,7 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
                "params": json.dumps({"file": str(rp)}), "status": "ok",
                "error": ("input repaired: " + "; ".join(cmesh.repairs)) if cmesh.repairs else ""}
         try:                                     # a bad result file costs its row, as a crashing method does
-            r = read_mesh(rp, repair=False)
+            r = read_mesh(rp, repair=False, finite=False)     # NaN: scored as the task scores it (diverged)
             same_faces = len(r.F) in (cmesh.n_faces, m_raw)
             t = row["task"] = e.get("task") or ("smoothing" if len(r.V) in (cmesh.n_vertices, n_raw) and same_faces
                                                 else "simplification")

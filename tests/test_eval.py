@@ -224,3 +224,28 @@ def test_results_named_like_numbers_are_method_names(tmp_path):
     assert main(["report", str(tmp_path / "o")]) == 0
     from harness.results import load_csv
     assert list(load_csv(tmp_path / "o" / "smoothing.csv")["method"]) == ["10", "20"]
+
+
+def test_a_result_file_with_nan_coordinates_is_scored_as_the_same_arrays_are(tmp_path):
+    """Before: `eval` called a smoothing result file holding NaN (a diverged method's output) an
+    unreadable file, an error row, while `harness.evaluate` scored the same arrays as
+    ``diverged``; a row the leaderboard ranks as invalid, not a failure to read. Now both say
+    diverged; a simplification result with NaN is an error row in both, as in a run."""
+    from harness.mesh import write_obj
+    clean = read_mesh(PAIR / "Original.obj")
+    V = clean.V.copy()
+    V[7] = np.nan
+    write_obj(tmp_path / "nan.obj", V, clean.F)
+    assert "nan" in (tmp_path / "nan.obj").read_text()
+    row = harness.evaluate(V, clean.F, clean.V, clean.F, task="smoothing")
+    assert row["diverged"] is True
+    assert cli(["eval", str(tmp_path / "nan.obj"), "--clean", str(PAIR / "Original.obj"), "--out",
+                str(tmp_path / "o"), "--task", "smoothing"]) == 0
+    ev = pd.read_csv(tmp_path / "o" / "smoothing.csv").iloc[0]
+    assert ev["status"] == "ok" and bool(ev["diverged"]), ev["error"]
+    assert cli(["eval", str(tmp_path / "nan.obj"), "--clean", str(PAIR / "Original.obj"), "--out",
+                str(tmp_path / "s"), "--task", "simplification"]) == 0
+    ev = pd.read_csv(tmp_path / "s" / "simplification.csv").iloc[0]
+    assert ev["status"] == "error" and "non-finite" in ev["error"], ev["error"]
+    with pytest.raises(InvalidMeshError, match="NaN"):      # as an input, still refused
+        read_mesh(tmp_path / "nan.obj")
