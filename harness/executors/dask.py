@@ -476,38 +476,44 @@ def _topic(key) -> str:
     return f"mesh-shootout-case:{key}"
 
 
+def _worker():
+    """The Dask worker running this thread's task, or None outside one (a test calling `run_task`)."""
+    try:
+        from distributed import get_worker
+        return get_worker()
+    except Exception:  # noqa: BLE001 - ValueError outside a worker; no distributed at all
+        return None
+
+
 def _log(event: str) -> None:
     """Tell the scheduler this task's case begins (`STARTED`) or ended (`ENDED`): a task
     cancelled between the two ran when its worker died, rather than waited for a worker that
     left or finished before it left."""
-    try:
-        from distributed import get_worker
-        w = get_worker()
-        key = w.get_current_task()
-        w.log_event(_topic(key), event)
-    except Exception:  # noqa: BLE001 - not inside a worker (a test calling run_task)
-        pass
+    w = _worker()
+    if w is not None:
+        try:
+            w.log_event(_topic(w.get_current_task()), event)
+        except Exception:  # noqa: BLE001 - a worker closing: the event is lost, the case counts as waiting
+            pass
 
 
 def _cancelled() -> bool:
     """Whether the client gave up on the task this worker thread runs (it cancelled the future:
     the driver was interrupted, or closed): Dask lets the thread run on, so its case is killed."""
+    w = _worker()
+    if w is None:
+        return False
     try:
-        from distributed import get_worker
-        w = get_worker()
         ts = w.state.tasks.get(w.get_current_task())
-    except Exception:  # noqa: BLE001 - not inside a worker (a test calling run_task)
+    except Exception:  # noqa: BLE001 - no current task
         return False
     return ts is None or ts.state == "cancelled"
 
 
 def _worker_name() -> str:
     import socket
-    try:
-        from distributed import get_worker
-        return f"{get_worker().address}, host {socket.gethostname()}"
-    except Exception:  # noqa: BLE001 - not inside a worker (a test calling run_task)
-        return f"host {socket.gethostname()}"
+    w = _worker()
+    return (f"{w.address}, " if w is not None else "") + f"host {socket.gethostname()}"
 
 
 def _warm(case: Case) -> None:
