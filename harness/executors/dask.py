@@ -572,16 +572,15 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
             deadline = None if timeout is None else time.monotonic() + timeout
             while True:
                 left = None if deadline is None else deadline - time.monotonic()
-                if left is not None and left <= 0:
+                timed_out = left is not None and left <= 0
+                if timed_out or (stop is not None and stop()):
                     proc.kill()
                     proc.wait()
+                    if not timed_out:
+                        return cancelled_row(case), {}
                     row = base_row(case)
                     row.update(status="timeout", error=f"killed after {timeout:g} s (timeout)")
                     return row, {}
-                if stop is not None and stop():
-                    proc.kill()
-                    proc.wait()
-                    return cancelled_row(case), {}
                 try:
                     proc.wait(0.5 if left is None else min(0.5, left))
                     break
