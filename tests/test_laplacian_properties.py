@@ -192,6 +192,21 @@ def test_min_eig_closed_form():
     assert p["min_eig"] == pytest.approx(ev.min() / np.abs(ev).max(), rel=1e-8)
 
 
+def test_min_eig_when_lanczos_stalls_on_the_largest_eigenvalue():
+    """A symmetric, indefinite perturbation of the cotan W of a 42-vertex icosphere (an outside
+    review's adversarial case; rows sum to zero) whose two largest eigenvalues nearly tie
+    (4.82670, 4.82678): ARPACK's 8-vector Lanczos does not converge on ``lam_max``, and its
+    Gershgorin bound (6.86) was used instead, printing min_eig -0.605 where it is -0.8595. Now
+    a larger Krylov space (or a dense solver) gives it, or min_eig is blank."""
+    z = np.load(Path(__file__).parent / "data" / "arpack_lm_stall.npz")
+    n = len(z["V"])
+    W = sp.csr_matrix((z["data"], z["indices"], z["indptr"]), shape=(n, n))
+    ev = np.linalg.eigvalsh(-W.toarray())
+    p = laplacian_properties(W, None, z["V"], z["F"])
+    assert p["psd"] is False
+    assert p["min_eig"] == pytest.approx(ev.min() / np.abs(ev).max(), rel=1e-8)
+
+
 def test_bunny_spectrum_against_dense():
     """On knight (1k faces): min_eig of the (symmetric) cotan W equals the dense eigvalsh value; for the
     non-symmetric mean value W, psd follows the real parts of -W's dense eigenvalues."""

@@ -43,7 +43,10 @@ and ``M`` diagonal (or None):
        vector bounds it from above, so ``min_eig`` lies within ``[-PSD_TOL, 1e-10]`` and is
        reported as 0. Otherwise the steps below run.
     1. ``lam_max = max |eig(S)|`` by ARPACK Lanczos (``eigsh``, ``which='LM'``, tol 1e-6; fast,
-       extreme eigenvalue). Small Krylov spaces (``ncv=8``) are used throughout.
+       extreme eigenvalue). Small Krylov spaces (``ncv=8``) are used throughout; where this one
+       does not converge (nearly tied extreme eigenvalues), 32 vectors, then a dense solver up
+       to `DENSE_N` vertices; beyond, ``min_eig`` is blank and ``lam_max`` is replaced by its
+       Gershgorin bound in ``sigma`` only.
     2. ``A = S - sigma I`` with ``sigma = -PSD_TOL * lam_max`` is factorised as
        ``P A P^T = L D L^T`` without pivoting (QDLDL, AMD ordering; SuperLU in ``SymmetricMode``
        with ``diag_pivot_thresh=0`` if QDLDL is missing). By Sylvester's law of inertia the
@@ -97,6 +100,7 @@ LIN_TOL = 1e-9
 PSD_TOL = 1e-10
 PLANAR_TOL = 1e-9
 EIG_MAX_N = 200_000
+DENSE_N = 2000           # lam_max falls back to a dense eigensolver up to this size
 
 COLUMNS = ("sym_error", "loc_violations", "lin_error", "neg_weights", "min_eig", "psd", "nnz",
            "SYM", "LOC", "LIN", "POS", "operator_symmetric")
@@ -397,17 +401,11 @@ def _min_eig(W, V, F, WT=None):
         ev = np.linalg.eigvalsh(S.toarray())
         lam = np.abs(ev).max()
         return float(ev.min() / lam), bool(ev.min() >= -PSD_TOL * lam)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            lam_max = float(np.abs(sla.eigsh(S, k=1, which="LM", ncv=min(n - 1, 8), v0=_v0(n),
-                                             return_eigenvectors=False, tol=1e-6,
-                                             maxiter=max(1000, 10 * n))).max())
-    except (sla.ArpackNoConvergence, RuntimeError, ValueError):
-        lam_max = float(abs(S).sum(axis=1).max())  # Gershgorin bound (>= true value)
-    if lam_max == 0.0:
+    lam_max = _largest_magnitude(S, n)
+    scale = lam_max if lam_max is not None else float(abs(S).sum(axis=1).max())   # Gershgorin: >= the true one
+    if scale == 0.0:
         return 0.0, True
-    sigma = -PSD_TOL * lam_max
+    sigma = -PSD_TOL * scale
     A = (S - sigma * sp.identity(n, format="csc")).tocsc()
     factored = _ldlt(A)
     if factored is None:            # singular pivot or a non-symmetric pivot order: inertia unknown
@@ -433,7 +431,24 @@ def _min_eig(W, V, F, WT=None):
     lam_min = float(np.min(ev))
     if not psd and lam_min >= sigma:  # iteration disagrees with the exact inertia count
         return None, psd
-    return lam_min / lam_max, psd
+    return (lam_min / lam_max if lam_max is not None else None), psd
+
+
+def _largest_magnitude(S, n):
+    """``max |eig(S)|`` of symmetric S (CSC): Lanczos with 8 vectors, then with 32 (nearly tied
+    extreme eigenvalues of opposite sign can stall the small space), then a dense solver up to
+    `DENSE_N`; None when none of them gives it."""
+    for ncv in dict.fromkeys((min(n - 1, 8), min(n - 1, 32))):
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                return float(np.abs(sla.eigsh(S, k=1, which="LM", ncv=ncv, v0=_v0(n), return_eigenvectors=False,
+                                              tol=1e-6, maxiter=max(1000, 10 * n))).max())
+        except (sla.ArpackNoConvergence, RuntimeError, ValueError):
+            pass
+    if n <= DENSE_N:
+        return float(np.abs(np.linalg.eigvalsh(S.toarray())).max())
+    return None
 
 
 def _most_negative(S, n, lam_max):
