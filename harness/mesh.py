@@ -26,7 +26,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from .core.geometry import COMPILED_EDGES_FROM, edge_face_counts, face_cross, mean_edge_length, referenced  # noqa: F401
+from .core.geometry import (COMPILED_EDGES_FROM, edge_face_counts, face_cross, mean_edge_length,  # noqa: F401
+                            referenced, repeated_half_edges)
 from .errors import InvalidMeshError
 
 SUPPORTED = (".obj", ".off", ".ply", ".stl")
@@ -513,11 +514,14 @@ def topology(V: np.ndarray, F: np.ndarray) -> dict:
     """Topological facts of a triangle mesh.
 
     Returns a dict with ``n_edges``, ``boundary_edges``, ``boundary_loops`` (components of the
-    boundary-edge graph), ``components`` (of the face graph, over referenced vertices),
-    ``euler`` (chi = V - E + F over referenced vertices), ``genus`` (from
-    chi = 2c - 2g - b, total over components; may be fractional for non-manifold meshes),
-    ``nonmanifold_edges`` (edges with more than two faces), ``nonmanifold_vertices``,
-    ``manifold`` (edge- and vertex-manifold).
+    boundary-edge graph), ``components`` (connected pieces of the surface as a point set: faces
+    joined through a shared vertex or edge, over referenced vertices; two fans meeting at one
+    vertex are one piece), ``euler`` (chi = V - E + F over referenced vertices), ``genus``
+    (from chi = 2c - 2g - b, total over components: the genus of an orientable manifold mesh,
+    fractional or meaningless otherwise), ``nonmanifold_edges`` (edges with more than two faces),
+    ``nonmanifold_vertices``, ``manifold`` (edge- and vertex-manifold), ``oriented`` (no directed
+    edge in more than one face: on a manifold mesh, consistently oriented faces, which make it
+    orientable).
     """
     n = len(V)
     edges, counts = edge_face_counts(F)
@@ -545,6 +549,7 @@ def topology(V: np.ndarray, F: np.ndarray) -> dict:
         "nonmanifold_edges": nm_edges,
         "nonmanifold_vertices": nm_verts,
         "manifold": nm_edges == 0 and nm_verts == 0,
+        "oriented": bool(len(F) == 0 or repeated_half_edges(F) == 0),
     }
 
 

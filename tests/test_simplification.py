@@ -358,6 +358,49 @@ def test_genus_change_is_blank_for_a_non_manifold_output():
     assert same["manifold"] and same["genus_change"] == 0 and same["topology_changed"] is False
 
 
+def test_a_flipped_face_or_a_moebius_output_is_judged():
+    """An outside review: one face of a simplified output reversed kept ``manifold`` True,
+    ``topology_changed`` False and a Hausdorff distance of 1e-16, a valid row; an annulus
+    turned into a Moebius band read ``genus_change`` 0.5. Now ``orientation_lost`` makes the
+    first invalid, and the genus is blank where the output's faces are not consistently
+    oriented (a Moebius band cannot be)."""
+    from harness import tasks
+    from harness.leaderboard import validity
+    from harness.tasks import simplification as simp
+    task = tasks.get("simplification")
+    s = np.linspace(0, 1, 9)
+    X, Y = np.meshgrid(s, s)
+    V = np.c_[X.ravel(), Y.ravel(), np.zeros(X.size)]
+    q = (np.arange(8)[:, None] * 9 + np.arange(8)[None, :]).ravel()
+    F = np.vstack([np.c_[q, q + 1, q + 10], np.c_[q, q + 10, q + 9]])
+    from harness.mesh import validate
+    from harness.tasks.base import CaseInput
+    clean = validate(V, F, repair=False)
+    inp = CaseInput(clean, clean.V, clean.F, clean.diagonal(), {"hausdorff_samples": 1000})
+    flipped = F.copy()
+    flipped[5] = flipped[5, ::-1]
+    row = task.measure(inp, simp.SimplificationResult(V.copy(), flipped), {"target_faces": len(F)})
+    assert row["manifold"] is True and row["orientation_lost"] is True and np.isnan(row["genus_change"])
+    assert row["hausdorff"] < 1e-12
+    import pandas as pd
+    ok = task.measure(inp, simp.SimplificationResult(V.copy(), F.copy()), {"target_faces": len(F)})
+    df = pd.DataFrame([dict(row, status="ok"), dict(ok, status="ok")])
+    why = validity(task.spec(), df)
+    assert "flipped faces" in why.iloc[0] and why.iloc[1] == "" and ok["genus_change"] == 0
+    # a strip of 12 quads whose ends are glued with a half twist: manifold, one boundary loop
+    t = np.linspace(0, 2 * np.pi, 13)[:-1]
+    ring = [np.c_[(1 + w * np.cos(t / 2)) * np.cos(t), (1 + w * np.cos(t / 2)) * np.sin(t), w * np.sin(t / 2)]
+            for w in (-0.3, 0.3)]
+    Vm = np.vstack(ring)
+    i = np.arange(12)
+    j = (i + 1) % 12
+    bn, tn = np.where(j == 0, 12, j), np.where(j == 0, 0, j + 12)       # the twist swaps the sides
+    Fm = np.vstack([np.c_[i, bn, i + 12], np.c_[bn, tn, i + 12]])
+    from harness.mesh import topology
+    tm = topology(Vm, Fm)
+    assert tm["manifold"] and tm["boundary_loops"] == 1 and not tm["oriented"] and tm["genus"] % 1 == 0.5
+
+
 def test_scratch_qem_is_translation_invariant(qem):
     """The collapses run in a centred frame: the bunny moved 1e6 away from the origin simplifies
     to the same faces, at the same places up to the coordinates' rounding (1e6 keeps 1e-10 of

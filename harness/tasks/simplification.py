@@ -98,9 +98,10 @@ def measure(inp, result, params) -> dict:
                 "over_target": bool(len(F_out) > target + target_tolerance(target)),
                 "manifold": topo["manifold"],
                 "manifold_lost": bool(topo_in["manifold"] and not topo["manifold"]),
-                # the genus is defined for manifold meshes only: blank when either is not
-                "genus_change": (topo["genus"] - topo_in["genus"] if topo["manifold"] and topo_in["manifold"]
-                                 else np.nan),
+                "orientation_lost": bool(topo_in["oriented"] and not topo["oriented"]),
+                # chi = 2c - 2g - b gives the genus of orientable manifold meshes only: blank otherwise
+                "genus_change": (topo["genus"] - topo_in["genus"] if all(t["manifold"] and t["oriented"]
+                                                                         for t in (topo, topo_in)) else np.nan),
                 "boundary_loops_change": topo["boundary_loops"] - topo_in["boundary_loops"],
                 "components_change": topo["components"] - topo_in["components"]})
     row["topology_changed"] = bool(topo["euler"] != topo_in["euler"] or row["boundary_loops_change"] != 0
@@ -155,13 +156,16 @@ TASK = Task(
         Metric("manifold", "true", "output is edge- and vertex-manifold", kind="bool"),
         Metric("manifold_lost", "false", "the input was manifold and the output is not (an invalid result)",
                kind="bool"),
+        Metric("orientation_lost", "false", "the input's faces were consistently oriented and the output's are "
+               "not: a face flipped (or an edge of more than two faces); an invalid result", kind="bool"),
         Metric("topology_changed", "false", "Euler characteristic (for manifold meshes: the genus), number of "
                "boundary loops or of connected components changed",
                kind="bool"),
-        Metric("genus_change", "info", "output genus minus input genus (blank unless both are manifold: "
-               "chi = 2c - 2g - b holds for manifold meshes only)"),
+        Metric("genus_change", "info", "output genus minus input genus (blank unless both are manifold and "
+               "consistently oriented: chi = 2c - 2g - b holds for orientable manifold meshes only)"),
         Metric("boundary_loops_change", "info", "output boundary loops minus input's", kind="int"),
-        Metric("components_change", "info", "output connected components minus input's", kind="int"),
+        Metric("components_change", "info", "output connected components (faces joined through a shared vertex "
+               "or edge) minus input's", kind="int"),
         Metric("min_angle", "higher", "smallest triangle angle", unit="deg", rel=0.01, abs=0.01),
         Metric("radius_ratio_mean", "higher", "mean of 2 r_in / r_circ over faces (1 = equilateral)",
                rel=0.01, abs=1e-3),
@@ -175,4 +179,6 @@ TASK = Task(
     preload=_warm_metrics, input_facts=("topology", "input_surface"),
     invalid_when=(Invalid("over_target", "==", "kept more faces than the target", value=True),
                   Invalid("manifold_lost", "==", "non-manifold output from a manifold input", value=True),
+                  Invalid("orientation_lost", "==", "flipped faces in the output of a consistently oriented input",
+                          value=True),
                   Invalid("topology_changed", "==", "topology changed", value=True)))
