@@ -141,14 +141,18 @@ CELL_SEP = "\x1f"                 # joins a cell's mesh, noise, level and settin
 
 def cell_values(spec: dict, df: pd.DataFrame, metric: str, axis_params=(), cells=None):
     """(values, invalid): cells x variants tables of the metric's mean over seeds (ok rows; blank
-    when any seed of the variant has no value there) and of whether a variant's result in the
-    cell is invalid (a seed errored or timed out, or broke a validity rule). Cell labels are
+    when the variant has no value on a seed of the cell: a blank value, or no row at all) and
+    of whether a variant's result in the cell is invalid (a seed errored or timed out, or broke a validity rule). Cell labels are
     mesh, noise model, noise level and axis parameters (JSON) joined by `CELL_SEP`. ``cells``: `_cells` of ``df``, when
     already made (it does not depend on the metric)."""
     d = _cells(spec, df, axis_params) if cells is None else cells
     keys = [d["_cell"], d["_variant"]]
     g = _value(d, metric).groupby(keys)
-    every_seed = g.count() == g.size()               # no mean over the seeds that happen to have a value
+    seed = (d["seed"] if "seed" in d else pd.Series(0, index=d.index)).astype(str)
+    own = seed.groupby(keys).nunique()               # a variant with no row on a seed of its cell (a case that
+    cell_seeds = seed.groupby(d["_cell"]).nunique()  # never ran) is blank there too, not a mean over fewer seeds
+    all_seeds = own.to_numpy() == cell_seeds.reindex(own.index.get_level_values(0)).to_numpy()
+    every_seed = (g.count() == g.size()) & all_seeds  # no mean over the seeds that happen to have a value
     vals = g.mean().where(every_seed).unstack("_variant")
     inval = d["_invalid"].groupby(keys).any().unstack("_variant").reindex_like(vals).fillna(False).astype(bool)
     return vals, inval

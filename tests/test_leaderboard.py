@@ -252,6 +252,26 @@ def test_methods_are_ranked_at_equal_k_and_equal_source_sets():
     assert {"sources", "source_seed"} <= set(tasks.get("geodesics").spec()["axis_params"])
 
 
+def test_a_variant_without_a_row_on_some_seed_is_not_ranked_on_the_others():
+    """An outside review: B's case on seed 1 never ran (an interrupted run, then `shootout report`):
+    B was ranked, and named the winner, on its seed-0 value alone (0.05, where its seed 1 would
+    have been 0.30), with no missing cell counted. Now a variant lacking a seed of its cell is
+    missing there, as one whose value on that seed is blank."""
+    rows = [{"mesh": "a", "noise_model": "gaussian", "noise_level": 0.3, "seed": s, "method": m, "params": "{}",
+             "status": "ok", "K_rel_l2": v} for m, s, v in (("A", 0, 0.10), ("A", 1, 0.10), ("B", 0, 0.05))]
+    rows += [{"mesh": "b", "noise_model": "none", "noise_level": None, "seed": None, "method": m, "params": "{}",
+              "status": "ok", "K_rel_l2": v} for m, v in (("A", 0.1), ("B", 0.2))]
+    spec = {"curvature": {"metrics": [{"name": "K_rel_l2", "better": "lower", "rank": True, "rel": 0.01, "abs": 1e-9}],
+                          "axis_params": [], "invalid_when": []}}
+    df = pd.DataFrame(rows)
+    vals, _ = L.cell_values(spec["curvature"], df, "K_rel_l2")
+    assert vals.notna().sum().to_dict() == {"A": 2, "B": 1}
+    lb = L.leaderboard({"curvature": df}, spec).set_index("method")
+    assert lb.loc["B", "missing_cells"] == 1 and lb.loc["A", "missing_cells"] == 0
+    w = L.winners({"curvature": df}, spec).set_index("mesh")
+    assert w.loc["a", "best"] == "A" and not str(w.loc["a", "runner_up"]).startswith("B")
+
+
 def test_the_reference_method_is_no_competitor_where_it_is_the_reference():
     """Where no analytic distance exists the geodesic reference is libigl's exact_geodesic: its
     own 0 there is no measurement, so it is not a valid result there (ranked last, never best);

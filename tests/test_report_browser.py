@@ -439,3 +439,31 @@ def test_an_exact_tie_names_the_same_best_as_winners_csv(tmp_path):
     s = check_report_in_browser(tmp_path / "report.html", interact=False)
     rows = [r for r in s["bestRows"] if r.startswith("knight")]
     assert rows and all("● scratch.explicit" in r for r in rows), rows
+
+
+def test_a_method_missing_a_seed_wins_nothing_in_the_report_either(tmp_path):
+    """The winner of a cell loses its seed-1 row (a case that never ran): the winners' table and
+    the report both leave it out of that cell instead of ranking it on its seed-0 value alone."""
+    import pandas as pd
+
+    import harness
+    from harness.cli import main as cli
+    cfg = {"name": "seedgap", "repeats": 1, "time_budget": 0, "meshes": ["knight"],
+           "noise": [{"model": "gaussian_normal", "levels": [0.3], "seeds": 2}],
+           "tasks": {"smoothing": {"methods": ["scratch.taubin", "scratch.explicit"]}}}
+    harness.run(cfg, out=tmp_path, quiet=True, workers=1)
+    win = pd.read_csv(tmp_path / "winners.csv")
+    best = win[win.metric == "dist_mean"].best.iloc[0].split(" ")[0]
+    rows = pd.read_csv(tmp_path / "smoothing.csv", dtype=str, keep_default_na=False)
+    rows = rows[~((rows.method == best) & (rows.seed == "1"))]
+    rows.to_csv(tmp_path / "smoothing.csv", index=False)
+    assert cli(["report", str(tmp_path)]) == 0                 # rebuilds report.html from the files
+    from harness import leaderboard, tasks
+    from harness.results import load_csv
+    win = leaderboard.winners({"smoothing": load_csv(tmp_path / "smoothing.csv")},
+                              {"smoothing": tasks.get("smoothing").spec()})
+    now = win[win.metric == "dist_mean"].best.iloc[0]
+    assert not now.startswith(best), now
+    s = check_report_in_browser(tmp_path / "report.html", interact=False)
+    shown = [r for r in s["bestRows"] if r.startswith("knight")]
+    assert shown and not any(f"● {best}" in r for r in shown), shown

@@ -317,8 +317,11 @@
   // takes the variant out of the cell: no mean over the seeds that happen to be good)
   function cellVariants(cell, key) {
     var keep = new Set();
+    var seedOf = function (r) { return String(r.seed); };
+    var nSeeds = new Set(cell.map(seedOf)).size;      // a variant without a row on some seed of the cell: blank, as winners.csv
     groupBy(cell, function (r) { return r._variant; }).forEach(function (g, v) {
-      var blank = g.some(function (r) { return r.status !== 'ok' || r.diverged || !isNum(r[key]); });
+      var blank = new Set(g.map(seedOf)).size < nSeeds ||
+        g.some(function (r) { return r.status !== 'ok' || r.diverged || !isNum(r[key]); });
       if (!blank && (showInvalid || !g.some(function (r) { return r._invalid; }))) keep.add(v);
     });
     return keep;
