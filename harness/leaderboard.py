@@ -48,14 +48,35 @@ def _truthy(v):
     return v
 
 
-def validity(spec: dict, df: pd.DataFrame) -> pd.Series:
+def validity(spec: dict, df: pd.DataFrame, measured: bool = False) -> pd.Series:
     """Why each row is not a valid result ('' when it is): status not ok, or the first of the
     task's declared ``invalid_when`` rules (`harness.tasks.base.Invalid`) that matches; a rule
     against another column (``than``) matches only beyond the metric's compare tolerance
-    (``max(rel * |other|, abs)``), so rounding noise does not decide validity."""
+    (``max(rel * |other|, abs)``), so rounding noise does not decide validity. ``measured``:
+    leave out the rules that mark a row as no measurement (``missing``, `not_measured`)."""
     why = pd.Series([""] * len(df), index=df.index, dtype=object)
+    for rule, hit in _rule_hits(spec, df, why):
+        if not (measured and rule.get("missing")):
+            why[hit & (why == "")] = rule.get("why") or rule.get("column")
+    return why
+
+
+def not_measured(spec: dict, df: pd.DataFrame) -> pd.Series:
+    """Whether each ok row matches a ``missing`` rule of the task's ``invalid_when``: its values
+    are no measurement of the method (e.g. the reference method scored against itself), so
+    rankings count them as missing, neither as a result nor as an invalid one."""
+    out = pd.Series(False, index=df.index)
+    for rule, hit in _rule_hits(spec, df, pd.Series([""] * len(df), index=df.index, dtype=object)):
+        if rule.get("missing"):
+            out |= hit
+    return out
+
+
+def _rule_hits(spec: dict, df: pd.DataFrame, why: pd.Series):
+    """``(rule, hit)`` for each ``invalid_when`` rule, ``hit`` the ok rows it matches; fills
+    ``why`` with the status of rows that are not ok."""
     if "status" not in df:
-        return why
+        return
     ok = df["status"] == "ok"
     why[~ok] = "status " + df.loc[~ok, "status"].astype(str)
     rules = (spec or {}).get("invalid_when")
@@ -81,8 +102,7 @@ def validity(spec: dict, df: pd.DataFrame) -> pd.Series:
             hit = df[col].map(_truthy).map(lambda v, want=rule.get("value"): v == want and not pd.isna(v))
         if rule.get("method"):
             hit = hit.astype(bool) & (df["method"] == rule["method"] if "method" in df else False)
-        why[ok & hit.astype(bool) & (why == "")] = rule.get("why") or col
-    return why
+        yield rule, ok & hit.astype(bool)
 
 
 def label_keys(methods, params, axis=(), defaults=None) -> dict[str, list[str]]:
@@ -169,8 +189,11 @@ def seed_values(spec: dict, df: pd.DataFrame, metric: str, axis_params=(), cells
 
 
 def _value(d: pd.DataFrame, metric: str) -> pd.Series:
-    """The metric of ok rows (blank elsewhere)."""
-    return pd.to_numeric(d[metric], errors="coerce").where(d["status"] == "ok")
+    """The metric of ok rows that are a measurement (blank elsewhere: `not_measured`)."""
+    ok = d["status"] == "ok"
+    if "_unmeasured" in d:
+        ok &= ~d["_unmeasured"].astype(bool)
+    return pd.to_numeric(d[metric], errors="coerce").where(ok)
 
 
 def _cells(spec: dict, df: pd.DataFrame, axis_params=()) -> pd.DataFrame:
@@ -178,7 +201,8 @@ def _cells(spec: dict, df: pd.DataFrame, axis_params=()) -> pd.DataFrame:
     every metric of the task."""
     d = df.copy()
     d["_variant"] = _variant(d, set(axis_params), (spec or {}).get("method_defaults"))
-    d["_invalid"] = (validity(spec, d) != "") & d["status"].isin(FAILED + ("ok",))
+    d["_invalid"] = (validity(spec, d, measured=True) != "") & d["status"].isin(FAILED + ("ok",))
+    d["_unmeasured"] = not_measured(spec, d) if "status" in d else False
     ps = [json.loads(p) if isinstance(p, str) and p else {} for p in d["params"]]
     text = lambda col: [("" if pd.isna(v) else str(v)) for v in d[col]] if col in d else [""] * len(d)  # noqa: E731
     d["_cell"] = [CELL_SEP.join(t) for t in zip(text("mesh"), text("noise_model"), text("noise_level"),
@@ -226,10 +250,15 @@ def _tied_rank_row(score: np.ndarray, rel: float, abs_: float) -> np.ndarray:
 
 def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_params=(), cells=None):
     """(ranks DataFrame cells x variants, missing per variant, invalid per variant); values within
-    the metric's tolerance tie (`tie_groups`)."""
+    the metric's tolerance tie (`tie_groups`). A variant that is no measurement in some cell
+    (`not_measured`: the reference scored against itself) is left out, as one that never ran:
+    counted missing there, it would drop the cell for every method."""
     if metric not in df or not len(df):
         return pd.DataFrame(), {}, {}
+    cells = _cells(spec, df, axis_params) if cells is None else cells
     vals, inval = cell_values(spec, df, metric, axis_params, cells)
+    gone = set(cells.loc[cells["_unmeasured"].astype(bool), "_variant"])
+    vals, inval = vals.loc[:, [v not in gone for v in vals.columns]], inval.loc[:, [v not in gone for v in inval.columns]]
     missing = vals.isna() & ~inval
     ran = ~missing.all(axis=0)             # a variant with no value anywhere (unavailable) is left out
     vals, inval, missing = vals.loc[:, ran], inval.loc[:, ran], missing.loc[:, ran]

@@ -287,6 +287,33 @@ def test_the_reference_method_is_no_competitor_where_it_is_the_reference():
     assert why == ["is the reference itself (0 by construction)", "", "", ""]
 
 
+def test_the_reference_method_is_left_out_of_the_ranking_not_ranked_last():
+    """An outside review: on knight and woody (no analytic distance) libigl.exact_geodesic is
+    the reference, its 0 no measurement; it was ranked last there, below heat methods with 6%
+    error, and counted invalid. Now it is left out of the ranking (as a method that never ran),
+    the other methods keep every cell, and it still wins nothing where it is the reference."""
+    from harness import tasks
+    spec = tasks.get("geodesics").spec()
+    rows = []
+    for mesh, exact, vals in (("sphere", False, (0.001, 0.001, 0.05)), ("knight", True, (0.0, 0.002, 0.06)),
+                              ("woody", True, (0.0, 0.003, 0.07))):
+        for m, v in zip(("libigl.exact_geodesic", "pygeodesic.exact", "scratch.heat"), vals):
+            rows.append({"mesh": mesh, "noise_model": "none", "noise_level": None, "seed": None, "method": m,
+                         "params": "{}", "status": "ok", "reference_exact": exact, "rel_error_mean": v})
+    df = pd.DataFrame(rows)
+    lb = L.leaderboard({"geodesics": df}, {"geodesics": spec})
+    lb = lb[lb.metric == "rel_error_mean"].set_index("method")
+    assert "libigl.exact_geodesic" not in lb.index
+    assert lb.loc["pygeodesic.exact", "cells"] == 3 and lb.loc["pygeodesic.exact", "mean_rank"] == 1.0
+    assert (lb["invalid_cells"] == 0).all()
+    w = L.winners({"geodesics": df}, {"geodesics": spec})
+    w = w[w.metric == "rel_error_mean"].set_index("mesh")
+    assert w.loc["knight", "best"] == "pygeodesic.exact" and w.loc["knight", "invalid_excluded"] == 0
+    assert w.loc["knight", "variants"] == 2
+    assert w.loc["sphere", "best"] in ("libigl.exact_geodesic", "pygeodesic.exact")
+    assert L.validity(spec, df).iloc[3] == "is the reference itself (0 by construction)"   # the report hides it
+
+
 def test_a_winner_must_be_better_on_every_seed_or_it_ties():
     """With several seeds the better mean alone names no winner: B has the best mean (1.05 against
     A's 1.10) but A is better on seed 0, so they tie; C, worse on every seed, is the runner-up."""

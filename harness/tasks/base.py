@@ -58,7 +58,10 @@ class Invalid:
     """A row is not a valid result when ``column`` ``op`` (``==`` or ``>``) ``value``, or, with
     ``than``, when ``column > row[than]`` (e.g. an error above the input's own error); with
     ``method``, only that method's rows (e.g. the method that computes the reference itself);
-    ``why`` is what the report and leaderboard say. Blank values never match."""
+    ``why`` is what the report and leaderboard say. Blank values never match. ``missing``: the
+    matching rows are no measurement of the method at all (the reference scored against itself):
+    rankings leave the method out instead of ranking it last (`harness.leaderboard.not_measured`);
+    the report still hides them as invalid."""
 
     column: str
     op: str
@@ -66,10 +69,11 @@ class Invalid:
     value: Any = None
     than: str | None = None
     method: str | None = None
+    missing: bool = False
 
     def spec(self) -> dict:
         return {"column": self.column, "op": self.op, "value": self.value, "than": self.than, "why": self.why,
-                "method": self.method}
+                "method": self.method, "missing": self.missing}
 
 
 @dataclass

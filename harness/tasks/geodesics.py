@@ -272,6 +272,6 @@ TASK = Task(
     output_mesh=output_mesh, order=50, checks=(("zero_at_source", _zero_at_source),),
     input_facts=("geodesic_reference",),
     # where no analytic distance exists the reference is libigl's exact_geodesic: that method
-    # scores 0 by construction there, which is no measurement of it
+    # scores 0 by construction there, which is no measurement of it (left out of the rankings)
     invalid_when=(Invalid("reference_exact", "==", "is the reference itself (0 by construction)", value=True,
-                          method="libigl.exact_geodesic"),))
+                          method="libigl.exact_geodesic", missing=True),))
