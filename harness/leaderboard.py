@@ -27,7 +27,9 @@ and k variants:
   ``chi2_F = 0``, p = 1.
 - Nemenyi: two variants differ significantly (alpha = 0.05) when their mean ranks differ by more
   than ``CD = q_0.05 sqrt(k (k+1) / (6 N))``, ``q_0.05`` the studentized range quantile over
-  sqrt(2) (Demšar eq. 5).
+  sqrt(2) (Demšar eq. 5). As in Demšar's procedure the post-hoc test applies only where the
+  Friedman test rejects (p < alpha): the tables and the report say so and show no difference
+  otherwise (``critical_difference`` stays in the CSV, a function of N and k alone).
 """
 from __future__ import annotations
 
@@ -388,13 +390,18 @@ def winners_markdown(w: pd.DataFrame) -> str:
 def winners_latex(w: pd.DataFrame) -> str:
     out = ["% mesh-shootout winners per cell; needs \\usepackage{booktabs}"]
     for (task, metric), g in w.groupby(["task", "metric"], sort=False):
-        out += [r"\begin{table}[t]", r"\centering", r"\begin{tabular}{llllrlr}", r"\toprule",
-                r"mesh & noise & setting & best & value & runner-up & value \\", r"\midrule"]
+        inp = g["input_value"].notna().any()          # the input's own value, where the task measures it
+        out += [r"\begin{table}[t]", r"\centering", r"\begin{tabular}{llllrlr" + ("r" if inp else "") + "}",
+                r"\toprule", r"mesh & noise & setting & best & value & runner-up & value" + (" & input" if inp else "")
+                + r" \\", r"\midrule"]
         out += [f"{_tex(r.mesh)} & {_tex(r.noise_model)} {_tex(r.noise_level)} & {_tex(r.setting)} & {_tex(_best(r))} & "
-                f"{_g(r.value)} & {_tex(_runner_up(r))} & {_g(r.runner_up_value)} \\\\" for r in g.itertuples()]
+                f"{_g(r.value)} & {_tex(_runner_up(r))} & {_g(r.runner_up_value)}" + (f" & {_g(r.input_value)}" if inp else "")
+                + " \\\\" for r in g.itertuples()]
+        said = (f"; input: \\texttt{{{_tex(metric)}}} of the case's input itself (a result worse than it made the "
+                "input worse)") if inp else ""
         out += [r"\bottomrule", r"\end{tabular}",
                 f"\\caption{{{_tex(task)}: best valid method per cell by \\texttt{{{_tex(metric)}}} ({g.iloc[0].better} is "
-                f"better); invalid results excluded.}}", r"\end{table}", ""]
+                f"better); invalid results excluded{said}.}}", r"\end{table}", ""]
     return "\n".join(out)
 
 
@@ -444,12 +451,28 @@ def leaderboard(frames: dict, specs: dict) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=COLUMNS)
 
 
+ALPHA = 0.05                      # the level of the Friedman test and of the Nemenyi post-hoc test
+
+
+def cd_applies(p, cd) -> bool:
+    """Whether the Nemenyi critical difference may be read: the Friedman test rejected at `ALPHA`."""
+    return not (p is None or pd.isna(p) or cd is None or pd.isna(cd)) and float(p) < ALPHA
+
+
+def _cd_text(r0, dash: str) -> str:
+    if pd.isna(r0.critical_difference):
+        return dash
+    if not cd_applies(r0.friedman_p, r0.critical_difference):
+        return f"not applied (Friedman p >= {ALPHA:g}: no pair is shown to differ)"
+    return f"{r0.critical_difference:.2f}"
+
+
 def to_markdown(lb: pd.DataFrame) -> str:
     out = []
     for (task, metric), g in lb.groupby(["task", "metric"], sort=False):
         r0 = g.iloc[0]
         p = "—" if pd.isna(r0.friedman_p) else f"{r0.friedman_p:.2g}"
-        cd = "—" if pd.isna(r0.critical_difference) else f"{r0.critical_difference:.2f}"
+        cd = _cd_text(r0, "—")
         out.append(f"### {task}: {metric} ({r0.better} is better)\n\n{int(r0.cells)} cell{'' if int(r0.cells) == 1 else 's'}, Friedman p = {p}, "
                    f"Nemenyi critical difference (alpha 0.05) = {cd}\n\n| method | mean rank | missing | invalid |\n"
                    "|---|---:|---:|---:|")
@@ -466,6 +489,15 @@ def _md(s) -> str:
     return t.replace("\r\n", "<br>").replace("\n", "<br>").replace("\r", "<br>")
 
 
+def _tex_num(x: float) -> str:
+    """``x`` to two significant digits for LaTeX math: ``1.5 \\times 10^{-5}``, not ``1.5e-05``."""
+    t = f"{float(x):.2g}"
+    if "e" not in t:
+        return t
+    m, e = t.split("e")
+    return f"{m} \\times 10^{{{int(e)}}}"
+
+
 def _tex(s: str) -> str:
     return "".join({"_": r"\_", "&": r"\&", "%": r"\%", "#": r"\#", "$": r"\$", "{": r"\{", "}": r"\}",
                     "~": r"\textasciitilde{}", "^": r"\textasciicircum{}", "\\": r"\textbackslash{}",
@@ -478,15 +510,15 @@ def to_latex(lb: pd.DataFrame) -> str:
     out = ["% mesh-shootout leaderboard; needs \\usepackage{booktabs}"]
     for (task, metric), g in lb.groupby(["task", "metric"], sort=False):
         r0 = g.iloc[0]
-        p = "--" if pd.isna(r0.friedman_p) else f"{r0.friedman_p:.2g}"
-        cd = "--" if pd.isna(r0.critical_difference) else f"{r0.critical_difference:.2f}"
+        p = "--" if pd.isna(r0.friedman_p) else _tex_num(r0.friedman_p)
+        cd = _cd_text(r0, "--").replace(">=", r"$\geq$")
         out += [r"\begin{table}[t]", r"\centering", r"\begin{tabular}{lrrr}", r"\toprule",
                 r"method & mean rank & missing & invalid \\", r"\midrule"]
         out += [f"{_tex(r.method)} & {r.mean_rank:.2f} & {r.missing_cells} & {r.invalid_cells} \\\\"
                 for r in g.itertuples()]
         out += [r"\bottomrule", r"\end{tabular}",
                 f"\\caption{{{_tex(task)}: mean rank by \\texttt{{{_tex(metric)}}} ({r0.better} is better) over "
-                f"{int(r0.cells)} cell{'' if int(r0.cells) == 1 else 's'}; Friedman $p = {p}$, Nemenyi CD$_{{0.05}} = {cd}$.}}", r"\end{table}", ""]
+                f"{int(r0.cells)} cell{'' if int(r0.cells) == 1 else 's'}; Friedman $p = {p}$, Nemenyi CD$_{{0.05}}$: {cd}.}}", r"\end{table}", ""]
     return "\n".join(out)
 
 

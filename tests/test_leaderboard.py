@@ -380,3 +380,21 @@ def test_markdown_tables_escape_a_mesh_name_that_is_free_text(tmp_path):
     assert not list((tmp_path / "o").glob(".*.tmp"))
     from harness.leaderboard import _tex
     assert _tex("y\n\nz") == "y  z"
+
+
+def test_latex_tables_print_numbers_as_math_and_keep_the_input_column():
+    """An outside review: LaTeX showed ``$p = 1.5e-05$`` (read as 1.5e minus 05) and winners.tex
+    dropped the noisy input's own value that winners.md shows."""
+    lb = pd.DataFrame([{"task": "t", "metric": "m", "better": "lower", "method": x, "mean_rank": r, "cells": 9,
+                        "missing_cells": 0, "invalid_cells": 0, "friedman_chi2": 20.0, "friedman_p": 1.5e-5,
+                        "critical_difference": 0.7, "k": 2} for x, r in (("a", 1.2), ("b", 1.8))])
+    tex = L.to_latex(lb)
+    assert r"$p = 1.5 \times 10^{-5}$" in tex and "CD$_{0.05}$: 0.70" in tex
+    lb["friedman_p"] = 0.2
+    assert "not applied" in L.to_latex(lb) and "not applied (Friedman p >= 0.05" in L.to_markdown(lb)
+    w = pd.DataFrame([{"task": "smoothing", "metric": "ev_mean", "better": "lower", "mesh": "knight",
+                       "noise_model": "gaussian", "noise_level": 0.3, "setting": "", "best": "a", "value": 0.01,
+                       "tied_with_best": "", "runner_up": "b", "runner_up_value": 0.0123, "tied_with_runner_up": "",
+                       "input_value": 0.0107, "variants": 2, "invalid_excluded": 0}])
+    tex = L.winners_latex(w)
+    assert "& input" in tex and "0.0107" in tex and "tabular}{llllrlrr}" in tex

@@ -166,6 +166,7 @@ def check_report_in_browser(report: Path, screenshot: Path | None = None, timeou
                     svgLinks: document.querySelectorAll('.panel a.svgdl').length,
                     panels: document.querySelectorAll('.panel').length,
                     cdLabels: Array.from(document.querySelectorAll('#leaderboard svg.cd text')).map(function (t) { return t.textContent; }),
+                    cdCliques: document.querySelectorAll('#leaderboard svg.cd line.clique').length,
                     jserrors: document.querySelectorAll('.jserror').length,
                     smoothingSvgs: document.querySelectorAll('#plots-smoothing svg.chart').length,
                     groupTitles: [...document.querySelectorAll('.plotgroup h4')].map(h => h.textContent),
@@ -467,3 +468,23 @@ def test_a_method_missing_a_seed_wins_nothing_in_the_report_either(tmp_path):
     s = check_report_in_browser(tmp_path / "report.html", interact=False)
     shown = [r for r in s["bestRows"] if r.startswith("knight")]
     assert shown and not any(f"● {best}" in r for r in shown), shown
+
+
+def test_no_critical_difference_is_drawn_where_the_friedman_test_does_not_reject(tmp_path):
+    """Two methods on two meshes: the Friedman test cannot reject (p = 0.16 at best). The
+    diagram joined nothing and showed the CD, so the pair read as significantly different;
+    Demšar's post-hoc test applies only after a rejection. Now the diagram says so, and
+    leaderboard.md too."""
+    import pandas as pd
+
+    import harness
+    cfg = {"name": "nocd", "repeats": 1, "time_budget": 0, "meshes": ["knight", "fandisk"],
+           "noise": [{"model": "gaussian_normal", "levels": [0.3]}],
+           "tasks": {"smoothing": {"methods": ["scratch.taubin", "scratch.explicit"]}}}
+    harness.run(cfg, out=tmp_path, quiet=True, workers=1)
+    lb = pd.read_csv(tmp_path / "leaderboard.csv")
+    assert (lb["friedman_p"] >= 0.05).all() and lb["critical_difference"].notna().all()
+    assert "not applied (Friedman p >= 0.05" in (tmp_path / "leaderboard.md").read_text()
+    s = check_report_in_browser(tmp_path / "report.html", interact=False)
+    assert s["cdDiagrams"] >= 1 and s["cdCliques"] == 0
+    assert any("does not reject" in t for t in s["cdLabels"]) and not any(t.startswith("CD = ") for t in s["cdLabels"])

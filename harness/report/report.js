@@ -969,9 +969,15 @@
       svg.appendChild(sv('line', {x1: x(t), x2: x(t), y1: top - 5, y2: top, stroke: '#333'}));
       var tx = sv('text', {x: x(t), y: top - 8, 'text-anchor': 'middle', 'font-size': 11}); tx.textContent = t; svg.appendChild(tx);
     }
-    if (isNum(g.cd)) {
+    // Demšar: the post-hoc test only where the Friedman test rejects; otherwise no pair is shown to differ
+    var applies = isNum(g.cd) && isNum(g.p) && g.p < 0.05;
+    if (applies) {
       svg.appendChild(sv('line', {x1: left, x2: left + g.cd / (k - 1) * (right - left), y1: 14, y2: 14, stroke: '#c00', 'stroke-width': 2}));
       var ct = sv('text', {x: left, y: 10, 'font-size': 11}); ct.textContent = 'CD = ' + fmt(g.cd, 3) + ' (Nemenyi, α = 0.05)'; svg.appendChild(ct);
+    } else if (isNum(g.cd)) {
+      var nt = sv('text', {x: left, y: 10, 'font-size': 11, 'class': 'cd-not-applied'});
+      nt.textContent = 'no critical difference: the Friedman test does not reject (p ≥ 0.05), so no pair is shown to differ';
+      svg.appendChild(nt);
     }
     var half = Math.ceil(ms.length / 2);
     ms.forEach(function (m, i) {
@@ -982,7 +988,7 @@
       lt.textContent = label(m);
       svg.appendChild(lt);
     });
-    if (isNum(g.cd)) {                      // maximal groups not significantly different: thick bars
+    if (applies) {                          // maximal groups not significantly different: thick bars
       var yb = top + 8, start = 0;
       for (var a = 0; a < ms.length; a++) {
         var b = a;
