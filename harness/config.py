@@ -286,12 +286,17 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
         from .tune import check_tune
         tune = check_tune(raw["tune"], base_dir, P, tasks, lambda m: _check_meshes(m, base_dir, P, "tune.train"))
         if tune is not None:                      # searched on the meshes it is judged on: not a fair test
-            judged = {json.dumps(_identity(m), sort_keys=True) for m in meshes}
-            for m in tune.train:
-                if json.dumps(_identity(m), sort_keys=True) in judged:
+            judged = {}
+            for j, m in enumerate(meshes):
+                for key in datasets.content_keys(m):
+                    judged.setdefault(key, j)
+            for i, m in enumerate(tune.train):
+                hit = sorted({judged[k] for k in datasets.content_keys(m) if k in judged})
+                if hit:
                     what = m.get("bundled") or m.get("procedural") or Path(m.get("file", "?")).name
-                    P.append(f"tune.train: {what} is also a test mesh (meshes:); tuning on the meshes a method "
-                             "is judged on favours the tuned setting: train on other meshes")
+                    P.append(f"tune.train[{i}]: {what} is also a test mesh (meshes[{hit[0]}]: the same file, or "
+                             "the same pair's noisy or clean file, or the same procedural mesh); tuning on the "
+                             "meshes a method is judged on favours the tuned setting: train on other meshes")
 
     try:                       # counted whenever the meshes and tasks allow, to join the other problems
         n = _count_cases(meshes, noises, tasks)

@@ -77,6 +77,30 @@ def resolve_bundled(name: str) -> str | None:
     return None
 
 
+def content_keys(spec: dict) -> set[str]:
+    """What a mesh spec is made of, whatever it is called: the sha1 of each file it reads (a
+    bundled mesh's or pair's package files, a file mesh and its clean file), or, for a procedural
+    mesh, its kind and parameters. Two specs sharing a key share a surface (`harness.config`
+    refuses training on a test mesh by these)."""
+    import hashlib
+    import json
+    if "procedural" in spec:
+        return {json.dumps({k: v for k, v in spec.items() if k != "name"}, sort_keys=True, default=str)}
+    if "bundled" in spec:
+        name = resolve_bundled(spec["bundled"])
+        files = ([DATA_DIR / PAIRS[name][0], DATA_DIR / PAIRS[name][1]] if name in PAIRS
+                 else [DATA_DIR / BUNDLED[name][0]] if name in BUNDLED else [])
+    else:
+        files = [Path(spec[k]) for k in ("file", "clean") if k in spec]
+    out = set()
+    for f in files:
+        try:
+            out.add(hashlib.sha1(Path(f).read_bytes()).hexdigest())
+        except OSError:            # already a problem of its own (file not found)
+            pass
+    return out
+
+
 @dataclass
 class Source:
     """A clean mesh and, for a ready pair, the given noisy positions."""

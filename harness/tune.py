@@ -22,8 +22,10 @@ vs tuned side by side. Training rows are kept in ``tune/`` inside the run folder
 """
 from __future__ import annotations
 
+import itertools
 import json
 import math
+from collections import Counter
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -45,17 +47,24 @@ class TuneSpec:
 
     def candidates(self, method: str) -> list[dict]:
         """Parameter overrides tried for ``method``: {} (the defaults) first, then the grid or a sample."""
+        import methods
+        meth = methods.get(method)
+        base = self.configured[method][1][0] if self.configured[method][1] else {}
         ranges = self.params[method]
         keys = sorted(ranges)
         total = math.prod(len(ranges[k]) for k in keys)
         pick = range(total)
-        if total > self.budget - 1:          # a seeded sample of the product's positions, never the whole product
+        want = max(self.budget - 1, 0)
+        if total > want:                     # a seeded sample of the product's positions, never the whole product
+            # positions whose setting is the defaults (tried first anyway) are not drawn: the budget buys others
+            default = meth.with_defaults(base)
+            same = [[i for i, v in enumerate(ranges[k]) if _key(meth.with_defaults({**base, k: v})[k]) == _key(default[k])]
+                    for k in keys]
+            excl = {_position(ranges, keys, c) for c in itertools.product(*same)} if all(same) else set()
             rng = np.random.default_rng(self.seed)
-            pick = sorted(rng.choice(total, size=max(self.budget - 1, 0), replace=False).tolist())
+            drawn = rng.choice(total, size=min(total, want + len(excl)), replace=False).tolist()
+            pick = sorted([i for i in drawn if i not in excl][:want])
         grid = [_nth_combination(ranges, keys, i) for i in pick]
-        import methods
-        meth = methods.get(method)
-        base = self.configured[method][1][0] if self.configured[method][1] else {}
         seen, out = set(), []
         for g in [{}] + grid:                      # settings equal to the defaults are the defaults
             key = json.dumps(meth.with_defaults({**base, **g}), sort_keys=True, default=str)
@@ -95,6 +104,18 @@ def _nth_combination(ranges: dict, keys: list, i: int) -> dict:
     return {k: out[k] for k in keys}
 
 
+def _position(ranges: dict, keys: list, idx: tuple) -> int:
+    """The position in the product (`_nth_combination`'s ``i``) of the value indices ``idx``."""
+    i = 0
+    for k, j in zip(keys, idx):
+        i = i * len(ranges[k]) + j
+    return i
+
+
+def _key(v) -> str:
+    return json.dumps(v, sort_keys=True, default=str)
+
+
 MAX_SETTINGS = 10 ** 15      # a tune.params product above this is refused (sampled positions fit int64)
 
 
@@ -118,6 +139,7 @@ def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | 
         seed = 0
     train = check_meshes(raw.get("train"))
     configured = {m: (t, [g for g in grid]) for t, entries in tasks.items() for m, grid in entries}
+    listed = Counter(m for entries in tasks.values() for m, _ in entries)
     params = raw.get("params")
     out_params: dict = {}
     if not isinstance(params, dict) or not params:
@@ -131,6 +153,10 @@ def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | 
             continue
         if not isinstance(ranges, dict) or not ranges:
             P.append(f"{at}: expected a mapping parameter -> list of values")
+            continue
+        if listed[m] > 1:                   # "as configured" would be the last entry in training, all on the test
+            P.append(f"{at}: {m} is listed {listed[m]} times under tasks:; tuning compares one configured setting "
+                     "with the chosen one: list it once (its values as lists in one entry)")
             continue
         meth = methods.get(m)
         from . import tasks as _tasks

@@ -107,3 +107,40 @@ def test_the_tuning_table_never_shows_another_settings_value_for_failed_cases():
     rows = pd.DataFrame({"status": ["ok", "error", "ok"], "dist_mean": [1.0, None, 3.0]})
     assert _test_mean(rows, "dist_mean") == "2 (2 of 3 ok)"
     assert _test_mean(rows.iloc[[0, 2]], "dist_mean") == "2" and _test_mean(rows.iloc[[]], "dist_mean") == "—"
+
+
+def test_the_budget_buys_settings_other_than_the_defaults():
+    """An outside review: budget 5 on an 8-setting grid tried 4 settings, since a drawn setting
+    equal to the defaults was dropped without a replacement. Now every seed gives the defaults
+    plus budget - 1 other settings, and the draw stays a seeded sample of the product."""
+    from harness.tune import _nth_combination, _position
+    ranges = {"a": [1, 2, 3], "b": list("xyzw"), "c": [0.1, 0.2]}
+    keys = sorted(ranges)
+    assert [_position(ranges, keys, idx) for idx in [(0, 0, 0), (2, 3, 1), (1, 2, 0)]] == [0, 23, 12]
+    assert _nth_combination(ranges, keys, 12) == {"a": 2, "b": "z", "c": 0.1}
+    for seed in range(12):
+        cfg = load_config({**CFG, "tune": {**CFG["tune"], "budget": 5, "seed": seed,
+                                           "params": {"scratch.implicit": {"iterations": [1, 2], "step": [0.1, 1.0, 5.0, 10.0]}}}})
+        got = cfg.tune.candidates("scratch.implicit")
+        assert len(got) == 5 and got[0] == {} and {"iterations": 1, "step": 1.0} not in got, (seed, got)
+    with pytest.raises(ConfigError, match="scratch.implicit is listed 2 times under tasks"):
+        load_config({**CFG, "tasks": {"smoothing": {"methods": ["scratch.implicit",
+                                                                {"name": "scratch.implicit", "params": {"step": 0.5}}]}}})
+
+
+def test_a_training_mesh_is_refused_when_it_is_a_test_mesh_by_content(tmp_path):
+    """An outside review: the leak check compared config spellings, so a bundled test mesh given
+    again as its file, a byte-identical copy, or a bundled pair given as its two files trained
+    on the test data. Now meshes are compared by the bytes they read."""
+    import shutil
+
+    from harness.datasets import DATA_DIR
+    shutil.copy(DATA_DIR / "decimated-knight.off", tmp_path / "copy.off")
+    pair = DATA_DIR / "denoise" / "Fandisk0.3"
+    base = {**CFG, "meshes": ["knight", "fandisk-noisy-0.3"]}
+    for train in ({"file": str(DATA_DIR / "decimated-knight.off")}, {"file": str(tmp_path / "copy.off")},
+                  {"file": str(pair / "Noisy.obj"), "clean": str(pair / "Original.obj")},
+                  {"file": str(tmp_path / "copy.off"), "name": "renamed"}):
+        with pytest.raises(ConfigError, match=r"tune.train\[0\]: .* is also a test mesh \(meshes\[[01]\]"):
+            load_config({**base, "tune": {**CFG["tune"], "train": [train]}})
+    load_config({**base, "tune": {**CFG["tune"], "train": ["spot"]}})      # another mesh: accepted
