@@ -6,8 +6,8 @@ case with status ok: ``group`` = task/mesh/noise, ``name`` = method[params], ``p
 ``extra_info`` with the case's metrics, ``stats``), ``datetime`` and ``version``.
 
 Every statistic is computed from the case's stored samples (the ``times`` column, seconds), as
-pytest-benchmark computes its own: mean, sample standard deviation, median, quartiles (numpy's
-linear interpolation), IQR, Tukey fences ``ld15iqr``/``hd15iqr`` (the most extreme samples within
+pytest-benchmark computes its own: mean, sample standard deviation, median, quartiles (its
+methods, `_quartiles`), IQR, Tukey fences ``ld15iqr``/``hd15iqr`` (the most extreme samples within
 1.5 IQR of the quartiles), outlier counts (``mean +- stddev`` and Tukey) and ``total``. Rows of
 runs made before samples were stored (no ``times``) fall back to min/median/max, and
 ``extra_info.stats_note`` says so.
@@ -57,7 +57,7 @@ def stats_from_row(row: dict) -> dict | None:
     n = len(t)
     mean = float(arr.mean())
     stddev = float(arr.std(ddof=1)) if n > 1 else 0.0
-    q1, q3 = (float(x) for x in np.percentile(arr, [25, 75]))
+    q1, q3 = _quartiles(sorted(float(x) for x in t))
     iqr = q3 - q1
     lo_f, hi_f = q1 - 1.5 * iqr, q3 + 1.5 * iqr
     inside = arr[(arr >= lo_f) & (arr <= hi_f)]
@@ -69,6 +69,21 @@ def stats_from_row(row: dict) -> dict | None:
             "ld15iqr": float(inside.min()) if inside.size else float(arr.min()),
             "hd15iqr": float(inside.max()) if inside.size else float(arr.max()),
             "ops": (1.0 / mean) if mean > 0 else 0.0, "total": float(arr.sum()), "iterations": 1}
+
+
+def _quartiles(d: list) -> tuple[float, float]:
+    """``(q1, q3)`` of sorted ``d`` as pytest-benchmark computes them (Wikipedia's quartile
+    methods: for an odd count, method 3, a weighted mean of the two data around n/4 and 3n/4;
+    for an even count, method 2 ... 1, the medians of the lower and upper halves)."""
+    n = len(d)
+    if n == 1:
+        return d[0], d[0]
+    if n % 2:
+        m, r = n // 4, n % 4
+        if r == 1:
+            return 0.25 * d[m - 1] + 0.75 * d[m], 0.75 * d[3 * m] + 0.25 * d[3 * m + 1]
+        return 0.75 * d[m] + 0.25 * d[m + 1], 0.25 * d[3 * m + 1] + 0.75 * d[3 * m + 2]
+    return float(np.median(d[: n // 2])), float(np.median(d[n // 2:]))
 
 
 def _machine_info(meta: dict) -> dict:

@@ -571,3 +571,23 @@ def test_compare_and_the_export_write_settings_as_a_config_does(run_a, tmp_path)
                                                                          "tag": "null"})) for r in rows])
     names = [x["name"] for x in build(b)["benchmarks"] if x["group"].startswith("smoothing/")]
     assert names and all('flag=true' in n and 'tag="null"' in n for n in names), names
+
+
+def test_benchmark_json_stats_are_pytest_benchmarks_own():
+    """An outside review: the export's quartiles (numpy's interpolation) differed from
+    pytest-benchmark's in every benchmark, and so did some outlier counts and Tukey fences; the
+    docstring said they were computed as pytest-benchmark computes them. Now they are, for
+    sample counts 1 to 12 and samples with ties."""
+    stats_mod = pytest.importorskip("pytest_benchmark.stats")
+    from harness.benchmark_json import stats_from_row
+    rng = np.random.default_rng(3)
+    for n in range(1, 13):
+        for _ in range(20):
+            t = np.round(rng.lognormal(-7, 0.5, n), 6 if n % 3 else 4).tolist()     # ties on some
+            mine = stats_from_row({"time_s": float(np.median(t)), "times": json.dumps(t)})
+            ref = stats_mod.Stats()
+            for x in t:
+                ref.update(x)
+            for k in ("q1", "q3", "iqr", "iqr_outliers", "stddev_outliers", "ld15iqr", "hd15iqr", "median",
+                      "mean", "stddev", "min", "max", "rounds", "total"):
+                assert mine[k] == pytest.approx(getattr(ref, k), rel=1e-12, abs=1e-18), (n, k, t)
