@@ -31,7 +31,8 @@ def tufted(V, F, *, mollify_factor=1e-5):
     LaplacianResult
         ``W = -L`` where ``L`` is the package's positive semi-definite Laplacian (converted to
         libigl's sign convention: positive off-diagonal weights, negative diagonal) and ``M``
-        its lumped (Voronoi-like, from the intrinsic Delaunay triangulation) mass matrix.
+        its lumped barycentric mass matrix: a third of the area of each intrinsic Delaunay
+        triangle at each of its corners (equal to ``scratch.tufted`` with ``mass: barycentric``).
         The package puts ``L_ii = 1`` on unreferenced vertices (an isolated row that does not
         sum to zero); those diagonal entries are set to 0 here so every row of ``W`` sums to
         zero, as the contract requires. ``M`` is returned unchanged.
