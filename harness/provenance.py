@@ -44,6 +44,50 @@ def git_dirty() -> bool | None:
         return None
 
 
+def usable_cpus() -> int:
+    """CPUs this process may run on: its affinity set (``taskset``, a container's cpuset), at
+    most its cgroup's CPU quota (``cpu.max``, or v1's ``cfs_quota_us / cfs_period_us``, rounded
+    up); ``os.cpu_count()`` counts the machine's instead."""
+    try:
+        n = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        n = os.cpu_count() or 1
+    quota = _cgroup_quota()
+    if quota is not None:
+        n = min(n, max(1, -int(-quota // 1)))
+    return max(1, n)
+
+
+def _cgroup_quota() -> float | None:
+    """The CPU quota (cores) of this process's cgroup, None when unlimited or unknown."""
+    try:
+        lines = Path("/proc/self/cgroup").read_text().splitlines()
+    except OSError:
+        return None
+    root = Path("/sys/fs/cgroup")
+    for line in lines:
+        parts = line.split(":", 2)
+        if len(parts) != 3:
+            continue
+        _, ctrl, rel = parts
+        rel = rel.lstrip("/")
+        try:
+            if ctrl == "" and (root / rel / "cpu.max").is_file():             # cgroup v2
+                quota, period = (root / rel / "cpu.max").read_text().split()[:2]
+                if quota != "max":
+                    return int(quota) / int(period)
+            elif "cpu" in ctrl.split(","):                                    # cgroup v1
+                for d in (root / ctrl / rel, root / "cpu" / rel):
+                    if (d / "cpu.cfs_quota_us").is_file():
+                        quota = int((d / "cpu.cfs_quota_us").read_text())
+                        if quota > 0:
+                            return quota / int((d / "cpu.cfs_period_us").read_text())
+                        break
+        except (OSError, ValueError):
+            continue
+    return None
+
+
 def machine_info() -> dict:
     import psutil
     freq = psutil.cpu_freq()
@@ -56,7 +100,7 @@ def machine_info() -> dict:
     except OSError:
         pass
     return {"node": platform.node(), "system": platform.system(), "release": platform.release(),
-            "machine": platform.machine(), "cpu": cpu, "cpu_count": os.cpu_count(),
+            "machine": platform.machine(), "cpu": cpu, "cpu_count": os.cpu_count(), "usable_cpus": usable_cpus(),
             "cpu_freq_mhz": freq.max if freq else None,
             "memory_gb": round(psutil.virtual_memory().total / 2 ** 30, 1)}
 

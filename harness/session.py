@@ -18,7 +18,7 @@ from .config import Config, load_config
 from .errors import ShootoutError, check_interrupt, problems_error
 from .executors import EXECUTORS, make_executor
 from .mesh import write_ply
-from .provenance import git_commit, git_dirty, machine_info, now_iso, package_versions
+from .provenance import git_commit, git_dirty, machine_info, now_iso, package_versions, usable_cpus
 from .results import Frames, RunFolder, check_output_file, out_dir_problems
 
 
@@ -176,10 +176,10 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
     cfg: Config = config_or_path if isinstance(config_or_path, Config) else load_config(config_or_path)
     out_dir = Path(out) if out else Path("results") / cfg.name
     folder = RunFolder(out_dir)
-    workers = 1 if executor == "serial" else int(workers) if workers else (os.cpu_count() or 1)
+    workers = 1 if executor == "serial" else int(workers) if workers else usable_cpus()
     timeout = None if executor == "serial" else timeout if timeout is not None else cfg.timeout
     chash = config_hash(cfg)
-    threads = 1 if executor == "dask" else max(1, (os.cpu_count() or 1) // workers)
+    threads = 1 if executor == "dask" else max(1, usable_cpus() // workers)   # the cores this run may use
     cases = [dataclasses.replace(c, threads=threads) for c in cfg.cases]
     done: set[str] = set()
     problems = out_dir_problems(out_dir, resume)     # refused before the folder or its lock is made

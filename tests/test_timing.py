@@ -86,6 +86,21 @@ def test_back_to_back_runs_compare_equal_and_a_2x_slowdown_is_flagged(tmp_path):
     assert flagged and all("slowdown.sleep" in ln and "time_s" in ln for ln in flagged), slow.stdout
 
 
+def test_workers_and_threads_follow_the_cpus_the_process_may_use(tmp_path):
+    """An outside review: under `taskset -c 0` a run took os.cpu_count() (2) for its workers and
+    threads per case, so a BLAS case ran 2 threads on 1 allowed CPU (eigh of a 700 x 700 matrix
+    9.6 s against 0.13 s). Now the affinity set (and a cgroup quota) bounds both."""
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text("meshes: [knight]\nrepeats: 1\ntime_budget: 0\ntasks: {laplacian: {methods: [scratch.uniform]}}\n")
+    r = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(tmp_path / "o"), "--quiet"],
+                       cwd=ROOT, capture_output=True, text=True, timeout=300,
+                       preexec_fn=lambda: os.sched_setaffinity(0, {min(os.sched_getaffinity(0))}))
+    assert r.returncode == 0, r.stderr
+    meta = json.loads((tmp_path / "o" / "run.json").read_text())
+    assert meta["workers"] == 1 and meta["timing"]["threads_per_case"] == 1
+    assert meta["machine"]["usable_cpus"] == 1 and meta["machine"]["cpu_count"] == os.cpu_count()
+
+
 def test_thread_limits_reuse_the_drivers_scan_until_a_library_is_loaded(monkeypatch):
     """`limit_threads` in a case process reuses the driver's thread-pool scan (so a case does not
     pay for it) and limits every pool it found; a shared object loaded after the scan is seen

@@ -49,6 +49,7 @@ from pathlib import Path
 
 from ..config import Case
 from ..errors import InvalidMeshError, RunInterrupted, ShootoutError
+from ..provenance import usable_cpus
 from ..runner import base_row
 from .isolation import cancelled_row, signal_name
 
@@ -146,7 +147,7 @@ class DaskExecutor:
         self._futures: dict = {}
         if scheduler is None:
             with dask.config.set({"distributed.worker.daemon": False}):
-                self._cluster = LocalCluster(n_workers=max(1, int(workers or os.cpu_count() or 1)),
+                self._cluster = LocalCluster(n_workers=max(1, int(workers or usable_cpus())),
                                              threads_per_worker=1, processes=True,
                                              dashboard_address=None)
             self.client = Client(self._cluster)
