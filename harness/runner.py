@@ -228,13 +228,22 @@ def _library(name: str):
 
 
 def forget_inputs() -> None:
-    """Drop what the harness's own helpers keep between calls about the inputs they saw (the
-    pattern-keyed symbolic analyses of `harness.core.solvers`), so that every timed call pays
-    for its input like a first call; within one call, repeated factorizations still share them.
-    Compiled code stays loaded: that is warming the code path, not the data."""
+    """Drop what is kept between calls about the inputs seen: the pattern-keyed symbolic
+    analyses of `harness.core.solvers`, and the factorization ``pypardiso.spsolve`` keeps in its
+    module-level solver (it reuses it, without solving anew, whenever it sees the same matrix
+    again: a plugin calling it would have every sample flattered by the cold call's
+    factorization), so that every timed call pays for its input like a first call; within one
+    call, repeated factorizations still share them. Compiled code stays loaded: that is warming
+    the code path, not the data. A method's own caches across calls are its author's to avoid."""
     solvers = sys.modules.get("harness.core.solvers")
     if solvers is not None:
         solvers.clear_cache()
+    pardiso = sys.modules.get("pypardiso")
+    if pardiso is not None and hasattr(getattr(pardiso, "ps", None), "remove_stored_factorization"):
+        try:
+            pardiso.ps.remove_stored_factorization()
+        except Exception:  # noqa: BLE001 - another pypardiso version: nothing to forget there
+            pass
 
 
 def base_row(case: Case) -> dict:
