@@ -34,11 +34,18 @@ refused:
   sample counts cannot reach significance (fewer than 5 samples a side) are counted as
   inconclusive, never as regressions. B's samples are first divided by the run's drift (the
   median over all cases of the ratio of median times: a machine busier during one run slows
-  every case alike; ``--absolute-time`` turns this off). Load from other processes during a
+  every case alike; ``--absolute-time`` turns this off), and the verdict must hold on the raw
+  times too (else inconclusive: load slows multi-threaded cases more than single-threaded
+  ones, so one drift fits neither); a drift of ``time_factor`` or more while the machines were
+  as busy is a regression of the whole run (`whole_run_change`). Load from other processes during a
   whole sample window stretches every sample, the fastest included; so where both rows say how
-  many cores other processes kept busy during their samples (``others_cpu``: outside load, and
+  many cores other processes kept busy from the cold call to the last sample (``others_cpu``: outside load, and
   with several workers the case's siblings in the same run, which compete for the same cores),
-  a wall-time regression (improvement) is inconclusive when the load stretched B's (A's)
+  a wall-time regression (improvement) is inconclusive when B's (A's) machine was busier by
+  ``BUSY_CORES`` or more and the case's threads plus that load exceeded the cores (waiting and
+  spinning threads grow the CPU time as much as the wall time); when only B (A) measured its
+  load, ``BUSY_CORES`` or more, and the CPU time did not grow (shrink) by ``time_factor``; when
+  the load stretched B's (A's)
   samples ``OVERSUBSCRIBED`` (1.25) times or more beyond the other run's (a process using ``u``
   cores on a machine with ``free`` = core count - ``others_cpu`` runs ``max(1, u / free)``
   times slower: it waits for a core, a sub-millisecond sample a whole time slice, and its CPU
@@ -239,6 +246,29 @@ def run_drift(rows_a: dict, rows_b: dict) -> float:
     return float(np.median(r)) if len(r) >= 5 else 1.0
 
 
+def whole_run_change(rows_a: dict, rows_b: dict, drift: float, factor: float) -> dict | None:
+    """A change entry for the whole run when its drift (`run_drift`) is ``factor`` or more (a
+    regression) or ``1 / factor`` or less (an improvement) while the median difference of the
+    other processes' load (`busier`, over the cases ok in both that measured it, at least 5) is
+    below ``BUSY_CORES``: the machines were as busy, so the common slowdown is the code's (or the
+    machine's: the notes say when the runs come from different machines). None otherwise."""
+    import numpy as np
+    if 1.0 / factor < drift < factor:
+        return None
+    d = [busier(ra, rows_b[c]) for c, ra in rows_a.items() if c in rows_b and ra.get("status") == "ok"
+         and rows_b[c].get("status") == "ok"]
+    d = [x for x in d if x is not None]
+    if len(d) < 5 or abs(float(np.median(d))) >= BUSY_CORES:
+        return None
+    verdict = "regression" if drift >= factor else "improvement"
+    return {"case_id": "(all cases)", "task": "(run)", "case": "the whole run", "metric": "time_s", "a": 1.0,
+            "b": round(drift, 4), "verdict": verdict,
+            "note": (f"B took {drift:.3g}x A's time in the median case while other processes kept the machine about "
+                     f"as busy (median difference {float(np.median(d)):+.2g} cores over {len(d)} cases): every "
+                     "case changed alike, which each case's verdict, relative to this drift, does not count "
+                     "(--absolute-time judges each case on its raw times)")}
+
+
 def cpu_ratio(ra: dict, rb: dict) -> float | None:
     """Median process CPU time per sample, B over A (``cpu_times``), or None without them."""
     a, b = time_samples(ra, "cpu_times"), time_samples(rb, "cpu_times")
@@ -272,18 +302,29 @@ def load_stretch(fast: dict, slow: dict, cores: int | None) -> float | None:
     return max(1.0, u / max(cores - os_, 1e-3)) / max(1.0, u / max(cores - of, 1e-3))
 
 
-def _load_explains(ra: dict, rb: dict, verdict: str, factor: float, cores: int | None = None) -> bool:
-    """Whether other processes' load explains a wall-time change (module docstring): the load
-    stretched the slower run's samples ``OVERSUBSCRIBED`` (1.25) times or more beyond the faster
-    run's (`load_stretch`) and the CPU time did not grow by more than ``CONTENDED_CPU`` x
+def _load_explains(ra: dict, rb: dict, verdict: str, factor: float, cores: int | None = None,
+                   threads: tuple | None = None) -> bool:
+    """Whether other processes' load explains a wall-time change (module docstring): the slower
+    run's machine was busier by ``BUSY_CORES`` or more and its case's threads (``threads``: A's
+    and B's threads per case) plus that load exceeded the ``cores`` (threads waiting for a core,
+    and BLAS threads spinning while they wait, grow the CPU time too, so it cannot tell); or the
+    load stretched the slower run's samples ``OVERSUBSCRIBED`` (1.25) times or more beyond the
+    faster run's (`load_stretch`) and the CPU time did not grow by more than ``CONTENDED_CPU`` x
     ``factor``; or the slower run's machine was busier by ``BUSY_CORES`` or more and the CPU time
-    did not grow by ``factor``."""
-    d = busier(ra, rb)
-    if d is None:
-        return False
+    did not grow by ``factor``; or only the slower run measured its load (the other's sample
+    window was too short), ``BUSY_CORES`` or more, and the CPU time did not grow by ``factor``."""
     c = cpu_ratio(ra, rb)
     slow, fast = (rb, ra) if verdict == "regression" else (ra, rb)
     grew = None if c is None else (c if verdict == "regression" else (1.0 / c if c > 0 else math.inf))
+    o_slow, o_fast = _num(slow.get("others_cpu")), _num(fast.get("others_cpu"))
+    if o_fast is None:                    # the faster run's load is unknown: it may have been as quiet or not
+        return o_slow is not None and o_slow >= BUSY_CORES and not (grew is not None and grew > factor)
+    d = busier(ra, rb)
+    if d is None:
+        return False
+    t_slow = (threads or (None, None))[1 if verdict == "regression" else 0]
+    if cores and t_slow and (d if verdict == "regression" else -d) >= BUSY_CORES and t_slow + o_slow > cores:
+        return True
     stretch = load_stretch(fast, slow, cores)
     if stretch is not None and stretch >= OVERSUBSCRIBED:
         return not (grew is not None and grew > CONTENDED_CPU * factor)
@@ -293,9 +334,23 @@ def _load_explains(ra: dict, rb: dict, verdict: str, factor: float, cores: int |
 
 
 def judge_time(ra: dict, rb: dict, factor: float = TIME_FACTOR, drift: float = 1.0, load_rule: bool = True,
-               cores: int | None = None) -> str:
+               cores: int | None = None, threads: tuple | None = None) -> str:
     """'regression' | 'improvement' | 'inconclusive' | 'same' (see the module docstring);
-    ``cores``: the machine's core count (`load_stretch`), when known."""
+    ``cores``: the machine's core count (`load_stretch`), when known; ``threads``: A's and B's
+    threads per case. With a ``drift`` the raw times must agree: a change that only the drift
+    correction makes (an unchanged single-threaded case beside multi-threaded ones that load
+    slowed more), or that it hides, is inconclusive."""
+    v = _judge_time(ra, rb, factor, drift, load_rule, cores, threads)
+    if drift == 1.0 or v == "inconclusive":
+        return v
+    raw = _judge_time(ra, rb, factor, 1.0, load_rule, cores, threads)
+    if raw == v or {v, raw} <= {"same", "inconclusive"}:
+        return v
+    return "inconclusive"
+
+
+def _judge_time(ra: dict, rb: dict, factor: float, drift: float, load_rule: bool, cores: int | None,
+                threads: tuple | None) -> str:
     eff = time_effect(ra, rb, drift)
     if eff is not None:
         if not eff["conclusive"]:
@@ -306,7 +361,7 @@ def judge_time(ra: dict, rb: dict, factor: float = TIME_FACTOR, drift: float = 1
             verdict = "regression"
         if eff["p_faster"] < ALPHA and hi < 1 / factor and eff["min_ratio"] < 1 / factor and -eff["diff"] > TIME_FLOOR_S:
             verdict = "improvement"
-        if verdict != "same" and load_rule and _load_explains(ra, rb, verdict, factor, cores):
+        if verdict != "same" and load_rule and _load_explains(ra, rb, verdict, factor, cores, threads):
             return "inconclusive"
         return verdict
     a, b = _num(ra.get("time_s")), _num(rb.get("time_s"))
@@ -383,13 +438,18 @@ def _label(r: dict) -> str:
 
 
 def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FACTOR, rules=None,
-                 absolute_time: bool = False, load_rule: bool = True, cores: int | None = None) -> dict:
+                 absolute_time: bool = False, load_rule: bool = True, cores: int | None = None,
+                 threads: tuple | None = None) -> dict:
     """Every change between two runs' rows: ``{"changes": [...], "only_a": [...], "only_b": [...], ...}``.
 
     ``rules``: ``{task: {metric: Rule}}`` from the runs' task declarations (default: the known tasks).
     Times are judged relative to the whole run's drift (`run_drift`) unless ``absolute_time``;
     ``load_rule``: the other processes' load may make a time change inconclusive (`judge_time`;
-    ``cores``, the core count both runs' machines share, lets `load_stretch` do so).
+    ``cores``, the core count both runs' machines share, lets `load_stretch` do so; ``threads``,
+    A's and B's threads per case). A drift of ``time_factor`` or more (or its inverse) while
+    other processes' load did not differ by ``BUSY_CORES`` (`whole_run_change`) is itself a
+    change of the whole run: every case slowed alike, which no case's verdict relative to the
+    drift can see.
     """
     changes, input_changes = [], []
     unmatched: set = set()
@@ -411,7 +471,7 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
             changes.append({**base, "metric": "status", "a": sa, "b": sb, "verdict": verdict,
                             "note": str(rb.get("error") or "")[:200]})
         if sa == "ok" and sb == "ok" and time_factor:
-            v = judge_time(ra, rb, time_factor, used_drift, load_rule, cores)
+            v = judge_time(ra, rb, time_factor, used_drift, load_rule, cores, threads)
             a, b = _num(ra.get("time_s")), _num(rb.get("time_s"))
             if a is not None and b is not None and a != b:
                 changes.append({**base, "metric": "time_s", "a": a, "b": b,
@@ -436,6 +496,9 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
                 verdict = "info"              # e.g. peak_rss_mb: counted, not listed
             entry = {**base, "metric": metric, "a": a, "b": b, "verdict": verdict}
             (input_changes if rule.kind == "input" else changes).append(entry)
+    whole = whole_run_change(rows_a, rows_b, drift, time_factor) if time_factor and not absolute_time else None
+    if whole is not None:
+        changes.append(whole)
     only_a = [c for c in rows_a if c not in rows_b]
     only_b = [c for c in rows_b if c not in rows_a]
     for cid in only_a:
@@ -514,7 +577,10 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
     other_rules = sorted(f"{t}.{m}" for t in rules_a.keys() & rules_b.keys()
                          for m in rules_a[t].keys() & rules_b[t].keys() if rules_a[t][m] != rules_b[t][m])
     ca, cb = ((m.get("machine") or {}).get("cpu_count") for m in (meta_a, meta_b))
-    res = compare_rows(ra, rb, time_factor, rules, absolute_time, cores=ca if ca == cb else None)
+    threads = tuple((m.get("timing") or {}).get("threads_per_case") if isinstance(m.get("timing"), dict) else None
+                    for m in (meta_a, meta_b))
+    threads = tuple(t if isinstance(t, int) and not isinstance(t, bool) and t > 0 else None for t in threads)
+    res = compare_rows(ra, rb, time_factor, rules, absolute_time, cores=ca if ca == cb else None, threads=threads)
     changes = _sorted(res["changes"])
     regress = [c for c in changes if c["verdict"] == "regression"]
     shown = [c for c in changes if c["verdict"] not in ("within tolerance", "info", "inconclusive")]

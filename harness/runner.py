@@ -27,10 +27,9 @@ Timing protocol (the method call alone; metrics are not timed):
    measurement, would, 1.0-1.24x slower than the rest at 86k faces);
    each sample's process CPU time (all threads of the process) is kept too (``cpu_times``,
    median ``time_cpu_s``), and ``others_cpu`` is the number of cores other processes kept busy
-   on average during the samples (``/proc/stat``, steal included, minus this process; blank off
-   Linux and for sample windows under 0.2 s): between two one-worker runs, ``shootout compare``
-   does not call a wall-time change a regression when the other run's machine was quieter by
-   half a core or more and the CPU time did not grow by the same factor;
+   on average from the cold call to the last sample (``/proc/stat``, steal included, minus this
+   process; blank off Linux and for windows under 0.2 s): ``shootout compare`` does not call a
+   wall-time change a regression when the load explains it (`harness.compare`);
 4. memory: ``method_mem_mb`` is the peak resident memory of the first sampled call minus the
    resident memory just before it, in MiB (Linux: freed heap returned to the OS with glibc's
    ``malloc_trim``, then the kernel's high-water mark reset through ``/proc/self/clear_refs``;
@@ -356,6 +355,7 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
             warnings.simplefilter("always")
             run, finish = method.bind(inp.V.copy(), inp.F.copy(), **case.params)   # checks: untimed
             forget_inputs()
+            busy0, own0, wall0 = _machine_busy_s(), time.process_time(), time.perf_counter()   # others_cpu's window
             t0 = time.perf_counter()
             cold_result = run()                                     # cold call: same code path, own input
             cold = time.perf_counter() - t0
@@ -364,7 +364,6 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
         if case.threads and (loaded is None or _loaded_objects() != loaded):
             limiters.append(limit_threads(case.threads))    # pools the cold call loaded
         times, cpu, result, spent = [], [], None, 0.0
-        busy0, own0, wall0 = _machine_busy_s(), time.process_time(), time.perf_counter()
         while len(times) < case.repeats or (spent < case.time_budget and len(times) < MAX_SAMPLES):
             result = None                               # the previous result is freed here, untimed
             run, finish = method.bind(inp.V.copy(), inp.F.copy(), **case.params)  # a method that writes

@@ -247,7 +247,10 @@ def test_wall_time_on_a_busier_machine_without_cpu_time_is_inconclusive():
     assert judge_time(row([4 * t for t in base], base, 1.5), row(same, same, 0.1)) == "inconclusive"
     assert judge_time(row([4 * t for t in base], base, 0.1), row(same, same, 0.1)) == "improvement"
     assert judge_time(row(base, base, 0.1), row(same, same, 1.5)) == "same"
-    assert judge_time(_row(base), row(slow, same, 1.5)) == "regression"       # A stored no load: as before
+    no_load = {**_row(base), "cpu_times": json.dumps(base)}                 # A's window too short to measure it
+    assert judge_time(no_load, row(slow, same, 1.5)) == "inconclusive"        # A's load unknown, B's busy
+    assert judge_time(no_load, row(slow, slow, 1.5)) == "regression"          # ... but 4x the CPU time
+    assert judge_time(no_load, row(slow, same, 0.2)) == "regression"          # ... or B quiet
     assert judge_time(row(base, base, 0.1), row(slow, same, 1.5), load_rule=False) == "regression"
     # less than half a core busier, but the slower run's machine had fewer free cores than the
     # case used: its samples waited for a core (measured: 17x the wall time of a 0.6 ms method,
@@ -271,6 +274,52 @@ def test_wall_time_on_a_busier_machine_without_cpu_time_is_inconclusive():
     # CPU time with 4x the wall time is a regression
     assert judge_time(row(base, base, 1.0), row(slow, [2 * t for t in same], 1.05), cores=2) == "regression"
     assert judge_time(row(twice, same, 1.465), row(base, base, 0.98), cores=2) == "inconclusive"  # improvement
+
+
+def test_load_that_oversubscribes_the_cases_threads_excuses_even_a_cpu_time_change():
+    """An outside review: one worker (2 threads per case on 2 cores), B rerun beside a busy loop:
+    libigl.eigsh took 12.7x, with 7.1x the CPU time (BLAS threads spin while they wait for a
+    core), and was called a regression (exit 1). With the case's threads plus the load above the
+    cores, neither time can tell: inconclusive. Nothing changes when the threads fit."""
+    rng = np.random.default_rng(2)
+    base = list(0.0148 * (1 + 0.2 * rng.random(12)))
+
+    def row(k_wall, k_cpu, others):
+        return {**_row([k_wall * t for t in base]), "cpu_times": json.dumps([k_cpu * t for t in base]),
+                "others_cpu": others}
+    a, b = row(1, 1.9, 0.0), row(12.7, 7.1 * 1.9, 1.05)
+    assert judge_time(a, b, cores=2) == "regression"                        # threads unknown: as before
+    assert judge_time(a, b, cores=2, threads=(2, 2)) == "inconclusive"
+    assert judge_time(a, b, cores=8, threads=(2, 2)) == "regression"          # cores to spare
+    assert judge_time(a, row(12.7, 7.1 * 1.9, 0.3), cores=2, threads=(2, 2)) == "regression"   # equally quiet
+    assert judge_time(b, a, cores=2, threads=(2, 2)) == "inconclusive"        # the same, read as an improvement
+
+
+def test_a_verdict_must_hold_on_the_raw_times_and_a_common_slowdown_is_the_whole_runs():
+    """An outside review: six cases made 2x slower and three unchanged gave a drift of 2, so the
+    three unchanged cases were called improvements ('B/A 0.502x') and the six slowed ones passed
+    (exit 0). Now a verdict must also hold on the raw times, and a drift of 1.5x or more while
+    the machines were as busy is a regression of the whole run."""
+    from harness.compare import compare_rows
+    rng = np.random.default_rng(4)
+
+    def row(k, others=0.1):
+        t = list(0.01 * k * (1 + 0.05 * rng.random(12)))
+        return {**_row(t), "cpu_times": json.dumps(t), "others_cpu": others, "status": "ok", "task": "smoothing",
+                "method": "m", "mesh": "x", "params": "{}"}
+    ids = [f"c{i}" for i in range(9)]
+    A = {c: {**row(1), "case_id": c} for c in ids}
+    B = {c: {**row(2 if i < 6 else 1), "case_id": c} for i, c in enumerate(ids)}
+    res = compare_rows(A, B)
+    verdicts = {c["case_id"]: c["verdict"] for c in res["changes"] if c["metric"] == "time_s"}
+    assert res["drift"] == pytest.approx(2, rel=0.1)
+    assert all(verdicts[c] in ("within tolerance", "inconclusive") for c in ids[6:]), verdicts    # no false improvement
+    assert verdicts["(all cases)"] == "regression"
+    busy = {c: {**r, "others_cpu": 1.2} for c, r in B.items()}                  # B's machine busier: the load's
+    assert "(all cases)" not in {c["case_id"] for c in compare_rows(A, busy)["changes"]}
+    assert "(all cases)" not in {c["case_id"] for c in compare_rows(A, B, absolute_time=True)["changes"]}
+    same = compare_rows(A, {c: {**row(1), "case_id": c} for c in ids})
+    assert not [c for c in same["changes"] if c["verdict"] in ("regression", "improvement")]
 
 
 def test_two_worker_runs_excuse_a_wall_time_change_that_load_explains(run_a, tmp_path):
