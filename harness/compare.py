@@ -547,6 +547,12 @@ def timing_notes(meta_a: dict, meta_b: dict, res: dict) -> list[str]:
     la, lb = meta_a.get("load_average"), meta_b.get("load_average")
     if la or lb:
         notes.append(f"load average (1 min) at start/end: A {la}, B {lb}")
+    busy = []
+    for rows in (res["rows_a"], res["rows_b"]):
+        v = sorted(x for x in (_num(r.get("others_cpu")) for r in rows.values()) if x is not None)
+        busy.append(f"{v[len(v) // 2]:.2g} (max {v[-1]:.2g}, {len(v)} cases)" if v else "not measured")
+    notes.append(f"cores other processes kept busy during the timed calls (others_cpu, median): A {busy[0]}, "
+                 f"B {busy[1]}; what the load average says may differ (it counts waiting processes)")
     n_inc = sum(c["verdict"] == "inconclusive" for c in res["changes"])
     if n_inc:
         notes.append(f"{n_inc} case(s) are inconclusive on time (not counted as regressions): too few timed samples "

@@ -76,6 +76,14 @@ def test_the_header_states_the_timing_protocol_of_run_json(run_dir):
     assert f"at least {t['min_repeats']} " in row.group(1)
     assert f"load average {meta['load_average'][0]:.2f} at the start" in row.group(1)
     assert f"fixed cost per case {rh._fmt(fc['mean'])} s mean" in row.group(1)
+    import pandas as pd                   # the load the timed calls saw, beside the load average
+    busy = pd.concat([pd.read_csv(p)["others_cpu"] for p in run_dir.glob("*.csv")
+                      if "others_cpu" in pd.read_csv(p, nrows=0).columns]).dropna()
+    if len(busy):
+        assert f"other processes kept {busy.median():.2g} cores busy in the median case" in row.group(1), row.group(1)
+    said = rh._others_text({"a": pd.DataFrame({"others_cpu": [0.1, 1.3, None]}),
+                            "b": pd.DataFrame({"others_cpu": ["0.2"]}), "c": pd.DataFrame({"x": [1]})})
+    assert said.startswith("other processes kept 0.2 cores busy in the median case (max 1.3)") and "3 case(s)" in said
 
 
 def test_a_method_run_only_away_from_its_defaults_is_labelled_so(tmp_path):

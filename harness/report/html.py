@@ -197,6 +197,19 @@ def _solver_text(solver: dict) -> str:
     return "; ".join(parts)
 
 
+def _others_text(frames) -> str:
+    """How busy other processes kept the machine during the cases' timed calls (the rows'
+    ``others_cpu``): what slowed the timings, where the load average also counts processes that
+    wait without running."""
+    import pandas as pd
+    vals = pd.concat([pd.to_numeric(df["others_cpu"], errors="coerce") for df in frames.values()
+                      if "others_cpu" in df] or [pd.Series(dtype=float)]).dropna()
+    if vals.empty:
+        return ""
+    return (f"other processes kept {vals.median():.2g} cores busy in the median case (max {vals.max():.2g}) during "
+            f"the timed calls of {len(vals)} case(s) (others_cpu; with several workers, the sibling cases count)")
+
+
 def _timing_text(meta) -> str:
     """run.json's timing protocol in one line: threads per case, samples, load averages, fixed cost."""
     t = meta.get("timing") if isinstance(meta.get("timing"), dict) else {}
@@ -252,7 +265,7 @@ def _header_html(meta, frames, run_dir) -> str:
             ("commit", f"<span class='mono'>{_esc(meta.get('git_commit') or 'not a git checkout')}</span>"
                        + (" <b>with uncommitted changes to tracked files</b>" if meta.get("git_dirty") else "")),
             ("command", f"<span class='mono'>{_esc(meta.get('command', ''))}</span>")]
-    protocol = _timing_text(meta)
+    protocol = "; ".join(x for x in (_timing_text(meta), _others_text(frames)) if x)
     if protocol:
         rows.append(("timing protocol", _esc(protocol)))
     if workers and cores and workers > 1:
