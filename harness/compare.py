@@ -36,14 +36,16 @@ refused:
   median over all cases of the ratio of median times: a machine busier during one run slows
   every case alike; ``--absolute-time`` turns this off), and the verdict must hold on the raw
   times too (else inconclusive: load slows multi-threaded cases more than single-threaded
-  ones, so one drift fits neither); a drift of ``time_factor`` or more while the machines were
-  as busy is a regression of the whole run (`whole_run_change`). Load from other processes during a
+  ones, so one drift fits neither); a drift of ``time_factor`` or more on machines neither run
+  oversubscribed is a regression of the whole run (`whole_run_change`). Load from other processes during a
   whole sample window stretches every sample, the fastest included; so where both rows say how
   many cores other processes kept busy from the cold call to the last sample (``others_cpu``: outside load, and
   with several workers the case's siblings in the same run, which compete for the same cores),
-  a wall-time regression (improvement) is inconclusive when B's (A's) machine was busier by
-  ``BUSY_CORES`` or more and the case's threads plus that load exceeded the cores (waiting and
-  spinning threads grow the CPU time as much as the wall time); when only B (A) measured its
+  a wall-time regression (improvement) is inconclusive when B's (A's) case could use several
+  threads and they plus that load exceeded the cores by ``BUSY_CORES`` or more, or when B's
+  (A's) machine was busier by ``BUSY_CORES`` or more and the case's threads plus that load
+  exceeded the cores (waiting and spinning threads grow the CPU time as much as the wall
+  time); when only B (A) measured its
   load, ``BUSY_CORES`` or more, and the CPU time did not grow (shrink) by ``time_factor``; when
   the load stretched B's (A's)
   samples ``OVERSUBSCRIBED`` (1.25) times or more beyond the other run's (a process using ``u``
@@ -246,27 +248,37 @@ def run_drift(rows_a: dict, rows_b: dict) -> float:
     return float(np.median(r)) if len(r) >= 5 else 1.0
 
 
-def whole_run_change(rows_a: dict, rows_b: dict, drift: float, factor: float) -> dict | None:
+def whole_run_change(rows_a: dict, rows_b: dict, drift: float, factor: float, cores: int | None = None,
+                     own: tuple | None = None) -> dict | None:
     """A change entry for the whole run when its drift (`run_drift`) is ``factor`` or more (a
-    regression) or ``1 / factor`` or less (an improvement) while the median difference of the
-    other processes' load (`busier`, over the cases ok in both that measured it, at least 5) is
-    below ``BUSY_CORES``: the machines were as busy, so the common slowdown is the code's (or the
+    regression) or ``1 / factor`` or less (an improvement) while neither machine was
+    oversubscribed: each run's median load from other processes (``others_cpu`` of its ok rows,
+    at least 2) plus the cores the run used itself (``own``: workers x threads per case) stayed
+    within ``cores`` + 0.25 (without ``cores`` or ``own``: each median below ``BUSY_CORES``),
+    so the machines were about as free, so the common slowdown is the code's (or the
     machine's: the notes say when the runs come from different machines). None otherwise."""
     import numpy as np
     if 1.0 / factor < drift < factor:
         return None
-    d = [busier(ra, rows_b[c]) for c, ra in rows_a.items() if c in rows_b and ra.get("status") == "ok"
-         and rows_b[c].get("status") == "ok"]
-    d = [x for x in d if x is not None]
-    if len(d) < 5 or abs(float(np.median(d))) >= BUSY_CORES:
+    load = []
+    for rows in (rows_a, rows_b):
+        v = [_num(r.get("others_cpu")) for r in rows.values() if r.get("status") == "ok"]
+        v = [x for x in v if x is not None]
+        load.append(float(np.median(v)) if len(v) >= 2 else None)
+    if None in load:
+        return None
+    if cores and own and None not in own:
+        if any(o + k > cores + 0.25 for o, k in zip(load, own)):
+            return None
+    elif max(load) >= BUSY_CORES:
         return None
     verdict = "regression" if drift >= factor else "improvement"
     return {"case_id": "(all cases)", "task": "(run)", "case": "the whole run", "metric": "time_s", "a": 1.0,
             "b": round(drift, 4), "verdict": verdict,
-            "note": (f"B took {drift:.3g}x A's time in the median case while other processes kept the machine about "
-                     f"as busy (median difference {float(np.median(d)):+.2g} cores over {len(d)} cases): every "
-                     "case changed alike, which each case's verdict, relative to this drift, does not count "
-                     "(--absolute-time judges each case on its raw times)")}
+            "note": (f"B took {drift:.3g}x A's time in the median case on machines neither run oversubscribed "
+                     f"(others_cpu median {load[0]:.2g} / {load[1]:.2g} cores, A / B): every case changed "
+                     "alike, which each case's verdict, relative to this drift, does not count (--absolute-time "
+                     "judges each case on its raw times)")}
 
 
 def cpu_ratio(ra: dict, rb: dict) -> float | None:
@@ -305,9 +317,13 @@ def load_stretch(fast: dict, slow: dict, cores: int | None) -> float | None:
 def _load_explains(ra: dict, rb: dict, verdict: str, factor: float, cores: int | None = None,
                    threads: tuple | None = None) -> bool:
     """Whether other processes' load explains a wall-time change (module docstring): the slower
-    run's machine was busier by ``BUSY_CORES`` or more and its case's threads (``threads``: A's
-    and B's threads per case) plus that load exceeded the ``cores`` (threads waiting for a core,
-    and BLAS threads spinning while they wait, grow the CPU time too, so it cannot tell); or the
+    run's case could use several threads (``threads``: A's and B's threads per case; one
+    whose samples used one core may still have a BLAS thread spinning for a core, 83x the CPU
+    time in one rerun) and its threads
+    plus the other processes' load exceeded the ``cores`` by ``BUSY_CORES`` or more (threads
+    waiting for a core, and BLAS threads spinning while they wait, grow the wall and the CPU
+    time alike, by 80x in one rerun, so neither can tell); or its machine was busier by
+    ``BUSY_CORES`` or more and its case's threads plus that load exceeded the cores; or the
     load stretched the slower run's samples ``OVERSUBSCRIBED`` (1.25) times or more beyond the
     faster run's (`load_stretch`) and the CPU time did not grow by more than ``CONTENDED_CPU`` x
     ``factor``; or the slower run's machine was busier by ``BUSY_CORES`` or more and the CPU time
@@ -317,12 +333,15 @@ def _load_explains(ra: dict, rb: dict, verdict: str, factor: float, cores: int |
     slow, fast = (rb, ra) if verdict == "regression" else (ra, rb)
     grew = None if c is None else (c if verdict == "regression" else (1.0 / c if c > 0 else math.inf))
     o_slow, o_fast = _num(slow.get("others_cpu")), _num(fast.get("others_cpu"))
+    t_slow = (threads or (None, None))[1 if verdict == "regression" else 0]
+    if (cores and t_slow and t_slow > 1 and o_slow is not None
+            and t_slow + o_slow >= cores + BUSY_CORES):
+        return True                       # a multi-threaded case on an oversubscribed machine: no time tells
     if o_fast is None:                    # the faster run's load is unknown: it may have been as quiet or not
         return o_slow is not None and o_slow >= BUSY_CORES and not (grew is not None and grew > factor)
     d = busier(ra, rb)
     if d is None:
         return False
-    t_slow = (threads or (None, None))[1 if verdict == "regression" else 0]
     if cores and t_slow and (d if verdict == "regression" else -d) >= BUSY_CORES and t_slow + o_slow > cores:
         return True
     stretch = load_stretch(fast, slow, cores)
@@ -439,16 +458,16 @@ def _label(r: dict) -> str:
 
 def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FACTOR, rules=None,
                  absolute_time: bool = False, load_rule: bool = True, cores: int | None = None,
-                 threads: tuple | None = None) -> dict:
+                 threads: tuple | None = None, own: tuple | None = None) -> dict:
     """Every change between two runs' rows: ``{"changes": [...], "only_a": [...], "only_b": [...], ...}``.
 
     ``rules``: ``{task: {metric: Rule}}`` from the runs' task declarations (default: the known tasks).
     Times are judged relative to the whole run's drift (`run_drift`) unless ``absolute_time``;
     ``load_rule``: the other processes' load may make a time change inconclusive (`judge_time`;
     ``cores``, the core count both runs' machines share, lets `load_stretch` do so; ``threads``,
-    A's and B's threads per case). A drift of ``time_factor`` or more (or its inverse) while
-    other processes' load did not differ by ``BUSY_CORES`` (`whole_run_change`) is itself a
-    change of the whole run: every case slowed alike, which no case's verdict relative to the
+    A's and B's threads per case; ``own``, the cores each run used itself). A drift of
+    ``time_factor`` or more (or its inverse) on machines that were not oversubscribed
+    (`whole_run_change`) is itself a change of the whole run: every case slowed alike, which no case's verdict relative to the
     drift can see.
     """
     changes, input_changes = [], []
@@ -496,7 +515,8 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
                 verdict = "info"              # e.g. peak_rss_mb: counted, not listed
             entry = {**base, "metric": metric, "a": a, "b": b, "verdict": verdict}
             (input_changes if rule.kind == "input" else changes).append(entry)
-    whole = whole_run_change(rows_a, rows_b, drift, time_factor) if time_factor and not absolute_time else None
+    whole = (whole_run_change(rows_a, rows_b, drift, time_factor, cores, own) if time_factor and not absolute_time
+             else None)
     if whole is not None:
         changes.append(whole)
     only_a = [c for c in rows_a if c not in rows_b]
@@ -586,7 +606,10 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
     threads = tuple((m.get("timing") or {}).get("threads_per_case") if isinstance(m.get("timing"), dict) else None
                     for m in (meta_a, meta_b))
     threads = tuple(t if isinstance(t, int) and not isinstance(t, bool) and t > 0 else None for t in threads)
-    res = compare_rows(ra, rb, time_factor, rules, absolute_time, cores=ca if ca == cb else None, threads=threads)
+    workers = tuple(m.get("workers") if isinstance(m.get("workers"), int) else None for m in (meta_a, meta_b))
+    own = tuple(w * t if w and t else None for w, t in zip(workers, threads))
+    res = compare_rows(ra, rb, time_factor, rules, absolute_time, cores=ca if ca == cb else None, threads=threads,
+                       own=own)
     changes = _sorted(res["changes"])
     regress = [c for c in changes if c["verdict"] == "regression"]
     shown = [c for c in changes if c["verdict"] not in ("within tolerance", "info", "inconclusive")]

@@ -293,6 +293,11 @@ def test_load_that_oversubscribes_the_cases_threads_excuses_even_a_cpu_time_chan
     assert judge_time(a, b, cores=8, threads=(2, 2)) == "regression"          # cores to spare
     assert judge_time(a, row(12.7, 7.1 * 1.9, 0.3), cores=2, threads=(2, 2)) == "regression"   # equally quiet
     assert judge_time(b, a, cores=2, threads=(2, 2)) == "inconclusive"        # the same, read as an improvement
+    # both machines about as busy, but beyond the case's 2 threads on 2 cores: 84x with 83x the CPU
+    # time in one rerun (a busy loop beside B, bursty load during A); nothing can tell
+    assert judge_time(row(1, 1.9, 0.88), row(84, 83 * 1.9, 1.0), cores=2, threads=(2, 2)) == "inconclusive"
+    assert judge_time(row(1, 1.9, 0.88), row(84, 83 * 1.9, 1.0), cores=2, threads=(1, 1)) == "regression"
+    assert judge_time({**a, "others_cpu": None}, row(8, 2.8 * 1.9, 1.4), cores=2, threads=(2, 2)) == "inconclusive"
 
 
 def test_a_verdict_must_hold_on_the_raw_times_and_a_common_slowdown_is_the_whole_runs():
@@ -315,6 +320,8 @@ def test_a_verdict_must_hold_on_the_raw_times_and_a_common_slowdown_is_the_whole
     assert res["drift"] == pytest.approx(2, rel=0.1)
     assert all(verdicts[c] in ("within tolerance", "inconclusive") for c in ids[6:]), verdicts    # no false improvement
     assert verdicts["(all cases)"] == "regression"
+    sparse = {c: {**r, "others_cpu": None if i > 1 else 0.1} for i, (c, r) in enumerate(A.items())}
+    assert "(all cases)" in {c["case_id"] for c in compare_rows(sparse, B)["changes"]}   # each run's own median
     busy = {c: {**r, "others_cpu": 1.2} for c, r in B.items()}                  # B's machine busier: the load's
     assert "(all cases)" not in {c["case_id"] for c in compare_rows(A, busy)["changes"]}
     assert "(all cases)" not in {c["case_id"] for c in compare_rows(A, B, absolute_time=True)["changes"]}
@@ -331,6 +338,7 @@ def test_two_worker_runs_excuse_a_wall_time_change_that_load_explains(run_a, tmp
     for d in (a, b):
         meta = json.loads((d / "run.json").read_text())
         meta["workers"] = 2
+        meta.setdefault("timing", {})["threads_per_case"] = 1
         meta.setdefault("machine", {})["cpu_count"] = 2
         (d / "run.json").write_text(json.dumps(meta))
 
