@@ -443,7 +443,7 @@ def leaderboard(frames: dict, specs: dict) -> pd.DataFrame:
             if ranks.empty:
                 continue
             chi2, p, cd = friedman_nemenyi(ranks)
-            for v, r in ranks.mean(axis=0).sort_values().items():
+            for v, r in sorted(ranks.mean(axis=0).items(), key=lambda x: (x[1], str(x[0]))):   # ties: by name
                 rows.append({"task": task, "metric": m["name"], "better": m["better"], "method": v,
                              "mean_rank": float(r), "cells": int(len(ranks)), "missing_cells": int(missing.get(v, 0)),
                              "invalid_cells": int(invalid.get(v, 0)), "friedman_chi2": chi2, "friedman_p": p,
