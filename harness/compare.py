@@ -550,7 +550,7 @@ def timing_notes(meta_a: dict, meta_b: dict, res: dict) -> list[str]:
     """Why time changes between these two runs may not mean what they seem."""
     notes = []
     ma, mb = meta_a.get("machine"), meta_b.get("machine")
-    if ma and mb and ma != mb:
+    if ma and mb and any(ma[k] != mb[k] for k in ma.keys() & mb.keys()):     # keys one version records alone: not a difference
         notes.append("the runs come from different machines: time changes compare different hardware")
     wa, wb = meta_a.get("workers"), meta_b.get("workers")
     if wa and wb and wa != wb:
@@ -571,13 +571,15 @@ def timing_notes(meta_a: dict, meta_b: dict, res: dict) -> list[str]:
     for rows in (res["rows_a"], res["rows_b"]):
         v = sorted(x for x in (_num(r.get("others_cpu")) for r in rows.values()) if x is not None)
         busy.append(f"{v[len(v) // 2]:.2g} (max {v[-1]:.2g}, {len(v)} cases)" if v else "not measured")
-    notes.append(f"cores other processes kept busy during the timed calls (others_cpu, median): A {busy[0]}, "
-                 f"B {busy[1]}; what the load average says may differ (it counts waiting processes)")
+    if busy != ["not measured", "not measured"]:
+        notes.append(f"cores other processes kept busy during the timed calls (others_cpu, median): A {busy[0]}, "
+                     f"B {busy[1]}; what the load average says may differ (it counts waiting processes)")
     n_inc = sum(c["verdict"] == "inconclusive" for c in res["changes"])
     if n_inc:
         notes.append(f"{n_inc} case(s) are inconclusive on time (not counted as regressions): too few timed samples "
-                     "on one side (raise repeats or time_budget), or a wall-time change while other processes "
-                     "kept the slower run's machine busier, without a CPU-time change (see each case's note)")
+                     "on one side (raise repeats or time_budget), a wall-time change that other processes' load "
+                     "explains, or a change the raw times and the times relative to the run's drift disagree on "
+                     "(see each case's note)")
     if any(time_samples(r) is None for r in list(res["rows_a"].values()) + list(res["rows_b"].values())
            if r.get("status") == "ok" and r.get("library") != "external"):        # eval rows have no time at all
         notes.append("some rows store no timed samples (older runs): their time is judged on median/min/max only")

@@ -63,6 +63,21 @@ def validity(spec: dict, df: pd.DataFrame, measured: bool = False) -> pd.Series:
     return why
 
 
+def _with_current_missing(spec: dict, rule: dict) -> dict:
+    """``rule`` with ``missing`` as the task declares it now, where a run.json written before
+    rules had the key recorded it without (the same column, operator, value and method)."""
+    if "missing" in rule or not isinstance(rule, dict):
+        return rule
+    from . import tasks
+    try:
+        now = tasks.get((spec or {}).get("name") or "").spec()["invalid_when"]
+    except KeyError:
+        return rule
+    same = ("column", "op", "value", "method", "than")
+    match = next((r for r in now if all(r.get(k) == rule.get(k) for k in same)), None)
+    return {**rule, "missing": bool(match and match.get("missing"))}
+
+
 def not_measured(spec: dict, df: pd.DataFrame) -> pd.Series:
     """Whether each ok row matches a ``missing`` rule of the task's ``invalid_when``: its values
     are no measurement of the method (e.g. the reference method scored against itself), so
@@ -89,6 +104,7 @@ def _rule_hits(spec: dict, df: pd.DataFrame, why: pd.Series):
         except KeyError:
             rules = []
     for rule in rules:
+        rule = _with_current_missing(spec, rule)
         col = rule.get("column")
         if col not in df:
             continue
@@ -462,6 +478,8 @@ def cd_applies(p, cd) -> bool:
 def _cd_text(r0, dash: str) -> str:
     if pd.isna(r0.critical_difference):
         return dash
+    if pd.isna(r0.friedman_p):
+        return "not applied (no Friedman test: one cell or one method)"
     if not cd_applies(r0.friedman_p, r0.critical_difference):
         return f"not applied (Friedman p >= {ALPHA:g}: no pair is shown to differ)"
     return f"{r0.critical_difference:.2f}"

@@ -450,7 +450,7 @@ def validate(V, F, name: str = "", repair: bool = True, finite: bool = True) -> 
         raise InvalidMeshError(f"{label}face indices out of range [0, {len(V)}): "
                                f"min {int(F.min())}, max {int(F.max())}")
     big, span = float(np.abs(V).max()), float((V.max(axis=0) - V.min(axis=0)).max())
-    if finite and big > COORD_LIMIT or 0 < span < 1 / COORD_LIMIT:
+    if finite and (big > COORD_LIMIT or 0 < span < 1 / COORD_LIMIT):
         raise InvalidMeshError(f"{label}coordinates up to {big:.3g} over a span of {span:.3g}: beyond "
                                f"{COORD_LIMIT:g} (or a span below {1 / COORD_LIMIT:g}) the fourth powers of lengths "
                                "that areas and angles use overflow (or underflow) double precision; rescale the mesh")

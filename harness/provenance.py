@@ -58,34 +58,50 @@ def usable_cpus() -> int:
     return max(1, n)
 
 
-def _cgroup_quota() -> float | None:
-    """The CPU quota (cores) of this process's cgroup, None when unlimited or unknown."""
+def _cgroup_quota(root: Path = Path("/sys/fs/cgroup"), proc: Path = Path("/proc/self/cgroup")) -> float | None:
+    """The smallest CPU quota (cores) of this process's cgroup and its ancestors (a quota on a
+    parent slice binds too), v2 (``cpu.max``) or v1 (``cpu.cfs_quota_us / cpu.cfs_period_us``),
+    looked up under the path ``/proc/self/cgroup`` names and, for a container that sees its
+    own cgroup as the mount's root, at the root itself; None when unlimited or unknown."""
     try:
-        lines = Path("/proc/self/cgroup").read_text().splitlines()
+        lines = proc.read_text().splitlines()
     except OSError:
         return None
-    root = Path("/sys/fs/cgroup")
+    found = []
     for line in lines:
         parts = line.split(":", 2)
         if len(parts) != 3:
             continue
         _, ctrl, rel = parts
-        rel = rel.lstrip("/")
-        try:
-            if ctrl == "" and (root / rel / "cpu.max").is_file():             # cgroup v2
-                quota, period = (root / rel / "cpu.max").read_text().split()[:2]
-                if quota != "max":
-                    return int(quota) / int(period)
-            elif "cpu" in ctrl.split(","):                                    # cgroup v1
-                for d in (root / ctrl / rel, root / "cpu" / rel):
-                    if (d / "cpu.cfs_quota_us").is_file():
-                        quota = int((d / "cpu.cfs_quota_us").read_text())
-                        if quota > 0:
-                            return quota / int((d / "cpu.cfs_period_us").read_text())
-                        break
-        except (OSError, ValueError):
+        rel_parts = [p for p in rel.split("/") if p]
+        if ctrl == "":
+            bases, read = [root], _v2_quota
+        elif "cpu" in ctrl.split(","):
+            bases, read = [root / ctrl, root / "cpu", root / "cpu,cpuacct"], _v1_quota
+        else:
             continue
-    return None
+        for base in bases:
+            for k in range(len(rel_parts), -1, -1):          # the cgroup, then each ancestor up to the root
+                q = read(base.joinpath(*rel_parts[:k]))
+                if q is not None:
+                    found.append(q)
+    return min(found) if found else None
+
+
+def _v2_quota(d: Path) -> float | None:
+    try:
+        quota, period = (d / "cpu.max").read_text().split()[:2]
+        return None if quota == "max" else int(quota) / int(period)
+    except (OSError, ValueError):
+        return None
+
+
+def _v1_quota(d: Path) -> float | None:
+    try:
+        quota = int((d / "cpu.cfs_quota_us").read_text())
+        return quota / int((d / "cpu.cfs_period_us").read_text()) if quota > 0 else None
+    except (OSError, ValueError, ZeroDivisionError):
+        return None
 
 
 def machine_info() -> dict:

@@ -139,7 +139,7 @@ def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | 
         seed = 0
     train = check_meshes(raw.get("train"))
     configured = {m: (t, [g for g in grid]) for t, entries in tasks.items() for m, grid in entries}
-    listed = Counter(m for entries in tasks.values() for m, _ in entries)
+    n_listed = Counter(m for entries in tasks.values() for m, _ in entries)
     params = raw.get("params")
     out_params: dict = {}
     if not isinstance(params, dict) or not params:
@@ -154,8 +154,8 @@ def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | 
         if not isinstance(ranges, dict) or not ranges:
             P.append(f"{at}: expected a mapping parameter -> list of values")
             continue
-        if listed[m] > 1:                   # "as configured" would be the last entry in training, all on the test
-            P.append(f"{at}: {m} is listed {listed[m]} times under tasks:; tuning compares one configured setting "
+        if n_listed[m] > 1:                 # "as configured" would be the last entry in training, all on the test
+            P.append(f"{at}: {m} is listed {n_listed[m]} times under tasks:; tuning compares one configured setting "
                      "with the chosen one: list it once (its values as lists in one entry)")
             continue
         meth = methods.get(m)

@@ -648,3 +648,14 @@ def test_benchmark_json_stats_are_pytest_benchmarks_own():
             for k in ("q1", "q3", "iqr", "iqr_outliers", "stddev_outliers", "ld15iqr", "hd15iqr", "median",
                       "mean", "stddev", "min", "max", "rounds", "total"):
                 assert mine[k] == pytest.approx(getattr(ref, k), rel=1e-12, abs=1e-18), (n, k, t)
+
+
+def test_the_same_machine_is_not_called_another_for_a_key_one_version_records_alone():
+    """An outside review: a baseline written before run.json recorded ``usable_cpus`` was said
+    to come from a different machine."""
+    from harness.compare import timing_notes
+    m = {"node": "n", "cpu": "x", "cpu_count": 2}
+    res = {"changes": [], "rows_a": {}, "rows_b": {}, "drift": 1.0}
+    assert not any("different machines" in n for n in timing_notes({"machine": m}, {"machine": {**m, "usable_cpus": 2}}, res))
+    assert any("different machines" in n for n in timing_notes({"machine": m}, {"machine": {**m, "cpu_count": 8}}, res))
+    assert not any("others_cpu" in n for n in timing_notes({"machine": m}, {"machine": m}, res))   # nothing measured

@@ -312,6 +312,9 @@ def test_the_reference_method_is_left_out_of_the_ranking_not_ranked_last():
     assert w.loc["knight", "variants"] == 2
     assert w.loc["sphere", "best"] in ("libigl.exact_geodesic", "pygeodesic.exact")
     assert L.validity(spec, df).iloc[3] == "is the reference itself (0 by construction)"   # the report hides it
+    old = {**spec, "invalid_when": [{k: v for k, v in r.items() if k != "missing"} for r in spec["invalid_when"]]}
+    lb_old = L.leaderboard({"geodesics": df}, {"geodesics": old})            # a run.json written before the key
+    assert "libigl.exact_geodesic" not in set(lb_old["method"])
 
 
 def test_a_winner_must_be_better_on_every_seed_or_it_ties():

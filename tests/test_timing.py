@@ -379,3 +379,24 @@ def test_a_case_process_inherits_the_drivers_objects_frozen(monkeypatch):
     row, _ = isolation.run_isolated(case)
     assert row["frozen"] >= 2000, row
     assert gc.get_freeze_count() == 0
+
+
+@pytest.mark.parametrize("cgroup, files, want", [
+    ("0::/\n", {"cpu.max": "100000 100000\n"}, 1.0),                                   # v2, private namespace
+    ("0::/system.slice/docker-abc.scope\n", {"cpu.max": "150000 100000\n"}, 1.5),       # v2, host namespace
+    ("4:cpu,cpuacct:/docker/abc\n", {"cpu,cpuacct/cpu.cfs_quota_us": "100000\n",        # v1 docker
+                                     "cpu,cpuacct/cpu.cfs_period_us": "100000\n"}, 1.0),
+    ("0::/lim.slice/run-x.scope\n", {"lim.slice/cpu.max": "200000 100000\n",            # quota on a parent slice
+                                      "lim.slice/run-x.scope/cpu.max": "max 100000\n"}, 2.0),
+    ("0::/a\n", {"a/cpu.max": "max 100000\n"}, None),                                   # unlimited
+])
+def test_the_cgroup_cpu_quota_is_found_in_common_container_layouts(tmp_path, cgroup, files, want):
+    """An outside review: only a v2 cgroup with a private namespace was read; a v1 Docker layout,
+    a v2 host namespace and a quota on a parent slice fell back to the host's CPUs."""
+    from harness.provenance import _cgroup_quota
+    root = tmp_path / "cgroup"
+    for rel, text in files.items():
+        (root / rel).parent.mkdir(parents=True, exist_ok=True)
+        (root / rel).write_text(text)
+    (tmp_path / "self").write_text(cgroup)
+    assert _cgroup_quota(root, tmp_path / "self") == want

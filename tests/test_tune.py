@@ -123,6 +123,9 @@ def test_the_budget_buys_settings_other_than_the_defaults():
                                            "params": {"scratch.implicit": {"iterations": [1, 2], "step": [0.1, 1.0, 5.0, 10.0]}}}})
         got = cfg.tune.candidates("scratch.implicit")
         assert len(got) == 5 and got[0] == {} and {"iterations": 1, "step": 1.0} not in got, (seed, got)
+    two = load_config({**CFG, "tune": {**CFG["tune"], "params": {"scratch.implicit": {"step": [0.1, 1.0]},
+                                                                  "scratch.taubin": {"iterations": [5, 10]}}}})
+    assert set(two.tune.params) == {"scratch.implicit", "scratch.taubin"}     # the review's crash: a set indexed
     with pytest.raises(ConfigError, match="scratch.implicit is listed 2 times under tasks"):
         load_config({**CFG, "tasks": {"smoothing": {"methods": ["scratch.implicit",
                                                                 {"name": "scratch.implicit", "params": {"step": 0.5}}]}}})

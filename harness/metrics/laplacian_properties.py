@@ -423,7 +423,7 @@ def _min_eig(W, V, F, WT=None):
                 ev = sla.eigsh(S, k=1, sigma=sigma, OPinv=op, which="LM", ncv=min(n - 1, 8), v0=_v0(n),
                                return_eigenvectors=False, tol=1e-10, maxiter=1000)
             else:
-                ev = _most_negative(S, n, lam_max)
+                ev = _most_negative(S, n, scale)
     except (sla.ArpackNoConvergence, RuntimeError, ValueError, np.linalg.LinAlgError):
         return None, psd
     if ev is None:

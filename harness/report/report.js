@@ -976,7 +976,8 @@
       var ct = sv('text', {x: left, y: 10, 'font-size': 11}); ct.textContent = 'CD = ' + fmt(g.cd, 3) + ' (Nemenyi, α = 0.05)'; svg.appendChild(ct);
     } else if (isNum(g.cd)) {
       var nt = sv('text', {x: left, y: 10, 'font-size': 11, 'class': 'cd-not-applied'});
-      nt.textContent = 'no critical difference: the Friedman test does not reject (p ≥ 0.05), so no pair is shown to differ';
+      nt.textContent = isNum(g.p) ? 'no critical difference: the Friedman test does not reject (p ≥ 0.05), so no pair is shown to differ'
+        : 'no critical difference: no Friedman test here (one cell or one method)';
       svg.appendChild(nt);
     }
     var half = Math.ceil(ms.length / 2);
