@@ -131,7 +131,7 @@ def rule_for(metric: str, task: str | None = None, rules: dict | None = None) ->
 
 SKIP = {"case_id", "task", "mesh", "noise_model", "noise_level", "seed", "method", "library", "params",
         "status", "error", "time_s", "time_min_s", "time_max_s", "time_q1_s", "time_q3_s", "time_cold_s", "times",
-        "time_cpu_s", "cpu_times", "others_cpu",
+        "time_cpu_s", "cpu_times", "others_cpu", "threads_busy",
         "method_mem_mb", "repeats", "min_angle_hist"}
 
 
@@ -255,7 +255,8 @@ def whole_run_change(rows_a: dict, rows_b: dict, drift: float, factor: float, co
     oversubscribed: each run's median load from other processes (``others_cpu`` of its ok rows,
     at least 2) plus the cores the run used itself (``own``: workers x threads per case) stayed
     within ``cores`` + 0.25 (without ``cores`` or ``own``: each median below ``BUSY_CORES``),
-    so the machines were about as free, so the common slowdown is the code's (or the
+    so the machines were about as free; where a run did not measure its load, when the median
+    CPU time ratio over the cases (at least 5) changed by ``factor`` as well, so the common slowdown is the code's (or the
     machine's: the notes say when the runs come from different machines). None otherwise."""
     import numpy as np
     if 1.0 / factor < drift < factor:
@@ -265,14 +266,25 @@ def whole_run_change(rows_a: dict, rows_b: dict, drift: float, factor: float, co
         v = [_num(r.get("others_cpu")) for r in rows.values() if r.get("status") == "ok"]
         v = [x for x in v if x is not None]
         load.append(float(np.median(v)) if len(v) >= 2 else None)
-    if None in load:
-        return None
+    verdict = "regression" if drift >= factor else "improvement"
+    if None in load:                      # a load not measured (short windows): the CPU time must agree
+        c = [cpu_ratio(ra, rows_b[k]) for k, ra in rows_a.items() if k in rows_b and ra.get("status") == "ok"
+             and rows_b[k].get("status") == "ok"]
+        c = [x for x in c if x is not None]
+        cpu = float(np.median(c)) if len(c) >= 5 else None
+        if cpu is None or not (cpu >= factor if verdict == "regression" else cpu <= 1.0 / factor):
+            return None
+        return {"case_id": "(all cases)", "task": "(run)", "case": "the whole run", "metric": "time_s", "a": 1.0,
+                "b": round(drift, 4), "verdict": verdict,
+                "note": (f"B took {drift:.3g}x A's time in the median case, and {cpu:.3g}x its CPU time (median over "
+                         f"{len(c)} cases; other processes' load not measured): every case changed alike, which "
+                         "each case's verdict, relative to this drift, does not count (--absolute-time judges each "
+                         "case on its raw times)")}
     if cores and own and None not in own:
         if any(o + k > cores + 0.25 for o, k in zip(load, own)):
             return None
     elif max(load) >= BUSY_CORES:
         return None
-    verdict = "regression" if drift >= factor else "improvement"
     return {"case_id": "(all cases)", "task": "(run)", "case": "the whole run", "metric": "time_s", "a": 1.0,
             "b": round(drift, 4), "verdict": verdict,
             "note": (f"B took {drift:.3g}x A's time in the median case on machines neither run oversubscribed "
@@ -289,6 +301,21 @@ def cpu_ratio(ra: dict, rb: dict) -> float | None:
     import numpy as np
     ma = float(np.median(a))
     return float(np.median(b)) / ma if ma > 0 else None
+
+
+def threads_used(fast: dict, slow: dict, cap: int | None) -> int | None:
+    """Threads the case kept busy: the larger ``threads_busy`` of the two rows (threads that ran
+    for 5% of the timed window, a spinning BLAS pool included); for rows written before that
+    column, its faster row's ``u = CPU / wall`` rounded (at least 1); else ``cap``, the run's
+    threads per case."""
+    import numpy as np
+    tb = [x for x in (_num(fast.get("threads_busy")), _num(slow.get("threads_busy"))) if x is not None]
+    if tb:
+        return int(max(tb))
+    c, w = time_samples(fast, "cpu_times"), time_samples(fast)
+    if c and w and np.median(w) > 0:
+        return max(1, int(round(float(np.median(c) / np.median(w)))))
+    return cap
 
 
 def busier(ra: dict, rb: dict) -> float | None:
@@ -317,9 +344,8 @@ def load_stretch(fast: dict, slow: dict, cores: int | None) -> float | None:
 def _load_explains(ra: dict, rb: dict, verdict: str, factor: float, cores: int | None = None,
                    threads: tuple | None = None) -> bool:
     """Whether other processes' load explains a wall-time change (module docstring): the slower
-    run's case could use several threads (``threads``: A's and B's threads per case; one
-    whose samples used one core may still have a BLAS thread spinning for a core, 83x the CPU
-    time in one rerun) and its threads
+    run's case kept several threads busy (`threads_used`; ``threads``: A's and B's threads per
+    case, where the rows do not say) and its threads
     plus the other processes' load exceeded the ``cores`` by ``BUSY_CORES`` or more (threads
     waiting for a core, and BLAS threads spinning while they wait, grow the wall and the CPU
     time alike, by 80x in one rerun, so neither can tell); or its machine was busier by
@@ -333,7 +359,7 @@ def _load_explains(ra: dict, rb: dict, verdict: str, factor: float, cores: int |
     slow, fast = (rb, ra) if verdict == "regression" else (ra, rb)
     grew = None if c is None else (c if verdict == "regression" else (1.0 / c if c > 0 else math.inf))
     o_slow, o_fast = _num(slow.get("others_cpu")), _num(fast.get("others_cpu"))
-    t_slow = (threads or (None, None))[1 if verdict == "regression" else 0]
+    t_slow = threads_used(fast, slow, (threads or (None, None))[1 if verdict == "regression" else 0])
     if (cores and t_slow and t_slow > 1 and o_slow is not None
             and t_slow + o_slow >= cores + BUSY_CORES):
         return True                       # a multi-threaded case on an oversubscribed machine: no time tells

@@ -593,7 +593,8 @@ def _check_identity(path: Path, df: pd.DataFrame) -> None:
 
 
 NUMERIC_COMMON = ("n_vertices", "n_faces", "noise_level", "seed", "time_s", "time_min_s", "time_max_s", "time_q1_s",
-                  "time_q3_s", "time_cold_s", "repeats", "time_cpu_s", "others_cpu", "method_mem_mb", "peak_rss_mb")
+                  "time_q3_s", "time_cold_s", "repeats", "time_cpu_s", "others_cpu", "threads_busy", "method_mem_mb",
+                  "peak_rss_mb")
 
 
 def _check_numbers(path: Path, df: pd.DataFrame) -> None:

@@ -26,10 +26,12 @@ Timing protocol (the method call alone; metrics are not timed):
    for the heap memory it touches (otherwise only the first sample, trimmed for the memory
    measurement, would, 1.0-1.24x slower than the rest at 86k faces);
    each sample's process CPU time (all threads of the process) is kept too (``cpu_times``,
-   median ``time_cpu_s``), and ``others_cpu`` is the number of cores other processes kept busy
+   median ``time_cpu_s``), ``others_cpu`` is the number of cores other processes kept busy
    on average from the cold call to the last sample (``/proc/stat``, steal included, minus this
-   process; blank off Linux and for windows under 0.2 s): ``shootout compare`` does not call a
-   wall-time change a regression when the load explains it (`harness.compare`);
+   process; blank off Linux and for windows under 0.2 s), and ``threads_busy`` the number of
+   this process's threads that ran for 5% of that window or more (`threads_busy`; a BLAS pool
+   spinning while it waits counts): ``shootout compare`` does not call a wall-time change a
+   regression when the load explains it (`harness.compare`);
 4. memory: ``method_mem_mb`` is the peak resident memory of the first sampled call minus the
    resident memory just before it, in MiB (Linux: freed heap returned to the OS with glibc's
    ``malloc_trim``, then the kernel's high-water mark reset through ``/proc/self/clear_refs``;
@@ -113,6 +115,33 @@ def _machine_busy_s() -> float | None:
         return sum(int(x) for x in f[1:4] + f[6:9]) / ticks
     except (OSError, ValueError, IndexError, AttributeError):
         return None
+
+
+def _thread_ticks() -> dict[int, int] | None:
+    """CPU clock ticks (user + system) of each thread of this process (``/proc/self/task``), None
+    where unknown."""
+    out = {}
+    try:
+        for d in os.scandir("/proc/self/task"):
+            try:
+                with open(f"/proc/self/task/{d.name}/stat") as fh:
+                    f = fh.read().rsplit(")", 1)[1].split()
+                out[int(d.name)] = int(f[11]) + int(f[12])      # utime, stime: fields 14 and 15
+            except (OSError, ValueError, IndexError):
+                continue                                        # a thread that ended meanwhile
+    except OSError:
+        return None
+    return out
+
+
+def threads_busy(before: dict | None, after: dict | None, wall_s: float) -> int | None:
+    """How many threads ran for at least 5% of a window of ``wall_s`` seconds (and 2 ticks),
+    from `_thread_ticks` before and after it (a thread that ended within the window is not
+    seen: pools persist, so theirs are); None without both or under 0.2 s (10 ms ticks)."""
+    if before is None or after is None or wall_s < 0.2:
+        return None
+    floor = max(2, 0.05 * wall_s * os.sysconf("SC_CLK_TCK"))
+    return sum(1 for tid, t in after.items() if t - before.get(tid, 0) >= floor)
 
 
 _POOLS: tuple | None = None   # (threadpoolctl controller, loaded objects at its scan), see scan_thread_pools
@@ -356,6 +385,7 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
             run, finish = method.bind(inp.V.copy(), inp.F.copy(), **case.params)   # checks: untimed
             forget_inputs()
             busy0, own0, wall0 = _machine_busy_s(), time.process_time(), time.perf_counter()   # others_cpu's window
+            ticks0 = _thread_ticks()
             t0 = time.perf_counter()
             cold_result = run()                                     # cold call: same code path, own input
             cold = time.perf_counter() - t0
@@ -387,6 +417,7 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
         if busy0 is not None and busy1 is not None and wall1 - wall0 >= 0.2:   # /proc/stat counts 10 ms ticks
             others = max(0.0, (busy1 - busy0) - (own1 - own0)) / (wall1 - wall0)
             row["others_cpu"] = round(min(others, float(os.cpu_count() or 1)), 3)
+        row["threads_busy"] = threads_busy(ticks0, _thread_ticks(), wall1 - wall0)
         t_measure = time.perf_counter()
         row.update(task.measured(inp, result, full))
         extras["measure_s"] = time.perf_counter() - t_measure

@@ -263,11 +263,15 @@ def test_wall_time_on_a_busier_machine_without_cpu_time_is_inconclusive():
                       cores=2) == "inconclusive"
     assert judge_time(row(base, base, 0.98), row(slow, slow, 1.465), cores=2) == "regression"   # 4x the CPU time
     # under equal load nothing is excused: 2.5x the wall and CPU time, two workers with a quarter
-    # core of outside load in both runs, or one worker whose case uses 1.7 cores, 0.7 busy in both
+    # core of outside load in both runs, or one worker whose case uses 1.7 cores, 0.2 busy in both;
+    # but a case keeping 2 threads busy beside 0.7 busy cores oversubscribes 2 cores, where
+    # waiting threads make any time (84x between two loaded reruns): inconclusive even then
     more = [2.5 * t for t in same]
     assert judge_time(row(base, base, 1.25), row(more, more, 1.25), cores=2) == "regression"
-    assert judge_time(row(base, [1.7 * t for t in base], 0.7), row(more, [1.7 * t for t in more], 0.7),
+    assert judge_time(row(base, [1.7 * t for t in base], 0.2), row(more, [1.7 * t for t in more], 0.2),
                       cores=2) == "regression"
+    assert judge_time(row(base, [1.7 * t for t in base], 0.7), row(more, [1.7 * t for t in more], 0.7),
+                      cores=2) == "inconclusive"
     assert judge_time(row(more, more, 1.25), row(base, base, 1.25), cores=2) == "improvement"
     assert judge_time(row(base, base, 1.4), row(more, more, 1.25), cores=2) == "regression"   # B less loaded
     # beside one busy sibling on two cores about one core is free: not oversubscribed, so 2x the
@@ -284,11 +288,11 @@ def test_load_that_oversubscribes_the_cases_threads_excuses_even_a_cpu_time_chan
     rng = np.random.default_rng(2)
     base = list(0.0148 * (1 + 0.2 * rng.random(12)))
 
-    def row(k_wall, k_cpu, others):
+    def row(k_wall, k_cpu, others, busy=None):
         return {**_row([k_wall * t for t in base]), "cpu_times": json.dumps([k_cpu * t for t in base]),
-                "others_cpu": others}
-    a, b = row(1, 1.9, 0.0), row(12.7, 7.1 * 1.9, 1.05)
-    assert judge_time(a, b, cores=2) == "regression"                        # threads unknown: as before
+                "others_cpu": others, "threads_busy": busy}
+    a, b = row(1, 1.9, 0.0), row(12.7, 7.1 * 1.9, 1.05)                     # u = 1.9: two threads (older rows)
+    assert judge_time(a, b, cores=2) == "inconclusive"                       # u = 1.9 says two threads
     assert judge_time(a, b, cores=2, threads=(2, 2)) == "inconclusive"
     assert judge_time(a, b, cores=8, threads=(2, 2)) == "regression"          # cores to spare
     assert judge_time(a, row(12.7, 7.1 * 1.9, 0.3), cores=2, threads=(2, 2)) == "regression"   # equally quiet
@@ -296,8 +300,13 @@ def test_load_that_oversubscribes_the_cases_threads_excuses_even_a_cpu_time_chan
     # both machines about as busy, but beyond the case's 2 threads on 2 cores: 84x with 83x the CPU
     # time in one rerun (a busy loop beside B, bursty load during A); nothing can tell
     assert judge_time(row(1, 1.9, 0.88), row(84, 83 * 1.9, 1.0), cores=2, threads=(2, 2)) == "inconclusive"
-    assert judge_time(row(1, 1.9, 0.88), row(84, 83 * 1.9, 1.0), cores=2, threads=(1, 1)) == "regression"
     assert judge_time({**a, "others_cpu": None}, row(8, 2.8 * 1.9, 1.4), cores=2, threads=(2, 2)) == "inconclusive"
+    # samples that used one core, but two threads busy (a BLAS pool spinning for a core): excused;
+    # one busy thread, 10x the wall and CPU time on a machine 0.6 core busier: a regression
+    # (another review: the run's 2 threads per case alone excused every such case)
+    assert judge_time(row(1, 1, 0.88, 2), row(84, 83, 1.0, 2), cores=2, threads=(2, 2)) == "inconclusive"
+    assert judge_time(row(1, 1, 0.0, 1), row(10, 10, 0.6, 1), cores=2, threads=(2, 2)) == "regression"
+    assert judge_time(row(1, 1, 0.0), row(10, 10, 0.6), cores=2, threads=(2, 2)) == "regression"      # u = 1
 
 
 def test_a_verdict_must_hold_on_the_raw_times_and_a_common_slowdown_is_the_whole_runs():
@@ -322,6 +331,10 @@ def test_a_verdict_must_hold_on_the_raw_times_and_a_common_slowdown_is_the_whole
     assert verdicts["(all cases)"] == "regression"
     sparse = {c: {**r, "others_cpu": None if i > 1 else 0.1} for i, (c, r) in enumerate(A.items())}
     assert "(all cases)" in {c["case_id"] for c in compare_rows(sparse, B)["changes"]}   # each run's own median
+    blank = {c: {**r, "others_cpu": None} for c, r in B.items()}              # load not measured: the CPU
+    assert "(all cases)" in {c["case_id"] for c in compare_rows(A, blank)["changes"]}   # time doubled too
+    sleeps = {c: {**r, "cpu_times": A[c]["cpu_times"]} for c, r in blank.items()}
+    assert "(all cases)" not in {c["case_id"] for c in compare_rows(A, sleeps)["changes"]}
     busy = {c: {**r, "others_cpu": 1.2} for c, r in B.items()}                  # B's machine busier: the load's
     assert "(all cases)" not in {c["case_id"] for c in compare_rows(A, busy)["changes"]}
     assert "(all cases)" not in {c["case_id"] for c in compare_rows(A, B, absolute_time=True)["changes"]}

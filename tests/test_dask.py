@@ -40,7 +40,7 @@ from harness.errors import RunInterrupted  # noqa: E402
 
 SHOOTOUT = Path(sys.executable).with_name("shootout")
 NOT_COMPARED = {"time_s", "time_min_s", "time_max_s", "time_q1_s", "time_q3_s", "time_cold_s", "times", "repeats",
-                "time_cpu_s", "cpu_times", "others_cpu", "method_mem_mb", "peak_rss_mb"}
+                "time_cpu_s", "cpu_times", "others_cpu", "threads_busy", "method_mem_mb", "peak_rss_mb"}
 # min_eig (smallest eigenvalue of -(W+W^T)/2 over the largest) comes from ARPACK with a random
 # start vector: it differs between two *local* runs too, by ~1e-17 (values ~1e-17 on PSD
 # operators). Compared with an absolute tolerance of 1e-12 on that relative number.

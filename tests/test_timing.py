@@ -400,3 +400,28 @@ def test_the_cgroup_cpu_quota_is_found_in_common_container_layouts(tmp_path, cgr
         (root / rel).write_text(text)
     (tmp_path / "self").write_text(cgroup)
     assert _cgroup_quota(root, tmp_path / "self") == want
+
+
+def test_threads_busy_counts_the_threads_that_ran_in_the_window():
+    """``threads_busy`` (`harness.runner.threads_busy`) tells a single-threaded case from one whose
+    second thread ran, even when the samples used one core (a pool spinning for a core): the
+    compare rules for an oversubscribed machine use it instead of the run's thread cap."""
+    import threading
+
+    from harness.runner import _thread_ticks, threads_busy
+
+    def spin(s):
+        end = time.perf_counter() + s
+        while time.perf_counter() < end:
+            pass
+    t0, w0 = _thread_ticks(), time.perf_counter()
+    spin(0.4)
+    assert threads_busy(t0, _thread_ticks(), time.perf_counter() - w0) == 1
+    t0, w0 = _thread_ticks(), time.perf_counter()
+    th = threading.Thread(target=spin, args=(0.6,))
+    th.start()
+    spin(0.4)
+    busy = threads_busy(t0, _thread_ticks(), time.perf_counter() - w0)        # a thread that ended is not listed
+    th.join()
+    assert busy == 2
+    assert threads_busy(t0, _thread_ticks(), 0.1) is None                   # too short for 10 ms ticks

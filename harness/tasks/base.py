@@ -18,7 +18,7 @@ from ..errors import MethodFailed
 COMMON_COLUMNS = ["case_id", "task", "mesh", "n_vertices", "n_faces", "noise_model", "noise_level", "seed",
                   "method", "library", "params", "status", "error", "time_s", "time_min_s", "time_max_s",
                   "time_q1_s", "time_q3_s", "time_cold_s", "repeats", "times", "time_cpu_s", "cpu_times", "others_cpu",
-                  "method_mem_mb", "peak_rss_mb"]
+                  "threads_busy", "method_mem_mb", "peak_rss_mb"]
 BETTER = ("lower", "higher", "one", "true", "false", "count", "target", "info", "input")
 
 
