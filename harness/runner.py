@@ -266,10 +266,10 @@ def forget_inputs() -> None:
     solvers = sys.modules.get("harness.core.solvers")
     if solvers is not None:
         solvers.clear_cache()
-    pardiso = sys.modules.get("pypardiso")
-    if pardiso is not None and hasattr(getattr(pardiso, "ps", None), "remove_stored_factorization"):
+    ps = getattr(sys.modules.get("pypardiso"), "ps", None)
+    if getattr(getattr(ps, "factorized_A", None), "shape", (0, 0)) != (0, 0):   # one kept: forget it
         try:
-            pardiso.ps.remove_stored_factorization()
+            ps.remove_stored_factorization()
         except Exception:  # noqa: BLE001 - another pypardiso version: nothing to forget there
             pass
 
