@@ -256,8 +256,9 @@ def whole_run_change(rows_a: dict, rows_b: dict, drift: float, factor: float, co
     at least 2) plus the cores the run used itself (``own``: workers x threads per case) stayed
     within ``cores`` + 0.25 (without ``cores`` or ``own``: each median below ``BUSY_CORES``),
     so the machines were about as free; where a run did not measure its load, when the median
-    CPU time ratio over the cases (at least 5) changed by ``factor`` as well, so the common slowdown is the code's (or the
-    machine's: the notes say when the runs come from different machines). None otherwise."""
+    CPU time ratio over the cases (at least 5) changed by ``factor`` as well. The common change
+    is then the code's (or the machine's: the notes say when the runs come from different
+    machines). None otherwise."""
     import numpy as np
     if 1.0 / factor < drift < factor:
         return None
@@ -274,23 +275,19 @@ def whole_run_change(rows_a: dict, rows_b: dict, drift: float, factor: float, co
         cpu = float(np.median(c)) if len(c) >= 5 else None
         if cpu is None or not (cpu >= factor if verdict == "regression" else cpu <= 1.0 / factor):
             return None
-        return {"case_id": "(all cases)", "task": "(run)", "case": "the whole run", "metric": "time_s", "a": 1.0,
-                "b": round(drift, 4), "verdict": verdict,
-                "note": (f"B took {drift:.3g}x A's time in the median case, and {cpu:.3g}x its CPU time (median over "
-                         f"{len(c)} cases; other processes' load not measured): every case changed alike, which "
-                         "each case's verdict, relative to this drift, does not count (--absolute-time judges each "
-                         "case on its raw times)")}
-    if cores and own and None not in own:
-        if any(o + k > cores + 0.25 for o, k in zip(load, own)):
-            return None
-    elif max(load) >= BUSY_CORES:
+        why = (f", and {cpu:.3g}x its CPU time (median over {len(c)} cases; other processes' load not "
+               "measured)")
+    elif (any(o + k > cores + 0.25 for o, k in zip(load, own)) if cores and own and None not in own
+          else max(load) >= BUSY_CORES):
         return None
+    else:
+        why = (f" on machines neither run oversubscribed (others_cpu median {load[0]:.2g} / {load[1]:.2g} "
+               "cores, A / B)")
     return {"case_id": "(all cases)", "task": "(run)", "case": "the whole run", "metric": "time_s", "a": 1.0,
             "b": round(drift, 4), "verdict": verdict,
-            "note": (f"B took {drift:.3g}x A's time in the median case on machines neither run oversubscribed "
-                     f"(others_cpu median {load[0]:.2g} / {load[1]:.2g} cores, A / B): every case changed "
-                     "alike, which each case's verdict, relative to this drift, does not count (--absolute-time "
-                     "judges each case on its raw times)")}
+            "note": (f"B took {drift:.3g}x A's time in the median case{why}: every case changed alike, which "
+                     "each case's verdict, relative to this drift, does not count (--absolute-time judges each "
+                     "case on its raw times)")}
 
 
 def cpu_ratio(ra: dict, rb: dict) -> float | None:
