@@ -253,33 +253,47 @@ def whole_run_change(rows_a: dict, rows_b: dict, drift: float, factor: float, co
     """A change entry for the whole run when its drift (`run_drift`) is ``factor`` or more (a
     regression) or ``1 / factor`` or less (an improvement) while neither machine was
     oversubscribed: each run's median load from other processes (``others_cpu`` of its ok rows,
-    at least 2) plus the cores the run used itself (``own``: workers x threads per case) stayed
-    within ``cores`` + 0.25 (without ``cores`` or ``own``: each median below ``BUSY_CORES``),
-    so the machines were about as free; where a run did not measure its load, when the median
-    CPU time ratio over the cases (at least 5) changed by ``factor`` as well. The common change
+    at least 2; with several workers the siblings are in it) plus the threads one of its cases
+    kept busy (median ``threads_busy``; else ``own``, its threads per case) stayed within
+    ``cores`` + 0.25 (without ``cores``: each median below ``BUSY_CORES``), so the machines
+    were about as free; where a run did not measure its load, when the median CPU time ratio
+    over the cases (at least 5) changed by ``factor`` as well; on an oversubscribed machine,
+    only when every case kept one thread busy and the CPU time changed by ``CONTENDED_CPU`` x
+    ``factor`` (one waiting thread does not multiply its CPU time). The common change
     is then the code's (or the machine's: the notes say when the runs come from different
     machines). None otherwise."""
     import numpy as np
     if 1.0 / factor < drift < factor:
         return None
-    load = []
-    for rows in (rows_a, rows_b):
-        v = [_num(r.get("others_cpu")) for r in rows.values() if r.get("status") == "ok"]
-        v = [x for x in v if x is not None]
-        load.append(float(np.median(v)) if len(v) >= 2 else None)
+    def median_of(rows, col):
+        v = [_num(r.get(col)) for r in rows.values() if r.get("status") == "ok"]
+        v = [x for x in v if x is not None and math.isfinite(x)]
+        return float(np.median(v)) if len(v) >= 2 else None
+    load = [median_of(rows, "others_cpu") for rows in (rows_a, rows_b)]
+    busy = [median_of(rows, "threads_busy") for rows in (rows_a, rows_b)]
+    # the cores one case of each run kept busy itself (its siblings are in others_cpu already)
+    mine = [b if b is not None else (t if t else None) for b, t in zip(busy, own or (None, None))]
     verdict = "regression" if drift >= factor else "improvement"
-    if None in load:                      # a load not measured (short windows): the CPU time must agree
-        c = [cpu_ratio(ra, rows_b[k]) for k, ra in rows_a.items() if k in rows_b and ra.get("status") == "ok"
-             and rows_b[k].get("status") == "ok"]
-        c = [x for x in c if x is not None]
-        cpu = float(np.median(c)) if len(c) >= 5 else None
-        if cpu is None or not (cpu >= factor if verdict == "regression" else cpu <= 1.0 / factor):
+    c = [cpu_ratio(ra, rows_b[k]) for k, ra in rows_a.items() if k in rows_b and ra.get("status") == "ok"
+         and rows_b[k].get("status") == "ok"]
+    c = [x for x in c if x is not None]
+    cpu = float(np.median(c)) if len(c) >= 5 else None
+    cpu_agrees = cpu is not None and (cpu >= factor if verdict == "regression" else cpu <= 1.0 / factor)
+
+    def crowded(o, k):                    # the run's own case plus the others' load beyond the cores
+        return o is not None and (o + (k or 1) > cores + 0.25 if cores else o >= BUSY_CORES)
+    single = all(b is not None and b <= 1 for b in busy)
+    if any(crowded(o, k) for o, k in zip(load, mine)):
+        # an oversubscribed machine: only CPU time grown well beyond what contention does to one thread
+        if not (single and cpu is not None and (cpu >= CONTENDED_CPU * factor if verdict == "regression"
+                                                 else cpu <= 1.0 / (CONTENDED_CPU * factor))):
+            return None
+        why = f", and {cpu:.3g}x its CPU time with one thread busy per case (median over {len(c)} cases)"
+    elif None in load:                    # a load not measured (short windows): the CPU time must agree
+        if not cpu_agrees:
             return None
         why = (f", and {cpu:.3g}x its CPU time (median over {len(c)} cases; other processes' load not "
                "measured)")
-    elif (any(o + k > cores + 0.25 for o, k in zip(load, own)) if cores and own and None not in own
-          else max(load) >= BUSY_CORES):
-        return None
     else:
         why = (f" on machines neither run oversubscribed (others_cpu median {load[0]:.2g} / {load[1]:.2g} "
                "cores, A / B)")
@@ -302,13 +316,17 @@ def cpu_ratio(ra: dict, rb: dict) -> float | None:
 
 def threads_used(fast: dict, slow: dict, cap: int | None) -> int | None:
     """Threads the case kept busy: the larger ``threads_busy`` of the two rows (threads that ran
-    for 5% of the timed window, a spinning BLAS pool included); for rows written before that
-    column, its faster row's ``u = CPU / wall`` rounded (at least 1); else ``cap``, the run's
-    threads per case."""
+    for 5% of the timed window, a spinning BLAS pool included); where both are blank (windows
+    under 0.05 s), ``cap``, the run's threads per case (a short multi-threaded sample's CPU time
+    is too coarse to tell); for rows written before that column, the faster row's ``u = CPU /
+    wall`` rounded (at least 1); else ``cap``."""
     import numpy as np
-    tb = [x for x in (_num(fast.get("threads_busy")), _num(slow.get("threads_busy"))) if x is not None]
+    tb = [x for x in (_num(fast.get("threads_busy")), _num(slow.get("threads_busy")))
+          if x is not None and math.isfinite(x)]
     if tb:
         return int(max(tb))
+    if "threads_busy" in fast or "threads_busy" in slow:   # this version, windows too short to count them
+        return cap
     c, w = time_samples(fast, "cpu_times"), time_samples(fast)
     if c and w and np.median(w) > 0:
         return max(1, int(round(float(np.median(c) / np.median(w)))))
@@ -345,8 +363,10 @@ def _load_explains(ra: dict, rb: dict, verdict: str, factor: float, cores: int |
     case, where the rows do not say) and its threads
     plus the other processes' load exceeded the ``cores`` by ``BUSY_CORES`` or more (threads
     waiting for a core, and BLAS threads spinning while they wait, grow the wall and the CPU
-    time alike, by 80x in one rerun, so neither can tell); or its machine was busier by
-    ``BUSY_CORES`` or more and its case's threads plus that load exceeded the cores; or the
+    time alike, by 80x in one rerun, so neither can tell), or neither run measured its load
+    (windows under 0.2 s); or its machine was busier by ``BUSY_CORES`` or more and its case's
+    threads plus that load exceeded the cores, for a single-threaded case only where the CPU
+    time did not grow by more than ``CONTENDED_CPU`` x ``factor``; or the
     load stretched the slower run's samples ``OVERSUBSCRIBED`` (1.25) times or more beyond the
     faster run's (`load_stretch`) and the CPU time did not grow by more than ``CONTENDED_CPU`` x
     ``factor``; or the slower run's machine was busier by ``BUSY_CORES`` or more and the CPU time
@@ -360,13 +380,16 @@ def _load_explains(ra: dict, rb: dict, verdict: str, factor: float, cores: int |
     if (cores and t_slow and t_slow > 1 and o_slow is not None
             and t_slow + o_slow >= cores + BUSY_CORES):
         return True                       # a multi-threaded case on an oversubscribed machine: no time tells
+    if o_slow is None and o_fast is None:  # neither window was long enough to measure the load
+        return bool(t_slow and t_slow > 1)   # threads that may have waited (and spun) for a core: no time tells
     if o_fast is None:                    # the faster run's load is unknown: it may have been as quiet or not
         return o_slow is not None and o_slow >= BUSY_CORES and not (grew is not None and grew > factor)
     d = busier(ra, rb)
     if d is None:
         return False
-    if cores and t_slow and (d if verdict == "regression" else -d) >= BUSY_CORES and t_slow + o_slow > cores:
-        return True
+    if (cores and t_slow and (d if verdict == "regression" else -d) >= BUSY_CORES and t_slow + o_slow > cores
+            and (t_slow > 1 or not (grew is not None and grew > CONTENDED_CPU * factor))):
+        return True                       # (one thread waiting for a core does not multiply its CPU time)
     stretch = load_stretch(fast, slow, cores)
     if stretch is not None and stretch >= OVERSUBSCRIBED:
         return not (grew is not None and grew > CONTENDED_CPU * factor)
@@ -488,7 +511,7 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
     Times are judged relative to the whole run's drift (`run_drift`) unless ``absolute_time``;
     ``load_rule``: the other processes' load may make a time change inconclusive (`judge_time`;
     ``cores``, the core count both runs' machines share, lets `load_stretch` do so; ``threads``,
-    A's and B's threads per case; ``own``, the cores each run used itself). A drift of
+    A's and B's threads per case; ``own``, the threads one case of each run may use). A drift of
     ``time_factor`` or more (or its inverse) on machines that were not oversubscribed
     (`whole_run_change`) is itself a change of the whole run: every case slowed alike, which no case's verdict relative to the
     drift can see.
@@ -631,8 +654,7 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
     threads = tuple((m.get("timing") or {}).get("threads_per_case") if isinstance(m.get("timing"), dict) else None
                     for m in (meta_a, meta_b))
     threads = tuple(t if isinstance(t, int) and not isinstance(t, bool) and t > 0 else None for t in threads)
-    workers = tuple(m.get("workers") if isinstance(m.get("workers"), int) else None for m in (meta_a, meta_b))
-    own = tuple(w * t if w and t else None for w, t in zip(workers, threads))
+    own = threads                          # a case's own threads, where its rows do not say
     res = compare_rows(ra, rb, time_factor, rules, absolute_time, cores=ca if ca == cb else None, threads=threads,
                        own=own)
     changes = _sorted(res["changes"])

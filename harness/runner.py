@@ -29,8 +29,8 @@ Timing protocol (the method call alone; metrics are not timed):
    median ``time_cpu_s``), ``others_cpu`` is the number of cores other processes kept busy
    on average from the cold call to the last sample (``/proc/stat``, steal included, minus this
    process; blank off Linux and for windows under 0.2 s), and ``threads_busy`` the number of
-   this process's threads that ran for 5% of that window or more (`threads_busy`; a BLAS pool
-   spinning while it waits counts): ``shootout compare`` does not call a wall-time change a
+   this process's threads that ran for 5% of that window and 2 clock ticks or more (blank
+   under 0.05 s; `threads_busy`; a BLAS pool spinning while it waits counts): ``shootout compare`` does not call a wall-time change a
    regression when the load explains it (`harness.compare`);
 4. memory: ``method_mem_mb`` is the peak resident memory of the first sampled call minus the
    resident memory just before it, in MiB (Linux: freed heap returned to the OS with glibc's
@@ -135,10 +135,10 @@ def _thread_ticks() -> dict[int, int] | None:
 
 
 def threads_busy(before: dict | None, after: dict | None, wall_s: float) -> int | None:
-    """How many threads ran for at least 5% of a window of ``wall_s`` seconds (and 2 ticks),
-    from `_thread_ticks` before and after it (a thread that ended within the window is not
-    seen: pools persist, so theirs are); None without both or under 0.2 s (10 ms ticks)."""
-    if before is None or after is None or wall_s < 0.2:
+    """How many threads ran for at least 5% of a window of ``wall_s`` seconds and 2 clock ticks
+    (10 ms each), from `_thread_ticks` before and after it (a thread that ended within the
+    window is not seen: pools persist, so theirs are); None without both or under 0.05 s."""
+    if before is None or after is None or wall_s < 0.05:
         return None
     floor = max(2, 0.05 * wall_s * os.sysconf("SC_CLK_TCK"))
     return sum(1 for tid, t in after.items() if t - before.get(tid, 0) >= floor)

@@ -288,9 +288,9 @@ def test_load_that_oversubscribes_the_cases_threads_excuses_even_a_cpu_time_chan
     rng = np.random.default_rng(2)
     base = list(0.0148 * (1 + 0.2 * rng.random(12)))
 
-    def row(k_wall, k_cpu, others, busy=None):
+    def row(k_wall, k_cpu, others, busy=None):         # busy None: a row of a version without the column
         return {**_row([k_wall * t for t in base]), "cpu_times": json.dumps([k_cpu * t for t in base]),
-                "others_cpu": others, "threads_busy": busy}
+                "others_cpu": others, **({} if busy is None else {"threads_busy": busy})}
     a, b = row(1, 1.9, 0.0), row(12.7, 7.1 * 1.9, 1.05)                     # u = 1.9: two threads (older rows)
     assert judge_time(a, b, cores=2) == "inconclusive"                       # u = 1.9 says two threads
     assert judge_time(a, b, cores=2, threads=(2, 2)) == "inconclusive"
@@ -672,3 +672,42 @@ def test_the_same_machine_is_not_called_another_for_a_key_one_version_records_al
     assert not any("different machines" in n for n in timing_notes({"machine": m}, {"machine": {**m, "usable_cpus": 2}}, res))
     assert any("different machines" in n for n in timing_notes({"machine": m}, {"machine": {**m, "cpu_count": 8}}, res))
     assert not any("others_cpu" in n for n in timing_notes({"machine": m}, {"machine": m}, res))   # nothing measured
+
+
+def test_the_second_review_of_the_time_rules():
+    """A review of the mends: (1) short cases (no load measured on either side) of a BLAS method
+    beside a busy loop were a 38x regression with 38x the CPU time; (2) a whole run 10x slower
+    with 2 workers (the sibling in others_cpu) was never reported; (3) a single-threaded case 10x
+    slower in wall and CPU time beside a full busy loop was excused; (4) threads_busy inf
+    crashed."""
+    from harness.compare import compare_rows
+    rng = np.random.default_rng(5)
+
+    def row(k_wall, k_cpu, others=None, busy=None, n=12):
+        t = list(0.01 * (1 + 0.05 * rng.random(n)))
+        return {**_row([k_wall * x for x in t]), "cpu_times": json.dumps([k_cpu * x for x in t]),
+                "others_cpu": others, "threads_busy": busy, "status": "ok", "task": "smoothing", "method": "m",
+                "mesh": "x", "params": "{}"}
+    # (1) neither window measured the load, two threads busy: inconclusive; one thread: judged
+    assert judge_time(row(1, 1, busy=2), row(38, 38, busy=2), cores=2, threads=(2, 2)) == "inconclusive"
+    assert judge_time(row(1, 1, busy=1), row(38, 38, busy=1), cores=2, threads=(2, 2)) == "regression"
+    # (3) one thread, 10x the CPU time, beside a full busy loop: a regression; 1x the CPU: load
+    assert judge_time(row(1, 1, 0.05, 1), row(10, 10, 1.05, 1), cores=2, threads=(2, 2)) == "regression"
+    assert judge_time(row(1, 1, 0.05, 1), row(10, 1, 1.05, 1), cores=2, threads=(2, 2)) == "inconclusive"
+    # (2) two workers, one thread each, the sibling as others_cpu 1.0 in both: the whole run's 10x is seen
+    ids = [f"c{i}" for i in range(8)]
+    A = {c: {**row(1, 1, 1.0, 1), "case_id": c} for c in ids}
+    B = {c: {**row(10, 10, 1.0, 1), "case_id": c} for c in ids}
+    assert "(all cases)" in {c["case_id"] for c in compare_rows(A, B, cores=2, threads=(1, 1), own=(1, 1))["changes"]}
+    # ... and beside a busy loop (others 1.4), seen only because the CPU time grew 10x with one thread busy
+    B2 = {c: {**r, "others_cpu": 1.4} for c, r in B.items()}
+    assert "(all cases)" in {c["case_id"] for c in compare_rows(A, B2, cores=2, threads=(1, 1), own=(1, 1))["changes"]}
+    B3 = {c: {**row(10, 1, 1.4, 1), "case_id": c} for c in ids}                 # wall only: the load's
+    assert "(all cases)" not in {c["case_id"] for c in compare_rows(A, B3, cores=2, threads=(1, 1), own=(1, 1))["changes"]}
+    # (1b) one run unmeasured, the other oversubscribed with two threads busy: not the code's
+    A4 = {c: {**row(1, 1), "case_id": c} for c in ids}
+    B4 = {c: {**row(20, 20, 0.7, 2), "case_id": c} for c in ids}
+    assert "(all cases)" not in {c["case_id"] for c in compare_rows(A4, B4, cores=2, threads=(2, 2), own=(2, 2))["changes"]}
+    # (4) a hand-edited inf
+    assert judge_time(row(1, 1, 0.0, float("inf")), row(10, 10, 1.2, 1), cores=2, threads=(2, 2)) in (
+        "regression", "inconclusive")

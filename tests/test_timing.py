@@ -424,4 +424,4 @@ def test_threads_busy_counts_the_threads_that_ran_in_the_window():
     busy = threads_busy(t0, _thread_ticks(), time.perf_counter() - w0)        # a thread that ended is not listed
     th.join()
     assert busy == 2
-    assert threads_busy(t0, _thread_ticks(), 0.1) is None                   # too short for 10 ms ticks
+    assert threads_busy(t0, _thread_ticks(), 0.04) is None                  # too short for 10 ms ticks
