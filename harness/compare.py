@@ -30,35 +30,41 @@ refused:
   times A's fastest, and the medians differ by more than 1 ms. A method that does more work
   slows every sample, its fastest included; a burst of load elsewhere slows some samples but
   rarely the fastest, so it widens the interval or moves the median without raising an alarm.
-  The ratio is printed with its interval. Cases whose
-  sample counts cannot reach significance (fewer than 5 samples a side) are counted as
-  inconclusive, never as regressions. B's samples are first divided by the run's drift (the
-  median over all cases of the ratio of median times: a machine busier during one run slows
-  every case alike; ``--absolute-time`` turns this off), and the verdict must hold on the raw
-  times too (else inconclusive: load slows multi-threaded cases more than single-threaded
-  ones, so one drift fits neither); a drift of ``time_factor`` or more on machines neither run
-  oversubscribed is a regression of the whole run (`whole_run_change`). Load from other processes during a
-  whole sample window stretches every sample, the fastest included; so where both rows say how
-  many cores other processes kept busy from the cold call to the last sample (``others_cpu``: outside load, and
-  with several workers the case's siblings in the same run, which compete for the same cores),
-  a wall-time regression (improvement) is inconclusive when B's (A's) case could use several
-  threads and they plus that load exceeded the cores by ``BUSY_CORES`` or more, or when B's
-  (A's) machine was busier by ``BUSY_CORES`` or more and the case's threads plus that load
-  exceeded the cores (waiting and spinning threads grow the CPU time as much as the wall
-  time); when only B (A) measured its
-  load, ``BUSY_CORES`` or more, and the CPU time did not grow (shrink) by ``time_factor``; when
-  the load stretched B's (A's)
-  samples ``OVERSUBSCRIBED`` (1.25) times or more beyond the other run's (a process using ``u``
-  cores on a machine with ``free`` = core count - ``others_cpu`` runs ``max(1, u / free)``
-  times slower: it waits for a core, a sub-millisecond sample a whole time slice, and its CPU
-  time itself grows under shared caches and hyperthreads, by 1.95x measured here), unless the
-  median process CPU time (``cpu_times``) grew (shrank) by more than ``CONTENDED_CPU`` (2) x
-  ``time_factor``; or when B's (A's) machine was busier by ``BUSY_CORES`` (0.5) or more and the
-  CPU time did not grow (shrink) by ``time_factor`` as well (both runs on machines with the
-  same core count). Under equal load nothing is excused. On an equally quiet machine a wall-time change counts
-  whatever its CPU time does (sleeps, I/O, lost parallelism and work in other processes are
-  not in a process's CPU time). Rows without samples fall back to: median
-  over ``time_factor`` x A's, fastest B repeat slower than slowest A repeat, > 1 ms;
+  The ratio is printed with its interval. Cases whose sample counts cannot reach significance
+  (the exact test's smallest p, ``1 / C(n_A + n_B, n_A)``, is not below ``ALPHA``: e.g. 3
+  samples a side) are inconclusive, never regressions. B's samples are first divided by the
+  run's drift (the median over all cases of the ratio of median times; ``--absolute-time``
+  turns this off), and the verdict must hold on the raw times too, else it is inconclusive
+  (load slows multi-threaded cases more than single-threaded ones, so one drift fits neither).
+  A drift of ``time_factor`` or more is itself one regression line for the whole run
+  (`whole_run_change`) where neither run oversubscribed its machine, or, on a busier or
+  unmeasured machine, where one thread per case was busy and the CPU time changed with the
+  wall time.
+
+  Load from other processes slows every sample, the fastest included. ``others_cpu`` is how
+  many cores other processes (with several workers, the case's siblings too) kept busy from
+  the cold call to the last sample, blank for windows under 0.2 s; ``threads_busy`` how many
+  threads of the case ran (`threads_used`). A wall-time regression (improvement) of B (A) is
+  inconclusive when (threads ``t``, the slower run's load ``o``, the CPU time ratio ``c``):
+  - ``t`` > 1 and ``t + o`` exceeds the cores by ``BUSY_CORES`` (0.5) or more: threads waiting
+    for a core, and BLAS pools spinning while they wait, grow the wall and CPU time alike;
+  - neither run measured its load, and ``t`` > 1 or ``c`` did not grow by ``time_factor``;
+  - only the slower run measured its load, ``BUSY_CORES`` or more, and ``c`` did not grow by
+    ``time_factor``;
+  - the slower run's machine was busier by ``BUSY_CORES`` or more, ``t + o`` exceeded the cores,
+    and (for one thread) ``c`` did not grow by more than ``CONTENDED_CPU`` (2) x ``time_factor``;
+  - the load stretched the slower samples ``OVERSUBSCRIBED`` (1.25) times or more beyond the
+    other run's (`load_stretch`: ``max(1, u / free)``, ``u`` the cores the faster row used,
+    ``free`` the cores the load left), ``c`` did not grow by more than ``CONTENDED_CPU`` x
+    ``time_factor``, and, where ``c`` grew with the wall time (0.75 of it or more), the change
+    divided by that stretch is not past ``time_factor``
+    (a waiting process's CPU time itself grows under shared caches and hyperthreads, by 1.95x
+    measured here once);
+  - the slower run's machine was busier by ``BUSY_CORES`` or more and ``c`` did not grow by
+    ``time_factor``.
+  Under equal load nothing is excused: on equally quiet machines a wall-time change counts
+  whatever its CPU time does (sleeps, I/O, lost parallelism). Rows without samples fall back
+  to: median over ``time_factor`` x A's, fastest B repeat slower than slowest A repeat, > 1 ms;
 * a case whose status was ok and is not any more regresses; a case of RUN_A missing in RUN_B
   regresses too (an interrupted or shrunken run must not pass CI); cases new in RUN_B are listed.
 
@@ -256,10 +262,10 @@ def whole_run_change(rows_a: dict, rows_b: dict, drift: float, factor: float, co
     at least 2; with several workers the siblings are in it) plus the threads one of its cases
     kept busy (median ``threads_busy``; else ``own``, its threads per case) stayed within
     ``cores`` + 0.25 (without ``cores``: each median below ``BUSY_CORES``), so the machines
-    were about as free; where a run did not measure its load, when the median CPU time ratio
-    over the cases (at least 5) changed by ``factor`` as well; on an oversubscribed machine,
-    only when every case kept one thread busy and the CPU time changed by ``CONTENDED_CPU`` x
-    ``factor`` (one waiting thread does not multiply its CPU time). The common change
+    were about as free; otherwise (a busier machine, or a load not measured) only when one
+    case of each run kept one thread busy and the median CPU time ratio over the cases (at
+    least 5) changed by ``factor`` and by at least 0.75 of the drift (one thread waiting for a
+    core does not change its CPU time; waiting threads of a pool may spin). The common change
     is then the code's (or the machine's: the notes say when the runs come from different
     machines). None otherwise."""
     import numpy as np
@@ -271,37 +277,45 @@ def whole_run_change(rows_a: dict, rows_b: dict, drift: float, factor: float, co
         return float(np.median(v)) if len(v) >= 2 else None
     load = [median_of(rows, "others_cpu") for rows in (rows_a, rows_b)]
     busy = [median_of(rows, "threads_busy") for rows in (rows_a, rows_b)]
-    # the cores one case of each run kept busy itself (its siblings are in others_cpu already)
-    mine = [b if b is not None else (t if t else None) for b, t in zip(busy, own or (None, None))]
+    # the cores one case of each run kept busy itself (its siblings are in others_cpu already): its
+    # threads_busy, else the run's threads per case, else (older rows) its CPU time over wall time
+    used = [median_of({k: {"status": r.get("status"), "u": _u(r)} for k, r in rows.items()}, "u")
+            for rows in (rows_a, rows_b)]
+    mine = [b if b is not None else (t if t else (max(1, round(u)) if u is not None else None))
+            for b, t, u in zip(busy, own or (None, None), used)]
     verdict = "regression" if drift >= factor else "improvement"
     c = [cpu_ratio(ra, rows_b[k]) for k, ra in rows_a.items() if k in rows_b and ra.get("status") == "ok"
          and rows_b[k].get("status") == "ok"]
     c = [x for x in c if x is not None]
     cpu = float(np.median(c)) if len(c) >= 5 else None
-    cpu_agrees = cpu is not None and (cpu >= factor if verdict == "regression" else cpu <= 1.0 / factor)
 
     def crowded(o, k):                    # the run's own case plus the others' load beyond the cores
-        return o is not None and (o + (k or 1) > cores + 0.25 if cores else o >= BUSY_CORES)
-    single = all(b is not None and b <= 1 for b in busy)
-    if any(crowded(o, k) for o, k in zip(load, mine)):
-        # an oversubscribed machine: only CPU time grown well beyond what contention does to one thread
-        if not (single and cpu is not None and (cpu >= CONTENDED_CPU * factor if verdict == "regression"
-                                                 else cpu <= 1.0 / (CONTENDED_CPU * factor))):
-            return None
-        why = f", and {cpu:.3g}x its CPU time with one thread busy per case (median over {len(c)} cases)"
-    elif None in load:                    # a load not measured (short windows): the CPU time must agree
-        if not cpu_agrees:
-            return None
-        why = (f", and {cpu:.3g}x its CPU time (median over {len(c)} cases; other processes' load not "
-               "measured)")
-    else:
+        return o is None or (o + (k or 1) > cores + 0.25 if cores else o >= BUSY_CORES)
+    single = all(k is not None and k <= 1 for k in mine)
+    if not any(crowded(o, k) for o, k in zip(load, mine)):
         why = (f" on machines neither run oversubscribed (others_cpu median {load[0]:.2g} / {load[1]:.2g} "
                "cores, A / B)")
+    elif (single and cpu is not None and (cpu >= factor and cpu >= 0.75 * drift if verdict == "regression"
+                                          else cpu <= 1.0 / factor and cpu <= drift / 0.75)):
+        # a busy or unmeasured machine: one thread waiting for a core does not change its CPU time, so
+        # a CPU time that changed with the wall time is the code's
+        why = (f", and {cpu:.3g}x its CPU time with one thread per case (median over {len(c)} cases; other "
+               "processes' load " + ("not measured" if None in load else
+                                     f"{load[0]:.2g} / {load[1]:.2g} cores, A / B") + ")")
+    else:
+        return None
     return {"case_id": "(all cases)", "task": "(run)", "case": "the whole run", "metric": "time_s", "a": 1.0,
             "b": round(drift, 4), "verdict": verdict,
             "note": (f"B took {drift:.3g}x A's time in the median case{why}: every case changed alike, which "
                      "each case's verdict, relative to this drift, does not count (--absolute-time judges each "
                      "case on its raw times)")}
+
+
+def _u(row: dict) -> float | None:
+    """Cores the row's samples kept busy: median CPU time over median wall time."""
+    import numpy as np
+    c, w = time_samples(row, "cpu_times"), time_samples(row)
+    return float(np.median(c) / np.median(w)) if c and w and np.median(w) > 0 else None
 
 
 def cpu_ratio(ra: dict, rb: dict) -> float | None:
@@ -327,10 +341,8 @@ def threads_used(fast: dict, slow: dict, cap: int | None) -> int | None:
         return int(max(tb))
     if "threads_busy" in fast or "threads_busy" in slow:   # this version, windows too short to count them
         return cap
-    c, w = time_samples(fast, "cpu_times"), time_samples(fast)
-    if c and w and np.median(w) > 0:
-        return max(1, int(round(float(np.median(c) / np.median(w)))))
-    return cap
+    u = _u(fast)
+    return max(1, int(round(u))) if u is not None else cap
 
 
 def busier(ra: dict, rb: dict) -> float | None:
@@ -357,7 +369,7 @@ def load_stretch(fast: dict, slow: dict, cores: int | None) -> float | None:
 
 
 def _load_explains(ra: dict, rb: dict, verdict: str, factor: float, cores: int | None = None,
-                   threads: tuple | None = None) -> bool:
+                   threads: tuple | None = None, ratio: float | None = None, min_ratio: float | None = None) -> bool:
     """Whether other processes' load explains a wall-time change (module docstring): the slower
     run's case kept several threads busy (`threads_used`; ``threads``: A's and B's threads per
     case, where the rows do not say) and its threads
@@ -380,8 +392,9 @@ def _load_explains(ra: dict, rb: dict, verdict: str, factor: float, cores: int |
     if (cores and t_slow and t_slow > 1 and o_slow is not None
             and t_slow + o_slow >= cores + BUSY_CORES):
         return True                       # a multi-threaded case on an oversubscribed machine: no time tells
-    if o_slow is None and o_fast is None:  # neither window was long enough to measure the load
-        return bool(t_slow and t_slow > 1)   # threads that may have waited (and spun) for a core: no time tells
+    if o_slow is None and o_fast is None:  # neither window was long enough to measure the load:
+        # threads that may have waited (and spun) for a core tell nothing; one thread, its CPU time
+        return bool(t_slow and t_slow > 1) or (grew is not None and grew <= factor)
     if o_fast is None:                    # the faster run's load is unknown: it may have been as quiet or not
         return o_slow is not None and o_slow >= BUSY_CORES and not (grew is not None and grew > factor)
     d = busier(ra, rb)
@@ -392,6 +405,9 @@ def _load_explains(ra: dict, rb: dict, verdict: str, factor: float, cores: int |
         return True                       # (one thread waiting for a core does not multiply its CPU time)
     stretch = load_stretch(fast, slow, cores)
     if stretch is not None and stretch >= OVERSUBSCRIBED:
+        slowest = min(ratio, min_ratio if min_ratio is not None else ratio) if ratio is not None else None
+        if slowest is not None and grew is not None and grew >= 0.75 * ratio and slowest / stretch > factor:
+            return False                  # the CPU time grew with the wall time, beyond what the load stretches
         return not (grew is not None and grew > CONTENDED_CPU * factor)
     if grew is not None and grew > factor:
         return False
@@ -409,9 +425,7 @@ def judge_time(ra: dict, rb: dict, factor: float = TIME_FACTOR, drift: float = 1
     if drift == 1.0 or v == "inconclusive":
         return v
     raw = _judge_time(ra, rb, factor, 1.0, load_rule, cores, threads)
-    if raw == v or {v, raw} <= {"same", "inconclusive"}:
-        return v
-    return "inconclusive"
+    return v if raw == v else "inconclusive"
 
 
 def _judge_time(ra: dict, rb: dict, factor: float, drift: float, load_rule: bool, cores: int | None,
@@ -426,7 +440,9 @@ def _judge_time(ra: dict, rb: dict, factor: float, drift: float, load_rule: bool
             verdict = "regression"
         if eff["p_faster"] < ALPHA and hi < 1 / factor and eff["min_ratio"] < 1 / factor and -eff["diff"] > TIME_FLOOR_S:
             verdict = "improvement"
-        if verdict != "same" and load_rule and _load_explains(ra, rb, verdict, factor, cores, threads):
+        slower = (eff["ratio"], eff["min_ratio"]) if verdict == "regression" else (
+            1.0 / eff["ratio"] if eff["ratio"] > 0 else math.inf, 1.0 / eff["min_ratio"] if eff["min_ratio"] > 0 else math.inf)
+        if verdict != "same" and load_rule and _load_explains(ra, rb, verdict, factor, cores, threads, *slower):
             return "inconclusive"
         return verdict
     a, b = _num(ra.get("time_s")), _num(rb.get("time_s"))

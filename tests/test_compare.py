@@ -335,8 +335,10 @@ def test_a_verdict_must_hold_on_the_raw_times_and_a_common_slowdown_is_the_whole
     assert "(all cases)" in {c["case_id"] for c in compare_rows(A, blank)["changes"]}   # time doubled too
     sleeps = {c: {**r, "cpu_times": A[c]["cpu_times"]} for c, r in blank.items()}
     assert "(all cases)" not in {c["case_id"] for c in compare_rows(A, sleeps)["changes"]}
-    busy = {c: {**r, "others_cpu": 1.2} for c, r in B.items()}                  # B's machine busier: the load's
-    assert "(all cases)" not in {c["case_id"] for c in compare_rows(A, busy)["changes"]}
+    busy = {c: {**r, "others_cpu": 1.2, "cpu_times": A[c]["cpu_times"]} for c, r in B.items()}   # busier, same CPU:
+    assert "(all cases)" not in {c["case_id"] for c in compare_rows(A, busy)["changes"]}     # the load's
+    worked = {c: {**r, "others_cpu": 1.2} for c, r in B.items()}                # busier, but 2x the CPU time
+    assert "(all cases)" in {c["case_id"] for c in compare_rows(A, worked)["changes"]}      # with one thread
     assert "(all cases)" not in {c["case_id"] for c in compare_rows(A, B, absolute_time=True)["changes"]}
     same = compare_rows(A, {c: {**row(1), "case_id": c} for c in ids})
     assert not [c for c in same["changes"] if c["verdict"] in ("regression", "improvement")]
@@ -711,3 +713,29 @@ def test_the_second_review_of_the_time_rules():
     # (4) a hand-edited inf
     assert judge_time(row(1, 1, 0.0, float("inf")), row(10, 10, 1.2, 1), cores=2, threads=(2, 2)) in (
         "regression", "inconclusive")
+
+
+def test_the_third_review_of_the_time_rules():
+    """A review of the second mends: (1) single-threaded ms cases with no load measured, 2x the
+    wall time and the same CPU time beside load: a false regression; (2) a real 2x slowdown in
+    wall and CPU time at a load stretch of 1.25 was excused; (3) every case 2x slower with 2
+    workers beside 0.3 core more load: no whole-run line, every case 'within tolerance'."""
+    from harness.compare import compare_rows
+    rng = np.random.default_rng(6)
+
+    def row(k_wall, k_cpu, others=None, busy=None, base=0.004):
+        t = list(base * (1 + 0.05 * rng.random(25)))
+        return {**_row([k_wall * x for x in t]), "cpu_times": json.dumps([k_cpu * x for x in t]),
+                "others_cpu": others, "threads_busy": busy, "status": "ok", "task": "smoothing", "method": "m",
+                "mesh": "x", "params": "{}"}
+    assert judge_time(row(1, 1, busy=1), row(2, 1, busy=1), cores=2, threads=(2, 2)) == "inconclusive"   # (1)
+    assert judge_time(row(1, 1, busy=1), row(2, 2, busy=1), cores=2, threads=(2, 2)) == "regression"
+    for k in (2.0, 2.9):                                                                                 # (2)
+        assert judge_time(row(1, 1, 1.0, 1, 0.05), row(k, k, 1.2, 1, 0.05), cores=2, threads=(1, 1)) == "regression"
+    ids = [f"c{i}" for i in range(8)]                                                                    # (3)
+    A = {c: {**row(1, 1, 1.0, 1), "case_id": c} for c in ids}
+    B = {c: {**row(2, 2, 1.3, 1), "case_id": c} for c in ids}
+    res = compare_rows(A, B, cores=2, threads=(1, 1), own=(1, 1))
+    verdicts = {c["case_id"]: c["verdict"] for c in res["changes"] if c["metric"] == "time_s"}
+    assert verdicts.pop("(all cases)") == "regression"
+    assert set(verdicts.values()) <= {"regression", "inconclusive"}, verdicts      # never 'within tolerance'
