@@ -188,7 +188,8 @@ TASK = Task(
         Metric("eig_rel_error_max", "lower", "max_i>=1 |lambda_i - lambda*_i| / lambda*_i against l(l+1)/r^2 (spheres) "
                "or pi^2 (a^2 + b^2) (unit-square planes, Neumann)", rank=True, **_E),
         Metric("eig_rel_error_mean", "lower", "mean of the same", rank=True, **_E),
-        Metric("eig0", "info", "smallest eigenvalue (0 for a closed mesh)"),
+        Metric("eig0", "info", "smallest eigenvalue, 1/length^2 (0 up to rounding on a connected mesh, open ones "
+               "too: the constants are in the kernel under the natural Neumann condition; one 0 per component)"),
         Metric("eig_max", "info", "largest of the k eigenvalues"),
         Metric("k_returned", "info", "eigenpairs returned", kind="int"),
         Metric("residual_max", "lower", "max_i ||W x_i + lambda_i M x_i||_(M^-1) / (||x_i||_M max(|lambda_i|, "
