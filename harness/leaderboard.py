@@ -66,7 +66,7 @@ def validity(spec: dict, df: pd.DataFrame, measured: bool = False) -> pd.Series:
 def _with_current_missing(spec: dict, rule: dict) -> dict:
     """``rule`` with ``missing`` as the task declares it now, where a run.json written before
     rules had the key recorded it without (the same column, operator, value and method)."""
-    if "missing" in rule or not isinstance(rule, dict):
+    if not isinstance(rule, dict) or "missing" in rule:
         return rule
     from . import tasks
     try:
