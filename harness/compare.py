@@ -255,12 +255,12 @@ def run_drift(rows_a: dict, rows_b: dict) -> float:
 
 
 def whole_run_change(rows_a: dict, rows_b: dict, drift: float, factor: float, cores: int | None = None,
-                     own: tuple | None = None) -> dict | None:
+                     threads: tuple | None = None) -> dict | None:
     """A change entry for the whole run when its drift (`run_drift`) is ``factor`` or more (a
     regression) or ``1 / factor`` or less (an improvement) while neither machine was
     oversubscribed: each run's median load from other processes (``others_cpu`` of its ok rows,
     at least 2; with several workers the siblings are in it) plus the threads one of its cases
-    kept busy (median ``threads_busy``; else ``own``, its threads per case) stayed within
+    kept busy (median ``threads_busy``; else ``threads``, its threads per case) stayed within
     ``cores`` + 0.25 (without ``cores``: each median below ``BUSY_CORES``), so the machines
     were about as free; otherwise (a busier machine, or a load not measured) only when one
     case of each run kept one thread busy and the median CPU time ratio over the cases (at
@@ -271,18 +271,17 @@ def whole_run_change(rows_a: dict, rows_b: dict, drift: float, factor: float, co
     import numpy as np
     if 1.0 / factor < drift < factor:
         return None
-    def median_of(rows, col):
-        v = [_num(r.get(col)) for r in rows.values() if r.get("status") == "ok"]
+    def median_of(rows, value):           # over the ok rows that have it (at least 2)
+        v = [value(r) for r in rows.values() if r.get("status") == "ok"]
         v = [x for x in v if x is not None and math.isfinite(x)]
         return float(np.median(v)) if len(v) >= 2 else None
-    load = [median_of(rows, "others_cpu") for rows in (rows_a, rows_b)]
-    busy = [median_of(rows, "threads_busy") for rows in (rows_a, rows_b)]
+    load = [median_of(rows, lambda r: _num(r.get("others_cpu"))) for rows in (rows_a, rows_b)]
+    busy = [median_of(rows, lambda r: _num(r.get("threads_busy"))) for rows in (rows_a, rows_b)]
+    used = [median_of(rows, _u) for rows in (rows_a, rows_b)]
     # the cores one case of each run kept busy itself (its siblings are in others_cpu already): its
     # threads_busy, else the run's threads per case, else (older rows) its CPU time over wall time
-    used = [median_of({k: {"status": r.get("status"), "u": _u(r)} for k, r in rows.items()}, "u")
-            for rows in (rows_a, rows_b)]
     mine = [b if b is not None else (t if t else (max(1, round(u)) if u is not None else None))
-            for b, t, u in zip(busy, own or (None, None), used)]
+            for b, t, u in zip(busy, threads or (None, None), used)]
     verdict = "regression" if drift >= factor else "improvement"
     c = [cpu_ratio(ra, rows_b[k]) for k, ra in rows_a.items() if k in rows_b and ra.get("status") == "ok"
          and rows_b[k].get("status") == "ok"]
@@ -334,7 +333,6 @@ def threads_used(fast: dict, slow: dict, cap: int | None) -> int | None:
     under 0.05 s), ``cap``, the run's threads per case (a short multi-threaded sample's CPU time
     is too coarse to tell); for rows written before that column, the faster row's ``u = CPU /
     wall`` rounded (at least 1); else ``cap``."""
-    import numpy as np
     tb = [x for x in (_num(fast.get("threads_busy")), _num(slow.get("threads_busy")))
           if x is not None and math.isfinite(x)]
     if tb:
@@ -357,14 +355,11 @@ def load_stretch(fast: dict, slow: dict, cores: int | None) -> float | None:
     machine with ``free = cores - others_cpu`` cores free runs about ``max(1, u / free)`` times
     slower; the ratio of that for the slower row to that for the faster. 1 under equal load;
     None when the core count, the CPU times or ``others_cpu`` are missing."""
-    import numpy as np
     if not cores:
         return None
-    ca, wa = time_samples(fast, "cpu_times"), time_samples(fast)
-    of, os_ = _num(fast.get("others_cpu")), _num(slow.get("others_cpu"))
-    if not ca or not wa or of is None or os_ is None or np.median(wa) <= 0:
+    u, of, os_ = _u(fast), _num(fast.get("others_cpu")), _num(slow.get("others_cpu"))
+    if u is None or of is None or os_ is None:
         return None
-    u = float(np.median(ca) / np.median(wa))
     return max(1.0, u / max(cores - os_, 1e-3)) / max(1.0, u / max(cores - of, 1e-3))
 
 
@@ -520,14 +515,14 @@ def _label(r: dict) -> str:
 
 def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FACTOR, rules=None,
                  absolute_time: bool = False, load_rule: bool = True, cores: int | None = None,
-                 threads: tuple | None = None, own: tuple | None = None) -> dict:
+                 threads: tuple | None = None) -> dict:
     """Every change between two runs' rows: ``{"changes": [...], "only_a": [...], "only_b": [...], ...}``.
 
     ``rules``: ``{task: {metric: Rule}}`` from the runs' task declarations (default: the known tasks).
     Times are judged relative to the whole run's drift (`run_drift`) unless ``absolute_time``;
     ``load_rule``: the other processes' load may make a time change inconclusive (`judge_time`;
     ``cores``, the core count both runs' machines share, lets `load_stretch` do so; ``threads``,
-    A's and B's threads per case; ``own``, the threads one case of each run may use). A drift of
+    A's and B's threads per case). A drift of
     ``time_factor`` or more (or its inverse) on machines that were not oversubscribed
     (`whole_run_change`) is itself a change of the whole run: every case slowed alike, which no case's verdict relative to the
     drift can see.
@@ -577,7 +572,7 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
                 verdict = "info"              # e.g. peak_rss_mb: counted, not listed
             entry = {**base, "metric": metric, "a": a, "b": b, "verdict": verdict}
             (input_changes if rule.kind == "input" else changes).append(entry)
-    whole = (whole_run_change(rows_a, rows_b, drift, time_factor, cores, own) if time_factor and not absolute_time
+    whole = (whole_run_change(rows_a, rows_b, drift, time_factor, cores, threads) if time_factor and not absolute_time
              else None)
     if whole is not None:
         changes.append(whole)
@@ -670,9 +665,7 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
     threads = tuple((m.get("timing") or {}).get("threads_per_case") if isinstance(m.get("timing"), dict) else None
                     for m in (meta_a, meta_b))
     threads = tuple(t if isinstance(t, int) and not isinstance(t, bool) and t > 0 else None for t in threads)
-    own = threads                          # a case's own threads, where its rows do not say
-    res = compare_rows(ra, rb, time_factor, rules, absolute_time, cores=ca if ca == cb else None, threads=threads,
-                       own=own)
+    res = compare_rows(ra, rb, time_factor, rules, absolute_time, cores=ca if ca == cb else None, threads=threads)
     changes = _sorted(res["changes"])
     regress = [c for c in changes if c["verdict"] == "regression"]
     shown = [c for c in changes if c["verdict"] not in ("within tolerance", "info", "inconclusive")]

@@ -176,10 +176,11 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
     cfg: Config = config_or_path if isinstance(config_or_path, Config) else load_config(config_or_path)
     out_dir = Path(out) if out else Path("results") / cfg.name
     folder = RunFolder(out_dir)
-    workers = 1 if executor == "serial" else int(workers) if workers else usable_cpus()
+    cpus = usable_cpus()                 # the cores this run may use
+    workers = 1 if executor == "serial" else int(workers) if workers else cpus
     timeout = None if executor == "serial" else timeout if timeout is not None else cfg.timeout
     chash = config_hash(cfg)
-    threads = 1 if executor == "dask" else max(1, usable_cpus() // workers)   # the cores this run may use
+    threads = 1 if executor == "dask" else max(1, cpus // workers)
     cases = [dataclasses.replace(c, threads=threads) for c in cfg.cases]
     done: set[str] = set()
     problems = out_dir_problems(out_dir, resume)     # refused before the folder or its lock is made

@@ -67,7 +67,7 @@ class TuneSpec:
         grid = [_nth_combination(ranges, keys, i) for i in pick]
         seen, out = set(), []
         for g in [{}] + grid:                      # settings equal to the defaults are the defaults
-            key = json.dumps(meth.with_defaults({**base, **g}), sort_keys=True, default=str)
+            key = _key(meth.with_defaults({**base, **g}))
             if key not in seen:
                 seen.add(key)
                 out.append(g)
@@ -167,7 +167,7 @@ def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | 
                 P.append(f"{at}.{k}: {k} is an axis of the {configured[m][0]} task (rows with other values are "
                          "other cells, not competitors): it cannot be tuned; list its values under the task's params")
                 continue
-            listed = {json.dumps(g.get(k), sort_keys=True, default=str) for g in configured[m][1]}
+            listed = {_key(g.get(k)) for g in configured[m][1]}
             if len(listed) > 1:             # "as configured" would be one value in training, all on the test
                 P.append(f"{at}.{k}: the run lists several values of {k} for {m} under tasks:; tuning compares "
                          "one configured setting with the chosen one: list one value there, or tune another parameter")
@@ -184,7 +184,6 @@ def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | 
             continue
         out_params[m] = ok
         if meth.setting_check is not None and size <= 100_000:     # candidates the method refuses as a whole
-            import itertools
             base = configured[m][1][0] if configured[m][1] else {}
             for combo in itertools.product(*ok.values()):
                 why = meth.setting_problem({**base, **dict(zip(ok, combo))})

@@ -700,16 +700,16 @@ def test_the_second_review_of_the_time_rules():
     ids = [f"c{i}" for i in range(8)]
     A = {c: {**row(1, 1, 1.0, 1), "case_id": c} for c in ids}
     B = {c: {**row(10, 10, 1.0, 1), "case_id": c} for c in ids}
-    assert "(all cases)" in {c["case_id"] for c in compare_rows(A, B, cores=2, threads=(1, 1), own=(1, 1))["changes"]}
+    assert "(all cases)" in {c["case_id"] for c in compare_rows(A, B, cores=2, threads=(1, 1))["changes"]}
     # ... and beside a busy loop (others 1.4), seen only because the CPU time grew 10x with one thread busy
     B2 = {c: {**r, "others_cpu": 1.4} for c, r in B.items()}
-    assert "(all cases)" in {c["case_id"] for c in compare_rows(A, B2, cores=2, threads=(1, 1), own=(1, 1))["changes"]}
+    assert "(all cases)" in {c["case_id"] for c in compare_rows(A, B2, cores=2, threads=(1, 1))["changes"]}
     B3 = {c: {**row(10, 1, 1.4, 1), "case_id": c} for c in ids}                 # wall only: the load's
-    assert "(all cases)" not in {c["case_id"] for c in compare_rows(A, B3, cores=2, threads=(1, 1), own=(1, 1))["changes"]}
+    assert "(all cases)" not in {c["case_id"] for c in compare_rows(A, B3, cores=2, threads=(1, 1))["changes"]}
     # (1b) one run unmeasured, the other oversubscribed with two threads busy: not the code's
     A4 = {c: {**row(1, 1), "case_id": c} for c in ids}
     B4 = {c: {**row(20, 20, 0.7, 2), "case_id": c} for c in ids}
-    assert "(all cases)" not in {c["case_id"] for c in compare_rows(A4, B4, cores=2, threads=(2, 2), own=(2, 2))["changes"]}
+    assert "(all cases)" not in {c["case_id"] for c in compare_rows(A4, B4, cores=2, threads=(2, 2))["changes"]}
     # (4) a hand-edited inf
     assert judge_time(row(1, 1, 0.0, float("inf")), row(10, 10, 1.2, 1), cores=2, threads=(2, 2)) in (
         "regression", "inconclusive")
@@ -735,7 +735,7 @@ def test_the_third_review_of_the_time_rules():
     ids = [f"c{i}" for i in range(8)]                                                                    # (3)
     A = {c: {**row(1, 1, 1.0, 1), "case_id": c} for c in ids}
     B = {c: {**row(2, 2, 1.3, 1), "case_id": c} for c in ids}
-    res = compare_rows(A, B, cores=2, threads=(1, 1), own=(1, 1))
+    res = compare_rows(A, B, cores=2, threads=(1, 1))
     verdicts = {c["case_id"]: c["verdict"] for c in res["changes"] if c["metric"] == "time_s"}
     assert verdicts.pop("(all cases)") == "regression"
     assert set(verdicts.values()) <= {"regression", "inconclusive"}, verdicts      # never 'within tolerance'
