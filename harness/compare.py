@@ -77,6 +77,7 @@ from __future__ import annotations
 import html
 import json
 import math
+import statistics
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -627,7 +628,7 @@ def timing_notes(meta_a: dict, meta_b: dict, res: dict) -> list[str]:
     busy = []
     for rows in (res["rows_a"], res["rows_b"]):
         v = sorted(x for x in (_num(r.get("others_cpu")) for r in rows.values()) if x is not None)
-        busy.append(f"{v[len(v) // 2]:.2g} (max {v[-1]:.2g}, {len(v)} cases)" if v else "not measured")
+        busy.append(f"{statistics.median(v):.2g} (max {v[-1]:.2g}, {len(v)} cases)" if v else "not measured")
     if busy != ["not measured", "not measured"]:
         notes.append(f"cores other processes kept busy during the timed calls (others_cpu, median): A {busy[0]}, "
                      f"B {busy[1]}; what the load average says may differ (it counts waiting processes)")

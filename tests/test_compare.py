@@ -739,3 +739,14 @@ def test_the_third_review_of_the_time_rules():
     verdicts = {c["case_id"]: c["verdict"] for c in res["changes"] if c["metric"] == "time_s"}
     assert verdicts.pop("(all cases)") == "regression"
     assert set(verdicts.values()) <= {"regression", "inconclusive"}, verdicts      # never 'within tolerance'
+
+
+def test_the_others_cpu_note_gives_the_true_median_as_the_report_does():
+    """`compare`'s note on other processes' load took the upper median of an even count, where
+    the report's header takes the true median."""
+    from harness.compare import timing_notes
+    m = {"node": "n", "cpu": "x", "cpu_count": 2}
+    rows = {c: {"others_cpu": v} for c, v in zip("abcd", ("0.1", "0.2", "0.4", "0.9"))}
+    res = {"changes": [], "rows_a": rows, "rows_b": rows, "drift": 1.0}
+    note = next(n for n in timing_notes({"machine": m}, {"machine": m}, res) if "others_cpu" in n)
+    assert "A 0.3 (max 0.9, 4 cases)" in note, note
