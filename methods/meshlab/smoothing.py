@@ -25,8 +25,13 @@ uniform sums count each neighbour twice and cotangent sums give ``cot a + cot b`
     ``iterations`` -> ``stepsmoothnum``. VCG holds ``lambda`` and ``mu`` in single precision:
     the result is that of ``float32(lambda)``, ``float32(mu)`` (``-0.53`` becomes
     ``-0.52999997``, a difference of ~1e-10 of the diagonal per iteration).
-``meshlab.hc`` (``apply_coord_hc_laplacian_smoothing``, Vollmer et al. 1999, beta 0.5)
-    no parameters; the filter runs one HC pass, called ``iterations`` times.
+``meshlab.hc`` (``apply_coord_hc_laplacian_smoothing``, ``VertexCoordLaplacianHC``)
+    no parameters; the filter runs one pass, called ``iterations`` times. With ``q`` the
+    positions before the pass, ``p_i = mean_{N(i)} q_j`` and ``b_i = p_i - q_i`` (the paper's
+    alpha = 0), the pass gives ``p_i - beta b_i + (1 - beta) mean_{N(i)} b_j`` with beta 0.5.
+    Vollmer, Mencl and Mueller's HC (1999) *subtracts* the neighbours' mean ``b``
+    (`scratch.hc`), so this is MeshLab's variant of HC, not the paper's: on Fandisk0.3 one pass
+    is 6.9e-3 of the diagonal away from it (tests/test_smoothing_hc.py).
 ``meshlab.two_steps`` (``apply_coord_two_steps_smoothing``)
     Belyaev & Ohtake's two-step ("PasoDoble") smoothing: face normals smoothed
     ``normal_iterations`` times among neighbours within ``normal_threshold_deg``, then vertices
@@ -131,9 +136,13 @@ def taubin(V, F, **params):
           params={"iterations": Param("iterations", 1, "int", low=0, high=10000,
                                       doc="number of HC passes (the filter runs one)")})
 def hc(V, F, *, iterations=1):
-    """MeshLab HC Laplacian smoothing (Vollmer, Mencl, Mueller 1999; beta = 0.5).
+    """MeshLab's HC Laplacian smoothing: VCGLib's variant of Vollmer, Mencl, Mueller 1999.
 
-    The filter has no parameters and runs a single pass; it is applied ``iterations`` times.
+    One pass, with ``q`` the positions before it and ``N(i)`` the edge neighbours:
+    ``p_i = mean_{N(i)} q_j``, ``b_i = p_i - q_i`` and ``p_i - beta b_i + (1 - beta)
+    mean_{N(i)} b_j``, beta = 0.5. The paper subtracts the last term (`scratch.hc`); a table
+    that names the paper's HC should use `scratch.hc`. The filter has no parameters and runs a
+    single pass; it is applied ``iterations`` times.
     """
     ms = _meshset(V, F)
     for _ in range(int(iterations)):
