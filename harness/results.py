@@ -553,6 +553,36 @@ def check_out_dir(out_dir: Path) -> None:
         pass
 
 
+PLAN_COLUMNS = ("case_id", "task", "mesh", "noise_model", "noise_level", "seed", "method", "library", "params")
+NOT_RUN = "not run"               # a planned case with no row (in memory only, never in a CSV)
+
+
+def with_not_run(frames: dict, meta: dict | None) -> dict:
+    """``frames`` plus one row of status `NOT_RUN` for every case run.json's ``plan`` lists
+    (``{"columns": PLAN_COLUMNS, "rows": [...]}``) and no CSV holds, e.g. the cases an
+    interrupted run never reached: a seed or a whole cell such a run never ran counts as
+    missing in the leaderboard and the winners, and the report counts the cases. Frames are
+    returned as they are when run.json has no (readable) plan."""
+    plan = (meta or {}).get("plan")
+    if not isinstance(plan, dict) or list(plan.get("columns") or []) != list(PLAN_COLUMNS):
+        return frames
+    seen = {cid for df in frames.values() if "case_id" in df for cid in df["case_id"].astype(str)}
+    extra: dict[str, list] = {}
+    for r in plan.get("rows") or []:
+        if isinstance(r, list) and len(r) == len(PLAN_COLUMNS) and str(r[0]) not in seen and r[1] in tasks.names():
+            extra.setdefault(r[1], []).append({**dict(zip(PLAN_COLUMNS, r)), "status": NOT_RUN,
+                                               "error": "not run: the run stopped before this case"})
+    out = dict(frames)
+    for task, rows in extra.items():
+        add = pd.DataFrame(rows)
+        base = out.get(task)
+        if base is None:
+            base = pd.DataFrame(columns=columns(task))
+        add = add.astype({c: base[c].dtype for c in ("seed",) if c in base and len(base)}, errors="ignore")
+        out[task] = pd.concat([base, add.reindex(columns=base.columns)], ignore_index=True)
+    return out
+
+
 def load_csv(path) -> pd.DataFrame:
     """Read a task CSV with true/false columns as booleans and ids as strings.
 

@@ -19,7 +19,7 @@ from .errors import ShootoutError, check_interrupt, problems_error
 from .executors import EXECUTORS, make_executor
 from .mesh import write_ply
 from .provenance import git_commit, git_dirty, machine_info, now_iso, package_versions, usable_cpus
-from .results import Frames, RunFolder, check_output_file, out_dir_problems
+from .results import Frames, RunFolder, check_output_file, out_dir_problems, with_not_run
 
 
 def config_hash(cfg: Config, with_tune: bool = True) -> str:
@@ -35,6 +35,19 @@ def config_hash(cfg: Config, with_tune: bool = True) -> str:
         key.append(["tune", cfg.tune.metric, sorted(c.case_id for c in cfg.tune.cases)])
     blob = json.dumps(key).encode()
     return hashlib.sha1(blob).hexdigest()[:16]
+
+
+def plan(cases) -> dict:
+    """run.json's ``plan``: the identifying columns (`results.PLAN_COLUMNS`) of every case the run
+    means to run, as its rows would start (`runner.base_row`), so that a report of an
+    interrupted run counts the cases it never ran (`results.with_not_run`)."""
+    from .results import PLAN_COLUMNS
+    from .runner import base_row
+    rows = []
+    for c in cases:
+        r = base_row(c)
+        rows.append([r[k] for k in PLAN_COLUMNS])
+    return {"columns": list(PLAN_COLUMNS), "rows": rows}
 
 
 def _solver_info() -> dict | None:
@@ -444,7 +457,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
             "session_command": " ".join(sys.argv),
             "finished": None, "status": "running", "executor": executor,
             "scheduler": scheduler, "workers": workers, "timeout_s": timeout,
-            "n_cases": len(cfg.cases), "resumed_ok_cases": len(done),
+            "n_cases": len(cfg.cases), "plan": plan(cfg.cases), "resumed_ok_cases": len(done),
             "versions": package_versions(), "git_commit": git_commit(), "git_dirty": git_dirty(), "machine": machine_info(),
             "solver": _solver_info(), "command": command, "tasks": task_specs(cfg),
             "method_sources": method_sources(cfg),
@@ -493,6 +506,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
             todo = [c for c in extra_cases if c.case_id not in done]
             cases = cases + todo
             meta["n_cases"] = len(cfg.cases) + len(extra_cases)
+            meta["plan"] = plan(list(cfg.cases) + list(extra_cases))
             folder.write_run_json(meta)
             if bar is not None:
                 bar.total = meta["n_cases"]
@@ -618,7 +632,8 @@ def finish(out_dir, cfg: Config, timeout=None, export_benchmark_json=None, extra
         warn("3D views could not be computed", exc)
     try:
         from .leaderboard import write as write_leaderboard
-        write_leaderboard(out_dir, folder.frames(), {t: s for t, s in task_specs(cfg).items()})
+        write_leaderboard(out_dir, with_not_run(folder.frames(), folder.read_run_json()),
+                          {t: s for t, s in task_specs(cfg).items()})
     except Exception as exc:  # noqa: BLE001
         warn("the leaderboard could not be written", exc)
     try:

@@ -401,3 +401,31 @@ def test_latex_tables_print_numbers_as_math_and_keep_the_input_column():
                        "input_value": 0.0107, "variants": 2, "invalid_excluded": 0}])
     tex = L.winners_latex(w)
     assert "& input" in tex and "0.0107" in tex and "tabular}{llllrlrr}" in tex
+
+
+def test_seeds_and_cells_an_interrupted_run_never_reached_are_missing_not_ranked():
+    """An outside review: an interrupted run (2 meshes x 3 seeds planned; knight ran on every
+    seed, woody on seed 0 only) ranked woody on its one seed, named its winner and counted no
+    missing cell: a cell's seeds were those of its rows. run.json's ``plan`` now adds a ``not run``
+    row for every planned case with no row, so woody is missing for every method, and a cell of
+    which no case ran (cat) is too."""
+    from harness.results import NOT_RUN, PLAN_COLUMNS, with_not_run
+    val = {("knight", "A"): (0.1, 0.1, 0.1), ("knight", "B"): (0.2, 0.2, 0.2), ("woody", "A"): (0.3,),
+           ("woody", "B"): (0.05,)}
+    rows = [{"case_id": f"{mesh}{m}{s}", "task": "curvature", "mesh": mesh, "noise_model": "gaussian",
+             "noise_level": 0.3, "seed": s, "method": m, "params": "{}", "status": "ok", "K_rel_l2": v}
+            for (mesh, m), vs in val.items() for s, v in enumerate(vs)]
+    plan = {"columns": list(PLAN_COLUMNS),
+            "rows": [[f"{mesh}{m}{s}", "curvature", mesh, "gaussian", 0.3, s, m, "scratch", "{}"]
+                     for mesh in ("knight", "woody", "cat") for m in "AB" for s in range(3)]}
+    spec = {"curvature": {"metrics": [{"name": "K_rel_l2", "better": "lower", "rank": True, "rel": 0.01, "abs": 1e-9}],
+                          "axis_params": [], "invalid_when": []}}
+    frames = {"curvature": pd.DataFrame(rows)}
+    assert with_not_run(frames, {}) is frames                      # a run.json without a plan: as before
+    full = with_not_run(frames, {"plan": plan})
+    assert (full["curvature"]["status"] == NOT_RUN).sum() == 18 - len(rows)
+    lb = L.leaderboard(full, spec).set_index("method")
+    assert lb["missing_cells"].to_dict() == {"A": 2, "B": 2}
+    w = L.winners(full, spec).set_index("mesh")
+    assert w.loc["knight", "best"] == "A"
+    assert "woody" not in w.index and "cat" not in w.index      # no winner on a seed or cell that did not run

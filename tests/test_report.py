@@ -347,3 +347,19 @@ def test_run_json_says_whether_the_code_that_ran_is_its_commit(run_dir, tmp_path
     (clone / "README.md").write_text((clone / "README.md").read_text() + "\nedited\n")
     dirty = subprocess.run([sys.executable, "-c", probe, str(clone)], capture_output=True, text=True)
     assert (clean.stdout.strip(), dirty.stdout.strip()) == ("False", "True"), (clean, dirty)
+
+
+def test_the_cases_an_interrupted_run_never_ran_are_counted_as_not_run(run_dir, tmp_path):
+    """An outside review: the report of an interrupted run said nothing of the cases it never
+    reached. run.json's plan gives each a ``not run`` row: in the status table, the rows and
+    the data the winner tables use (never in a CSV)."""
+    dst = copy_run(run_dir, tmp_path)
+    before = len(list(csv.DictReader((dst / "smoothing.csv").open())))
+    rewrite_csv(dst / "smoothing.csv", lambda rows: rows.__setitem__(slice(None), rows[:-3]))
+    assert cli(["report", str(dst)]) == 0
+    data = page_data(dst / "report.html")["tasks"]["smoothing"]
+    status = [r[data["columns"].index("status")] for r in data["rows"]]
+    assert len(status) == before and status.count("not run") == 3
+    html = (dst / "report.html").read_text()
+    assert "<th>not run</th>" in html
+    assert len(list(csv.DictReader((dst / "smoothing.csv").open()))) == before - 3

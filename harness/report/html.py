@@ -24,7 +24,7 @@ from pathlib import Path
 
 from .. import tasks as _tasks
 from ..leaderboard import label_text, leaderboard, validity
-from ..results import RunFolder
+from ..results import RunFolder, with_not_run
 from ..schema import scalar as _clean
 from .common import esc as _esc
 from .common import fmt as _fmt
@@ -301,7 +301,7 @@ def collect(run_dir) -> dict:
     """Everything the page shows, as JSON-ready data (also what the tests inspect)."""
     folder = RunFolder(run_dir)
     meta = folder.read_run_json() or {}
-    frames = folder.frames()
+    frames = with_not_run(folder.frames(), meta)       # cases an interrupted run never ran: "not run" rows
     specs = task_specs(meta, frames)
     tasks = {t: _frame_payload(specs[t], frames[t]) for t in specs if t in frames}
     mat = (property_matrix(frames["laplacian"], (specs.get("laplacian") or {}).get("method_defaults"))

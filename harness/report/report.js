@@ -331,7 +331,7 @@
   function winnerRows(cell, key, visSet, bt, ncol, target) {
     var keep = cellVariants(cell, key);
     if (!keep.size) {
-      var bad = cell.filter(function (r) { return r._invalid && r.status !== 'unavailable'; });   // unavailable: missing, as in winners.csv
+      var bad = cell.filter(function (r) { return r._invalid && r.status !== 'unavailable' && r.status !== 'not run'; });   // missing, as in winners.csv
       if (bad.length) bt.appendChild(noValidRow(bad, ncol, target));
       return [];
     }
