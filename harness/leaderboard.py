@@ -393,7 +393,7 @@ def winners_markdown(w: pd.DataFrame) -> str:
         out.append(f"### {task}: best by {metric} ({g.iloc[0].better} is better)\n\n"
                    "| mesh | noise | setting | best | value | runner-up | value |" + (" input |" if inp else "") +
                    " invalid excluded |\n|---|---|---|---|---:|---|---:|" + ("---:|" if inp else "") + "---:|")
-        out += [f"| {_md(r.mesh)} | {_md(r.noise_model)} {r.noise_level} | {_md(r.setting)} | {_md(_best(r))} | {_g(r.value)} | "
+        out += [f"| {_md(r.mesh)} | {_md(r.noise_model)} {r.noise_level} | {_md(setting_text(r.setting))} | {_md(_best(r))} | {_g(r.value)} | "
                 f"{_md(_runner_up(r))} | "
                 f"{_g(r.runner_up_value)} |" + (f" {_g(r.input_value)} |" if inp else "") + f" {r.invalid_excluded} |"
                 for r in g.itertuples()]
@@ -404,18 +404,18 @@ def winners_markdown(w: pd.DataFrame) -> str:
 
 
 def winners_latex(w: pd.DataFrame) -> str:
-    out = ["% mesh-shootout winners per cell; needs \\usepackage{booktabs}"]
+    out = ["% mesh-shootout winners per cell; needs \\usepackage{booktabs} and \\usepackage{graphicx}"]
     for (task, metric), g in w.groupby(["task", "metric"], sort=False):
         inp = g["input_value"].notna().any()          # the input's own value, where the task measures it
-        out += [r"\begin{table}[t]", r"\centering", r"\begin{tabular}{llllrlr" + ("r" if inp else "") + "}",
+        out += [r"\begin{table}[t]", r"\centering", FIT, r"\begin{tabular}{llllrlr" + ("r" if inp else "") + "}",
                 r"\toprule", r"mesh & noise & setting & best & value & runner-up & value" + (" & input" if inp else "")
                 + r" \\", r"\midrule"]
-        out += [f"{_tex(r.mesh)} & {_tex(r.noise_model)} {_tex(r.noise_level)} & {_tex(r.setting)} & {_tex(_best(r))} & "
+        out += [f"{_tex(r.mesh)} & {_tex(r.noise_model)} {_tex(r.noise_level)} & {_tex(setting_text(r.setting))} & {_tex(_best(r))} & "
                 f"{_g(r.value)} & {_tex(_runner_up(r))} & {_g(r.runner_up_value)}" + (f" & {_g(r.input_value)}" if inp else "")
                 + " \\\\" for r in g.itertuples()]
         said = (f"; input: \\texttt{{{_tex(metric)}}} of the case's input itself (a result worse than it made the "
                 "input worse)") if inp else ""
-        out += [r"\bottomrule", r"\end{tabular}",
+        out += [r"\bottomrule", r"\end{tabular}}",
                 f"\\caption{{{_tex(task)}: best valid method per cell by \\texttt{{{_tex(metric)}}} ({g.iloc[0].better} is "
                 f"better); invalid results excluded{said}.}}", r"\end{table}", ""]
     return "\n".join(out)
@@ -517,26 +517,42 @@ def _tex_num(x: float) -> str:
 
 
 def _tex(s: str) -> str:
+    """Text for LaTeX in any font encoding (OT1, pdflatex's default, prints ``<`` ``>`` ``|`` ``"``
+    as other glyphs): the special characters escaped, those four as text symbols."""
     return "".join({"_": r"\_", "&": r"\&", "%": r"\%", "#": r"\#", "$": r"\$", "{": r"\{", "}": r"\}",
                     "~": r"\textasciitilde{}", "^": r"\textasciicircum{}", "\\": r"\textbackslash{}",
+                    "<": r"\textless{}", ">": r"\textgreater{}", "|": r"\textbar{}", '"': r"\texttt{\char34}",
                     "\n": " ", "\r": " "}.get(c, c)           # a blank line would end the tabular's paragraph
                    for c in str(s))
 
 
+FIT = r"\resizebox{\ifdim\width>\linewidth\linewidth\else\width\fi}{!}{%"   # shrink a table wider than the text only
+
+
+def setting_text(setting) -> str:
+    """A cell's setting (the axis parameters as JSON) as ``k=v`` pairs (`params_text`), unset ones
+    left out: ``target_ratio=0.1``, not ``{"target_faces": null, "target_ratio": 0.1}``."""
+    try:
+        d = json.loads(setting) if isinstance(setting, str) and setting else {}
+    except json.JSONDecodeError:
+        return str(setting)
+    return params_text(d) if isinstance(d, dict) else str(setting)
+
+
 def to_latex(lb: pd.DataFrame) -> str:
     """booktabs tables, one per (task, metric)."""
-    out = ["% mesh-shootout leaderboard; needs \\usepackage{booktabs}"]
+    out = ["% mesh-shootout leaderboard; needs \\usepackage{booktabs} and \\usepackage{graphicx}"]
     for (task, metric), g in lb.groupby(["task", "metric"], sort=False):
         r0 = g.iloc[0]
-        p = "--" if pd.isna(r0.friedman_p) else _tex_num(r0.friedman_p)
+        p = "no Friedman test" if pd.isna(r0.friedman_p) else f"Friedman $p = {_tex_num(r0.friedman_p)}$"
         cd = _cd_text(r0, "--").replace(">=", r"$\geq$")
-        out += [r"\begin{table}[t]", r"\centering", r"\begin{tabular}{lrrr}", r"\toprule",
+        out += [r"\begin{table}[t]", r"\centering", FIT, r"\begin{tabular}{lrrr}", r"\toprule",
                 r"method & mean rank & missing & invalid \\", r"\midrule"]
         out += [f"{_tex(r.method)} & {r.mean_rank:.2f} & {r.missing_cells} & {r.invalid_cells} \\\\"
                 for r in g.itertuples()]
-        out += [r"\bottomrule", r"\end{tabular}",
+        out += [r"\bottomrule", r"\end{tabular}}",
                 f"\\caption{{{_tex(task)}: mean rank by \\texttt{{{_tex(metric)}}} ({r0.better} is better) over "
-                f"{int(r0.cells)} cell{'' if int(r0.cells) == 1 else 's'}; Friedman $p = {p}$, Nemenyi CD$_{{0.05}}$: {cd}.}}", r"\end{table}", ""]
+                f"{int(r0.cells)} cell{'' if int(r0.cells) == 1 else 's'}; {p}, Nemenyi CD$_{{0.05}}$: {cd}.}}", r"\end{table}", ""]
     return "\n".join(out)
 
 

@@ -429,3 +429,23 @@ def test_seeds_and_cells_an_interrupted_run_never_reached_are_missing_not_ranked
     w = L.winners(full, spec).set_index("mesh")
     assert w.loc["knight", "best"] == "A"
     assert "woody" not in w.index and "cat" not in w.index      # no winner on a seed or cell that did not run
+
+
+def test_latex_prints_what_the_names_say_and_fits_the_page():
+    """An outside review, compiling the .tex with pdflatex's default font encoding: ``<`` ``>``
+    ``"`` ``|`` printed as other glyphs (a quoted parameter label in every setting cell), a missing
+    Friedman p read ``$p = --$`` (minus minus), and winners.tex printed each setting as JSON and
+    ran up to 556 pt off the page."""
+    assert L._tex('a<b>"c"|d') == r'a\textless{}b\textgreater{}\texttt{\char34}c\texttt{\char34}\textbar{}d'
+    assert L.setting_text('{"target_faces": null, "target_ratio": 0.1}') == "target_ratio=0.1"
+    lb = pd.DataFrame([{"task": "t", "metric": "m", "better": "lower", "cells": 1, "k": 2, "method": x,
+                        "mean_rank": r, "missing_cells": 0, "invalid_cells": 0, "friedman_p": float("nan"),
+                        "critical_difference": float("nan")} for x, r in (("A", 1.0), ("B", 2.0))])
+    tex = L.to_latex(lb)
+    assert "$p = --$" not in tex and "no Friedman test" in tex and L.FIT in tex
+    w = pd.DataFrame([{"task": "simplification", "metric": "m", "better": "lower", "mesh": "knight",
+                       "noise_model": "none", "noise_level": "", "setting": '{"target_faces": null, "target_ratio": 0.1}',
+                       "best": "A", "value": 1.0, "tied_with_best": "", "runner_up": "", "runner_up_value": None,
+                       "tied_with_runner_up": "", "input_value": None, "variants": 1, "invalid_excluded": 0}])
+    assert "target\\_ratio=0.1" in L.winners_latex(w) and "null" not in L.winners_latex(w)
+    assert "| target_ratio=0.1 |" in L.winners_markdown(w)
