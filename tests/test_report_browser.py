@@ -367,6 +367,11 @@ def test_winner_tables_show_ties_and_cells_without_a_valid_result(tiny_run, tmp_
     s = check_report_in_browser(run / "report.html", interact=False)
     (qem,) = [r for r in s["bestRows"] if "fast_simplification.qem (tied: copy.qem)" in r]
     assert "µsfast_simplification.qem0." in qem, qem
+    for p in (path, sm):                         # rows in another order (workers finish in any): the same tables
+        rows = list(csv.DictReader(p.open()))
+        _write_rows(p, rows[::-1])
+    build_report(run)
+    assert check_report_in_browser(run / "report.html", interact=False)["bestRows"] == s["bestRows"]
 
 
 def test_generic_table_says_when_no_result_of_a_cell_is_valid(tmp_path):

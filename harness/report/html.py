@@ -322,6 +322,15 @@ def _leaderboard_payload(frames, specs) -> list[dict]:
     return out
 
 
+def _leaderboard_files_text(run_dir) -> str:
+    """Where else the leaderboard is: the files of it this run folder holds (a run writes them
+    when it finishes; an interrupted run, `eval` and `shootout report` do not)."""
+    have = [n for n in ("leaderboard.csv", "leaderboard.md", "leaderboard.tex") if (Path(run_dir) / n).is_file()]
+    if not have:
+        return "This run folder has no leaderboard files (they are written when a run finishes)."
+    return "Also in " + ", ".join(have) + "."
+
+
 def _task_section(task, spec, frames) -> str:
     title, intro = _esc(spec.get("title") or task), _esc(spec.get("intro") or "")
     if task not in frames:
@@ -340,12 +349,15 @@ def render(run_dir) -> str:
         if t not in specs and t in _tasks.names():
             specs[t] = _tasks.get(t).spec()
     order = sorted(specs, key=lambda t: (BUILTIN_ORDER.index(t) if t in BUILTIN_ORDER else 9, t))
-    views = data["views"]
+    views, views_note = data["views"], None
     if not views and not (Path(run_dir) / "views").is_dir() and frames:
-        views = [{"case_id": "-", "why": "", "error": "this run folder has no views/ (made by an older version, "
-                  "or the views could not be computed); `shootout views RUN_DIR` computes them (it runs the "
-                  "chosen methods again)"}]
+        why = ({"interrupted": "the run was interrupted before its views were computed",
+                "running": "the run had not finished (or its driver was killed) when this page was built"}
+               .get(meta.get("status"), "this run folder has no views/ (made by an older version, or the views "
+                                         "could not be computed)"))
+        views_note = f"No 3D views: {why}; `shootout views RUN_DIR` computes them (it runs the chosen methods again)."
     payload = {"name": meta.get("name") or Path(run_dir).name, "tasks": data["tasks"], "views": views,
+               "views_note": views_note,
                "max_display_faces": MAX_DISPLAY_FACES, "leaderboard": data["leaderboard"]}
     blob = json.dumps(payload, allow_nan=False, separators=(",", ":"), default=_clean)
     blob = blob.replace("</", "<\\/").replace("<!--", "<\\!--")
@@ -364,7 +376,7 @@ def render(run_dir) -> str:
             "critical difference (Demšar 2006): methods joined by a bar do not differ significantly (α = 0.05). "
             "Invalid results (diverged, worse than the noisy input, over the face target, made non-manifold or topology-changing) rank last in "
             "their cell; cells with a missing result are left out; values closer than the metric's compare tolerance tie. "
-            "Also in leaderboard.csv, .md and .tex.</p>"
+            f"{_leaderboard_files_text(run_dir)}</p>"
             "<div id='leaderboard-body'></div></section>",
             *[_task_section(t, specs[t], frames) for t in order],
             "<section id='views'><h2>3D views</h2><p>Meshes side by side, coloured by the per-vertex quantity "

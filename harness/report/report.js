@@ -66,6 +66,15 @@
     return m;
   }
   function uniq(a) { return Array.from(new Set(a)); }
+  // rows in a fixed cell order (mesh, noise, level, target: numbers by value), not the CSV's, which
+  // follows the order the workers finished in, so the winner tables list their cells alike every run
+  function inCellOrder(rows) {
+    var cmp = function (a, b) { return String(a).localeCompare(String(b), 'en', {numeric: true}); };
+    var tgt = function (r) { return isNum(r._target) ? r._target : -1; };
+    return rows.slice().sort(function (a, b) {
+      return cmp(a.mesh, b.mesh) || cmp(a._noise, b._noise) || (tgt(a) - tgt(b)) || cmp(a._axis || '', b._axis || '');
+    });
+  }
   function guard(where, host, f) {
     try { return f(); } catch (err) {
       console.error('report: ' + where + ' failed: ' + (err && err.stack || err));
@@ -426,9 +435,12 @@
     if (!v.length || Math.min.apply(null, v) <= 0) return false;
     return Math.max.apply(null, v) / Math.min.apply(null, v) > 20;
   }
-  function tipOf(r, extra) {
-    return r._variant + '\n' + r.mesh + ', ' + r._noise + (r.seed !== null && r.seed !== undefined ? ', seed ' + r.seed : '') +
-      '\n' + extra + '\ncase ' + r.case_id;
+  function tipOf(r, extra, group) {   // group: the rows a point aggregates (several seeds: no one seed or case named)
+    var many = group && group.length > 1;
+    return r._variant + '\n' + r.mesh + ', ' + r._noise +
+      (many ? ', seeds ' + group.map(function (x) { return x.seed; }).join(', ')
+            : (r.seed !== null && r.seed !== undefined ? ', seed ' + r.seed : '')) +
+      '\n' + extra + (many ? '\ncases ' + group.map(function (x) { return x.case_id; }).join(', ') : '\ncase ' + r.case_id);
   }
   function histPlot(parent, d, hidden, title, mkLeg) {
     var rows = d.rows.filter(function (r) { return r.status === 'ok' && Array.isArray(r._hist); });
@@ -594,7 +606,7 @@
     function render() {
       leg.innerHTML = ''; plots.innerHTML = '';
       var M = SMOOTH_METRICS.find(function (m) { return m[0] === state.metric; });
-      var key = M[0], inKey = M[2], label = key + (key.indexOf('deg') > 0 ? '' : ' (/ bbox diagonal)');
+      var key = M[0], inKey = M[2], label = key + (key.indexOf('deg') > 0 ? ' (degrees)' : ' (/ bbox diagonal)');
       var mkLeg = function (extra) { return function () { return legend(d.variants, d.colors, hidden, render, extra); }; };
       var all = d.rows.filter(function (r) { return !state.mesh || r.mesh === state.mesh; });
       var ok = all.filter(function (r) { return r.status === 'ok' && !r.diverged; });
@@ -610,7 +622,7 @@
       var anyWorse = false;
       var nInvalid = vis.filter(function (r) { return r._invalid; }).length;
       var tol = tolOf(d.T.spec, key), visSet = new Set(vis);
-      groupBy(all, panelsKey).forEach(function (cell) {   // every row of the cell: failed, diverged and hidden too
+      groupBy(inCellOrder(all), panelsKey).forEach(function (cell) {   // every row of the cell: failed, diverged and hidden too
         var rs = winnerRows(cell, key, visSet, bt, 5);
         if (!rs.length) return;
         var pts = aggregate(rs, key);
@@ -696,14 +708,16 @@
         ioSeries.push({name: v, color: d.colors[v], pts: rs.map(function (r) {
           return [r[ioIn], r[ioKey], tipOf(r, 'input ' + fmt(r[ioIn]) + ' → ' + fmt(r[ioKey]) + ' (' + ioKey + ')')]; })});
       });
-      addPanel(ioPanels, chart({w: 440, h: 340, xlabel: ioIn, ylabel: ioKey, xlog: true, ylog: true, diag: true, series: ioSeries}));
+      var unit = ioKey.indexOf('deg') > 0 ? ' (degrees)' : ' (/ bbox diagonal)';
+      addPanel(ioPanels, chart({w: 440, h: 340, xlabel: ioIn + unit, ylabel: ioKey + unit, xlog: true, ylog: true, diag: true, series: ioSeries}));
       histPlot(plots, {rows: ok, colors: d.colors}, hidden, 'Triangle quality of the results: min-angle histogram per method', mkLeg([]));
     }
     function aggregate(rs, key) { // one point per variant: [median time, mean metric, tip, n, variant]
       var out = [];
       groupBy(rs, function (r) { return r._variant; }).forEach(function (g, v) {
         var t = median(g.map(function (r) { return r.time_s; }).filter(isNum)), y = mean(g.map(function (r) { return r[key]; }));
-        out.push([t, y, tipOf(g[0], key + ' ' + fmt(y) + ', time ' + fmtTime(t) + (g.length > 1 ? ' (' + g.length + ' seeds)' : '')), g.length, v]);
+        out.push([t, y, tipOf(g[0], key + ' ' + fmt(y) + (g.length > 1 ? ' (mean of ' + g.length + ' seeds)' : '') + ', time ' +
+          fmtTime(t) + (g.length > 1 ? ' (median)' : ''), g), g.length, v]);
       });
       return out;
     }
@@ -734,7 +748,7 @@
         '</th><th>faces</th><th>time</th><th>fastest</th><th>its ' + esc(key) + '</th><th>its time</th></tr>';
       var nInvalid = vis.filter(function (r) { return r._invalid; }).length;
       var tol = tolOf(d.T.spec, key), visSet = new Set(vis);
-      groupBy(all, function (r) { return r.mesh + '|' + r._noise + '|' + r._target; }).forEach(function (cell) {
+      groupBy(inCellOrder(all), function (r) { return r.mesh + '|' + r._noise + '|' + r._target; }).forEach(function (cell) {
         var rows = winnerRows(cell, key, visSet, bt, 7, cell[0]._target);
         if (!rows.length) return;
         // one entry per method: mean metric and faces over seeds, median time
@@ -772,7 +786,8 @@
           groupBy(vr, function (r) { return r._target; }).forEach(function (g) {
             var x = mean(g.map(function (r) { return r.out_faces; })), y = mean(g.map(function (r) { return r[key]; }));
             pts.push([x, y, tipOf(g[0], 'target ' + fmt(g[0]._target) + ': ' + Math.round(x) + ' faces of ' + g[0].n_faces +
-              ', ' + key + ' ' + fmt(y) + ', time ' + fmtTime(median(g.map(function (r) { return r.time_s; }))))]);
+              ', ' + key + ' ' + fmt(y) + ', time ' + fmtTime(median(g.map(function (r) { return r.time_s; }))) +
+              (g.length > 1 ? ' (means of ' + g.length + ' seeds, median time)' : ''), g)]);
           });
           pts.sort(function (a, b) { return a[0] - b[0]; });
           series.push({name: v, color: d.colors[v], pts: pts, line: true});
@@ -928,7 +943,7 @@
     var host = document.getElementById('view-list');
     var views = D.views || [];
     if (!views.length) {
-      host.appendChild(el('p', {'class': 'muted', text: 'No 3D views: this run has no case with a mesh to show and status ok.'}));
+      host.appendChild(el('p', {'class': 'muted', text: D.views_note || 'No 3D views: this run has no case with a mesh to show and status ok.'}));
       body.dataset.view3d = 'none';
       return;
     }
@@ -1061,7 +1076,7 @@
       bt.innerHTML = '<tr><th>mesh</th><th>noise</th>' + (axes ? '<th>setting</th>' : '') + '<th>best</th><th>' + esc(key) +
         '</th><th>time</th></tr>';
       var visSet = new Set(vis);
-      groupBy(d.rows.filter(function (r) { return !state.mesh || r.mesh === state.mesh; }), function (r) {
+      groupBy(inCellOrder(d.rows.filter(function (r) { return !state.mesh || r.mesh === state.mesh; })), function (r) {
         return r.mesh + '|' + r._noise + '|' + (r._axis || '');
       }).forEach(function (cell) {
         var rows = winnerRows(cell, key, visSet, bt, 3, axes ? (cell[0]._axis || '') : undefined);
