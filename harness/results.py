@@ -15,6 +15,7 @@ place). A user's own file is never deleted. One run at a time: `lock` takes an e
 """
 from __future__ import annotations
 
+import contextlib
 import csv
 import errno
 import fcntl
@@ -64,6 +65,20 @@ def atomic_write(path: Path, write) -> None:
         except OSError:
             pass
         raise
+
+
+_HELD_LOCKS: list = []            # the run folders' lock files this process opened (`RunFolder.lock`)
+
+
+def close_inherited_locks() -> None:
+    """In a forked case process: close the inherited copies of the driver's run-folder locks.
+    An ``flock`` belongs to the open file, which a fork shares, so a method holding a copy could
+    release the driver's lock (``flock(fd, LOCK_UN)``) and let a second run write into the folder;
+    closing a copy leaves the lock with the driver."""
+    for fh in _HELD_LOCKS:
+        with contextlib.suppress(OSError, ValueError):
+            fh.close()
+    _HELD_LOCKS.clear()
 
 
 def format_row(task: str, row: dict) -> str:
@@ -198,6 +213,7 @@ class RunFolder:
         fh.truncate()
         fh.write(str(os.getpid()))
         fh.flush()
+        _HELD_LOCKS[:] = [f for f in _HELD_LOCKS if not f.closed] + [fh]
         return fh
 
     def foreign_files(self) -> list[str]:

@@ -2,6 +2,7 @@
 result types, and Ctrl-C at any moment (each failure below was reproduced on the previous version)."""
 from __future__ import annotations
 
+import csv
 import json
 import os
 import random
@@ -258,3 +259,18 @@ def test_an_interrupt_after_the_last_row_marks_the_run_interrupted(tmp_path, mon
     monkeypatch.undo()
     harness.run(cfg, out=tmp_path / "o", workers=1, resume=True)
     assert (tmp_path / "o" / "report.html").exists()
+
+
+def test_a_case_cannot_release_the_run_folders_lock(tmp_path):
+    """An outside review: a case process inherited the driver's ``.shootout.lock`` descriptor, and
+    an ``flock`` belongs to the open file a fork shares, so a method's ``flock(fd, LOCK_UN)``
+    released the driver's lock and a second run wrote its rows into the same folder. The case now
+    closes its copy: the method finds none, and the lock it then tries to take is still held."""
+    cfg = _cfg(tmp_path, ["lockpick.unlock"], plugins=["tests.plugins.lockpick"])
+    out = tmp_path / "o"
+    env = {**_env(tmp_path), "LOCKPICK_LOCK": str(out / ".shootout.lock")}
+    r = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(out), "--quiet",
+                        "--workers", "1"], cwd=ROOT, env=env, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr[-800:]
+    rows = list(csv.DictReader((out / "smoothing.csv").open()))
+    assert [x["status"] for x in rows] == ["ok"], [x["error"] for x in rows]

@@ -38,6 +38,7 @@ import time
 
 from .. import input_store
 from ..config import Case
+from ..results import close_inherited_locks
 from ..runner import base_row, run_case
 
 
@@ -200,6 +201,7 @@ def _child(conn, case, want_meshes, own_reader_fd=None, want_view=False, stderr_
     # (about 40 MB, 75 ms here). The driver's own collector is left as it was.
     gc.freeze()
     input_store.drop_lock()
+    close_inherited_locks()              # the run folder's lock stays the driver's alone
     _isolate(stderr_path)
     _die_with_driver(conn, own_reader_fd)
     pid = os.getpid()
