@@ -32,6 +32,36 @@ def git_commit() -> str | None:
         return None
 
 
+def code_hash(plugins=()) -> str | None:
+    """SHA-256 (first 16 hex digits) of the source that runs the cases: every ``.py`` file of the
+    ``harness`` and ``methods`` packages and of each plugin module (a package: its ``.py`` files),
+    names and bytes. Two sessions with different uncommitted edits, or different plugin code,
+    differ here though ``git_commit`` and ``git_dirty`` agree; None when a file cannot be read."""
+    import hashlib
+    import importlib.util
+    root = Path(__file__).resolve().parent.parent
+    files = [(f"{d}/{p.relative_to(root / d)}", p) for d in ("harness", "methods") for p in (root / d).rglob("*.py")]
+    for mod in plugins:
+        try:
+            spec = importlib.util.find_spec(mod)
+        except (ImportError, ValueError):
+            spec = None
+        origin = Path(spec.origin) if spec is not None and spec.origin and spec.origin.endswith(".py") else None
+        if origin is None:
+            files.append((f"plugin {mod}", None))
+        elif origin.name == "__init__.py":
+            files += [(f"plugin {mod}/{p.relative_to(origin.parent)}", p) for p in origin.parent.rglob("*.py")]
+        else:
+            files.append((f"plugin {mod}", origin))
+    h = hashlib.sha256()
+    try:
+        for name, path in sorted(files, key=lambda x: x[0]):
+            h.update(name.encode() + b"\0" + (path.read_bytes() if path is not None else b"?") + b"\0")
+    except OSError:
+        return None
+    return h.hexdigest()[:16]
+
+
 def git_dirty() -> bool | None:
     """Whether the checkout's tracked files differ from its commit (the code that ran is not the
     commit's), or None outside a git checkout."""

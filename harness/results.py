@@ -115,7 +115,7 @@ def _is_ours(data) -> bool:
 _NUM = (int, float)
 _META_TYPES = {      # run.json's keys and the types its readers rely on
     "name": str, "status": str, "started": str, "finished": str, "command": str, "config_source": str,
-    "config_dir": str, "config_hash": str, "git_commit": str, "executor": str, "scheduler": str, "kind": str,
+    "config_dir": str, "config_hash": str, "git_commit": str, "code_sha256": str, "plan": dict, "executor": str, "scheduler": str, "kind": str,
     "config": dict, "machine": dict, "versions": dict, "tasks": dict, "timing": dict, "solver": dict, "tune": dict,
     "fixed_cost_per_case_s": dict, "status_counts": dict, "method_sources": dict,
     "workers": int, "n_cases": int, "resumed_ok_cases": int, "wall_s": _NUM, "timeout_s": _NUM,

@@ -20,7 +20,7 @@ from . import tasks
 from .config import name_problem, samples_problem
 from .errors import ShootoutError, problems_error
 from .mesh import Mesh, missing_file_problem, read_mesh, validate
-from .provenance import git_commit, git_dirty, machine_info, now_iso, package_versions
+from .provenance import code_hash, git_commit, git_dirty, machine_info, now_iso, package_versions
 from .results import Frames, RunFolder, out_dir_problems
 from .tasks.base import CaseInput
 
@@ -203,7 +203,7 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
         folder.write_run_json({
             "name": out.name, "kind": "eval", "config": config or {},
             "started": now_iso(), "finished": now_iso(), "status": "finished", "executor": "eval", "workers": 1,
-            "n_cases": len(entries), "versions": package_versions(), "git_commit": git_commit(), "git_dirty": git_dirty(),
+            "n_cases": len(entries), "versions": package_versions(), "git_commit": git_commit(), "git_dirty": git_dirty(), "code_sha256": code_hash(),
             "machine": machine_info(), "command": " ".join(sys.argv),
             "tasks": {t: tasks.get(t).spec() for t in rows_by_task}})
         build_report(out)

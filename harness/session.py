@@ -18,7 +18,7 @@ from .config import Config, load_config
 from .errors import ShootoutError, check_interrupt, problems_error
 from .executors import EXECUTORS, make_executor
 from .mesh import write_ply
-from .provenance import git_commit, git_dirty, machine_info, now_iso, package_versions, usable_cpus
+from .provenance import code_hash, git_commit, git_dirty, machine_info, now_iso, package_versions, usable_cpus
 from .results import Frames, RunFolder, check_output_file, out_dir_problems, with_not_run
 
 
@@ -335,7 +335,7 @@ def folder_problems(folder, out_dir, chash, resume: bool) -> list[str]:
             for p in folder.column_problems()]
 
 
-PROVENANCE = ("git_commit", "git_dirty", "versions")
+PROVENANCE = ("git_commit", "git_dirty", "code_sha256", "versions")
 
 
 def _keep_first_provenance(meta: dict, prev: dict, session_id: str, quiet: bool) -> None:
@@ -346,7 +346,7 @@ def _keep_first_provenance(meta: dict, prev: dict, session_id: str, quiet: bool)
     now = {k: meta[k] for k in PROVENANCE}
     first = {k: prev[k] for k in PROVENANCE if k in prev}     # what the first run recorded (None is a value:
     diff: dict = {}                                           # not installed, not a git checkout); a key an
-    for k in ("git_commit", "git_dirty"):                     # older version did not write is no change
+    for k in ("git_commit", "git_dirty", "code_sha256"):      # older version did not write is no change
         if k in first and first[k] != now[k]:
             diff[k] = [first[k], now[k]]
     fv = first.get("versions") if isinstance(first.get("versions"), dict) else {}
@@ -361,6 +361,7 @@ def _keep_first_provenance(meta: dict, prev: dict, session_id: str, quiet: bool)
         if not quiet:
             what = ([f"commit {diff['git_commit'][0]} -> {diff['git_commit'][1]}"] if "git_commit" in diff else []) \
                 + (["uncommitted changes " + ("now" if now["git_dirty"] else "then")] if "git_dirty" in diff else []) \
+                + (["the source files (harness, methods, plugins: code_sha256)"] if "code_sha256" in diff else []) \
                 + [f"{p} {a} -> {b}" for p, (a, b) in vers.items()]
             print("shootout: warning: this session's code or packages differ from the run's first ("
                   + "; ".join(what) + "): the folder will hold rows of both (run.json provenance_changed)",
@@ -458,7 +459,8 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
             "finished": None, "status": "running", "executor": executor,
             "scheduler": scheduler, "workers": workers, "timeout_s": timeout,
             "n_cases": len(cfg.cases), "plan": plan(cfg.cases), "resumed_ok_cases": len(done),
-            "versions": package_versions(), "git_commit": git_commit(), "git_dirty": git_dirty(), "machine": machine_info(),
+            "versions": package_versions(), "git_commit": git_commit(), "git_dirty": git_dirty(),
+            "code_sha256": code_hash(cfg.plugins), "machine": machine_info(),
             "solver": _solver_info(), "command": command, "tasks": task_specs(cfg),
             "method_sources": method_sources(cfg),
             "timing": {"threads_per_case": threads, "min_repeats": cfg.repeats,

@@ -406,3 +406,36 @@ def test_resume_of_a_csv_saved_with_a_byte_order_mark_keeps_its_rows(tmp_path):
     df = harness.run(cfg, out=out, workers=1, resume=True)["laplacian"]
     assert kept < set(df["case_id"]) and len(df) == sum(c.task == "laplacian" for c in cfg.cases)
     assert not p.read_bytes().startswith(b"\xef\xbb\xbf")
+
+
+def test_a_resume_with_other_plugin_code_under_the_same_commit_says_so(tmp_path):
+    """An outside review: two sessions with different plugin code (or different uncommitted
+    edits: ``git_dirty`` is True for both) recorded the same provenance, so the folder mixed rows
+    of both without a word. run.json's ``code_sha256`` hashes the harness's, the methods' and the
+    plugins' source files."""
+    import json
+    root = Path(__file__).resolve().parents[1]
+    plug = tmp_path / "provplug.py"
+    plug.write_text("from methods import SmoothingResult, register\n\n\n"
+                    "@register('provplug.scale', task='smoothing', library='provplug')\n"
+                    "def scale(V, F):\n    return SmoothingResult(V=V * 1.0)\n")
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text(json.dumps({"name": "prov", "repeats": 1, "time_budget": 0, "plugins": ["provplug"],
+                               "meshes": ["knight", "woody"], "noise": [{"model": "gaussian_normal", "levels": [0.3]}],
+                               "tasks": {"smoothing": {"methods": ["provplug.scale"]}}}))
+    out = tmp_path / "out"
+    env = {**os.environ, "PYTHONPATH": f"{root}:{tmp_path}"}
+    run = [sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(out), "--workers", "1"]
+    assert subprocess.run(run + ["--quiet"], cwd=root, env=env, capture_output=True, timeout=300).returncode == 0
+    first = json.loads((out / "run.json").read_text())["code_sha256"]
+    assert first and len(first) == 16
+    p = out / "smoothing.csv"
+    p.write_text("".join(p.read_text().splitlines(keepends=True)[:-1]))
+    plug.write_text(plug.read_text().replace("V * 1.0", "V * 1.001"))
+    r = subprocess.run(run + ["--resume"], cwd=root, env=env, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0 and "code_sha256" in r.stderr, r.stderr[-800:]
+    after = json.loads((out / "run.json").read_text())
+    (ch,) = after["provenance_changed"]
+    assert ch["code_sha256"][0] == first and ch["code_sha256"][1] not in (None, first)
+    assert after["code_sha256"] == first                    # the run's first, as its commit
+    assert "source files (code_sha256)" in (out / "report.html").read_text()

@@ -239,6 +239,8 @@ def _provenance_text(x: dict) -> str:
         parts.append("commit {} -> {}".format(*(x["git_commit"] + [None, None])[:2]))
     if isinstance(x.get("git_dirty"), list):
         parts.append("uncommitted changes {} -> {}".format(*(x["git_dirty"] + [None, None])[:2]))
+    if isinstance(x.get("code_sha256"), list):
+        parts.append("source files (code_sha256) {} -> {}".format(*(x["code_sha256"] + [None, None])[:2]))
     if isinstance(x.get("versions"), dict):
         parts += [f"{p} {v[0]} -> {v[1]}" for p, v in x["versions"].items() if isinstance(v, list) and len(v) == 2]
     return f"session {x.get('session')}: " + ", ".join(parts)
