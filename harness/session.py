@@ -338,6 +338,22 @@ def folder_problems(folder, out_dir, chash, resume: bool) -> list[str]:
 PROVENANCE = ("git_commit", "git_dirty", "code_sha256", "versions")
 
 
+def _no_room(exc: OSError, out_dir) -> str:
+    """The message of a write that found no room: where (the file, when the error names one: the
+    run folder, or elsewhere such as the cases' temporary files in ``TMPDIR``) and why (a full
+    disk, a quota, or the file-size limit of ``ulimit -f``)."""
+    import tempfile
+    why = {errno.EFBIG: "a file reached the size limit this process may write (ulimit -f)",
+           errno.EDQUOT: "the disk quota is used up"}.get(exc.errno, "the disk is full")
+    where = Path(exc.filename) if isinstance(exc.filename, (str, bytes, os.PathLike)) and exc.filename else None
+    note = ""
+    if where is not None and not Path(os.path.abspath(where)).is_relative_to(Path(os.path.abspath(out_dir))):
+        note = (f" (not in the run folder {out_dir}: the cases' temporary files go to {tempfile.gettempdir()}, "
+                "set by TMPDIR)")
+    return (f"{where or out_dir}: {why} ({exc.strerror}){note}; the run is marked interrupted and nothing "
+            "half-written was kept; make room (or raise the limit), then continue with --resume")
+
+
 def _keep_first_provenance(meta: dict, prev: dict, session_id: str, quiet: bool) -> None:
     """On --resume: run.json's top-level commit and package versions stay the first run's (as
     ``started`` and ``command`` do; each session records its own), and a session whose code or
@@ -410,9 +426,9 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
                     done = {cid for cid in done if cid not in meshed or _mesh_ok(out_dir / "meshes" / f"{cid}.ply")}
                     folder.drop_rows(lambda r: r["case_id"] not in done)
             except OSError as exc:
-                if exc.errno in (errno.ENOSPC, errno.EDQUOT):
+                if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG):
                     folder.remove_temporaries()
-                    raise DiskFull(f"{out_dir}: the disk is full ({exc.strerror}); --resume rewrites the CSVs with "
+                    raise DiskFull(f"{out_dir}: no room to write ({exc.strerror}); --resume rewrites the CSVs with "
                                    "their ok rows first and could not finish (each CSV is whole: written to a temporary file and "
                                    "renamed); free space and resume again") from None
                 raise
@@ -533,9 +549,8 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
     except OSError as exc:
         meta["status"] = "interrupted"
         folder.remove_temporaries()
-        if exc.errno in (errno.ENOSPC, errno.EDQUOT):
-            raise DiskFull(f"{out_dir}: the disk is full ({exc.strerror}); the run is marked interrupted and "
-                           "nothing half-written was kept; free space, then continue with --resume") from None
+        if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG):
+            raise DiskFull(_no_room(exc, out_dir)) from None
         raise
     except BaseException:
         meta["status"] = "interrupted"        # never 'finished' when something escaped the executor

@@ -546,3 +546,25 @@ def test_a_hand_edited_run_json_of_wrong_types_is_read_without_a_traceback(tmp_p
     harness.run(cfg, out=d, workers=1, resume=True)
     after = json.loads((d / "run.json").read_text())
     assert after["status"] == "finished" and len(after["sessions"]) == 2 and after["sessions"][0]["wall_s"] is None
+
+
+def test_a_file_size_limit_or_full_temporary_files_is_one_message_naming_where(tmp_path):
+    """An outside review: ``ulimit -f`` mid-run (EFBIG) was a traceback, and a full TMPDIR (the
+    cases' stderr files) was blamed on the run folder's disk."""
+    import errno as _errno
+    import resource
+
+    from harness.session import _no_room
+    cfg = write_cfg(tmp_path / "c.yaml", {**SMALL, "save_meshes": True, "meshes": ["bunny", "knight"]})
+    out = tmp_path / "o"
+    r = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(out)], cwd=ROOT,
+                       capture_output=True, text=True, timeout=120, env={**os.environ, "PYTHONPATH": str(ROOT)},
+                       preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_FSIZE, (60 * 1024, 60 * 1024)))
+    assert r.returncode == 1 and "size limit" in r.stderr and "Traceback" not in r.stderr, r.stderr[-800:]
+    assert json.loads((out / "run.json").read_text())["status"] == "interrupted"
+    assert cli(["run", cfg, "--out", out, "--resume"]).returncode == 0
+    elsewhere = OSError(_errno.ENOSPC, "No space left on device", "/elsewhere/tmp/shootout-case-x.err")
+    msg = _no_room(elsewhere, out)
+    assert msg.startswith("/elsewhere/tmp/shootout-case-x.err: the disk is full") and "TMPDIR" in msg
+    inside = _no_room(OSError(_errno.ENOSPC, "No space left on device", str(out / "smoothing.csv")), out)
+    assert "TMPDIR" not in inside and "disk is full" in inside
