@@ -94,7 +94,7 @@ def _cgroup_quota(root: Path = Path("/sys/fs/cgroup"), proc: Path = Path("/proc/
     looked up under the path ``/proc/self/cgroup`` names and, for a container that sees its
     own cgroup as the mount's root, at the root itself; None when unlimited or unknown."""
     try:
-        lines = proc.read_text().splitlines()
+        lines = proc.read_bytes().decode("utf-8", "surrogateescape").splitlines()   # a cgroup name is any bytes
     except OSError:
         return None
     found = []
@@ -118,19 +118,23 @@ def _cgroup_quota(root: Path = Path("/sys/fs/cgroup"), proc: Path = Path("/proc/
     return min(found) if found else None
 
 
+def _ratio(quota: int, period: int) -> float | None:
+    """Cores of a quota; None (no limit known) unless both are positive."""
+    return quota / period if quota > 0 and period > 0 else None
+
+
 def _v2_quota(d: Path) -> float | None:
     try:
         quota, period = (d / "cpu.max").read_text().split()[:2]
-        return None if quota == "max" else int(quota) / int(period)
-    except (OSError, ValueError):
+        return None if quota == "max" else _ratio(int(quota), int(period))
+    except (OSError, ValueError, UnicodeDecodeError):
         return None
 
 
 def _v1_quota(d: Path) -> float | None:
     try:
-        quota = int((d / "cpu.cfs_quota_us").read_text())
-        return quota / int((d / "cpu.cfs_period_us").read_text()) if quota > 0 else None
-    except (OSError, ValueError, ZeroDivisionError):
+        return _ratio(int((d / "cpu.cfs_quota_us").read_text()), int((d / "cpu.cfs_period_us").read_text()))
+    except (OSError, ValueError, UnicodeDecodeError):
         return None
 
 

@@ -389,6 +389,10 @@ def test_a_case_process_inherits_the_drivers_objects_frozen(monkeypatch):
     ("0::/lim.slice/run-x.scope\n", {"lim.slice/cpu.max": "200000 100000\n",            # quota on a parent slice
                                       "lim.slice/run-x.scope/cpu.max": "max 100000\n"}, 2.0),
     ("0::/a\n", {"a/cpu.max": "max 100000\n"}, None),                                   # unlimited
+    ("0::/\n", {"cpu.max": "100000 0\n"}, None),                                        # odd contents: no limit
+    ("0::/\n", {"cpu.max": "-100000 100000\n"}, None),                                  # known, never a crash
+    ("4:cpu:/d\n", {"cpu/d/cpu.cfs_quota_us": "100000\n", "cpu/d/cpu.cfs_period_us": "-5\n"}, None),
+    (b"0::/caf\xe9\n", {"cpu.max": "50000 100000\n"}, 0.5),                              # a non-UTF-8 name
 ])
 def test_the_cgroup_cpu_quota_is_found_in_common_container_layouts(tmp_path, cgroup, files, want):
     """An outside review: only a v2 cgroup with a private namespace was read; a v1 Docker layout,
@@ -398,7 +402,7 @@ def test_the_cgroup_cpu_quota_is_found_in_common_container_layouts(tmp_path, cgr
     for rel, text in files.items():
         (root / rel).parent.mkdir(parents=True, exist_ok=True)
         (root / rel).write_text(text)
-    (tmp_path / "self").write_text(cgroup)
+    (tmp_path / "self").write_bytes(cgroup if isinstance(cgroup, bytes) else cgroup.encode())
     assert _cgroup_quota(root, tmp_path / "self") == want
 
 
