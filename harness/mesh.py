@@ -90,6 +90,7 @@ def _fan(polys: list[list[int]]) -> tuple[np.ndarray, int]:
 
 def _read_obj(text: str):
     verts, polys = [], []
+    top = (0, 0)                             # the largest (1-based) index and its line
     for ln, line in enumerate(text.splitlines(), 1):
         parts = line.split()                 # any whitespace separates tokens (spaces, tabs, indentation)
         if not parts:
@@ -102,8 +103,19 @@ def _read_obj(text: str):
             idx = []
             for tok in parts[1:]:
                 i = int(tok.split("/", 1)[0])
+                if i == 0:
+                    raise InvalidMeshError(f"line {ln}: face index 0 (OBJ counts vertices from 1; a negative "
+                                           "index counts back from the last vertex read)")
+                if i < 0 and -i > len(verts):
+                    raise InvalidMeshError(f"line {ln}: face index {i} counts back past the first vertex "
+                                           f"({len(verts)} read so far)")
+                if i > top[0]:
+                    top = (i, ln)
                 idx.append(i - 1 if i > 0 else len(verts) + i)
             polys.append(idx)
+    if top[0] > len(verts):
+        raise InvalidMeshError(f"line {top[1]}: face index {top[0]}, but the file has {len(verts)} vertices "
+                               "(OBJ counts from 1)")
     try:
         V = np.asarray(verts, dtype=np.float64).reshape(-1, 3)
     except ValueError as exc:
@@ -139,6 +151,8 @@ def _read_off(text: str):
     head = tokens_lines[0][1:] or tokens_lines[1]
     start = 1 if tokens_lines[0][1:] else 2
     nv, nf = int(head[0]), int(head[1])
+    if nv < 0 or nf < 0:
+        raise InvalidMeshError(f"OFF header gives {nv} vertices and {nf} faces: a count cannot be negative")
     if len(tokens_lines) != start + nv + nf and tokens_lines[0][0] == "OFF":
         stream = _off_stream([x for t in tokens_lines[start:] for x in t], nv, nf)
         if stream is not None:               # a plain OFF laid out freely: whitespace separates tokens
@@ -323,7 +337,9 @@ def missing_file_problem(path) -> str | None:
     path = Path(path)
     if path.is_dir():
         return "is a folder; give a mesh file"
-    return None if path.is_file() else "no such file"
+    if path.is_file():
+        return None
+    return "is not a regular file (a pipe, socket or device); give a mesh file" if path.exists() else "no such file"
 
 
 def read_mesh(path, name: str | None = None, repair: bool = True, sha1: str | None = None,

@@ -169,7 +169,7 @@ LOAD_ERRORS = {
     "garbage_stl": "truncated ASCII STL",
     "truncated_binary": "unreadable",            # .ply and .stl: both stems map here
     "lying_header": "truncated PLY: the header's elements need at least",
-    "out_of_range": "face indices out of range",
+    "out_of_range": "face index 99, but the file has 6 vertices (OBJ counts from 1)",
     "huge_coords": "overflow (or underflow) double precision; rescale the mesh",
     "tiny_coords": "span of 2e-100: beyond",
     "huge_count": "truncated PLY: the header's elements need at least",

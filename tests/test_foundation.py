@@ -149,13 +149,28 @@ def test_polygon_file_is_fan_triangulated(tmp_path):
 
 @pytest.mark.parametrize("text,ext,needle", [
     ("", ".obj", "empty"), ("v 0 0 0\nv nan 0 0\nv 1 1 1\nf 1 2 3\n", ".obj", "NaN"),
-    ("v 0 0 0\nf 1 2 3\n", ".obj", "out of range"), ("OFF\n3 1 0\n0 0 0\n", ".off", "truncated"),
+    ("v 0 0 0\nf 1 2 3\n", ".obj", "line 2: face index 3, but the file has 1 vertices"),
+    ("OFF\n3 1 0\n0 0 0\n", ".off", "truncated"),
+    ("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", ".obj", "line 4: face index 0 .OBJ counts vertices from 1"),
+    ("v 0 0 0\nv 1 0 0\nf -1 -2 -3\nv 0 1 0\n", ".obj", "line 3: face index -3 counts back past the first vertex"),
+    ("OFF\n-4 4 0\n0 0 0\n", ".off", "a count cannot be negative"),
     ("solid", ".xyz", "unsupported")])
 def test_bad_files_raise_clear_errors(tmp_path, text, ext, needle):
+    """Outside reviews: an OBJ's index 0 or 9 was reported 0-based after wrapping (``max 4``,
+    ``max 8``), and an OFF count of -4 as ``invalid literal for int()``."""
     p = tmp_path / f"bad{ext}"
     p.write_text(text)
     with pytest.raises(InvalidMeshError, match=needle):
         read_mesh(p)
+
+
+def test_a_pipe_given_as_a_mesh_is_not_called_missing(tmp_path):
+    import os
+
+    from harness.mesh import missing_file_problem
+    os.mkfifo(tmp_path / "scan.obj")
+    assert missing_file_problem(tmp_path / "scan.obj").startswith("is not a regular file")
+    assert missing_file_problem(tmp_path / "nothing.obj") == "no such file"
 
 
 # ----------------------------------------------------------------------------- noise
