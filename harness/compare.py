@@ -184,6 +184,10 @@ def judge(metric: str, a, b, row_a=None, row_b=None, rule: Rule | None = None) -
         return "improvement" if miss_b < miss_a - tol else "same"
     if rule.kind == "one":
         x, y = abs(x - 1.0), abs(y - 1.0)
+    if not (math.isfinite(x) and math.isfinite(y)):   # an infinity: its order decides (no tolerance of it)
+        if x == y:
+            return "same"
+        return "regression" if (y > x) == (rule.kind in ("lower", "one")) else "improvement"
     tol = max(rule.rel * abs(x), rule.abs)
     worse = (y - x) if rule.kind in ("lower", "one") else (x - y)
     if worse > tol:

@@ -750,3 +750,14 @@ def test_the_others_cpu_note_gives_the_true_median_as_the_report_does():
     res = {"changes": [], "rows_a": rows, "rows_b": rows, "drift": 1.0}
     note = next(n for n in timing_notes({"machine": m}, {"machine": m}, res) if "others_cpu" in n)
     assert "A 0.3 (max 0.9, 4 cases)" in note, note
+
+
+def test_an_infinite_baseline_is_no_tolerance_for_any_value():
+    """An outside review: a baseline of inf made the tolerance infinite, so any finite value of
+    B was 'within tolerance' (CSVs holding inf are now refused when read; a frame given through
+    the Python API can still hold one)."""
+    from harness.compare import Rule, judge
+    lower, higher = Rule("lower", 0.01, 0.0), Rule("higher", 0.01, 0.0)
+    inf = float("inf")
+    assert judge("m", inf, 1.0, rule=lower) == "improvement" and judge("m", 1.0, inf, rule=lower) == "regression"
+    assert judge("m", -inf, 1.0, rule=higher) == "improvement" and judge("m", inf, inf, rule=lower) == "same"
