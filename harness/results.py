@@ -555,6 +555,10 @@ def check_out_dir(out_dir: Path) -> None:
     if p == Path(p.anchor) or p == home:
         raise ShootoutError(f"--out {out_dir}: is {'the file system root' if p == Path(p.anchor) else 'your home folder'}"
                             "; give a folder of its own for the run")
+    src = Path(__file__).resolve().parent.parent          # the folder holding the harness and methods packages
+    if p == src or any(p == src / pkg or p.is_relative_to(src / pkg) for pkg in ("harness", "methods")):
+        raise ShootoutError(f"--out {out_dir}: is mesh-shootout's source folder{'' if p == src else ' or inside it'} "
+                            f"({src}); give a folder of its own for the run (e.g. {src / 'results' / 'NAME'})")
     while not p.exists():
         p = p.parent
     if not p.is_dir():
