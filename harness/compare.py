@@ -513,8 +513,9 @@ def _label(r: dict) -> str:
     except json.JSONDecodeError:
         p = {}
     ps = params_text(p if isinstance(p, dict) else {})
-    lvl = r.get("noise_level")
-    noise = r.get("noise_model") if _blank(lvl) else f"{r.get('noise_model')} {lvl:g}"
+    lvl, seed = r.get("noise_level"), _num(r.get("seed"))
+    noise = str(r.get("noise_model")) if _blank(lvl) else f"{r.get('noise_model')} {lvl:g}"
+    noise += "" if seed is None or not math.isfinite(seed) else f" seed {seed:g}"    # two seeds: two cases
     return f"{r.get('mesh')} {noise} {r.get('method')}[{ps}]"
 
 

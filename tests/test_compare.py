@@ -761,3 +761,12 @@ def test_an_infinite_baseline_is_no_tolerance_for_any_value():
     inf = float("inf")
     assert judge("m", inf, 1.0, rule=lower) == "improvement" and judge("m", 1.0, inf, rule=lower) == "regression"
     assert judge("m", -inf, 1.0, rule=higher) == "improvement" and judge("m", inf, inf, rule=lower) == "same"
+
+
+def test_a_case_label_names_its_seed():
+    """An outside review: two regression lines of one method on two seeds read the same."""
+    from harness.compare import _label
+    r = {"mesh": "woody", "noise_model": "gaussian_normal", "noise_level": 0.3, "method": "meshlab.hc",
+         "params": '{"iterations": 1}'}
+    assert _label({**r, "seed": 1}) == "woody gaussian_normal 0.3 seed 1 meshlab.hc[iterations=1]"
+    assert _label({**r, "seed": 2}) != _label({**r, "seed": 1}) and "seed" not in _label({**r, "seed": ""})
