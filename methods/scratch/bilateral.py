@@ -72,10 +72,11 @@ def sun_vertex_update(X: np.ndarray, F: np.ndarray, N: np.ndarray, iterations: i
 @register("scratch.bilateral", task="smoothing", library="scratch",
           cite="Zheng, Fu, Au, Tai, Bilateral normal filtering for mesh denoising, IEEE TVCG 17(10), 2011",
           params={"sigma_r": Param("sigma_r", 0.35, "float", low=1e-6, high=10.0,
-                                   doc="range (normal difference) Gaussian width (Zheng et al.'s sigma_s)"),
+                                   doc="range (normal difference) Gaussian width: Zheng et al.'s sigma_s (their 0.35)"),
                   "sigma_s": Param("sigma_s", 1.0, "float", low=1e-6, high=100.0,
                                    doc="spatial Gaussian width in units of the mean "
-                                       "centroid distance of edge-adjacent faces (sigma_c)"),
+                                       "centroid distance of edge-adjacent faces: Zheng et al.'s "
+                                       "sigma_c multiple, not their sigma_s (that is sigma_r here)"),
                   "normal_iterations": Param("normal_iterations", 20, "int", low=0, high=1000,
                                              doc="normal filtering passes per iteration"),
                   "vertex_iterations": Param("vertex_iterations", 10, "int", low=0, high=1000,
