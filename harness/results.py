@@ -93,10 +93,13 @@ REPORT_FILES = ("report.html", "leaderboard.csv", "leaderboard.md", "leaderboard
                 "winners.md", "winners.tex")
 
 
+PLAN_FILE = "plan.csv"            # every case the config plans (`RunFolder.write_plan`)
+
+
 def output_names() -> list[str]:
     """The files a run writes at the top of its folder and may replace or delete: task CSVs,
     run.json, the report, leaderboard and winners tables."""
-    return [task_file(t) for t in tasks.names()] + ["run.json", *REPORT_FILES]
+    return [task_file(t) for t in tasks.names()] + ["run.json", PLAN_FILE, *REPORT_FILES]
 
 
 def run_file_names() -> list[str]:
@@ -115,7 +118,7 @@ def _is_ours(data) -> bool:
 _NUM = (int, float)
 _META_TYPES = {      # run.json's keys and the types its readers rely on
     "name": str, "status": str, "started": str, "finished": str, "command": str, "config_source": str,
-    "config_dir": str, "config_hash": str, "git_commit": str, "code_sha256": str, "plan": dict, "executor": str, "scheduler": str, "kind": str,
+    "config_dir": str, "config_hash": str, "git_commit": str, "code_sha256": str, "executor": str, "scheduler": str, "kind": str,
     "config": dict, "machine": dict, "versions": dict, "tasks": dict, "timing": dict, "solver": dict, "tune": dict,
     "fixed_cost_per_case_s": dict, "status_counts": dict, "method_sources": dict,
     "workers": int, "n_cases": int, "resumed_ok_cases": int, "wall_s": _NUM, "timeout_s": _NUM,
@@ -329,7 +332,7 @@ class RunFolder:
             kinds = list(dict.fromkeys(tasks.names() + self.recorded_tasks()))   # also kinds not installed now
             for task in kinds:
                 self.csv_path(task).unlink(missing_ok=True)
-            for name in REPORT_FILES:
+            for name in (*REPORT_FILES, PLAN_FILE):
                 (self.path / name).unlink(missing_ok=True)
             vdir = self.path / "views"
             if vdir.is_dir():
@@ -409,6 +412,36 @@ class RunFolder:
         for task in tasks.names():
             if self.csv_path(task).exists():
                 out[task] = load_csv(self.csv_path(task))
+        return out
+
+    def write_plan(self, rows: list[dict]) -> None:
+        """``plan.csv``: the identifying columns (`PLAN_COLUMNS`) of every case the run plans."""
+        def write(fh):
+            w = csv.writer(fh, lineterminator="\n")
+            w.writerow(PLAN_COLUMNS)
+            w.writerows([cell(r.get(c)) for c in PLAN_COLUMNS] for r in rows)
+        atomic_write(self.path / PLAN_FILE, write)
+
+    def read_plan(self) -> list[dict] | None:
+        """The rows of ``plan.csv`` (typed by `_plan_row`), None when the folder has none (a run
+        folder of an older version, or of `eval`); `ShootoutError` naming the first damaged line."""
+        path = self.path / PLAN_FILE
+        if not path.exists():
+            return None
+        try:
+            text = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ShootoutError(f"{path}: unreadable ({exc})") from None
+        rows = list(csv.reader(io.StringIO(text)))
+        if not rows or tuple(rows[0]) != PLAN_COLUMNS:
+            raise ShootoutError(f"{path}: damaged plan: its header is not {','.join(PLAN_COLUMNS)}")
+        out = []
+        for i, r in enumerate(rows[1:], 2):
+            row = _plan_row(dict(zip(PLAN_COLUMNS, r))) if len(r) == len(PLAN_COLUMNS) else None
+            if row is None:
+                raise ShootoutError(f"{path}: damaged plan: line {i} is not a case as this tool writes it "
+                                    f"({','.join(r)[:80]!r}); remove the file to build the report without it")
+            out.append(row)
         return out
 
     # ------------------------------------------------------------------------- views
@@ -577,21 +610,42 @@ PLAN_COLUMNS = ("case_id", "task", "mesh", "noise_model", "noise_level", "seed",
 NOT_RUN = "not run"               # a planned case with no row (in memory only, never in a CSV)
 
 
-def with_not_run(frames: dict, meta: dict | None) -> dict:
-    """``frames`` plus one row of status `NOT_RUN` for every case run.json's ``plan`` lists
-    (``{"columns": PLAN_COLUMNS, "rows": [...]}``) and no CSV holds, e.g. the cases an
-    interrupted run never reached: a seed or a whole cell such a run never ran counts as
-    missing in the leaderboard and the winners, and the report counts the cases. Frames are
-    returned as they are when run.json has no (readable) plan."""
-    plan = (meta or {}).get("plan")
-    if not isinstance(plan, dict) or list(plan.get("columns") or []) != list(PLAN_COLUMNS):
+def _plan_row(r: dict) -> dict | None:
+    """A plan.csv row with its columns typed as a task CSV's (seed int, noise level float or
+    None), or None when a value is not what the harness writes."""
+    try:
+        params = json.loads(r["params"])
+        level = None if r["noise_level"] == "" else float(r["noise_level"])
+        seed = int(r["seed"])
+    except (TypeError, ValueError, KeyError):
+        return None
+    ok = (isinstance(params, dict) and r["task"] in tasks.names() and all(r[k] for k in ("case_id", "mesh", "method"))
+          and (level is None or np.isfinite(level)))
+    return {**r, "noise_level": level, "seed": seed} if ok else None
+
+
+def with_not_run(frames: dict, plan: list | None) -> dict:
+    """``frames`` plus one row of status `NOT_RUN` for every case of ``plan`` (`RunFolder.read_plan`)
+    that no CSV holds, e.g. the cases an interrupted run never reached: a seed or a whole cell
+    such a run never ran is then missing in the leaderboard and the winners, and the report
+    counts the cases. A published pair's level is measured when its case runs, so a planned row
+    without one takes the level the pair's other rows give. ``frames`` as they are without a plan."""
+    if not plan:
         return frames
     seen = {cid for df in frames.values() if "case_id" in df for cid in df["case_id"].astype(str)}
+    pair_level = {}
+    for df in frames.values():
+        if {"mesh", "noise_model", "noise_level"} <= set(df.columns):
+            given = df[(df["noise_model"] == "given") & df["noise_level"].notna()]
+            pair_level.update(zip(given["mesh"], given["noise_level"]))
     extra: dict[str, list] = {}
-    for r in plan.get("rows") or []:
-        if isinstance(r, list) and len(r) == len(PLAN_COLUMNS) and str(r[0]) not in seen and r[1] in tasks.names():
-            extra.setdefault(r[1], []).append({**dict(zip(PLAN_COLUMNS, r)), "status": NOT_RUN,
-                                               "error": "not run: the run stopped before this case"})
+    for r in plan:
+        if r["case_id"] in seen:
+            continue
+        level = r["noise_level"] if r["noise_level"] is not None or r["noise_model"] != "given" \
+            else pair_level.get(r["mesh"])
+        extra.setdefault(r["task"], []).append({**r, "noise_level": level, "status": NOT_RUN,
+                                                "error": "not run: the run stopped before this case"})
     out = dict(frames)
     for task, rows in extra.items():
         add = pd.DataFrame(rows)

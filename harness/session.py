@@ -37,17 +37,13 @@ def config_hash(cfg: Config, with_tune: bool = True) -> str:
     return hashlib.sha1(blob).hexdigest()[:16]
 
 
-def plan(cases) -> dict:
-    """run.json's ``plan``: the identifying columns (`results.PLAN_COLUMNS`) of every case the run
-    means to run, as its rows would start (`runner.base_row`), so that a report of an
+def plan(cases) -> list[dict]:
+    """The run folder's ``plan.csv``: the identifying columns (`results.PLAN_COLUMNS`) of every case
+    the run means to run, as its rows would start (`runner.base_row`), so that a report of an
     interrupted run counts the cases it never ran (`results.with_not_run`)."""
     from .results import PLAN_COLUMNS
     from .runner import base_row
-    rows = []
-    for c in cases:
-        r = base_row(c)
-        rows.append([r[k] for k in PLAN_COLUMNS])
-    return {"columns": list(PLAN_COLUMNS), "rows": rows}
+    return [{k: r[k] for k in PLAN_COLUMNS} for r in map(base_row, cases)]
 
 
 def _solver_info() -> dict | None:
@@ -338,10 +334,14 @@ def folder_problems(folder, out_dir, chash, resume: bool) -> list[str]:
 PROVENANCE = ("git_commit", "git_dirty", "code_sha256", "versions")
 
 
-def _no_room(exc: OSError, out_dir) -> str:
+NO_ROOM = (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
+
+
+def _no_room(exc: OSError, out_dir, then: str = "the run is marked interrupted and nothing half-written was "
+             "kept; make room (or raise the limit), then continue with --resume") -> str:
     """The message of a write that found no room: where (the file, when the error names one: the
-    run folder, or elsewhere such as the cases' temporary files in ``TMPDIR``) and why (a full
-    disk, a quota, or the file-size limit of ``ulimit -f``)."""
+    run folder, or elsewhere such as the cases' temporary files in ``TMPDIR``), why (a full
+    disk, a quota, or the file-size limit of ``ulimit -f``), and ``then``, what was kept and what to do."""
     import tempfile
     why = {errno.EFBIG: "a file reached the size limit this process may write (ulimit -f)",
            errno.EDQUOT: "the disk quota is used up"}.get(exc.errno, "the disk is full")
@@ -350,8 +350,7 @@ def _no_room(exc: OSError, out_dir) -> str:
     if where is not None and not Path(os.path.abspath(where)).is_relative_to(Path(os.path.abspath(out_dir))):
         note = (f" (not in the run folder {out_dir}: the cases' temporary files go to {tempfile.gettempdir()}, "
                 "set by TMPDIR)")
-    return (f"{where or out_dir}: {why} ({exc.strerror}){note}; the run is marked interrupted and nothing "
-            "half-written was kept; make room (or raise the limit), then continue with --resume")
+    return f"{where or out_dir}: {why} ({exc.strerror}){note}; {then}"
 
 
 def _keep_first_provenance(meta: dict, prev: dict, session_id: str, quiet: bool) -> None:
@@ -426,11 +425,11 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
                     done = {cid for cid in done if cid not in meshed or _mesh_ok(out_dir / "meshes" / f"{cid}.ply")}
                     folder.drop_rows(lambda r: r["case_id"] not in done)
             except OSError as exc:
-                if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG):
+                if exc.errno in NO_ROOM:
                     folder.remove_temporaries()
-                    raise DiskFull(f"{out_dir}: no room to write ({exc.strerror}); --resume rewrites the CSVs with "
-                                   "their ok rows first and could not finish (each CSV is whole: written to a temporary file and "
-                                   "renamed); free space and resume again") from None
+                    raise DiskFull(_no_room(exc, out_dir, "--resume rewrites the CSVs with their ok rows first and "
+                                            "could not finish (each CSV is whole: written to a temporary file and "
+                                            "renamed); make room (or raise the limit) and resume again")) from None
                 raise
             folder.remove_temporaries()
             cases = [c for c in cases if c.case_id not in done]
@@ -474,7 +473,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
             "session_command": " ".join(sys.argv),
             "finished": None, "status": "running", "executor": executor,
             "scheduler": scheduler, "workers": workers, "timeout_s": timeout,
-            "n_cases": len(cfg.cases), "plan": plan(cfg.cases), "resumed_ok_cases": len(done),
+            "n_cases": len(cfg.cases), "resumed_ok_cases": len(done),
             "versions": package_versions(), "git_commit": git_commit(), "git_dirty": git_dirty(),
             "code_sha256": code_hash(cfg.plugins), "machine": machine_info(),
             "solver": _solver_info(), "command": command, "tasks": task_specs(cfg),
@@ -499,7 +498,16 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         meta["resumed_at"] = now_iso()
     if executor == "dask":       # the cluster's worker threads, not --workers
         meta.update(ex.describe())
-    folder.write_run_json(meta)
+    try:
+        folder.write_run_json(meta)
+        folder.write_plan(plan(cfg.cases))
+    except OSError as exc:
+        ex.close()
+        folder.remove_temporaries()
+        if exc.errno in NO_ROOM:
+            raise DiskFull(_no_room(exc, out_dir, "nothing half-written was kept; make room (or raise the limit), "
+                                    "then run again" + (" with --resume" if resume else ""))) from None
+        raise
     bar = None
     if not quiet:
         n_todo = len(cases) + (len(cfg.tune.cases) if cfg.tune is not None else 0)
@@ -524,8 +532,8 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
             todo = [c for c in extra_cases if c.case_id not in done]
             cases = cases + todo
             meta["n_cases"] = len(cfg.cases) + len(extra_cases)
-            meta["plan"] = plan(list(cfg.cases) + list(extra_cases))
             folder.write_run_json(meta)
+            folder.write_plan(plan(list(cfg.cases) + list(extra_cases)))
             if bar is not None:
                 bar.total = meta["n_cases"]
         for case, row, extras in ex.run(cases, want_meshes=cfg.save_meshes):
@@ -549,7 +557,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
     except OSError as exc:
         meta["status"] = "interrupted"
         folder.remove_temporaries()
-        if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG):
+        if exc.errno in NO_ROOM:
             raise DiskFull(_no_room(exc, out_dir)) from None
         raise
     except BaseException:
@@ -649,7 +657,7 @@ def finish(out_dir, cfg: Config, timeout=None, export_benchmark_json=None, extra
         warn("3D views could not be computed", exc)
     try:
         from .leaderboard import write as write_leaderboard
-        write_leaderboard(out_dir, with_not_run(folder.frames(), folder.read_run_json()),
+        write_leaderboard(out_dir, with_not_run(folder.frames(), folder.read_plan()),
                           {t: s for t, s in task_specs(cfg).items()})
     except Exception as exc:  # noqa: BLE001
         warn("the leaderboard could not be written", exc)

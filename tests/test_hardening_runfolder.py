@@ -566,6 +566,12 @@ def test_a_file_size_limit_or_full_temporary_files_is_one_message_naming_where(t
     assert r.returncode == 1 and "size limit" in r.stderr and "Traceback" not in r.stderr, r.stderr[-800:]
     assert json.loads((out / "run.json").read_text())["status"] == "interrupted"
     assert cli(["run", cfg, "--out", out, "--resume"]).returncode == 0
+    first = tmp_path / "first"                        # no room for the first run.json (a review: a traceback)
+    r = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(first)], cwd=ROOT,
+                       capture_output=True, text=True, timeout=120, env={**os.environ, "PYTHONPATH": str(ROOT)},
+                       preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_FSIZE, (2048, 2048)))
+    assert r.returncode == 1 and "size limit" in r.stderr and "then run again" in r.stderr, r.stderr[-800:]
+    assert "Traceback" not in r.stderr and not [p.name for p in first.iterdir() if p.name != ".shootout.lock"]
     elsewhere = OSError(_errno.ENOSPC, "No space left on device", "/elsewhere/tmp/shootout-case-x.err")
     msg = _no_room(elsewhere, out)
     assert msg.startswith("/elsewhere/tmp/shootout-case-x.err: the disk is full") and "TMPDIR" in msg

@@ -406,7 +406,7 @@ def test_latex_tables_print_numbers_as_math_and_keep_the_input_column():
 def test_seeds_and_cells_an_interrupted_run_never_reached_are_missing_not_ranked():
     """An outside review: an interrupted run (2 meshes x 3 seeds planned; knight ran on every
     seed, woody on seed 0 only) ranked woody on its one seed, named its winner and counted no
-    missing cell: a cell's seeds were those of its rows. run.json's ``plan`` now adds a ``not run``
+    missing cell: a cell's seeds were those of its rows. plan.csv now adds a ``not run``
     row for every planned case with no row, so woody is missing for every method, and a cell of
     which no case ran (cat) is too."""
     from harness.results import NOT_RUN, PLAN_COLUMNS, with_not_run
@@ -415,14 +415,13 @@ def test_seeds_and_cells_an_interrupted_run_never_reached_are_missing_not_ranked
     rows = [{"case_id": f"{mesh}{m}{s}", "task": "curvature", "mesh": mesh, "noise_model": "gaussian",
              "noise_level": 0.3, "seed": s, "method": m, "params": "{}", "status": "ok", "K_rel_l2": v}
             for (mesh, m), vs in val.items() for s, v in enumerate(vs)]
-    plan = {"columns": list(PLAN_COLUMNS),
-            "rows": [[f"{mesh}{m}{s}", "curvature", mesh, "gaussian", 0.3, s, m, "scratch", "{}"]
-                     for mesh in ("knight", "woody", "cat") for m in "AB" for s in range(3)]}
+    plan = [dict(zip(PLAN_COLUMNS, (f"{mesh}{m}{s}", "curvature", mesh, "gaussian", 0.3, s, m, "scratch", "{}")))
+            for mesh in ("knight", "woody", "cat") for m in "AB" for s in range(3)]
     spec = {"curvature": {"metrics": [{"name": "K_rel_l2", "better": "lower", "rank": True, "rel": 0.01, "abs": 1e-9}],
                           "axis_params": [], "invalid_when": []}}
     frames = {"curvature": pd.DataFrame(rows)}
-    assert with_not_run(frames, {}) is frames                      # a run.json without a plan: as before
-    full = with_not_run(frames, {"plan": plan})
+    assert with_not_run(frames, None) is frames                    # a folder without a plan: as before
+    full = with_not_run(frames, plan)
     assert (full["curvature"]["status"] == NOT_RUN).sum() == 18 - len(rows)
     lb = L.leaderboard(full, spec).set_index("method")
     assert lb["missing_cells"].to_dict() == {"A": 2, "B": 2}
@@ -449,3 +448,21 @@ def test_latex_prints_what_the_names_say_and_fits_the_page():
                        "tied_with_runner_up": "", "input_value": None, "variants": 1, "invalid_excluded": 0}])
     assert "target\\_ratio=0.1" in L.winners_latex(w) and "null" not in L.winners_latex(w)
     assert "| target_ratio=0.1 |" in L.winners_markdown(w)
+
+
+def test_a_published_pairs_case_that_did_not_run_joins_its_pairs_cell():
+    """A review of the plan: a published pair's level is measured when its case runs, so the
+    plan has none, and the case that did not run formed a cell of its own ("given", blank):
+    every method was missing a cell there. It takes the level the pair's other rows give."""
+    from harness.results import PLAN_COLUMNS, with_not_run
+    rows = [{"case_id": f"{m}{mesh}", "task": "curvature", "mesh": mesh, "noise_model": "given", "noise_level": lv,
+             "seed": 0, "method": m, "params": "{}", "status": "ok", "K_rel_l2": 0.1 if m == "A" else 0.2}
+            for m in "AB" for mesh, lv in (("fandisk", 0.3), ("sphere", 0.5)) if (m, mesh) != ("B", "fandisk")]
+    plan = [dict(zip(PLAN_COLUMNS, (f"{m}{mesh}", "curvature", mesh, "given", None, 0, m, "scratch", "{}")))
+            for m in "AB" for mesh in ("fandisk", "sphere")]
+    spec = {"curvature": {"metrics": [{"name": "K_rel_l2", "better": "lower", "rank": True, "rel": 0.01, "abs": 1e-9}],
+                          "axis_params": [], "invalid_when": []}}
+    full = with_not_run({"curvature": pd.DataFrame(rows)}, plan)
+    lb = L.leaderboard(full, spec).set_index("method")
+    assert lb["missing_cells"].to_dict() == {"A": 0, "B": 1}
+    assert len(L.cell_values(spec["curvature"], full["curvature"], "K_rel_l2")[0]) == 2   # no phantom cell

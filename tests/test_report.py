@@ -349,7 +349,7 @@ def test_run_json_says_whether_the_code_that_ran_is_its_commit(run_dir, tmp_path
     assert (clean.stdout.strip(), dirty.stdout.strip()) == ("False", "True"), (clean, dirty)
 
 
-def test_the_cases_an_interrupted_run_never_ran_are_counted_as_not_run(run_dir, tmp_path):
+def test_the_cases_an_interrupted_run_never_ran_are_counted_as_not_run(run_dir, tmp_path, capsys):
     """An outside review: the report of an interrupted run said nothing of the cases it never
     reached. run.json's plan gives each a ``not run`` row: in the status table, the rows and
     the data the winner tables use (never in a CSV)."""
@@ -363,3 +363,8 @@ def test_the_cases_an_interrupted_run_never_ran_are_counted_as_not_run(run_dir, 
     html = (dst / "report.html").read_text()
     assert "<th>not run</th>" in html
     assert len(list(csv.DictReader((dst / "smoothing.csv").open()))) == before - 3
+    with (dst / "plan.csv").open("a") as fh:           # a hand-edited plan: a message, not a traceback
+        fh.write("abc,smoothing,knight,none,,x,scratch.taubin,scratch,{}\n")
+    assert cli(["report", str(dst)]) == 2
+    err = capsys.readouterr().err
+    assert "damaged plan: line" in err and "Traceback" not in err, err

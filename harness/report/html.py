@@ -303,7 +303,7 @@ def collect(run_dir) -> dict:
     """Everything the page shows, as JSON-ready data (also what the tests inspect)."""
     folder = RunFolder(run_dir)
     meta = folder.read_run_json() or {}
-    frames = with_not_run(folder.frames(), meta)       # cases an interrupted run never ran: "not run" rows
+    frames = with_not_run(folder.frames(), folder.read_plan())   # cases an interrupted run never ran: "not run" rows
     specs = task_specs(meta, frames)
     tasks = {t: _frame_payload(specs[t], frames[t]) for t in specs if t in frames}
     mat = (property_matrix(frames["laplacian"], (specs.get("laplacian") or {}).get("method_defaults"))
