@@ -703,9 +703,9 @@ NUMERIC_COMMON = ("n_vertices", "n_faces", "noise_level", "seed", "time_s", "tim
 
 def _check_numbers(path: Path, df: pd.DataFrame) -> None:
     """`ShootoutError` naming the first cell of a number column (the common timing and size
-    columns, a task's float and int metrics) that holds something else, or an infinity (the
-    harness writes a missing or non-finite number as an empty cell): a hand-edited or foreign
-    file, which would otherwise fail deep in the report or compare as no change."""
+    columns, a task's float and int metrics) that holds something else: a hand-edited or
+    foreign file, which would otherwise fail deep in the report. An infinity is a number (this
+    version writes none; older ones did): `compare` orders it, the report shows it as ``inf``."""
     try:
         spec = tasks.get(path.stem)
     except (KeyError, ValueError):
@@ -716,7 +716,7 @@ def _check_numbers(path: Path, df: pd.DataFrame) -> None:
             continue
         vals = df[c]
         num = pd.to_numeric(vals, errors="coerce")
-        bad = (num.isna() & vals.notna()) | np.isinf(num.astype(float))   # inf: never written (a missing number is blank)
+        bad = num.isna() & vals.notna()
         if bad.any():
             i = int(np.flatnonzero(bad.to_numpy())[0])
             raise ShootoutError(f"{path}: damaged CSV: column {c} holds {str(vals.iloc[i])[:40]!r} on line {i + 2}, "

@@ -71,8 +71,10 @@ def number(v) -> float | None:
 
 
 def fmt(v, digits: int = 3) -> str:
-    """The one number formatter of reports and listings: ``—`` for missing, ``true``/``false``,
-    integers as they are, ``digits`` significant digits in [1e-3, 1e5), scientific outside."""
+    """The one number formatter of reports and listings: ``—`` for missing (NaN too), ``inf``,
+    ``true``/``false``, integers as they are, ``digits`` significant digits in [1e-3, 1e5), scientific outside."""
+    if isinstance(v, (float, np.floating)) and math.isinf(v):
+        return "inf" if v > 0 else "-inf"             # not missing: an older version wrote it
     v = scalar(v) if not isinstance(v, str) else v
     if v is None or v == "":
         return "—"
@@ -84,7 +86,7 @@ def fmt(v, digits: int = 3) -> str:
     if x is None:
         return str(v)
     if not math.isfinite(x):
-        return "—"
+        return "—" if math.isnan(x) else ("inf" if x > 0 else "-inf")
     if x == 0:
         return "0"
     if 1e-3 <= abs(x) < 1e5:

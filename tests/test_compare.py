@@ -753,14 +753,16 @@ def test_the_others_cpu_note_gives_the_true_median_as_the_report_does():
 
 
 def test_an_infinite_baseline_is_no_tolerance_for_any_value():
-    """An outside review: a baseline of inf made the tolerance infinite, so any finite value of
-    B was 'within tolerance' (CSVs holding inf are now refused when read; a frame given through
-    the Python API can still hold one)."""
+    """An outside review: a hand-edited baseline of inf made the tolerance infinite, so any finite
+    value of B was 'within tolerance' (this version writes no inf; older ones did). Listings show
+    it as inf, not as a missing value."""
     from harness.compare import Rule, judge
     lower, higher = Rule("lower", 0.01, 0.0), Rule("higher", 0.01, 0.0)
     inf = float("inf")
     assert judge("m", inf, 1.0, rule=lower) == "improvement" and judge("m", 1.0, inf, rule=lower) == "regression"
     assert judge("m", -inf, 1.0, rule=higher) == "improvement" and judge("m", inf, inf, rule=lower) == "same"
+    from harness.schema import fmt
+    assert (fmt(inf), fmt(-inf), fmt("inf"), fmt(float("nan"))) == ("inf", "-inf", "inf", "—")
 
 
 def test_a_case_label_names_its_seed():

@@ -251,8 +251,7 @@ def test_damaged_csvs_are_a_message_not_a_traceback_or_a_false_regression(tmp_pa
             buf = io.StringIO()
             csv.writer(buf, lineterminator="\n").writerows(rows)
             p.write_text(buf.getvalue())
-        for col, value in (("params", "abc"), ("params", "-1"), ("method", ""), ("status", ""), ("status", "done"),
-                           ("ev_rms", "inf"), ("time_s", "-inf")):    # an infinity compared as no change
+        for col, value in (("params", "abc"), ("params", "-1"), ("method", ""), ("status", ""), ("status", "done")):
             edited(col, value)
             with pytest.raises(ShootoutError, match=f"column {col} holds {value!r} on line 2"):
                 load_csv(p)
