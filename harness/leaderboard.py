@@ -518,10 +518,13 @@ def _tex_num(x: float) -> str:
 
 def _tex(s: str) -> str:
     """Text for LaTeX in any font encoding (OT1, pdflatex's default, prints ``<`` ``>`` ``|`` ``"``
-    as other glyphs): the special characters escaped, those four as text symbols."""
+    as other glyphs): the special characters escaped, those four as text symbols, and the
+    characters of TeX's ligatures (``--`` an en dash, ``''`` a closing quote, ``!``` an inverted
+    exclamation mark, T1's ``,,``) kept apart by empty groups."""
     return "".join({"_": r"\_", "&": r"\&", "%": r"\%", "#": r"\#", "$": r"\$", "{": r"\{", "}": r"\}",
                     "~": r"\textasciitilde{}", "^": r"\textasciicircum{}", "\\": r"\textbackslash{}",
                     "<": r"\textless{}", ">": r"\textgreater{}", "|": r"\textbar{}", '"': r"\texttt{\char34}",
+                    "-": "-{}", "`": "{}`{}", "'": "'{}", ",": ",{}",   # no ligature: -- ``  '' !` ?` ,,
                     "\n": " ", "\r": " "}.get(c, c)           # a blank line would end the tabular's paragraph
                    for c in str(s))
 
