@@ -575,6 +575,9 @@ def check_output_file(path, flag: str, protect=(), run_dirs=(), kind: str | None
         raise ShootoutError(f"{flag} {path}: cannot write in {d} ({exc.strerror or exc})") from None
 
 
+SOURCE_DIRS = ("harness", "methods", "tests", "configs", "benchmarks", ".git", ".ci")   # never an --out
+
+
 def check_out_dir(out_dir: Path) -> None:
     """``--out`` must be a folder we can write, or creatable in one (exit 2 before anything is written)."""
     out_dir = Path(out_dir)
@@ -589,7 +592,7 @@ def check_out_dir(out_dir: Path) -> None:
         raise ShootoutError(f"--out {out_dir}: is {'the file system root' if p == Path(p.anchor) else 'your home folder'}"
                             "; give a folder of its own for the run")
     src = Path(__file__).resolve().parent.parent          # the folder holding the harness and methods packages
-    if p == src or any(p == src / pkg or p.is_relative_to(src / pkg) for pkg in ("harness", "methods")):
+    if p == src or any(p.is_relative_to(src / d) for d in SOURCE_DIRS):
         raise ShootoutError(f"--out {out_dir}: is mesh-shootout's source folder{'' if p == src else ' or inside it'} "
                             f"({src}); give a folder of its own for the run (e.g. {src / 'results' / 'NAME'})")
     while not p.exists():

@@ -200,7 +200,8 @@ def test_out_on_a_file_or_a_read_only_place_and_a_huge_face_index(tmp_path, tiny
     r = cli(["run", cfg, "--out", tmp_path / "afile"])
     assert r.returncode == 2 and "not a folder" in r.stderr and "Traceback" not in r.stderr
     for root, what in (("/", "the file system root"), (Path.home(), "your home folder"),
-                       (ROOT, "mesh-shootout's source folder"), (ROOT / "harness" / "x", "mesh-shootout's source folder")):
+                       (ROOT, "mesh-shootout's source folder"), (ROOT / "harness" / "x", "mesh-shootout's source folder"),
+                       (ROOT / "tests" / "plugins", "mesh-shootout's source folder")):
         r = cli(["run", cfg, "--out", root])           # the source folder: an outside review's run wrote among the sources
         assert r.returncode == 2 and f"is {what}" in r.stderr and not (Path(root) / "run.json").exists(), r.stderr
     assert not (ROOT / "harness" / "x").exists()
