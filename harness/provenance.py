@@ -32,11 +32,12 @@ def git_commit() -> str | None:
         return None
 
 
-def code_hash(plugins=()) -> str | None:
+def code_hash(plugins=()) -> str:
     """SHA-256 (first 16 hex digits) of the source that runs the cases: every ``.py`` file of the
     ``harness`` and ``methods`` packages and of each plugin module (a package: its ``.py`` files),
-    names and bytes. Two sessions with different uncommitted edits, or different plugin code,
-    differ here though ``git_commit`` and ``git_dirty`` agree; None when a file cannot be read."""
+    names and bytes (a file that cannot be read counts by its name). Two sessions with different
+    uncommitted edits, or different plugin code, differ here though ``git_commit`` and
+    ``git_dirty`` agree. Modules a plugin imports from elsewhere are not covered."""
     import hashlib
     import importlib.util
     root = Path(__file__).resolve().parent.parent
@@ -47,18 +48,19 @@ def code_hash(plugins=()) -> str | None:
         except (ImportError, ValueError):
             spec = None
         origin = Path(spec.origin) if spec is not None and spec.origin and spec.origin.endswith(".py") else None
-        if origin is None:
-            files.append((f"plugin {mod}", None))
-        elif origin.name == "__init__.py":
-            files += [(f"plugin {mod}/{p.relative_to(origin.parent)}", p) for p in origin.parent.rglob("*.py")]
+        dirs = ([origin.parent] if origin is not None and origin.name == "__init__.py" else
+                [Path(d) for d in (spec.submodule_search_locations or [])] if spec is not None and origin is None else [])
+        if dirs:                                       # a package, a namespace package too: all its files
+            files += [(f"plugin {mod}/{p.relative_to(d)}", p) for d in dirs for p in d.rglob("*.py")]
         else:
             files.append((f"plugin {mod}", origin))
     h = hashlib.sha256()
-    try:
-        for name, path in sorted(files, key=lambda x: x[0]):
-            h.update(name.encode() + b"\0" + (path.read_bytes() if path is not None else b"?") + b"\0")
-    except OSError:
-        return None
+    for name, path in sorted(files, key=lambda x: x[0]):
+        try:
+            data = path.read_bytes() if path is not None else b"<not found>"
+        except OSError as exc:
+            data = f"<unreadable: {exc.strerror}>".encode()
+        h.update(name.encode() + b"\0" + data + b"\0")
     return h.hexdigest()[:16]
 
 

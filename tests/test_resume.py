@@ -439,3 +439,16 @@ def test_a_resume_with_other_plugin_code_under_the_same_commit_says_so(tmp_path)
     assert ch["code_sha256"][0] == first and ch["code_sha256"][1] not in (None, first)
     assert after["code_sha256"] == first                    # the run's first, as its commit
     assert "source files (code_sha256)" in (out / "report.html").read_text()
+
+
+def test_code_sha256_covers_a_namespace_package_plugin(tmp_path, monkeypatch):
+    """A review of the hash: a plugin given as a namespace package (no __init__.py) hashed as a
+    constant, so editing its module changed nothing."""
+    from harness.provenance import code_hash
+    (tmp_path / "nsplug").mkdir()
+    mod = tmp_path / "nsplug" / "meth.py"
+    mod.write_text("X = 1\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    a = code_hash(["nsplug"])
+    mod.write_text("X = 2\n")
+    assert code_hash(["nsplug"]) != a and code_hash(["nsplug"]) == code_hash(["nsplug"])
