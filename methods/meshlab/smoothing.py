@@ -30,12 +30,22 @@ uniform sums count each neighbour twice and cotangent sums give ``cot a + cot b`
     positions before the pass, ``p_i = mean_{N(i)} q_j`` and ``b_i = p_i - q_i`` (the paper's
     alpha = 0), the pass gives ``p_i - beta b_i + (1 - beta) mean_{N(i)} b_j`` with beta 0.5.
     Vollmer, Mencl and Mueller's HC (1999) *subtracts* the neighbours' mean ``b``
-    (`scratch.hc`), so this is MeshLab's variant of HC, not the paper's: on Fandisk0.3 one pass
-    is 6.9e-3 of the diagonal away from it (tests/test_smoothing_hc.py).
-``meshlab.two_steps`` (``apply_coord_two_steps_smoothing``)
-    Belyaev & Ohtake's two-step ("PasoDoble") smoothing: face normals smoothed
-    ``normal_iterations`` times among neighbours within ``normal_threshold_deg``, then vertices
-    fitted to the new normals ``fit_iterations`` times; repeated ``iterations`` times.
+    (`scratch.hc`), so this is MeshLab's variant of HC, not the paper's: on Fandisk0.3, after
+    one pass, a vertex is up to 6.9e-3 of the diagonal away from it (tests/test_smoothing_hc.py).
+``meshlab.two_steps`` (``apply_coord_two_steps_smoothing``, VCG ``VertexCoordPasoDoble``)
+    MeshLab names Belyaev & Ohtake's two-step smoothing; the formulas are those of Sun et al.
+    2007 (`scratch.sun`): ``iterations`` times, unit face normals, then ``normal_iterations``
+    Jacobi passes ``n_f <- normalize(sum_g w_fg n_g)``, ``w_fg = (c - T)^2`` where
+    ``c = clamp(n_f . n_g, 1e-4, 1) >= T``, ``T = max(cos(normal_threshold_deg), 0)`` (no area
+    weights; 0 degrees moves nothing, 90 or more are all alike), then ``fit_iterations`` passes
+    ``x_i += 1/|F_i| sum_f n_f (n_f . (c_f - x_i))`` (boundary not fixed). Unlike Sun et al.,
+    VCG's normal pass walks each vertex's face list from the face itself, and the lists run
+    in decreasing face index, so a face averages only with the vertex-adjacent faces of a
+    lower or equal index (about half its ring; some faces only with themselves): the result
+    depends on the order of the faces (Fandisk0.3 at the defaults: ``dist_mean`` 4.13e-3 in
+    the file's order, 2.33e-3 with the faces shuffled, against the noisy input's 3.33e-3;
+    `scratch.sun` at its defaults gives 1.08e-3 in both orders), and it is not the paper's
+    method (tests/test_smoothing_sun.py).
 ``meshlab.surface_preserving`` (``apply_coord_laplacian_smoothing_surface_preserving``)
     uniform Laplacian step cancelled for vertices whose move would rotate an incident face
     normal by more than ``angle_deg`` (Lacewell et al. style "planar" Laplacian).
@@ -161,10 +171,13 @@ def hc(V, F, *, iterations=1):
                                           doc="stepfitnum")})
 def two_steps(V, F, *, iterations=3, normal_threshold_deg=60.0, normal_iterations=20,
               fit_iterations=20):
-    """MeshLab two-step smoothing (Belyaev & Ohtake 2003): normal smoothing, then fitting.
+    """MeshLab's two-step smoothing: Sun et al. 2007's normal filtering and vertex fitting, with
+    VCG's one-sided face neighbourhood (module docstring), so its result depends on the order
+    of the faces; `scratch.sun` is the published method.
 
-    Parameters map to the filter's ``stepsmoothnum``, ``normalthr`` (degrees),
-    ``stepnormalnum``, ``stepfitnum``; defaults are MeshLab's.
+    Parameters map to the filter's ``stepsmoothnum``, ``normalthr`` (degrees; the threshold is
+    ``max(cos(normalthr), 0)`` on the normals' dot product), ``stepnormalnum``, ``stepfitnum``;
+    defaults are MeshLab's.
     """
     ms = _meshset(V, F)
     if iterations > 0:
