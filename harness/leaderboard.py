@@ -517,16 +517,19 @@ def _tex_num(x: float) -> str:
 
 
 def _tex(s: str) -> str:
-    """Text for LaTeX in any font encoding (OT1, pdflatex's default, prints ``<`` ``>`` ``|`` ``"``
-    as other glyphs): the special characters escaped, those four as text symbols, and the
-    characters of TeX's ligatures (``--`` an en dash, ``''`` a closing quote, ``!``` an inverted
-    exclamation mark, T1's ``,,``) kept apart by empty groups."""
-    return "".join({"_": r"\_", "&": r"\&", "%": r"\%", "#": r"\#", "$": r"\$", "{": r"\{", "}": r"\}",
+    """Text for a LaTeX table cell, in OT1 (pdflatex's default, which prints ``<`` ``>`` ``|``
+    ``"`` as other glyphs) or T1: the special characters escaped, those four as text symbols,
+    the characters of TeX's ligatures (``--`` an en dash, ``''`` a closing quote, ``!``` an
+    inverted exclamation mark, T1's ``,,``) kept apart by empty groups, and a leading ``[`` or
+    ``*`` behind ``{}`` (after ``\\\\`` or ``\\midrule`` it would be read as their argument).
+    Characters outside LaTeX's UTF-8 tables (e.g. CJK) need xelatex or lualatex."""
+    out = "".join({"_": r"\_", "&": r"\&", "%": r"\%", "#": r"\#", "$": r"\$", "{": r"\{", "}": r"\}",
                     "~": r"\textasciitilde{}", "^": r"\textasciicircum{}", "\\": r"\textbackslash{}",
                     "<": r"\textless{}", ">": r"\textgreater{}", "|": r"\textbar{}", '"': r"\texttt{\char34}",
                     "-": "-{}", "`": "{}`{}", "'": "'{}", ",": ",{}",   # no ligature: -- ``  '' !` ?` ,,
                     "\n": " ", "\r": " "}.get(c, c)           # a blank line would end the tabular's paragraph
-                   for c in str(s))
+                  for c in str(s))
+    return "{}" + out if out[:1] in ("[", "*") else out
 
 
 FIT = r"\resizebox{\ifdim\width>\linewidth\linewidth\else\width\fi}{!}{%"   # shrink a table wider than the text only

@@ -81,10 +81,20 @@ def close_inherited_locks() -> None:
     _HELD_LOCKS.clear()
 
 
+def write_csv_rows(fh, rows) -> None:
+    """CSV lines ending in ``\n``; a row holding a carriage return in a value (a file name may)
+    has every field quoted, since the csv module quotes only the line terminator's characters
+    and a bare ``\r`` would end the line for a reader."""
+    plain = csv.writer(fh, lineterminator="\n")
+    quoted = csv.writer(fh, lineterminator="\n", quoting=csv.QUOTE_ALL)
+    for r in rows:
+        (quoted if any(isinstance(v, str) and "\r" in v for v in r) else plain).writerow(r)
+
+
 def format_row(task: str, row: dict) -> str:
     """One CSV line (with newline) in the task's column order; unknown keys are dropped."""
     buf = io.StringIO()
-    csv.writer(buf, lineterminator="\n").writerow([cell(row.get(c)) for c in columns(task)])
+    write_csv_rows(buf, [[cell(row.get(c)) for c in columns(task)]])
     return buf.getvalue()
 
 
@@ -276,7 +286,7 @@ class RunFolder:
         p = self.csv_path(task)
         if not p.exists():
             return []
-        text = p.read_text(encoding="utf-8-sig")            # a BOM is not part of the first column's name
+        text = p.read_bytes().decode("utf-8-sig")           # no newline translation; a BOM is no column name
         lines = text.splitlines(keepends=True)
         if lines and not lines[-1].endswith("\n"):
             lines = lines[:-1]
@@ -368,9 +378,8 @@ class RunFolder:
             done |= seen
             if self.csv_path(task).exists():
                 def write(fh, rows=rows, task=task):
-                    w = csv.DictWriter(fh, fieldnames=columns(task), lineterminator="\n")
-                    w.writeheader()
-                    w.writerows(rows)
+                    cols = columns(task)
+                    write_csv_rows(fh, [cols] + [[r.get(c, "") for c in cols] for r in rows])
                 atomic_write(self.csv_path(task), write)
         return done
 
@@ -385,9 +394,8 @@ class RunFolder:
                 continue
 
             def write(fh, keep=keep, task=task):
-                w = csv.DictWriter(fh, fieldnames=columns(task), lineterminator="\n")
-                w.writeheader()
-                w.writerows(keep)
+                cols = columns(task)
+                write_csv_rows(fh, [cols] + [[r.get(c, "") for c in cols] for r in keep])
             atomic_write(self.csv_path(task), write)
 
     def append(self, task: str, row: dict) -> None:
@@ -416,11 +424,8 @@ class RunFolder:
 
     def write_plan(self, rows: list[dict]) -> None:
         """``plan.csv``: the identifying columns (`PLAN_COLUMNS`) of every case the run plans."""
-        def write(fh):
-            w = csv.writer(fh, lineterminator="\n")
-            w.writerow(PLAN_COLUMNS)
-            w.writerows([cell(r.get(c)) for c in PLAN_COLUMNS] for r in rows)
-        atomic_write(self.path / PLAN_FILE, write)
+        atomic_write(self.path / PLAN_FILE, lambda fh: write_csv_rows(
+            fh, [PLAN_COLUMNS] + [[cell(r.get(c)) for c in PLAN_COLUMNS] for r in rows]))
 
     def read_plan(self) -> list[dict] | None:
         """The rows of ``plan.csv`` (typed by `_plan_row`), None when the folder has none (a run
@@ -429,7 +434,7 @@ class RunFolder:
         if not path.exists():
             return None
         try:
-            text = path.read_text(encoding="utf-8")
+            text = path.read_bytes().decode("utf-8")    # no newline translation: a quoted \r stays one
         except (OSError, UnicodeDecodeError) as exc:
             raise ShootoutError(f"{path}: unreadable ({exc})") from None
         rows = list(csv.reader(io.StringIO(text)))
@@ -575,7 +580,7 @@ def check_output_file(path, flag: str, protect=(), run_dirs=(), kind: str | None
         raise ShootoutError(f"{flag} {path}: cannot write in {d} ({exc.strerror or exc})") from None
 
 
-SOURCE_DIRS = ("harness", "methods", "tests", "configs", "benchmarks", ".git", ".ci")   # never an --out
+SOURCE_DIRS = ("harness", "methods", "tests", "configs", "benchmarks", "docs", ".git", ".ci")   # never an --out
 
 
 def check_out_dir(out_dir: Path) -> None:
@@ -593,8 +598,10 @@ def check_out_dir(out_dir: Path) -> None:
                             "; give a folder of its own for the run")
     src = Path(__file__).resolve().parent.parent          # the folder holding the harness and methods packages
     if p == src or any(p.is_relative_to(src / d) for d in SOURCE_DIRS):
-        raise ShootoutError(f"--out {out_dir}: is mesh-shootout's source folder{'' if p == src else ' or inside it'} "
-                            f"({src}); give a folder of its own for the run (e.g. {src / 'results' / 'NAME'})")
+        what = "source folder" if (src / "pyproject.toml").is_file() else "installation folder"
+        raise ShootoutError(f"--out {out_dir}: is mesh-shootout's {what}{'' if p == src else ' or inside it'} "
+                            f"({src}); give a folder of its own for the run"
+                            + (f" (e.g. {src / 'results' / 'NAME'})" if what == "source folder" else ""))
     while not p.exists():
         p = p.parent
     if not p.is_dir():
@@ -708,7 +715,8 @@ def _check_numbers(path: Path, df: pd.DataFrame) -> None:
     """`ShootoutError` naming the first cell of a number column (the common timing and size
     columns, a task's float and int metrics) that holds something else: a hand-edited or
     foreign file, which would otherwise fail deep in the report. An infinity is a number (this
-    version writes none; older ones did): `compare` orders it, the report shows it as ``inf``."""
+    version writes none; older ones did): `compare` orders it and prints ``inf``; the report's
+    page shows it blank, as a missing value."""
     try:
         spec = tasks.get(path.stem)
     except (KeyError, ValueError):

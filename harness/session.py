@@ -19,7 +19,7 @@ from .errors import ShootoutError, check_interrupt, problems_error
 from .executors import EXECUTORS, make_executor
 from .mesh import write_ply
 from .provenance import code_hash, git_commit, git_dirty, machine_info, now_iso, package_versions, usable_cpus
-from .results import Frames, RunFolder, check_output_file, out_dir_problems, with_not_run
+from .results import PLAN_FILE, Frames, RunFolder, check_output_file, out_dir_problems, with_not_run
 
 
 def config_hash(cfg: Config, with_tune: bool = True) -> str:
@@ -499,11 +499,14 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
     if executor == "dask":       # the cluster's worker threads, not --workers
         meta.update(ex.describe())
     try:
+        if not (resume and cfg.tune is not None):   # a tuned resume keeps its plan until tuning has chosen
+            folder.write_plan(plan(cfg.cases))
         folder.write_run_json(meta)
-        folder.write_plan(plan(cfg.cases))
     except OSError as exc:
         ex.close()
         folder.remove_temporaries()
+        if not resume:                    # a fresh run whose run.json did not fit leaves no plan either
+            (out_dir / PLAN_FILE).unlink(missing_ok=True)
         if exc.errno in NO_ROOM:
             raise DiskFull(_no_room(exc, out_dir, "nothing half-written was kept; make room (or raise the limit), "
                                     "then run again" + (" with --resume" if resume else ""))) from None

@@ -577,3 +577,21 @@ def test_a_file_size_limit_or_full_temporary_files_is_one_message_naming_where(t
     assert msg.startswith("/elsewhere/tmp/shootout-case-x.err: the disk is full") and "TMPDIR" in msg
     inside = _no_room(OSError(_errno.ENOSPC, "No space left on device", str(out / "smoothing.csv")), out)
     assert "TMPDIR" not in inside and "disk is full" in inside
+
+
+def test_a_carriage_return_in_a_label_survives_every_csv_the_run_writes(tmp_path):
+    """A review of plan.csv: a bare \\r in a mesh label (a file name may hold one) was written
+    unquoted, so readers split the row there: plan.csv, and the task CSVs before it, were then
+    'damaged'. Rows holding one are quoted whole, and readers keep the \\r."""
+    from harness.results import RunFolder, load_csv
+    folder = RunFolder(tmp_path / "o")
+    row = {"case_id": "abc123", "task": "smoothing", "mesh": "cr\rmesh, \"q\"", "noise_model": "none",
+           "noise_level": 0.0, "seed": 0, "method": "scratch.taubin", "library": "scratch", "params": "{}",
+           "status": "ok", "error": ""}
+    folder.append("smoothing", row)
+    folder.append("smoothing", {**row, "case_id": "def456", "mesh": "plain"})
+    assert load_csv(folder.csv_path("smoothing"))["mesh"].tolist() == [row["mesh"], "plain"]
+    assert folder.keep_ok_rows() == {"abc123", "def456"}                     # rewritten, still whole
+    assert load_csv(folder.csv_path("smoothing"))["mesh"].tolist() == [row["mesh"], "plain"]
+    folder.write_plan([row])
+    assert [r["mesh"] for r in folder.read_plan()] == [row["mesh"]]

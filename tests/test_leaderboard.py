@@ -437,6 +437,7 @@ def test_latex_prints_what_the_names_say_and_fits_the_page():
     ran up to 556 pt off the page."""
     assert L._tex('a<b>"c"|d') == r'a\textless{}b\textgreater{}\texttt{\char34}c\texttt{\char34}\textbar{}d'
     assert L._tex("a--b ''c!`") == "a-{}-{}b '{}'{}c!{}`{}"          # no en dash, quote or inverted mark
+    assert L._tex("[1em].b") == "{}[1em].b" and L._tex("*star") == "{}*star"   # not \\midrule's or \\\\'s argument
     assert L.setting_text('{"target_faces": null, "target_ratio": 0.1}') == "target_ratio=0.1"
     lb = pd.DataFrame([{"task": "t", "metric": "m", "better": "lower", "cells": 1, "k": 2, "method": x,
                         "mean_rank": r, "missing_cells": 0, "invalid_cells": 0, "friedman_p": float("nan"),

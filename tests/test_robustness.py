@@ -33,7 +33,7 @@ def env_with_root():
 
 
 def read_all(out: Path) -> pd.DataFrame:
-    return pd.concat([load_csv(p) for p in sorted(out.glob("*.csv")) if p.name not in ("leaderboard.csv", "winners.csv")], ignore_index=True)
+    return pd.concat([load_csv(p) for p in sorted(out.glob("*.csv")) if p.name not in ("leaderboard.csv", "winners.csv", "plan.csv")], ignore_index=True)
 
 
 def test_abort_segfault_and_sleep_through_the_cli(tmp_path):

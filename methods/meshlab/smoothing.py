@@ -31,7 +31,8 @@ uniform sums count each neighbour twice and cotangent sums give ``cot a + cot b`
     alpha = 0), the pass gives ``p_i - beta b_i + (1 - beta) mean_{N(i)} b_j`` with beta 0.5.
     Vollmer, Mencl and Mueller's HC (1999) *subtracts* the neighbours' mean ``b``
     (`scratch.hc`), so this is MeshLab's variant of HC, not the paper's: on Fandisk0.3, after
-    one pass, a vertex is up to 6.9e-3 of the diagonal away from it (tests/test_smoothing_hc.py).
+    one pass, a vertex is up to 6.7e-3 of the noisy input's bounding-box diagonal away from it
+    (tests/test_smoothing_hc.py).
 ``meshlab.two_steps`` (``apply_coord_two_steps_smoothing``, VCG ``VertexCoordPasoDoble``)
     MeshLab names Belyaev & Ohtake's two-step smoothing; the formulas are those of Sun et al.
     2007 (`scratch.sun`): ``iterations`` times, unit face normals, then ``normal_iterations``

@@ -11,7 +11,8 @@ from methods.scratch.bilateral import face_geometry, face_neighbour_pairs, sun_v
 @register("scratch.sun", task="smoothing", library="scratch",
           params={"threshold": Param("threshold", 0.5, "float", low=1e-10, high=1.0,
                                      doc="T: neighbours whose normals make cos <= T with the face's are "
-                                         "ignored (0.5: 60 degrees; the reference code's default)"),
+                                         "ignored (0.5: 60 degrees; the reference code's default; 1 "
+                                         "keeps every normal, and so the mesh)"),
                   "normal_iterations": Param("normal_iterations", 20, "int", low=0, high=1000,
                                              doc="normal filtering passes"),
                   "vertex_iterations": Param("vertex_iterations", 50, "int", low=0, high=1000,
