@@ -331,6 +331,31 @@ def test_a_case_that_kills_its_worker_costs_its_own_row_only(one_worker, tmp_pat
         assert r["status"] == "error" and "worker running this case died each of the 2 times" in r["error"], r
 
 
+def test_a_case_queued_behind_a_worker_killer_is_not_blamed_for_its_death(tmp_path):
+    """An outside review: with a bundled mesh (no shipped file), a case that only waited behind
+    one that kills its worker got Dask's KilledWorker too (Dask counts a death against every task
+    assigned to the worker) and became an error row: 1 run in 2 here before (a daemonic worker,
+    cases in subprocesses), so two runs of the same code compared as a regression. A KilledWorker
+    task that never started runs again; the killer is still named."""
+    with dask.config.set({"distributed.worker.daemon": True, "distributed.scheduler.allowed-failures": 3}):
+        cl = distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0",
+                                      silence_logs=logging.CRITICAL)
+    cfg = load_config({"plugins": ["tests.plugins.worker_killer", "tests.plugins.slowdown"], "time_budget": 0,
+                       "meshes": ["knight"], "noise": [{"model": "gaussian_normal", "levels": [0.1]}],
+                       "tasks": {"smoothing": {"methods": ["worker_killer.parent", "slowdown.sleep", "scratch.taubin"]}}})
+    try:
+        ex = DaskExecutor(timeout=120, scheduler=cl.scheduler_address)
+        try:
+            rows = {row["method"]: row for _, row, _ in ex.run(cfg.cases)}
+        finally:
+            ex.close()
+    finally:
+        cl.close()
+    assert rows["slowdown.sleep"]["status"] == rows["scratch.taubin"]["status"] == "ok", rows
+    killer = rows["worker_killer.parent"]
+    assert killer["status"] == "error" and "worker running this case died" in killer["error"], killer
+
+
 def _log_as(*events):
     from harness.executors.dask import _log
     for e in events:

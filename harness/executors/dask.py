@@ -6,7 +6,11 @@ Design
   one row per task: whatever Dask does underneath (a task re-run after its worker died,
   ``distributed.scheduler.allowed-failures``), the driver writes exactly one row per case, when
   its future completes. A task that Dask gives up on (``KilledWorker``: the worker process
-  itself died, e.g. out of memory) becomes an ``error`` row naming it.
+  itself died, e.g. out of memory) becomes an ``error`` row naming it if its case had started
+  (its task logs its start and end, `_log`); one that had only waited on that worker (Dask
+  counts a death against every task assigned to the worker) is submitted again, three times at
+  most. A scheduler lost, or restarted on the same address (the client reconnects, but the
+  tasks it had out are cancelled), interrupts the run (exit 1, resumable).
 - Cases are small and self-describing. Bundled and procedural meshes are loaded or
   regenerated on the worker (deterministically, from the package data and the spec). For
   ``{file: ...}`` meshes (and the ``clean:`` file of a pair) the *driver* reads the file's
@@ -238,11 +242,25 @@ class DaskExecutor:
                 row, extras = fut.result()
             except Exception as exc:  # KilledWorker, CancelledError: one error row; a lost scheduler: stop
                 name = type(exc).__name__
-                if name != "KilledWorker" and not self._scheduler_alive():
+                if name != "KilledWorker" and ("scheduler-connection-lost" in str(exc) or not self._scheduler_alive()):
+                    # gone, or gone and back (a restart on the same address: the client reconnects,
+                    # but the tasks it had out are cancelled): either way the run stops, resumable
                     raise RunInterrupted(f"lost the Dask scheduler {self.scheduler} ({name}); the rows "
                                          "finished so far are saved: continue with --resume") from None
                 sent, cid = sent_of[case.case_id], case.case_id
                 what = None
+                if name == "KilledWorker" and not self._ran_when_lost(fut.key):
+                    # Dask counts a worker's death against every task assigned to it, also those
+                    # queued behind the case that killed it: one that never started is run again
+                    tries[cid] = tries.get(cid, 0) + 1
+                    if tries[cid] <= 3:
+                        fut.release()
+                        again = submit(case, sent)
+                        futures[again] = case
+                        ac.add(again)
+                        continue
+                    what = (f"Dask gave up on this case {tries[cid]} times (KilledWorker) while it waited on "
+                            "workers that died before it started (another case may kill them); --resume runs it again")
                 if "Cancelled" in name and _hashes(sent):
                     # the worker holding the file's bytes left (a restart, --lifetime, or a case that
                     # killed it): every task waiting for them is cancelled, whether it ran or not
