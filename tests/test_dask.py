@@ -111,6 +111,34 @@ def test_dask_run_equals_local_run(cluster, tmp_path):
     assert meta["executor"] == "dask" and meta["workers"] == 2
 
 
+def _pretend_other_code(code):
+    import harness.executors.dask as d
+    d._CODE.clear()
+    if code:
+        d._CODE[()] = code
+
+
+def test_a_worker_running_other_code_costs_its_rows_not_a_mixed_folder(cluster):
+    """An outside review: a worker started on another checkout (an older commit, or edited code)
+    made rows that the run recorded under the driver's commit and code_sha256 (10 regressions
+    against a local run, nothing said). A row from a worker whose sources hash otherwise is an
+    error row naming both hashes. (The workers here are told another hash: the same thing to the
+    driver as another checkout.)"""
+    cfg = load_config({"name": "t", "time_budget": 0, "meshes": ["knight"],
+                       "tasks": {"smoothing": {"methods": ["scratch.taubin"]}}})
+    ex = DaskExecutor(timeout=60, scheduler=cluster.scheduler_address)
+    try:
+        ex.client.run(_pretend_other_code, "0123456789abcdef")
+        rows = [row for _, row, _ in ex.run(cfg.cases)]
+        ex.client.run(_pretend_other_code, None)
+        again = [row for _, row, _ in ex.run(cfg.cases)]
+    finally:
+        ex.close()
+    assert [r["status"] for r in rows] == ["error"] and "runs other code than the driver" in rows[0]["error"]
+    assert "0123456789abcdef" in rows[0]["error"] and "_worker_code" not in rows[0]
+    assert [r["status"] for r in again] == ["ok"] and "_worker_code" not in again[0]
+
+
 def test_timeout_and_crash_on_workers_through_the_cli(cluster, tmp_path):
     """`shootout run --executor dask --scheduler ADDR --timeout 3`: the sleeping case is killed on
     its worker (timeout row), the segfault is an error row naming SIGSEGV, the rest is ok."""

@@ -287,6 +287,10 @@ class DaskExecutor:
                                  else "the Dask task failed") + f" ({name}: {exc})")
                 row["error"] = what[:2000]
             fut.release()
+            why = other_code(row, case)
+            if why:
+                row, extras = base_row(case), {}
+                row["error"] = why
             yield case, row, extras
         self._futures = {}
 
@@ -485,8 +489,36 @@ def run_task(case: Case, blobs: dict, timeout: float | None, want_meshes: bool):
         row, meshes = run_isolated(case, timeout, want_meshes, stop=_cancelled)
     if row.get("status") == "unavailable":      # which machine lacks the library
         row["error"] = f"{row.get('error') or ''} (on the worker at {_worker_name()})".lstrip()
+    row[CODE_KEY] = (_code_of(case.plugins), _worker_name())
     _log(ENDED)
     return row, meshes
+
+
+CODE_KEY = "_worker_code"        # a row's (code_sha256, worker) from `run_task`, checked and dropped by the driver
+_CODE: dict = {}
+
+
+def _code_of(plugins) -> str:
+    """`harness.provenance.code_hash` of this process's sources and ``plugins``, once per process."""
+    key = tuple(plugins)
+    if key not in _CODE:
+        from ..provenance import code_hash
+        _CODE[key] = code_hash(key)
+    return _CODE[key]
+
+
+def other_code(row: dict, case: Case) -> str | None:
+    """Why ``row`` is not kept: the worker that made it ran other sources (`code_hash`) than this
+    driver, e.g. an older checkout on its PYTHONPATH; None when they agree or the row says nothing."""
+    theirs = row.pop(CODE_KEY, None)
+    if not isinstance(theirs, (tuple, list)) or len(theirs) != 2:
+        return None
+    ours = _code_of(case.plugins)
+    if theirs[0] == ours:
+        return None
+    return (f"the Dask worker ({theirs[1]}) runs other code than the driver (code_sha256 {theirs[0]}, the "
+            f"driver's {ours}: its harness, methods or plugins differ); its row is not kept: give every "
+            "worker the driver's code")
 
 
 def _topic(key) -> str:
