@@ -6,11 +6,11 @@ subtracts it. Tolerances are relative to the bounding-box diagonal, on a closed 
 plane with noise."""
 from pathlib import Path
 
-import igl
 import numpy as np
 import pytest
 
 import methods
+from harness.mesh import read_mesh
 from harness.noise import apply_noise
 from methods.scratch.hc import neighbour_mean
 
@@ -18,8 +18,8 @@ MESHES = Path(__file__).resolve().parents[1] / "harness" / "data" / "meshes"
 
 
 def _load(name):
-    V, F = igl.read_triangle_mesh(str(MESHES / name))
-    return np.asarray(V, np.float64), np.asarray(F, np.int64)
+    m = read_mesh(MESHES / name, repair=False)
+    return m.V, m.F
 
 
 def _obtuse_plane():

@@ -7,19 +7,19 @@ Tolerances are relative to the bounding-box diagonal; meshes: a noisy closed mes
 (decimated-knight), a noisy open one (woody) and a noisy obtuse plane."""
 from pathlib import Path
 
-import igl
 import numpy as np
 import pytest
 
 import methods
+from harness.mesh import read_mesh
 from harness.noise import apply_noise
 
 MESHES = Path(__file__).resolve().parents[1] / "harness" / "data" / "meshes"
 
 
 def _load(name):
-    V, F = igl.read_triangle_mesh(str(MESHES / name))
-    return np.asarray(V, np.float64), np.asarray(F, np.int64)
+    m = read_mesh(MESHES / name, repair=False)
+    return m.V, m.F
 
 
 @pytest.fixture(scope="module")

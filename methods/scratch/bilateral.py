@@ -69,6 +69,12 @@ def sun_vertex_update(X: np.ndarray, F: np.ndarray, N: np.ndarray, iterations: i
     return X
 
 
+FACE_NEIGHBOURHOOD = Param("neighbourhood", "vertex", choices=("vertex", "edge"),
+                           doc="faces sharing a vertex (default) or an edge with the face")
+FIXED_BOUNDARY = Param("boundary", "fixed", choices=("fixed", "free"),
+                       doc="boundary vertices kept in place (the reference code) or moved")
+
+
 @register("scratch.bilateral", task="smoothing", library="scratch",
           cite="Zheng, Fu, Au, Tai, Bilateral normal filtering for mesh denoising, IEEE TVCG 17(10), 2011",
           params={"sigma_r": Param("sigma_r", 0.35, "float", low=1e-6, high=10.0,
@@ -84,10 +90,7 @@ def sun_vertex_update(X: np.ndarray, F: np.ndarray, N: np.ndarray, iterations: i
                   "iterations": Param("iterations", 1, "int", low=0, high=1000,
                                       doc="outer iterations (filter normals, then fit); the "
                                           "paper's local scheme is 1"),
-                  "neighbourhood": Param("neighbourhood", "vertex", choices=("vertex", "edge"),
-                                         doc="faces sharing a vertex (default) or an edge with the centre face"),
-                  "boundary": Param("boundary", "fixed", choices=("fixed", "free"),
-                                    doc="boundary vertices kept in place (the reference code) or moved")})
+                  "neighbourhood": FACE_NEIGHBOURHOOD, "boundary": FIXED_BOUNDARY})
 def bilateral(V, F, *, sigma_r=0.35, sigma_s=1.0, normal_iterations=20, vertex_iterations=10,
               iterations=1, neighbourhood="vertex", boundary="fixed"):
     """Bilateral normal filtering (Zheng, Fu, Au, Tai, "Bilateral normal filtering for mesh

@@ -5,7 +5,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from methods import Param, SmoothingResult, register
-from methods.scratch.bilateral import face_geometry, face_neighbour_pairs, sun_vertex_update
+from methods.scratch.bilateral import (FACE_NEIGHBOURHOOD, FIXED_BOUNDARY, face_geometry, face_neighbour_pairs,
+                                      sun_vertex_update)
 
 
 @register("scratch.sun", task="smoothing", library="scratch",
@@ -17,10 +18,7 @@ from methods.scratch.bilateral import face_geometry, face_neighbour_pairs, sun_v
                                              doc="normal filtering passes"),
                   "vertex_iterations": Param("vertex_iterations", 50, "int", low=0, high=1000,
                                              doc="vertex update passes"),
-                  "neighbourhood": Param("neighbourhood", "vertex", choices=("vertex", "edge"),
-                                         doc="faces sharing a vertex (default) or an edge with the face"),
-                  "boundary": Param("boundary", "fixed", choices=("fixed", "free"),
-                                    doc="boundary vertices kept in place (the reference code) or moved")})
+                  "neighbourhood": FACE_NEIGHBOURHOOD, "boundary": FIXED_BOUNDARY})
 def sun(V, F, *, threshold=0.5, normal_iterations=20, vertex_iterations=50, neighbourhood="vertex",
         boundary="fixed"):
     """Sun, Rosin, Martin, Langbein, "Fast and effective feature-preserving mesh denoising",
