@@ -111,6 +111,21 @@ def test_dask_run_equals_local_run(cluster, tmp_path):
     assert meta["executor"] == "dask" and meta["workers"] == 2
 
 
+def test_a_scheduler_that_went_is_told_from_a_task_cancelled_for_itself():
+    """An outside review: a scheduler restarted on its address (or by another client's
+    ``restart()``) cancels the tasks out with a reason of its own, while the client reconnects,
+    so the run counted them as failed cases and ended 'finished'. Those reasons now interrupt
+    the run (checked by hand with a real scheduler killed and restarted, and with a second
+    client's restart(): exit 1, resumable)."""
+    from distributed.client import FutureCancelledError
+
+    from harness.executors.dask import scheduler_went
+    assert scheduler_went(FutureCancelledError("k", "scheduler-connection-lost"))
+    assert scheduler_went(FutureCancelledError("k", "scheduler-restart", "Scheduler has restarted"))
+    assert not scheduler_went(FutureCancelledError("k", "lost dependencies"))
+    assert not scheduler_went(FutureCancelledError("k", None)) and not scheduler_went(RuntimeError("scheduler-restart"))
+
+
 def _pretend_other_code(code):
     import harness.executors.dask as d
     d._CODE.clear()
@@ -134,7 +149,7 @@ def test_a_worker_running_other_code_costs_its_rows_not_a_mixed_folder(cluster):
         again = [row for _, row, _ in ex.run(cfg.cases)]
     finally:
         ex.close()
-    assert [r["status"] for r in rows] == ["error"] and "runs other code than the driver" in rows[0]["error"]
+    assert [r["status"] for r in rows] == ["error"] and "ran other code than the driver" in rows[0]["error"]
     assert "0123456789abcdef" in rows[0]["error"] and "_worker_code" not in rows[0]
     assert [r["status"] for r in again] == ["ok"] and "_worker_code" not in again[0]
 

@@ -211,6 +211,7 @@ class DaskExecutor:
         sent_of: dict = {}
         tries: dict = {}       # per case: cancellations before it ran (its file's holder left)
         died: dict = {}        # per case: cancellations while it ran (its worker died under it)
+        waited: dict = {}      # per case: KilledWorker before it started (deaths counted against it while queued)
 
         def submit(case, sent):
             for h in _hashes(sent):          # scattered bytes lost with their worker: ship them again
@@ -242,24 +243,24 @@ class DaskExecutor:
                 row, extras = fut.result()
             except Exception as exc:  # KilledWorker, CancelledError: one error row; a lost scheduler: stop
                 name = type(exc).__name__
-                if name != "KilledWorker" and ("scheduler-connection-lost" in str(exc) or not self._scheduler_alive()):
-                    # gone, or gone and back (a restart on the same address: the client reconnects,
-                    # but the tasks it had out are cancelled): either way the run stops, resumable
+                if name != "KilledWorker" and (scheduler_went(exc) or not self._scheduler_alive()):
+                    # gone, gone and back (a restart on the same address: the client reconnects, but
+                    # the tasks it had out are cancelled), or restarted by a client: the run stops, resumable
                     raise RunInterrupted(f"lost the Dask scheduler {self.scheduler} ({name}); the rows "
                                          "finished so far are saved: continue with --resume") from None
                 sent, cid = sent_of[case.case_id], case.case_id
                 what = None
-                if name == "KilledWorker" and not self._ran_when_lost(fut.key):
+                if name == "KilledWorker" and self._ran_when_lost(fut.key, unknown=True) is False:
                     # Dask counts a worker's death against every task assigned to it, also those
                     # queued behind the case that killed it: one that never started is run again
-                    tries[cid] = tries.get(cid, 0) + 1
-                    if tries[cid] <= 3:
+                    waited[cid] = waited.get(cid, 0) + 1
+                    if waited[cid] <= 3:
                         fut.release()
                         again = submit(case, sent)
                         futures[again] = case
                         ac.add(again)
                         continue
-                    what = (f"Dask gave up on this case {tries[cid]} times (KilledWorker) while it waited on "
+                    what = (f"Dask gave up on this case {waited[cid]} times (KilledWorker) while it waited on "
                             "workers that died before it started (another case may kill them); --resume runs it again")
                 if "Cancelled" in name and _hashes(sent):
                     # the worker holding the file's bytes left (a restart, --lifetime, or a case that
@@ -283,29 +284,33 @@ class DaskExecutor:
                         ac.add(again)
                         continue
                 row, extras = base_row(case), {}
-                what = what or (("the Dask worker running this case died" if name == "KilledWorker"
-                                 else "the Dask task failed") + f" ({name}: {exc})")
+                what = what or (("the Dask worker running this case died (this case, or another one running "
+                                  "beside it on that worker, may have killed it)" if name == "KilledWorker"
+                                  else "the Dask task failed") + f" ({name}: {exc})")
                 row["error"] = what[:2000]
             fut.release()
             why = other_code(row, case)
-            if why:
+            if why and row.get("status") == "ok":
                 row, extras = base_row(case), {}
                 row["error"] = why
+            elif why:                              # its own failure first (e.g. a plugin it cannot import)
+                row["error"] = f"{row.get('error') or ''}; {why}".lstrip("; ")[:2000]
             yield case, row, extras
         self._futures = {}
 
-    def _ran_when_lost(self, key) -> bool:
+    def _ran_when_lost(self, key, unknown=False):
         """Whether the cancelled task ``key`` was running its case when its worker went: `run_task`
         logs its start and its end to the scheduler, under a topic of its own (`_topic`, so no
         other task's events push them out of the scheduler's bounded log), and a task that ended
         there but whose result was lost with the worker before the driver fetched it ran
-        innocently (the log is read again a second later before a started task is blamed)."""
+        innocently (the log is read again a second later before a started task is blamed).
+        ``unknown`` is the answer when the log cannot be read."""
         for wait in (0.0, 1.0):              # an end on a surviving worker may reach the log a moment later
             time.sleep(wait)
             try:
                 events = {msg for _, msg in self.client.get_events(_topic(key))}
-            except Exception:  # noqa: BLE001 - no record: the cancellation counts as one before it ran
-                return False
+            except Exception:  # noqa: BLE001 - no record: ``unknown`` (a cancellation counts as one before it ran)
+                return unknown
             if ENDED in events or STARTED not in events:
                 return False
         return True
@@ -483,13 +488,16 @@ def run_task(case: Case, blobs: dict, timeout: float | None, want_meshes: bool):
     _log(STARTED)
     if _daemonic():
         row, meshes = run_in_subprocess(case, timeout, want_meshes, stop=_cancelled)
+        code = row.pop(CODE_KEY, None)            # hashed in that subprocess: the code that ran
     else:
         _warm(case)
+        code = _code_of(case.plugins)             # the worker's loaded code, which its forked cases run
         from .isolation import run_isolated
         row, meshes = run_isolated(case, timeout, want_meshes, stop=_cancelled)
     if row.get("status") == "unavailable":      # which machine lacks the library
         row["error"] = f"{row.get('error') or ''} (on the worker at {_worker_name()})".lstrip()
-    row[CODE_KEY] = (_code_of(case.plugins), _worker_name())
+    if code is not None:
+        row[CODE_KEY] = (code, _worker_name())
     _log(ENDED)
     return row, meshes
 
@@ -499,7 +507,9 @@ _CODE: dict = {}
 
 
 def _code_of(plugins) -> str:
-    """`harness.provenance.code_hash` of this process's sources and ``plugins``, once per process."""
+    """`harness.provenance.code_hash` of this process's sources and ``plugins``, once per process
+    and plugin list: for the driver and a forking worker, after their modules are loaded (their
+    cases run that code, whatever the files become); a case in a subprocess hashes its own."""
     key = tuple(plugins)
     if key not in _CODE:
         from ..provenance import code_hash
@@ -516,9 +526,19 @@ def other_code(row: dict, case: Case) -> str | None:
     ours = _code_of(case.plugins)
     if theirs[0] == ours:
         return None
-    return (f"the Dask worker ({theirs[1]}) runs other code than the driver (code_sha256 {theirs[0]}, the "
+    return (f"the Dask worker ({theirs[1]}) ran other code than the driver (code_sha256 {theirs[0]}, the "
             f"driver's {ours}: its harness, methods or plugins differ); its row is not kept: give every "
             "worker the driver's code")
+
+
+SCHEDULER_REASONS = ("scheduler-connection-lost", "scheduler-restart")
+
+
+def scheduler_went(exc: BaseException) -> bool:
+    """Whether ``exc`` cancelled a task because its scheduler went (the client lost it, or it
+    restarted: on the same address after a crash, or by any client's ``restart()``), not the
+    task: distributed's ``FutureCancelledError.reason``."""
+    return str(getattr(exc, "reason", "") or "") in SCHEDULER_REASONS
 
 
 def _topic(key) -> str:
@@ -602,7 +622,8 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
         env = dict(os.environ)          # this process's sys.path (plugins) for the child too
         paths = [p for p in sys.path if p and os.path.isdir(p)]
         env["PYTHONPATH"] = os.pathsep.join(dict.fromkeys(paths + env.get("PYTHONPATH", "").split(os.pathsep)))
-        proc = subprocess.Popen([sys.executable, "-m", "harness.executors.dask", out_path],
+        safe = ["-P"] if sys.version_info >= (3, 11) else []   # the worker's sys.path only, not the cwd first
+        proc = subprocess.Popen([sys.executable, *safe, "-m", "harness.executors.dask", out_path],
                                 stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
                                 stderr=subprocess.PIPE, env=env, start_new_session=True)   # killpg(0) hits it alone
         err_chunks: list[bytes] = []
@@ -673,8 +694,10 @@ def _subprocess_main(out_path: str) -> int:
         os._exit(70)
 
     threading.Thread(target=die_with_parent, daemon=True).start()
+    from ..provenance import code_hash
     from ..runner import run_case
     result = run_case(case, want_meshes=want_meshes)
+    result[0][CODE_KEY] = code_hash(case.plugins)     # the code this process loaded and ran
     tmp = out_path + ".part"
     with open(tmp, "wb") as fh:
         pickle.dump(result, fh, protocol=pickle.HIGHEST_PROTOCOL)
