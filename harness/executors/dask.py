@@ -9,8 +9,10 @@ Design
   itself died, e.g. out of memory) becomes an ``error`` row naming it if its case had started
   (its task logs its start and end, `_log`); one that had only waited on that worker (Dask
   counts a death against every task assigned to the worker) is submitted again, three times at
-  most. A scheduler lost, or restarted on the same address (the client reconnects, but the
-  tasks it had out are cancelled), interrupts the run (exit 1, resumable).
+  most. A scheduler lost, or restarted (on the same address, where the client reconnects but
+  the tasks it had out are cancelled, or by any client's ``restart()``), interrupts the run
+  (exit 1, resumable). A row whose worker ran other sources than the driver (`other_code`) is
+  an error row.
 - Cases are small and self-describing. Bundled and procedural meshes are loaded or
   regenerated on the worker (deterministically, from the package data and the spec). For
   ``{file: ...}`` meshes (and the ``clean:`` file of a pair) the *driver* reads the file's
