@@ -73,8 +73,9 @@ def number(v) -> float | None:
 def fmt(v, digits: int = 3) -> str:
     """The one number formatter of reports and listings: ``—`` for missing (NaN too), ``inf``,
     ``true``/``false``, integers as they are, ``digits`` significant digits in [1e-3, 1e5), scientific outside."""
-    if isinstance(v, (float, np.floating)) and math.isinf(v):
-        return "inf" if v > 0 else "-inf"             # not missing: an older version wrote it
+    inf = None if isinstance(v, (bool, np.bool_)) else number(v)
+    if inf is not None and math.isinf(inf):           # a number or its text; not missing: an older version wrote it
+        return "inf" if inf > 0 else "-inf"
     v = scalar(v) if not isinstance(v, str) else v
     if v is None or v == "":
         return "—"
@@ -85,8 +86,8 @@ def fmt(v, digits: int = 3) -> str:
     x = number(v)
     if x is None:
         return str(v)
-    if not math.isfinite(x):
-        return "—" if math.isnan(x) else ("inf" if x > 0 else "-inf")
+    if not math.isfinite(x):                          # NaN (an infinity was said above)
+        return "—"
     if x == 0:
         return "0"
     if 1e-3 <= abs(x) < 1e5:
