@@ -24,7 +24,7 @@ from pathlib import Path
 
 from .. import tasks as _tasks
 from ..leaderboard import label_text, leaderboard, validity
-from ..results import RunFolder, with_not_run
+from ..results import REPORT_FILES, RunFolder, with_not_run
 from ..schema import scalar as _clean
 from .common import esc as _esc
 from .common import fmt as _fmt
@@ -234,13 +234,8 @@ def _timing_text(meta) -> str:
 
 def _provenance_text(x: dict) -> str:
     """One entry of run.json's ``provenance_changed``: what a resumed session ran otherwise."""
-    parts = []
-    if isinstance(x.get("git_commit"), list):
-        parts.append("commit {} -> {}".format(*(x["git_commit"] + [None, None])[:2]))
-    if isinstance(x.get("git_dirty"), list):
-        parts.append("uncommitted changes {} -> {}".format(*(x["git_dirty"] + [None, None])[:2]))
-    if isinstance(x.get("code_sha256"), list):
-        parts.append("source files (code_sha256) {} -> {}".format(*(x["code_sha256"] + [None, None])[:2]))
+    said = (("git_commit", "commit"), ("git_dirty", "uncommitted changes"), ("code_sha256", "source files (code_sha256)"))
+    parts = ["{} {} -> {}".format(what, *(x[k] + [None, None])[:2]) for k, what in said if isinstance(x.get(k), list)]
     if isinstance(x.get("versions"), dict):
         parts += [f"{p} {v[0]} -> {v[1]}" for p, v in x["versions"].items() if isinstance(v, list) and len(v) == 2]
     return f"session {x.get('session')}: " + ", ".join(parts)
@@ -327,7 +322,7 @@ def _leaderboard_payload(frames, specs) -> list[dict]:
 def _leaderboard_files_text(run_dir) -> str:
     """Where else the leaderboard is: the files of it this run folder holds (a run writes them
     when it finishes; an interrupted run, `eval` and `shootout report` do not)."""
-    have = [n for n in ("leaderboard.csv", "leaderboard.md", "leaderboard.tex") if (Path(run_dir) / n).is_file()]
+    have = [n for n in REPORT_FILES if n.startswith("leaderboard.") and (Path(run_dir) / n).is_file()]
     if not have:
         return "This run folder has no leaderboard files (they are written when a run finishes)."
     return "Also in " + ", ".join(have) + "."
