@@ -662,7 +662,8 @@ def with_not_run(frames: dict, plan: list | None) -> dict:
         base = out.get(task)
         if base is None:
             base = pd.DataFrame(columns=columns(task))
-        add = add.astype({c: base[c].dtype for c in ("seed",) if c in base and len(base)}, errors="ignore")
+        if "seed" in base and len(base):
+            add = add.astype({"seed": base["seed"].dtype}, errors="ignore")
         out[task] = pd.concat([base, add.reindex(columns=base.columns)], ignore_index=True)
     return out
 
