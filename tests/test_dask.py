@@ -529,3 +529,28 @@ def test_a_file_changed_after_the_run_started_is_an_error_row_on_a_worker(tmp_pa
     assert blobs == {}
     row, _ = run_task(sent, blobs, timeout=60, want_meshes=False)
     assert row["status"] == "error" and "changed since the run started" in row["error"], row["error"]
+
+
+def test_a_daemonic_workers_case_leaves_no_process_behind(tmp_path, monkeypatch):
+    """A method's grandchild in a session of its own (setsid and a double fork) outlived its case
+    on a daemonic worker (each case a fresh subprocess, no subreaper above it): five of them
+    outlived a review's run. The subprocess's guard kills it whether the case returns, crashes
+    or runs past its timeout."""
+    monkeypatch.setenv("HOSTILE_MARK_DIR", str(tmp_path))
+    cfg = load_config({"plugins": ["tests.plugins.hostile"], "meshes": ["knight"], "time_budget": 0,
+                       "tasks": {"smoothing": {"methods": [{"name": "hostile.escape",
+                                                            "params": {"crash": [False, True]}},
+                                                           {"name": "hostile.escape", "params": {"hang": True}}]}}})
+    rows = [run_in_subprocess(c, timeout=8)[0] for c in cfg.cases]
+    assert sorted(r["status"] for r in rows) == ["error", "ok", "timeout"], rows
+    assert any("SIGSEGV" in (r.get("error") or "") for r in rows), rows
+    pids = [int(p.read_text()) for p in tmp_path.glob("escaped-*.pid")]
+    assert len(pids) >= 3, pids              # a warm-up call and a timed one for the ok case
+    time.sleep(0.3)
+
+    def alive(pid):
+        try:
+            return psutil.Process(pid).status() != psutil.STATUS_ZOMBIE
+        except psutil.NoSuchProcess:
+            return False
+    assert not [p for p in pids if alive(p)], pids

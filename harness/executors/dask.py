@@ -41,10 +41,12 @@ importable.
 """
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import os
 import pickle
+import signal
 import subprocess
 import sys
 import tempfile
@@ -615,8 +617,10 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
     For processes that may not fork multiprocessing children (daemonic Dask workers). The
     case goes in on stdin (pickled) and the result comes back through a temporary file (the
     method may print to stdout). The child holds stdin open and exits when it reaches EOF,
-    so it dies with this process. Crash -> ``error`` row naming the signal; past ``timeout``
-    -> killed, ``timeout`` row; ``stop()`` true (polled twice a second) -> killed.
+    so it dies with this process. It runs the case behind a guard (`_subprocess_main`) that
+    kills every process the case left, even in a session of its own. Crash -> ``error`` row
+    naming the signal; past ``timeout`` -> stopped (SIGTERM to the guard, SIGKILL 5 s later),
+    ``timeout`` row; ``stop()`` true (polled twice a second) -> stopped.
     """
     fd, out_path = tempfile.mkstemp(prefix="shootout-case-", suffix=".pkl")
     os.close(fd)
@@ -648,8 +652,12 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
                 left = None if deadline is None else deadline - time.monotonic()
                 timed_out = left is not None and left <= 0
                 if timed_out or (stop is not None and stop()):
-                    proc.kill()
-                    proc.wait()
+                    proc.terminate()     # the guard kills the case and what it left, then ends
+                    try:
+                        proc.wait(5)
+                    except subprocess.TimeoutExpired:
+                        proc.kill()
+                        proc.wait()
                     if not timed_out:
                         return cancelled_row(case), {}
                     row = base_row(case)
@@ -688,25 +696,59 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
 
 
 def _subprocess_main(out_path: str) -> int:
+    """The case process of `run_in_subprocess`, behind a guard: this process becomes a child
+    subreaper and forks the case; when the case ends (returns, crashes or is stopped by SIGTERM
+    from the worker), the guard kills every process it left, in its process group or out of it
+    (``setsid`` and a double fork re-parents them here), then ends as the case did: the same
+    exit code, or killed by the same signal."""
     case, want_meshes = pickle.load(sys.stdin.buffer)
+    from ..provenance import code_hash
+    from ..runner import run_case
+    from .isolation import become_subreaper, reap_strays
+    become_subreaper()
+    pid = os.fork()
+    if pid == 0:
+        try:
+            result = run_case(case, want_meshes=want_meshes)
+            result[0][CODE_KEY] = code_hash(case.plugins)     # the code this process loaded and ran
+            tmp = out_path + ".part"
+            with open(tmp, "wb") as fh:
+                pickle.dump(result, fh, protocol=pickle.HIGHEST_PROTOCOL)
+            os.replace(tmp, out_path)
+            sys.stdout.flush()
+            sys.stderr.flush()
+        except BaseException:  # noqa: BLE001 - the worker reads no result: an error row with this tail
+            import traceback
+            traceback.print_exc()
+            os._exit(1)
+        os._exit(0)                   # no interpreter teardown racing the guard's threads
+
+    def die_as(sig: int):             # ended by ``sig``, as the worker will read it
+        import faulthandler
+        faulthandler.disable()
+        signal.signal(sig, signal.SIG_DFL)
+        os.kill(os.getpid(), sig)
+        os._exit(128 + sig)
+
+    def end(sig: int):
+        with contextlib.suppress(OSError):
+            os.kill(pid, signal.SIGKILL)
+        reap_strays()                 # the case and whatever it left (reaps the case too)
+        die_as(sig)
 
     def die_with_parent():            # stdin EOF: the worker that started us is gone
         while os.read(0, 65536):      # raw fd: no buffered-stream lock held at shutdown
             pass
-        os._exit(70)
+        end(signal.SIGKILL)
 
+    signal.signal(signal.SIGTERM, lambda *_: end(signal.SIGTERM))
     threading.Thread(target=die_with_parent, daemon=True).start()
-    from ..provenance import code_hash
-    from ..runner import run_case
-    result = run_case(case, want_meshes=want_meshes)
-    result[0][CODE_KEY] = code_hash(case.plugins)     # the code this process loaded and ran
-    tmp = out_path + ".part"
-    with open(tmp, "wb") as fh:
-        pickle.dump(result, fh, protocol=pickle.HIGHEST_PROTOCOL)
-    os.replace(tmp, out_path)
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(0)                       # no interpreter teardown racing the watcher thread
+    status = os.waitpid(pid, 0)[1]
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    reap_strays()
+    if os.WIFSIGNALED(status):        # the worker names the signal that ended the case
+        die_as(os.WTERMSIG(status))
+    os._exit(os.waitstatus_to_exitcode(status))
 
 
 if __name__ == "__main__":

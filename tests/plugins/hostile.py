@@ -99,10 +99,11 @@ def stderr_flood(V, F):
     return SmoothingResult(V=V.copy())
 
 
-@register("hostile.escape", task="smoothing", library="hostile", params={"crash": False})
-def escape(V, F, *, crash=False):
+@register("hostile.escape", task="smoothing", library="hostile", params={"crash": False, "hang": False})
+def escape(V, F, *, crash=False, hang=False):
     """Leaves a grandchild in a session of its own (setsid and a double fork: out of the case's
-    process group), which records its pid and sleeps; then returns, or (``crash``) segfaults."""
+    process group), which records its pid and sleeps; then returns, (``crash``) segfaults or
+    (``hang``) sleeps a minute."""
     r, w = os.pipe()
     if os.fork() == 0:
         os.setsid()
@@ -116,6 +117,8 @@ def escape(V, F, *, crash=False):
     os.close(w)
     os.read(r, 1)
     os.close(r)
+    if hang:
+        time.sleep(60)
     if crash:
         import ctypes
         import faulthandler
