@@ -136,9 +136,11 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
     ``hausdorff``: the largest distance found (a lower bound), with ``hausdorff_upper`` the
     certified upper bound and ``hausdorff_gap = (upper - lower) / lower`` (0 when
     ``upper - lower <= atol``);
-    ``hausdorff_certified``: the gap met ``eps`` (relative) or ``atol`` (absolute; default
-    ``1e-12`` times the larger bounding-box diagonal, for exact reconstructions) before the
-    budget (``max_points`` distance queries per direction, ``max_seconds`` in all) ran out.
+    ``hausdorff_certified``: ``upper <= (1 + eps) lower + atol`` (``atol`` default ``1e-12``
+    times the larger bounding-box diagonal, for exact reconstructions) before the budget
+    (``max_points`` distance queries per direction, ``max_seconds`` in all) ran out: the gap
+    is at most ``eps``, except for a distance near rounding level, where ``atol`` may certify
+    a bracket whose relative gap is larger (e.g. ``[1e-12, 2.4e-12]`` of the diagonal).
     ``hausdorff_ab``/``_ba``: the one-sided lower bounds (A to B, B to A). Only the symmetric
     distance is certified: without ``corresponding`` the direction with the larger sampled
     maximum (A to B without samples) is bracketed first and the other only until its bound is
