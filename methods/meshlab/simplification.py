@@ -40,8 +40,11 @@ def qem(V, F, *, target_faces, preserve_boundary=False, boundary_weight=1.0,
         preserve_topology=False):
     """MeshLab quadric edge collapse decimation (Garland & Heckbert 1997, VCGLib's version).
 
-    VCGLib keeps a heap of edge collapses ordered by quadric error (unweighted face-plane
-    quadrics, optional boundary and planar quadrics), penalised by triangle quality.
+    VCGLib keeps a heap of edge collapses ordered by quadric error, penalised by triangle
+    quality. Its face-plane quadrics are built on the unnormalised normal ``(p1 - p0) x (p2 -
+    p0)`` (``UseArea``, VCGLib's default, which the filter does not change), so each face's
+    quadric is weighted by its doubled area squared, ``(2 A)^2``, where Garland & Heckbert
+    weight by area; the optional boundary and planar quadrics are built on that normal too.
 
     Parameters
     ----------
