@@ -175,13 +175,17 @@ def _load_cached(frozen) -> Source:
 
 def _pair(key: str, noisy_path: Path, clean_path: Path, level, noisy_sha1=None, clean_sha1=None) -> Source:
     noisy = read_mesh(noisy_path, repair=False, sha1=noisy_sha1)
-    clean = read_mesh(clean_path, repair=False, sha1=clean_sha1)
-    if noisy.n_vertices != clean.n_vertices:
-        raise InvalidMeshError(f"{key}: noisy ({noisy.n_vertices}) and clean ({clean.n_vertices}) "
+    raw = read_mesh(clean_path, repair=False, sha1=clean_sha1)
+    clean = validate(raw.V, raw.F, name=key)
+    if clean.repairs and noisy.n_vertices == clean.n_vertices and np.array_equal(noisy.F, clean.F):
+        return Source(key, clean, noisy_V=noisy.V, pair_level=level)       # the clean mesh's repaired layout
+    also = (f" (or the clean mesh's {clean.n_vertices} after its repairs: {'; '.join(clean.repairs)})"
+            if clean.repairs else "")
+    if noisy.n_vertices != raw.n_vertices:
+        raise InvalidMeshError(f"{key}: noisy ({noisy.n_vertices}) and clean ({raw.n_vertices}{also}) "
                                "vertex counts differ; a pair needs the same vertices in the same order")
-    if noisy.n_faces != clean.n_faces or not np.array_equal(noisy.F, clean.F):
+    if noisy.n_faces != raw.n_faces or not np.array_equal(noisy.F, raw.F):
         raise InvalidMeshError(f"{key}: noisy and clean faces differ; a pair needs the same connectivity")
-    clean = validate(clean.V, clean.F, name=key)
     return Source(key, clean, noisy_V=noisy.V[clean.vertex_map], pair_level=level)
 
 

@@ -35,54 +35,82 @@ def _result(task_name: str, V, F):
 
 
 def evaluate(V, F, V_clean, F_clean, task: str = "smoothing", V_noisy=None, hausdorff_samples: int = 20000,
-             target_faces: int | None = None) -> dict:
+             target_faces: int | None = None, target_ratio: float | None = None, what: str = "result") -> dict:
     """The task's metrics of a result ``(V, F)`` against the clean mesh ``(V_clean, F_clean)``.
 
-    ``task``: ``smoothing`` (``V`` has the clean mesh's vertices in order; ``F`` is None or the
-    clean mesh's faces, in any order and from any starting corner) or ``simplification``
-    (``(V, F)`` is compared to the input surface: ``V_noisy`` with the clean faces when given, else
-    the clean mesh). ``V_noisy``: the input the result was made from (smoothing: gives the
-    ``input_*`` columns; blank without it), finite. ``F``: integer indices. Lengths are fractions
-    of the clean mesh's bounding-box diagonal, as in a run. `ShootoutError` on input that breaks
-    these preconditions.
+    The clean mesh gets a run's documented repairs first (faces with a repeated vertex,
+    duplicate faces and unreferenced vertices removed: `harness.mesh.validate`), so the
+    diagonal, the surface and the per-vertex means are a run's. ``task``: ``smoothing`` (``V``
+    has the clean mesh's vertices in order, as given or as repaired; ``F`` is None or the
+    matching faces, in any order and from any starting corner) or ``simplification`` (``(V,
+    F)`` is compared to the input surface: ``V_noisy`` with the clean faces when given, else the
+    clean mesh; ``target_faces``, or ``target_ratio`` of the repaired clean mesh's faces, is the
+    face count it was asked for: without either, ``target_faces`` and ``over_target`` are blank,
+    not judged). ``V_noisy``: the input the result was made from (smoothing: gives the
+    ``input_*`` columns; blank without it), finite, in either vertex order. ``F``: integer
+    indices. Lengths are fractions of the clean mesh's bounding-box diagonal, as in a run.
+    `ShootoutError` listing every problem on input that breaks these preconditions (``what``
+    names the result in its messages).
     """
     P = []
     if task not in ("smoothing", "simplification"):
         P.append(f"task: eval scores smoothing and simplification results, not {task!r}")
     if samples_problem(hausdorff_samples):
         P.append(f"hausdorff_samples: {samples_problem(hausdorff_samples)}")
-    if target_faces is not None and (isinstance(target_faces, bool) or not isinstance(target_faces, (int, np.integer))
-                                     or target_faces < 1):
-        P.append(f"target_faces: expected an integer >= 1 (the face count the simplification was asked for), "
-                 f"got {target_faces!r}")
+    P += target_problems(target_faces, target_ratio)
+    if task == "simplification" and F is None:
+        P.append("F: a simplification result needs its faces")
     if P:
         raise ShootoutError("; ".join(P))
-    clean = validate(V_clean, F_clean, name="clean", repair=False)
-    V_in = clean.V if V_noisy is None else np.asarray(V_noisy, dtype=np.float64)
-    if V_in.shape != clean.V.shape:
-        raise ShootoutError(f"the noisy input has {len(V_in)} vertices, the clean mesh {len(clean.V)}")
-    if not np.isfinite(V_in).all():
-        raise ShootoutError(f"the noisy input has {int((~np.isfinite(V_in).all(axis=1)).sum())} vertices with NaN "
-                            "or inf coordinates")
+    n_raw, F_raw = len(np.asarray(V_clean)), np.asarray(F_clean)
+    clean = validate(V_clean, F_clean, name="clean")
+    V_in = clean.V
+    if V_noisy is not None:
+        V_in = np.asarray(V_noisy, dtype=np.float64)
+        if V_in.ndim != 2 or V_in.shape[1:] != (3,) or len(V_in) not in (clean.n_vertices, n_raw):
+            raise ShootoutError(f"the noisy input has shape {V_in.shape}, the clean mesh {len(clean.V)} vertices"
+                                + (f" ({n_raw} before its repairs)" if n_raw != clean.n_vertices else ""))
+        if len(V_in) != clean.n_vertices:
+            V_in = V_in[clean.vertex_map]
+        if not np.isfinite(V_in).all():
+            raise ShootoutError(f"the noisy input has {int((~np.isfinite(V_in).all(axis=1)).sum())} vertices with "
+                                "NaN or inf coordinates")
     if F is not None:
         Fa = np.asarray(F)
         if Fa.dtype.kind not in "iu" and not (Fa.dtype.kind == "f" and np.array_equal(Fa, np.round(Fa))):
             raise ShootoutError(f"F: expected integer vertex indices, got dtype {Fa.dtype}")
-    if task == "smoothing" and F is not None and not _same_faces(np.asarray(F, np.int64), clean.F):
-        raise ShootoutError("F: a smoothing result keeps the clean mesh's faces (pass F_clean or None); these differ "
-                            "(task='simplification' compares surfaces instead)")
+    if task == "smoothing":
+        V = in_clean_order(np.asarray(V, dtype=np.float64), F, clean, n_raw, F_raw, what)
+        F = None
     inp = CaseInput(clean, V_in, clean.F, clean.diagonal(), {"hausdorff_samples": hausdorff_samples})
     res = _result(task, V, F)
     t = tasks.get(task)
     res = t.validate_result("result", res, inp.V, inp.F)
     params = {}
     if task == "simplification":
-        params = {"target_ratio": None, "target_faces": int(len(res.F) if target_faces is None else target_faces)}
+        params = {"target_ratio": target_ratio, "target_faces": target_faces}
     row = t.measured(inp, res, params)
     if V_noisy is None:
         for k in [k for k in row if k.startswith("input_")]:
             row[k] = None
     return row
+
+
+def target_problems(target_faces, target_ratio, at: str = "") -> list[str]:
+    """What is wrong with a simplification result's target: an integer ``target_faces >= 1`` or a
+    ``target_ratio`` in (0, 1], not both."""
+    P = []
+    if target_faces is not None and (isinstance(target_faces, bool) or not isinstance(target_faces, (int, np.integer))
+                                     or target_faces < 1):
+        P.append(f"{at}target_faces: expected an integer >= 1 (the face count the simplification was asked for), "
+                 f"got {target_faces!r}")
+    if target_ratio is not None and (isinstance(target_ratio, bool) or not isinstance(target_ratio, (int, float))
+                                     or not 0 < target_ratio <= 1):
+        P.append(f"{at}target_ratio: expected a number in (0, 1] (the fraction of the clean mesh's faces asked "
+                 f"for), got {target_ratio!r}")
+    if target_faces is not None and target_ratio is not None:
+        P.append(f"{at}target_faces, {at}target_ratio: give one of the two")
+    return P
 
 
 def _sha1_file(p) -> str | None:
@@ -101,12 +129,14 @@ def _sha1_path(p: str, size: int, mtime_ns: int) -> str | None:
         return None
 
 
-def _eval_id(e: dict, seen: set) -> str:
-    """A scored file's case id: a hash of its label, the clean (and noisy) mesh's bytes and the task
-    asked for, so that two evals' rows of one label match in `shootout compare` whatever order the
-    files were given in (the files themselves may differ: that is what compare measures); a
-    repeat of a label within one eval gets the next free id."""
-    key = [e.get("label") or Path(e["file"]).stem, _sha1_file(e["clean"]), _sha1_file(e["noisy"]) if e.get("noisy") else None, e.get("task")]
+def _eval_id(e: dict, task: str, seen: set) -> str:
+    """A scored file's case id: a hash of its label, the clean (and noisy) mesh's bytes, the task
+    it was scored as (given or detected) and its target when one was given, so that two evals'
+    rows of one label match in `shootout compare` whatever order the files were given in and
+    whether the task was given or detected (the files themselves may differ: that is what
+    compare measures); a repeat of a label within one eval gets the next free id."""
+    key = [e.get("label") or Path(e["file"]).stem, _sha1_file(e["clean"]), _sha1_file(e["noisy"]) if e.get("noisy") else None, task]
+    key += [[k, e[k]] for k in ("target_faces", "target_ratio") if e.get(k) is not None]
     i = 0
     while True:
         cid = hashlib.sha1(json.dumps(key + ([i] if i else [])).encode()).hexdigest()[:12]
@@ -121,25 +151,38 @@ def _label(path: Path, labels, i) -> str:
 
 
 def eval_files(clean, results, out, noisy=None, task: str | None = None, labels=None,
-               hausdorff_samples: int = 20000) -> dict:
-    """Score result files against ``clean`` (and ``noisy``); write a run folder at ``out``."""
+               hausdorff_samples: int = 20000, target_faces: int | None = None,
+               target_ratio: float | None = None) -> dict:
+    """Score result files against ``clean`` (and ``noisy``); write a run folder at ``out``.
+    ``target_faces`` / ``target_ratio``: what the simplification results were asked for (see
+    `evaluate`)."""
     results = [Path(r) for r in results]
+    P = target_problems(target_faces, target_ratio, at="--")
+    P = [p.replace("--target_faces", "--target-faces").replace("--target_ratio", "--target-ratio") for p in P]
     if labels and len(labels) != len(results):
-        raise ShootoutError(f"--label: {len(labels)} label(s) for {len(results)} result file(s)")
+        P.append(f"--label: {len(labels)} label(s) for {len(results)} result file(s)")
+    if task == "smoothing" and (target_faces is not None or target_ratio is not None):
+        P.append("--target-faces, --target-ratio: a smoothing result has no target (drop them, or --task simplification)")
     entries = [{"file": r, "clean": Path(clean), "noisy": Path(noisy) if noisy else None, "task": task,
-                "label": _label(r, labels, i)} for i, r in enumerate(results)]
+                "label": _label(r, labels, i), "target_faces": target_faces, "target_ratio": target_ratio}
+               for i, r in enumerate(results)]
     return eval_entries(entries, out, hausdorff_samples,
-                        {"eval": {"clean": str(clean), "noisy": noisy and str(noisy), "results": [str(r) for r in results]}})
+                        {"eval": {"clean": str(clean), "noisy": noisy and str(noisy), "results": [str(r) for r in results],
+                                  **({"target_faces": target_faces} if target_faces is not None else {}),
+                                  **({"target_ratio": target_ratio} if target_ratio is not None else {})}},
+                        problems=P)
 
 
-def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, config: dict | None = None) -> dict:
-    """Score each ``{file, clean, noisy, task, label}`` entry (paths; ``noisy``, ``task`` optional)
-    and write one run folder at ``out`` with its report."""
+def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, config: dict | None = None,
+                 problems=()) -> dict:
+    """Score each ``{file, clean, noisy, task, label, target_faces, target_ratio}`` entry (paths;
+    all but ``file`` and ``clean`` optional) and write one run folder at ``out`` with its report;
+    ``problems`` (the caller's) join this function's in one `problems_error`, nothing written."""
     from . import datasets
     from .report import build_report
     out = Path(out)
     folder = RunFolder(out)
-    P = out_dir_problems(out)                    # nothing of the user's is replaced or deleted
+    P = list(problems) + out_dir_problems(out)   # nothing of the user's is replaced or deleted
     if samples_problem(hausdorff_samples):
         P.append(f"--hausdorff-samples: {samples_problem(hausdorff_samples)}")
     for e in entries:
@@ -156,21 +199,34 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
         clean, noisy, rp = Path(e["clean"]), e.get("noisy"), Path(e["file"])
         key = (str(clean), str(noisy))
         if key not in cleans:
-            raw = read_mesh(clean, repair=False)
-            if noisy:
-                src = datasets.cached({"file": str(Path(noisy).resolve()), "clean": str(clean.resolve())})
-                cleans[key] = (src.clean, src.noisy_V, len(raw.V), raw.F)
-            else:
-                cleans[key] = (read_mesh(clean), None, len(raw.V), raw.F)
-        cmesh, V_in, n_raw, F_raw = cleans[key]
-        m_raw = len(F_raw)
-        row = {"case_id": _eval_id(e, seen_ids), "task": e.get("task") or "smoothing", "mesh": cmesh.name,
-               "n_vertices": cmesh.n_vertices, "n_faces": cmesh.n_faces, "noise_model": "given" if noisy else "none",
-               "noise_level": None, "seed": None, "method": e.get("label") or rp.stem, "library": "external",
-               "params": json.dumps({"file": str(rp)}), "status": "ok",
-               "error": ("input repaired: " + "; ".join(cmesh.repairs)) if cmesh.repairs else ""}
+            try:
+                raw = read_mesh(clean, repair=False)
+                if noisy:
+                    src = datasets.cached({"file": str(Path(noisy).resolve()), "clean": str(clean.resolve())})
+                    cleans[key] = (src.clean, src.noisy_V, raw)
+                else:
+                    cleans[key] = (read_mesh(clean), None, raw)
+            except ShootoutError as exc:         # a reference that cannot be read costs its results' rows
+                cleans[key] = exc
+        got = cleans[key]
+        base = {"case_id": None, "task": e.get("task") or "smoothing",
+                "noise_model": "given" if noisy else "none", "noise_level": None, "seed": None,
+                "method": e.get("label") or rp.stem, "library": "external", "params": json.dumps({"file": str(rp)})}
+        if isinstance(got, Exception):
+            what = "the clean mesh" if not noisy else "the clean and noisy pair"
+            rows.append(({**base, "mesh": clean.stem, "status": "error",
+                          "error": f"{what} ({clean}{f', {noisy}' if noisy else ''}): {got}"[:2000]},
+                         bool(e.get("task"))))
+            continue
+        cmesh, V_in, raw = got
+        n_raw, m_raw = len(raw.V), len(raw.F)
+        notes = [f"input repaired: {'; '.join(cmesh.repairs)}"] if cmesh.repairs else []
+        row = {**base, "mesh": raw.name, "n_vertices": cmesh.n_vertices, "n_faces": cmesh.n_faces,
+               "status": "ok", "error": ""}
         try:                                     # a bad result file costs its row, as a crashing method does
             r = read_mesh(rp, repair=False, finite=False)     # NaN: scored as the task scores it (diverged)
+            if r.repairs:
+                notes.append(f"result read with repairs: {'; '.join(r.repairs)}")
             same_faces = len(r.F) in (cmesh.n_faces, m_raw)
             t = row["task"] = e.get("task") or ("smoothing" if len(r.V) in (cmesh.n_vertices, n_raw) and same_faces
                                                 else "simplification")
@@ -178,8 +234,12 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
                 raise ShootoutError(f"{rp.name}: {len(r.F)} faces, but the clean mesh has {cmesh.n_faces}: a "
                                     "smoothing result keeps the clean mesh's faces (use --task simplification to "
                                     "compare surfaces)")
-            V = _in_clean_order(r, cmesh, n_raw, F_raw, rp) if t == "smoothing" else r.V
-            row.update(evaluate(V, r.F, cmesh.V, cmesh.F, task=t, V_noisy=V_in, hausdorff_samples=hausdorff_samples))
+            target = {k: e.get(k) for k in ("target_faces", "target_ratio")} if t == "simplification" else {}
+            if t == "simplification" and not any(v is not None for v in target.values()):
+                notes.append("no target given (--target-faces or --target-ratio): over_target is not judged")
+            row.update(evaluate(r.V, r.F, raw.V, raw.F, task=t, V_noisy=V_in, hausdorff_samples=hausdorff_samples,
+                                **target, what=rp.name))
+            row["error"] = "; ".join(notes)
         except Exception as exc:  # noqa: BLE001 - any failure scoring one file is that file's error row
             row.update(status="error", error=(f"{type(exc).__name__}: {exc}" if not isinstance(exc, ShootoutError)
                                               else str(exc))[:2000])
@@ -189,6 +249,8 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
         for r, asked in rows:
             if r["status"] != "ok" and not asked:
                 r["task"] = next(iter(scored))
+    for e, (r, _) in zip(entries, rows):
+        r["case_id"] = _eval_id(e, r["task"], seen_ids)
     rows_by_task: dict[str, list] = {}
     for r, _ in rows:
         rows_by_task.setdefault(r["task"], []).append(r)
@@ -212,13 +274,13 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
         lock.close()
 
 
-RESULTS_KEYS = {"file", "clean", "noisy", "label", "task"}
+RESULTS_KEYS = {"file", "clean", "noisy", "label", "task", "target_faces", "target_ratio"}
 
 
-def results_config(raw: dict, base_dir: Path) -> tuple[list[dict], int]:
+def results_config(raw: dict, base_dir: Path, source: str = "<config>") -> tuple[list[dict], int]:
     """Validate a ``results:`` config (``name``, ``hausdorff_samples``, ``results: [{file, clean,
-    noisy, label, task}]``): the entries with resolved paths, or `ConfigError` listing every
-    problem with its key path."""
+    noisy, label, task, target_faces | target_ratio}]``): the entries with resolved paths, or
+    `ConfigError` from ``source`` listing every problem with its key path."""
     from .errors import ConfigError
     P = []
     for k in sorted(set(raw) - {"name", "results", "hausdorff_samples"}):
@@ -240,7 +302,11 @@ def results_config(raw: dict, base_dir: Path) -> tuple[list[dict], int]:
             continue
         for k in sorted(set(e) - RESULTS_KEYS):
             P.append(f"{at}.{k}: unknown key; expected one of {sorted(RESULTS_KEYS)}")
-        entry = {"label": e.get("label"), "task": e.get("task"), "noisy": None}
+        entry = {"label": e.get("label"), "task": e.get("task"), "noisy": None,
+                 "target_faces": e.get("target_faces"), "target_ratio": e.get("target_ratio")}
+        P += target_problems(entry["target_faces"], entry["target_ratio"], at=f"{at}.")
+        if entry["task"] == "smoothing" and (entry["target_faces"] is not None or entry["target_ratio"] is not None):
+            P.append(f"{at}.task: a smoothing result has no target_faces or target_ratio")
         for k in ("file", "clean", "noisy"):
             if k not in e:
                 if k != "noisy":
@@ -260,7 +326,7 @@ def results_config(raw: dict, base_dir: Path) -> tuple[list[dict], int]:
             P.append(f"{at}.label: expected a string")
         entries.append(entry)
     if P:
-        raise ConfigError("<config>", P)
+        raise ConfigError(source, P)
     return entries, hs
 
 
@@ -278,19 +344,22 @@ def _same_faces(A: np.ndarray, B: np.ndarray) -> bool:
     return bool(np.array_equal(canonical(A), canonical(B)))
 
 
-def _in_clean_order(r: Mesh, cmesh: Mesh, n_raw: int, F_raw: np.ndarray, path: Path) -> np.ndarray:
+def in_clean_order(V: np.ndarray, F, clean: Mesh, n_raw: int, F_raw: np.ndarray, what: str) -> np.ndarray:
     """A smoothing result's positions in the clean mesh's (repaired) vertex order: the result has
-    either the repaired mesh's vertices and faces or the clean file's own (then the repair's
-    vertex map applies), faces in any order and from any starting corner. Equal counts with other faces (e.g. an STL, whose reader welds and
-    re-sorts the corners) are an error: per-vertex errors would pair unrelated vertices."""
-    if len(r.V) == cmesh.n_vertices and _same_faces(r.F, cmesh.F):
-        return r.V
-    if len(r.V) == n_raw and _same_faces(r.F, F_raw) and cmesh.vertex_map is not None:
-        return r.V[cmesh.vertex_map]
-    if len(r.V) in (cmesh.n_vertices, n_raw):
-        raise ShootoutError(f"{path.name}: as many vertices as the clean mesh, but other faces: a smoothing result "
+    either the repaired mesh's vertices (and faces, when given) or the clean file's own (then
+    the repair's vertex map applies), faces in any order and from any starting corner. Equal
+    counts with other faces (e.g. an STL, whose reader welds and re-sorts the corners) are an
+    error: per-vertex errors would pair unrelated vertices."""
+    F = None if F is None else np.asarray(F, np.int64)
+    if len(V) == clean.n_vertices and (F is None or _same_faces(F, clean.F)):
+        return V
+    if len(V) == n_raw and (F is None or _same_faces(F, F_raw)):
+        return V[clean.vertex_map]
+    if len(V) in (clean.n_vertices, n_raw):
+        raise ShootoutError(f"{what}: as many vertices as the clean mesh, but other faces: a smoothing result "
                             "must keep the clean mesh's vertices in order and its faces (STL loses the order: save "
                             "OBJ, OFF or PLY; or use --task simplification to compare surfaces instead)")
-    raise ShootoutError(f"{path.name}: {len(r.V)} vertices, but the clean mesh has {cmesh.n_vertices}: a smoothing "
-                        "result must keep the clean mesh's vertices in order (use --task simplification to "
-                        "compare surfaces instead)")
+    raise ShootoutError(f"{what}: {len(V)} vertices, but the clean mesh has {clean.n_vertices}"
+                        + (f" ({n_raw} before its repairs)" if n_raw != clean.n_vertices else "")
+                        + ": a smoothing result must keep the clean mesh's vertices in order (use --task "
+                        "simplification to compare surfaces instead)")

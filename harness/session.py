@@ -179,7 +179,9 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
     raw = _results_config(config_or_path)
     if raw is not None:                  # a results: config scores files made elsewhere (shootout eval)
         from .scoring import eval_entries, results_config
-        entries, hs = results_config(raw[0], raw[1])
+        given = str(config_or_path) if isinstance(config_or_path, (str, Path)) else ""
+        entries, hs = results_config(raw[0], raw[1],
+                                     given if given and "\n" not in given and Path(given).is_file() else "<config>")
         out_dir = Path(out) if out else Path("results") / str(raw[0].get("name") or "eval")
         return eval_entries(entries, out_dir, hs, raw[0])
     cfg: Config = config_or_path if isinstance(config_or_path, Config) else load_config(config_or_path)

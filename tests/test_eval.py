@@ -9,9 +9,10 @@ import pandas as pd
 import pytest
 
 import harness
+import methods
 from harness import tasks
 from harness.cli import main as cli
-from harness.errors import InvalidMeshError
+from harness.errors import ConfigError, InvalidMeshError
 from harness.mesh import read_mesh
 
 PAIR = Path(harness.__file__).parent / "data" / "meshes" / "denoise" / "Fandisk0.3"
@@ -35,11 +36,12 @@ def test_eval_gives_exactly_the_numbers_of_a_run(run_with_meshes, tmp_path, task
     noisy = ["--noisy", str(PAIR / "Noisy.obj")]
     out = tmp_path / "eval"
     labels = sum((["--label", m] for m in rows["method"]), [])
+    target = ["--target-ratio", "0.2"] if task == "simplification" else []      # the run's
     assert cli(["eval", *map(str, files), "--clean", str(PAIR / "Original.obj"), *noisy, "--out", str(out),
-                "--task", task, "--hausdorff-samples", "2000", *labels]) == 0
+                "--task", task, "--hausdorff-samples", "2000", *labels, *target]) == 0
     ev = pd.read_csv(out / f"{task}.csv")
     assert list(ev["method"]) == list(rows["method"]) and (ev["status"] == "ok").all()
-    metrics = [c for c in tasks.get(task).columns if c != "target_faces"]
+    metrics = list(tasks.get(task).columns)
     pd.testing.assert_frame_equal(ev.set_index("method")[metrics], rows.set_index("method")[metrics],
                                   check_exact=True)
     meta = json.loads((out / "run.json").read_text())
@@ -197,8 +199,9 @@ def test_evaluate_refuses_input_it_cannot_score_honestly():
     assert harness.evaluate(V, F[::-1][:, [2, 0, 1]], V, F)["ev_mean"] == 0.0     # the same faces, reordered
     bad_noisy = src.noisy_V.copy()
     bad_noisy[3, 1] = np.nan
-    for kwargs, needle in (({"F": (F + 1) % len(V)}, "F: a smoothing result keeps"),
-                           ({"F": F + 1000000}, "F: a smoothing result keeps"),
+    for kwargs, needle in (({"F": (F + 1) % len(V)}, "other faces: a smoothing result must keep"),
+                           ({"F": F + 1000000}, "other faces: a smoothing result must keep"),
+                           ({"F": None, "task": "simplification"}, "F: a simplification result needs its faces"),
                            ({"F": F + 0.5, "task": "simplification"}, "F: expected integer"),
                            ({"F": F, "V_noisy": bad_noisy}, "NaN or inf"),
                            ({"F": F, "hausdorff_samples": 10**9}, "hausdorff_samples"),
@@ -249,3 +252,86 @@ def test_a_result_file_with_nan_coordinates_is_scored_as_the_same_arrays_are(tmp
     assert ev["status"] == "error" and "non-finite" in ev["error"], ev["error"]
     with pytest.raises(InvalidMeshError, match="NaN"):      # as an input, still refused
         read_mesh(tmp_path / "nan.obj")
+
+
+def test_a_simplification_scored_without_its_target_is_not_judged_on_it(run_with_meshes, tmp_path):
+    """An outside review: eval took a simplification result's own face count as its target, so the
+    unsimplified input was a valid result (over_target false, Hausdorff 0) and ranked best.
+    Without a target, target_faces and over_target are blank and the row says why; with
+    --target-faces (or --target-ratio) the unsimplified input is over its target."""
+    clean = str(PAIR / "Original.obj")
+    out = tmp_path / "o"
+    assert cli(["eval", clean, "--clean", clean, "--task", "simplification", "--out", str(out),
+                "--hausdorff-samples", "200"]) == 0
+    row = pd.read_csv(out / "simplification.csv").iloc[0]
+    assert pd.isna(row["target_faces"]) and pd.isna(row["over_target"]) and "over_target is not judged" in row["error"]
+    assert cli(["eval", clean, "--clean", clean, "--task", "simplification", "--out", str(tmp_path / "t"),
+                "--hausdorff-samples", "200", "--target-faces", "100"]) == 0
+    row = pd.read_csv(tmp_path / "t" / "simplification.csv").iloc[0]
+    assert row["target_faces"] == 100 and row["over_target"] and pd.isna(row["error"]), row
+    assert cli(["eval", clean, "--clean", clean, "--target-faces", "0", "--target-ratio", "x", "--out",
+                str(tmp_path / "bad")]) == 2 and not (tmp_path / "bad").exists()
+
+
+def test_a_clean_mesh_that_needs_repairs_scores_as_in_a_run(tmp_path):
+    """An outside review: `evaluate` skipped the run's repairs of the clean mesh (two unreferenced
+    vertices made the Hausdorff distance 3.5x smaller), and eval refused a smoothing result in
+    the clean file's own layout when the repairs changed it (duplicate faces, an unreferenced
+    vertex first). Both now score exactly as the repaired mesh does; a saved noisy input in the
+    repaired layout is accepted as --noisy."""
+    from harness import datasets
+    from harness.mesh import write_obj
+    src = datasets.load("fandisk-noisy-0.3")
+    V, F, Vn = src.clean.V, src.clean.F, src.noisy_V
+    smooth = methods.get("scratch.taubin")(Vn, F).V
+    far = np.array([[9.0, 9.0, 9.0], [-9.0, 0.0, 0.0]])
+    Vr, Vnr, Sr = (np.vstack([far, X]) for X in (V, Vn, smooth))    # two unreferenced vertices first
+    Fr = np.vstack([F + 2, F[:3] + 2])                              # and three duplicate faces
+    want = harness.evaluate(smooth, F, V, F, V_noisy=Vn)
+    assert harness.evaluate(Sr, Fr, Vr, Fr, V_noisy=Vnr) == want
+    assert harness.evaluate(Sr, None, Vr, Fr, V_noisy=Vn) == want     # the noisy input in the repaired layout
+    simp = methods.get("scratch.qem")(V, F, target_faces=len(F) // 4)
+    assert (harness.evaluate(simp.V, simp.F, Vr, Fr, task="simplification", target_faces=len(F) // 4)
+            == harness.evaluate(simp.V, simp.F, V, F, task="simplification", target_faces=len(F) // 4))
+    write_obj(tmp_path / "clean.obj", Vr, Fr)
+    write_obj(tmp_path / "noisy.obj", Vn, F)                          # as a run saves its input: repaired
+    write_obj(tmp_path / "mine.obj", Sr, Fr)
+    assert cli(["eval", str(tmp_path / "mine.obj"), "--clean", str(tmp_path / "clean.obj"), "--noisy",
+                str(tmp_path / "noisy.obj"), "--out", str(tmp_path / "o")]) == 0
+    row = pd.read_csv(tmp_path / "o" / "smoothing.csv").iloc[0]
+    assert row["status"] == "ok" and "input repaired" in row["error"], row["error"]
+    assert row["ev_mean"] == pytest.approx(want["ev_mean"], rel=1e-9) and row["mesh"] == "clean"
+    assert row["input_dist_mean"] == pytest.approx(want["input_dist_mean"], rel=1e-9)
+
+
+def test_a_clean_mesh_that_cannot_be_read_costs_its_results_rows(tmp_path):
+    """A results: config whose second clean mesh has a NaN stopped the whole eval with a message
+    naming neither the entry nor the file; it is now that entry's error row, naming the file."""
+    (tmp_path / "nan.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n")
+    (tmp_path / "ok.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    cfg = tmp_path / "r.yaml"
+    cfg.write_text(json.dumps({"name": "r", "results": [{"file": "ok.obj", "clean": "ok.obj", "label": "good"},
+                                                          {"file": "ok.obj", "clean": "nan.obj", "label": "bad"}]}))
+    assert cli(["run", str(cfg), "--out", str(tmp_path / "o")]) == 0
+    df = pd.read_csv(tmp_path / "o" / "smoothing.csv", keep_default_na=False).set_index("method")
+    assert df.loc["good", "status"] == "ok" and df.loc["bad", "status"] == "error"
+    assert "nan.obj" in df.loc["bad", "error"] and "NaN" in df.loc["bad", "error"], df.loc["bad", "error"]
+    cfg.write_text(json.dumps({"name": "r", "results": [{"file": "ok.obj", "clean": "ok.obj", "target_faces": 0,
+                                                          "task": "smoothing"}]}))
+    with pytest.raises(ConfigError) as exc:
+        harness.run(cfg, out=tmp_path / "p")
+    assert str(cfg) in str(exc.value) and "results[0].target_faces" in str(exc.value), str(exc.value)
+
+
+def test_two_evals_of_the_same_file_match_whether_the_task_was_given_or_detected(tmp_path):
+    """An outside review: the case id hashed the task as given (None when detected), so an eval
+    with --task smoothing and one without shared no case and compare exited 1 (a false
+    regression)."""
+    clean = str(PAIR / "Original.obj")
+    a, b = tmp_path / "a", tmp_path / "b"
+    assert cli(["eval", str(PAIR / "Noisy.obj"), "--clean", clean, "--out", str(a), "--label", "mine"]) == 0
+    assert cli(["eval", str(PAIR / "Noisy.obj"), "--clean", clean, "--out", str(b), "--label", "mine",
+                "--task", "smoothing"]) == 0
+    ids = [pd.read_csv(d / "smoothing.csv")["case_id"].tolist() for d in (a, b)]
+    assert ids[0] == ids[1], ids
+    assert cli(["compare", str(a), str(b), "--no-time"]) == 0
