@@ -120,8 +120,10 @@ class Method:
 
     def resolve_params(self, params: dict) -> dict:
         """Defaults filled in and values checked; raises ValueError listing every problem."""
+        both = [f"{a} and {n}: the same parameter given twice" for a, n in ALIASES.items()
+                if a in params and n in params and n in self.params]
         params = {ALIASES.get(k, k) if ALIASES.get(k) in self.params else k: v for k, v in params.items()}
-        problems = self.param_problems(params)
+        problems = both + self.param_problems(params)
         if not problems:
             why = self.setting_problem(params)
             problems = [why] if why else []

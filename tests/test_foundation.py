@@ -350,6 +350,10 @@ def test_python_api_run_and_method_errors(tmp_path):
         m(V[:, :2], F)
     with pytest.raises(KeyError, match="did you mean scratch.cotan"):
         methods.get("scratch.cotann")
+    taubin = methods.get("scratch.taubin")     # the alias and the name at once: the last one won, silently
+    assert np.array_equal(taubin(V, F, lam=0.6).V, taubin(V, F, **{"lambda": 0.6}).V)
+    with pytest.raises(ValueError, match="lam and lambda: the same parameter given twice"):
+        taubin(V, F, lam=0.5, **{"lambda": 0.6})
 
 
 def test_unavailable_library_is_a_row_not_a_crash(tmp_path):
