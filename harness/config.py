@@ -380,7 +380,7 @@ def expand_cases(meshes: list, noises, tasks: dict, seed: int, repeats: int, plu
 def _check_meshes(meshes, base_dir: Path, P: list, key: str = "meshes") -> list[dict]:
     """The mesh list at ``key`` (``meshes``, ``tune.train``): specs of the good entries, a problem
     in ``P`` for each bad one, named by its key path."""
-    out = []
+    out, where = [], []
     if not isinstance(meshes, list) or not meshes:
         P.append(f"{key}: expected a non-empty list of meshes")
         return out
@@ -389,8 +389,10 @@ def _check_meshes(meshes, base_dir: Path, P: list, key: str = "meshes") -> list[
         if isinstance(m, str):
             if datasets.resolve_bundled(m):
                 out.append({"bundled": datasets.resolve_bundled(m)})
+                where.append(at)
             elif m in datasets.PROCEDURAL:
                 out.append({"procedural": m, **datasets.PROCEDURAL[m]})
+                where.append(at)
             else:
                 opts = datasets.bundled_names() + list(datasets.PROCEDURAL)
                 P.append(f"{at}: unknown mesh {yaml_input.short(m)}{_close(m, opts)}; see `shootout datasets`")
@@ -415,6 +417,7 @@ def _check_meshes(meshes, base_dir: Path, P: list, key: str = "meshes") -> list[
                     continue
                 spec[k] = v if want_int else float(v)      # `radius: 1` is the default 1.0: one case id
             out.append({**{"procedural": kind}, **datasets.PROCEDURAL[kind], **spec})
+            where.append(at)
         elif isinstance(m, dict) and "file" in m:
             extra = set(m) - {"file", "clean", "name", "level"}
             if extra:
@@ -469,9 +472,33 @@ def _check_meshes(meshes, base_dir: Path, P: list, key: str = "meshes") -> list[
                     continue
             if "file" in spec and ("clean" in spec or "clean" not in m):
                 out.append(spec)
+                where.append(at)
         else:
             P.append(f"{at}: expected a bundled name, {{procedural: ...}} or {{file: ...}}, got {yaml_input.short(m)}")
+    P += _same_mesh_problems(out, where)
     return out
+
+
+def _same_mesh_problems(specs: list[dict], where: list[str]) -> list[str]:
+    """One mesh listed twice (same spec, or files with the same bytes: its cases would run once,
+    whatever its names), and a ``name:`` that another, different mesh also goes by (the ``mesh``
+    column and the noise seed come from it; it would be changed silently to tell them apart)."""
+    P, first = [], {}
+    ids = [json.dumps(_identity(s), sort_keys=True, default=str) for s in specs]
+    for i, ident in enumerate(ids):
+        if ident in first:
+            P.append(f"{where[i]}: the same mesh as {where[first[ident]]} (the same "
+                     f"{'file bytes' if 'file' in specs[i] else 'spec'}): list it once")
+        first.setdefault(ident, i)
+    labels = [datasets.spec_key(s) for s in specs]
+    for i, s in enumerate(specs):
+        if "name" not in s:
+            continue
+        other = next((j for j in range(len(specs)) if j != i and labels[j] == s["name"] and ids[j] != ids[i]), None)
+        if other is not None and not (other < i and "name" in specs[other]):     # a pair of names: said once
+            P.append(f"{where[i]}.name: {s['name']!r} is also the label of {where[other]}, another mesh: give each "
+                     "mesh a label of its own (it names the mesh column and seeds the noise)")
+    return P
 
 
 def _check_noise(noise, P: list, where: str = "noise") -> list[dict]:

@@ -2,6 +2,7 @@
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -20,6 +21,9 @@ from harness.metrics.surface_distance import point_surface_distance
 from harness.metrics.triangle_quality import triangle_quality
 from harness.core.geometry import area, volume
 from harness.noise import apply_noise
+
+MESH_DIR = Path(datasets.__file__).parent / "data" / "meshes"
+KNIGHT, BUNNY = MESH_DIR / "decimated-knight.off", MESH_DIR / "bunny.off"
 
 
 
@@ -269,6 +273,15 @@ def test_config_grid_expansion():
     ({"tasks": {"smoothing": {"methods": ["scratch.cotan"]}}}, "is a laplacian method, not smoothing"),
     ({"tasks": {"smoothin": {"methods": ["scratch.explicit"]}}}, "tasks.smoothin: unknown task"),
     ({"plugins": ["no_such_module_xyz"]}, "plugins[0]: cannot import"),
+    # an outside review: one mesh listed twice ran once, silently; a name two meshes share (or that is
+    # another mesh's label) was changed silently, and with it the noise, which the label seeds
+    ({"meshes": ["knight", "knight"]}, "meshes[1]: the same mesh as meshes[0] (the same spec): list it once"),
+    ({"meshes": [{"procedural": "sphere", "subdivisions": 2}, {"procedural": "sphere", "subdivisions": 2}]},
+     "meshes[1]: the same mesh as meshes[0]"),
+    ({"meshes": [{"file": str(KNIGHT), "name": "ball"}, {"file": str(BUNNY), "name": "ball"}]},
+     "meshes[0].name: 'ball' is also the label of meshes[1], another mesh"),
+    ({"meshes": [{"file": str(KNIGHT), "name": "sphere"}, "sphere"]},
+     "meshes[0].name: 'sphere' is also the label of meshes[1], another mesh"),
 ])
 def test_config_errors_name_key_path(patch, needle):
     probs = _problems({**GOOD, **patch})
