@@ -12,7 +12,8 @@ DOS end-of-file mark are not data), NaN/inf coordinates, indices out of range, n
 after the repairs, a surface of zero area (every face degenerate). A UTF-8 byte-order mark at
 the start of a text file (OBJ, OFF, ASCII PLY or STL) is skipped; a plain OFF whose tokens are
 not one vertex or face per line is read as a token stream when that uses every token exactly.
-Kept as they are, and reported by `topology`: zero-area faces with distinct corners,
+Kept as they are, and said in every row on the mesh (`Mesh.input_notes`): zero-area faces with
+distinct corners, non-manifold edges and inconsistent orientation; reported by `topology`:
 non-manifold edges and vertices, several components, boundaries.
 """
 from __future__ import annotations
@@ -62,6 +63,28 @@ class Mesh:
         modified after loading)."""
         from .core.geometry import vertex_normals
         return mean_edge_length(self.V, self.F), vertex_normals(self.V, self.F)
+
+    @functools.cached_property
+    def input_notes(self) -> list[str]:
+        """What a row on this mesh should say of it, beside its repairs: `orientation_note` and
+        `degenerate_note` (computed once per mesh; the driver computes them before forking)."""
+        return [n for n in (self.orientation_note, self.degenerate_note) if n]
+
+    @functools.cached_property
+    def degenerate_note(self) -> str:
+        """'' unless some faces have zero area to rounding (doubled area at most ``1e-12`` times
+        their longest edge squared: coincident or collinear corners, kept as they are): angles,
+        cotangents and normals are not defined there, and each method handles them its own way."""
+        n = 0
+        for i in range(0, len(self.F), 65536):
+            f = self.F[i:i + 65536]
+            P = self.V[f]
+            e2 = np.max([np.einsum("ij,ij->i", d, d) for d in (P[:, 1] - P[:, 0], P[:, 2] - P[:, 1], P[:, 0] - P[:, 2])],
+                        axis=0)
+            c = face_cross(self.V, f)
+            n += int(np.count_nonzero(np.sqrt(np.einsum("ij,ij->i", c, c)) <= 1e-12 * e2))
+        return (f"{n} zero-area face(s) (coincident or collinear corners): angles, cotangents and normals are not "
+                "defined there" if n else "")
 
     @functools.cached_property
     def orientation_note(self) -> str:

@@ -428,8 +428,7 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
             extras["view"] = task.view(inp, result)
         row["status"] = "ok"
         notes = ["input repaired: " + "; ".join(inp.clean.repairs)] if inp.clean.repairs else []
-        if inp.clean.orientation_note:
-            notes.append("input: " + inp.clean.orientation_note)
+        notes += ["input: " + n for n in inp.clean.input_notes]
         heard = list(dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in said
                                    if issubclass(w.category, (RuntimeWarning, UserWarning))))
         notes += [f"the method warned: {m}" for m in heard[:3]]

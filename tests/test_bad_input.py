@@ -367,6 +367,7 @@ def test_the_reader_applies_the_documented_policy(bad_dir):
             facts = {**topology(m.V, m.F), "n_faces": m.n_faces}
             for k, v in KEPT[stem].items():
                 assert facts[k] == v, (stem, k, facts[k])
+        assert ("1 zero-area face(s)" in m.degenerate_note) == (stem == "zero_area"), (stem, m.degenerate_note)
 
 
 def test_unusable_files_are_error_rows_naming_the_problem(bad_dir, tmp_path):
@@ -426,6 +427,8 @@ def test_repaired_and_kept_meshes_through_compiled_backends(bad_dir, tmp_path):
             assert (ok["n_vertices"] == nv).all() and (ok["n_faces"] == nf).all(), stem
             if note:
                 assert ok["error"].str.contains(note, regex=False).all(), (stem, task)
+        ok = df[(df["file"].map(lambda f: Path(f).stem) == "zero_area") & (df.status == "ok")]
+        assert ok["error"].str.contains("input: 1 zero-area face(s)", regex=False).all(), task  # said nowhere before
     assert not problems, "\n".join(problems)
 
 

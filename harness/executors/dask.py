@@ -604,7 +604,7 @@ def _warm(case: Case) -> None:
         if not any(k in case.mesh for k in FILE_KEYS):
             from .. import datasets
             src = datasets.cached(case.mesh)
-            src.clean.orientation_note
+            src.clean.input_notes
             if src.noisy_V is None and case.adds_noise:
                 src.clean.noise_frame
     except Exception:  # noqa: BLE001 - reported by the child, as a row

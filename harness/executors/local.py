@@ -158,7 +158,7 @@ def _warm_mesh_cache(cases) -> None:
         seen.add(k)
         try:
             src = datasets.cached(c.mesh)
-            src.clean.orientation_note       # computed once, inherited by every case of the mesh
+            src.clean.input_notes            # computed once, inherited by every case of the mesh
             if src.noisy_V is None and k in noisy:
                 src.clean.noise_frame        # computed once, inherited by every case of the mesh
         except Exception:  # noqa: BLE001 - the case's own child reports it as an error row
