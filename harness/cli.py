@@ -53,7 +53,8 @@ def _parser() -> argparse.ArgumentParser:
                    help="import this plugin module first (as a config's plugins:), to list its methods")
     ds = sub.add_parser("datasets", help="list bundled and procedural meshes")
     ds.add_argument("--json", action="store_true", help="machine-readable: one JSON list")
-    rp = sub.add_parser("report", help="rebuild report.html from a run folder (reads files only, runs no code)")
+    rp = sub.add_parser("report", help="rebuild report.html, the leaderboard and the winners from a run folder "
+                                       "(reads files only, runs no code)")
     rp.add_argument("run_dir")
     vw = sub.add_parser("views", help="recompute a run folder's 3D views (runs the chosen methods again)")
     vw.add_argument("run_dir")
@@ -239,6 +240,12 @@ def _cmd_report(a) -> int:
     try:
         for note in _rules_changed(d):
             print(f"note: {note}", file=sys.stderr)
+        meta = folder.read_run_json() or {}
+        if ours and meta.get("kind") != "eval":      # the rankings too: an interrupted run's, or a failed write's
+            from .leaderboard import write as write_leaderboard
+            from .results import with_not_run
+            specs = {t: v for t, v in (meta.get("tasks") or {}).items() if isinstance(v, dict)}
+            write_leaderboard(d, with_not_run(folder.frames(), folder.read_plan()), specs)
         print(build_report(d))
     finally:
         lock.close()

@@ -368,3 +368,17 @@ def test_the_cases_an_interrupted_run_never_ran_are_counted_as_not_run(run_dir, 
     assert cli(["report", str(dst)]) == 2
     err = capsys.readouterr().err
     assert "damaged plan: line" in err and "Traceback" not in err, err
+
+
+def test_shootout_report_rebuilds_the_rankings_too(tiny_run, tmp_path):
+    """An outside review: `shootout report` rebuilt report.html only, so the leaderboard and winners
+    of an interrupted run, or ones whose write failed at the end, could not be had without a
+    resume. It rewrites them from the files, equal to the run's own."""
+    d = tmp_path / "copy"
+    shutil.copytree(tiny_run, d)
+    names = ["leaderboard.csv", "leaderboard.md", "leaderboard.tex", "winners.csv", "winners.md", "winners.tex"]
+    before = {n: (d / n).read_text() for n in names}
+    for n in names:
+        (d / n).unlink()
+    assert cli(["report", str(d)]) == 0
+    assert {n: (d / n).read_text() for n in names} == before
