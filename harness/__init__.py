@@ -13,7 +13,7 @@ def run(config_or_path, **overrides):
 
 
 def evaluate(V, F, V_clean, F_clean, **kwargs):
-    """The task's metrics of a result against a clean mesh (see `harness.evaluate.evaluate`)."""
+    """The task's metrics of a result against a clean mesh (see `harness.scoring.evaluate`)."""
     from .scoring import evaluate as _evaluate
     return _evaluate(V, F, V_clean, F_clean, **kwargs)
 
@@ -41,7 +41,6 @@ def load_run(run_dir):
     df = pd.concat(list(frames.values()), ignore_index=True, sort=False)
     params = [json.loads(p) if isinstance(p, str) and p else {} for p in df.get("params", [])]
     keys = sorted({k for p in params for k in p})
-    for k in keys:
-        col = k if k not in df.columns else f"param_{k}"
-        df[col] = [p.get(k) for p in params]
-    return df
+    cols = pd.DataFrame({(k if k not in df.columns else f"param_{k}"): [p.get(k) for p in params] for k in keys},
+                        index=df.index)
+    return pd.concat([df, cols], axis=1) if keys else df

@@ -291,6 +291,8 @@ def _read_ply(data: bytes):
             if name == "vertex":
                 V = np.stack([arr["x"], arr["y"], arr["z"]], 1).astype(np.float64)
             continue
+        if name == "vertex":                          # as the ASCII path says
+            raise InvalidMeshError("list property in PLY vertex element")
         # elements with lists (faces): fast path when every list has 3 entries
         fields = []
         for p in props:

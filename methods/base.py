@@ -85,7 +85,7 @@ class Method:
             try:
                 importlib.import_module(mod)
             except Exception as exc:  # ImportError, or a broken binary wheel
-                hint = f"; optional: pip install 'mesh-shootout[{self.extra}]'" if self.extra else ""
+                hint = f"; optional: pip install -e '.[{self.extra}]' in the mesh-shootout checkout" if self.extra else ""
                 return f"{self.library}: cannot import {mod!r} ({type(exc).__name__}: {exc}){hint}"
         return None
 

@@ -46,7 +46,7 @@ def test_builtin_is_available(m):
 @pytest.mark.parametrize("m", OPTIONAL, ids=[m.name for m in OPTIONAL])
 def test_optional_backend_is_available_or_says_how_to_install_it(m):
     why = m.unavailable_reason()
-    assert why is None or f"pip install 'mesh-shootout[{m.extra}]'" in why
+    assert why is None or f"pip install -e '.[{m.extra}]'" in why      # as the README says
 
 
 def test_the_optional_extras_are_declared():
