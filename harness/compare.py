@@ -642,7 +642,7 @@ def timing_notes(meta_a: dict, meta_b: dict, res: dict) -> list[str]:
         notes.append(f"{n_inc} case(s) are inconclusive on time (not counted as regressions): too few timed samples "
                      "on one side (raise repeats or time_budget), a wall-time change that other processes' load "
                      "explains, or a change the raw times and the times relative to the run's drift disagree on "
-                     "(see each case's note)")
+                     "(each case's note is in the --html page)")
     if any(time_samples(r) is None for r in list(res["rows_a"].values()) + list(res["rows_b"].values())
            if r.get("status") == "ok" and r.get("library") != "external"):        # eval rows have no time at all
         notes.append("some rows store no timed samples (older runs): their time is judged on median/min/max only")

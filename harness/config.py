@@ -178,6 +178,7 @@ def samples_problem(hs) -> str | None:
 def load_config(source, base_dir: Path | None = None) -> Config:
     """Parse and validate a config given as a path, YAML text or dict."""
     label = "<config>"
+    odd: list[str] = []                  # numbers YAML 1.1 reads otherwise: listed with the other problems
     if isinstance(source, dict):
         raw = source
     elif isinstance(source, Path):
@@ -186,7 +187,7 @@ def load_config(source, base_dir: Path | None = None) -> Config:
             raise ConfigError(label, [f"config file not found (or not a file): {source}"])
         base_dir = base_dir or source.parent
         try:
-            raw = yaml_input.load(source.read_text())
+            raw = yaml_input.load(source.read_text(), odd)
         except (yaml.YAMLError, UnicodeDecodeError) as exc:
             raise ConfigError(label, [f"not valid YAML: {exc}".replace("\n", " ")]) from None
     else:
@@ -203,18 +204,19 @@ def load_config(source, base_dir: Path | None = None) -> Config:
         else:
             text = str(source)
         try:
-            raw = yaml_input.load(text)
+            raw = yaml_input.load(text, odd)
         except yaml.YAMLError as exc:
             raise ConfigError(label, [f"not valid YAML: {exc}".replace("\n", " ")]) from None
+    odd = [f"not valid YAML: {o}" for o in odd]
     if not isinstance(raw, dict):
-        raise ConfigError(label, [f"top level: expected a mapping, got {type(raw).__name__}"])
-    return _validate(raw, label, (base_dir or Path.cwd()).resolve())
+        raise ConfigError(label, odd + [f"top level: expected a mapping, got {type(raw).__name__}"])
+    return _validate(raw, label, (base_dir or Path.cwd()).resolve(), odd)
 
 
-def _validate(raw: dict, label: str, base_dir: Path) -> Config:
+def _validate(raw: dict, label: str, base_dir: Path, found=()) -> Config:
     from .plugins import import_methods
     methods = import_methods()
-    P: list[str] = []
+    P: list[str] = list(found)
 
     _unknown_keys(raw, TOP_KEYS, "", P)
 
@@ -284,13 +286,20 @@ def _validate(raw: dict, label: str, base_dir: Path) -> Config:
     tune = None
     if raw.get("tune") is not None:
         from .tune import check_tune
-        tune = check_tune(raw["tune"], base_dir, P, tasks, lambda m: _check_meshes(m, base_dir, P, "tune.train"))
-        if tune is not None:                      # searched on the meshes it is judged on: not a fair test
+        seen: list = []                           # the training meshes, checked even when tune: has other problems
+
+        def check_train(m):
+            seen.append(_check_meshes(m, base_dir, P, "tune.train"))
+            return seen[-1]
+        tune = check_tune(raw["tune"], base_dir, P, tasks, check_train)
+        train = tune.train if tune is not None else seen[0] if (
+            seen and isinstance(raw["tune"].get("train"), list) and len(seen[0]) == len(raw["tune"]["train"])) else []
+        if train:                                 # searched on the meshes it is judged on: not a fair test
             judged = {}
             for j, m in enumerate(meshes):
                 for key in datasets.content_keys(m):
                     judged.setdefault(key, j)
-            for i, m in enumerate(tune.train):
+            for i, m in enumerate(train):
                 hit = sorted({judged[k] for k in datasets.content_keys(m) if k in judged})
                 if hit:
                     what = m.get("bundled") or m.get("procedural") or Path(m.get("file", "?")).name

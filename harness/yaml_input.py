@@ -123,9 +123,12 @@ def _key_value(k):
     return yaml.constructor.SafeConstructor().construct_object(k)
 
 
-def load(text: str):
+def load(text: str, numbers: list | None = None):
     """The document's data (safe types only); `yaml.YAMLError` for bombs, duplicate keys in a
-    mapping, syntax errors and values their tag cannot read (``!!int abc``)."""
+    mapping, syntax errors and values their tag cannot read (``!!int abc``), and for plain
+    numbers YAML 1.1 reads otherwise than they look, unless ``numbers`` is a list: then one
+    message each is appended to it and the document is read as YAML 1.1 reads it (the caller
+    lists them with its own problems)."""
     loader = _Loader(text)
     try:
         node = loader.get_single_node()
@@ -138,7 +141,9 @@ def load(text: str):
             raise yaml.YAMLError("; ".join(dup) + ": each key may appear once in a mapping")
         odd: list = []
         _yaml11_numbers(node, odd, set())
-        if odd:
+        if odd and numbers is not None:
+            numbers += odd
+        elif odd:
             raise yaml.YAMLError("; ".join(odd[:10]) + (f"; and {len(odd) - 10} more" if len(odd) > 10 else ""))
         try:
             return loader.construct_document(node)

@@ -147,3 +147,6 @@ def test_a_training_mesh_is_refused_when_it_is_a_test_mesh_by_content(tmp_path):
         with pytest.raises(ConfigError, match=r"tune.train\[0\]: .* is also a test mesh \(meshes\[[01]\]"):
             load_config({**base, "tune": {**CFG["tune"], "train": [train]}})
     load_config({**base, "tune": {**CFG["tune"], "train": ["spot"]}})      # another mesh: accepted
+    with pytest.raises(ConfigError) as exc:      # said beside another problem of tune: (only after its fix before)
+        load_config({**base, "tune": {**CFG["tune"], "train": ["knight"], "budget": 0}})
+    assert "tune.budget" in str(exc.value) and "tune.train[0]: knight is also a test mesh" in str(exc.value), exc.value
