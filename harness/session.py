@@ -200,7 +200,7 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
     except ShootoutError as exc:
         problems.append(str(exc))
     if not problems and out_dir.is_dir():
-        problems = folder_problems(folder, out_dir, _accepted(cfg, chash), resume)
+        problems = folder_problems(folder, out_dir, _accepted(cfg, chash), resume, cfg)
     if problems:
         raise problems_error(problems)
     # before anything is written: an unreachable Dask scheduler is exit 2 with the folder untouched
@@ -303,7 +303,31 @@ def _accepted(cfg: Config, chash: str) -> tuple:
     return (chash,) if cfg.tune is None else (chash, config_hash(cfg, with_tune=False))
 
 
-def folder_problems(folder, out_dir, chash, resume: bool) -> list[str]:
+def _what_changed(prev: dict, folder, cfg: Config | None) -> str:
+    """What differs between the run recorded in ``folder`` (its run.json's config, its plan.csv)
+    and ``cfg``, as far as those files tell: ``'; found: ...'``, or '' when they do not."""
+    if cfg is None or not isinstance(prev.get("config"), dict):
+        return ""
+    old, new, out = prev["config"], cfg.raw if isinstance(cfg.raw, dict) else {}, []
+    for key, default in (("repeats", 1), ("time_budget", 0.25), ("hausdorff_samples", 20000),
+                         ("hausdorff_eps", 1e-3)):
+        a, b = old.get(key, default), new.get(key, default)
+        if a != b:
+            out.append(f"{key} {a!r} -> {b!r}")
+    if old.get("tune") != new.get("tune"):
+        out.append("tune:")
+    try:
+        ran = {r["case_id"] for r in (folder.read_plan() or [])}
+    except Exception:  # noqa: BLE001 - a damaged plan says nothing here; its own check names it
+        ran = set()
+    if ran:
+        now = {c.case_id for c in cfg.cases}
+        if ran - now or now - ran:
+            out.append(f"{len(ran - now)} of its cases not in this config, {len(now - ran)} of this config's not in it")
+    return f"; found: {', '.join(out)}" if out else ""
+
+
+def folder_problems(folder, out_dir, chash, resume: bool, cfg: Config | None = None) -> list[str]:
     """Why this run may not write into ``folder``: another program's files there (a fresh run), or
     (``--resume``) a run.json that is damaged, missing beside output files or of another config,
     or a task CSV whose columns are not this version's (resuming would drop its rows)."""
@@ -326,8 +350,8 @@ def folder_problems(folder, out_dir, chash, resume: bool) -> list[str]:
     if prev and prev.get("config_hash") not in accepted:
         return [f"--resume: the config changed since the run in {out_dir} started "
                 "(cases, tune:, repeats, time_budget, hausdorff_samples or hausdorff_eps differ; a case id also changes when a "
-                "mesh file's contents or a method's default parameters do); run without --resume to start over, "
-                "or use a new --out folder"]
+                "mesh file's contents or a method's default parameters do" + _what_changed(prev, folder, cfg)
+                + "); run without --resume to start over, or use a new --out folder"]
     return [f"--resume: {p}: written by another version of mesh-shootout or of its task kind, so resuming would "
             "drop its rows; run without --resume (a fresh run replaces them) or use a new --out folder"
             for p in folder.column_problems()]
@@ -411,7 +435,7 @@ def relabelled_meshes(folder, cases) -> list[str]:
 def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, executor, scheduler, resume, quiet,
                 export_benchmark_json, ex):
     done: set[str] = set()
-    refused = folder_problems(folder, out_dir, _accepted(cfg, chash), resume)   # before the lock too; again under it
+    refused = folder_problems(folder, out_dir, _accepted(cfg, chash), resume, cfg)   # before the lock too; again under it
     if refused:
         raise problems_error(refused)
     try:

@@ -134,7 +134,11 @@ def test_resume_with_a_changed_config_is_refused(tmp_path):
                        env=env_with_root(), capture_output=True, text=True, timeout=120)
     assert r.returncode == 2
     assert "config changed" in r.stderr and "--resume" in r.stderr and "Traceback" not in r.stderr
+    assert "0 of its cases not in this config" in r.stderr, r.stderr        # what changed (a review: not said)
     assert {p.name: p.read_bytes() for p in out.iterdir() if p.is_file() and p.name != ".shootout.lock"} == snapshot
+    cfg["tasks"]["laplacian"]["methods"].pop()
+    with pytest.raises(harness.errors.ShootoutError, match=r"found: repeats 1 -> 2\)"):
+        harness.run({**cfg, "repeats": 2}, out=out, resume=True)
 
 
 def test_resume_with_a_changed_time_budget_is_refused(tmp_path):
