@@ -175,9 +175,9 @@ def samples_problem(hs) -> str | None:
     return f"expected an integer in [0, {MAX_SAMPLES:,}], got {yaml_input.short(hs)}"
 
 
-def load_config(source, base_dir: Path | None = None) -> Config:
-    """Parse and validate a config given as a path, YAML text or dict."""
-    label = "<config>"
+def load_config(source, base_dir: Path | None = None, label: str = "<config>") -> Config:
+    """Parse and validate a config given as a path, YAML text or dict; ``label`` names a dict or
+    text in messages (a path names itself)."""
     odd: list[str] = []                  # numbers YAML 1.1 reads otherwise: listed with the other problems
     if isinstance(source, dict):
         raw = source
@@ -220,7 +220,7 @@ def _validate(raw: dict, label: str, base_dir: Path, found=()) -> Config:
 
     _unknown_keys(raw, TOP_KEYS, "", P)
 
-    name = raw.get("name", Path(label).stem if label != "<config>" else "run")
+    name = raw.get("name", Path(label).stem if label != "<config>" and Path(label).is_file() else "run")
     if name_problem(name):
         given = "name" in raw
         P.append(f"name: {name_problem(name)}" + ("" if given else

@@ -737,7 +737,7 @@ def recompute_views(run_dir) -> list[dict]:
     raw = dict(meta["config"])
     report = raw.pop("report", None)     # a listed id no longer a case (its file changed): its view says so
     cfg = load_config({**raw, "report": {k: v for k, v in report.items() if k != "views"}} if isinstance(report, dict)
-                      else raw, base_dir=base.resolve())
+                      else raw, base_dir=base.resolve(), label=f"{folder.run_json} (its config)")
     threads = (meta.get("timing") or {}).get("threads_per_case") if isinstance(meta.get("timing"), dict) else None
     threads = threads if isinstance(threads, int) and not isinstance(threads, bool) and 0 < threads <= 4096 else None
     cases = list(cfg.cases) + _recorded_tuned_cases(cfg, meta)
