@@ -154,6 +154,32 @@ def test_a_worker_running_other_code_costs_its_rows_not_a_mixed_folder(cluster):
     assert [r["status"] for r in again] == ["ok"] and "_worker_code" not in again[0]
 
 
+def _pretend_other_numpy(version):
+    import harness.executors.dask as d
+    d._CODE.pop("versions", None)
+    if version:
+        d._CODE["versions"] = {**d._versions(), "numpy": version}
+
+
+def test_a_worker_with_other_package_versions_costs_its_rows(cluster):
+    """Only the sources were compared: a worker with another numpy (or libigl, ...) made rows the
+    run recorded as the driver's environment's. A row from a worker whose package versions differ
+    is an error row naming each difference."""
+    cfg = load_config({"name": "t", "time_budget": 0, "meshes": ["knight"],
+                       "tasks": {"smoothing": {"methods": ["scratch.taubin"]}}})
+    ex = DaskExecutor(timeout=60, scheduler=cluster.scheduler_address)
+    try:
+        ex.client.run(_pretend_other_numpy, "1.0.0")
+        rows = [row for _, row, _ in ex.run(cfg.cases)]
+        ex.client.run(_pretend_other_numpy, None)
+        again = [row for _, row, _ in ex.run(cfg.cases)]
+    finally:
+        ex.close()
+    assert [r["status"] for r in rows] == ["error"] and "other package versions" in rows[0]["error"]
+    assert "numpy 1.0.0, the driver's" in rows[0]["error"] and "_worker_code" not in rows[0]
+    assert [r["status"] for r in again] == ["ok"]
+
+
 def test_timeout_and_crash_on_workers_through_the_cli(cluster, tmp_path):
     """`shootout run --executor dask --scheduler ADDR --timeout 3`: the sleeping case is killed on
     its worker (timeout row), the segfault is an error row naming SIGSEGV, the rest is ok."""

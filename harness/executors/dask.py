@@ -11,8 +11,8 @@ Design
   counts a death against every task assigned to the worker) is submitted again, three times at
   most. A scheduler lost, or restarted (on the same address, where the client reconnects but
   the tasks it had out are cancelled, or by any client's ``restart()``), interrupts the run
-  (exit 1, resumable). A row whose worker ran other sources than the driver (`other_code`) is
-  an error row.
+  (exit 1, resumable). A row whose worker ran other sources than the driver, or has other
+  package versions (`other_code`), is an error row.
 - Cases are small and self-describing. Bundled and procedural meshes are loaded or
   regenerated on the worker (deterministically, from the package data and the spec). For
   ``{file: ...}`` meshes (and the ``clean:`` file of a pair) the *driver* reads the file's
@@ -36,8 +36,8 @@ Design
   with ``save_meshes``, the mesh arrays.
 
 Workers need the same environment as the driver: this package and the backends installed
-(same versions, or the metrics may differ), and every module named under ``plugins:``
-importable.
+(same versions, or the metrics may differ: a worker's rows are refused otherwise), and every
+module named under ``plugins:`` importable.
 """
 from __future__ import annotations
 
@@ -492,22 +492,30 @@ def run_task(case: Case, blobs: dict, timeout: float | None, want_meshes: bool):
     _log(STARTED)
     if _daemonic():
         row, meshes = run_in_subprocess(case, timeout, want_meshes, stop=_cancelled)
-        code = row.pop(CODE_KEY, None)            # hashed in that subprocess: the code that ran
+        code, versions = row.pop(CODE_KEY, (None, None))     # that subprocess's: the code that ran
     else:
         _warm(case)
-        code = _code_of(case.plugins)             # the worker's loaded code, which its forked cases run
+        code, versions = _code_of(case.plugins), _versions()   # the worker's loaded code, which its forked cases run
         from .isolation import run_isolated
         row, meshes = run_isolated(case, timeout, want_meshes, stop=_cancelled)
     if row.get("status") == "unavailable":      # which machine lacks the library
         row["error"] = f"{row.get('error') or ''} (on the worker at {_worker_name()})".lstrip()
     if code is not None:
-        row[CODE_KEY] = (code, _worker_name())
+        row[CODE_KEY] = (code, _worker_name(), versions)
     _log(ENDED)
     return row, meshes
 
 
-CODE_KEY = "_worker_code"        # a row's (code_sha256, worker) from `run_task`, checked and dropped by the driver
+CODE_KEY = "_worker_code"   # a row's (code_sha256, worker, package versions) from `run_task`, checked and dropped by the driver
 _CODE: dict = {}
+
+
+def _versions() -> dict:
+    """`harness.provenance.package_versions` of this process, once (what its cases import)."""
+    if "versions" not in _CODE:
+        from ..provenance import package_versions
+        _CODE["versions"] = package_versions()
+    return _CODE["versions"]
 
 
 def _code_of(plugins) -> str:
@@ -525,14 +533,20 @@ def other_code(row: dict, case: Case) -> str | None:
     """Why ``row`` is not kept: the worker that made it ran other sources (`code_hash`) than this
     driver, e.g. an older checkout on its PYTHONPATH; None when they agree or the row says nothing."""
     theirs = row.pop(CODE_KEY, None)
-    if not isinstance(theirs, (tuple, list)) or len(theirs) != 2:
+    if not isinstance(theirs, (tuple, list)) or len(theirs) not in (2, 3):
         return None
     ours = _code_of(case.plugins)
-    if theirs[0] == ours:
-        return None
-    return (f"the Dask worker ({theirs[1]}) ran other code than the driver (code_sha256 {theirs[0]}, the "
-            f"driver's {ours}: its harness, methods or plugins differ); its row is not kept: give every "
-            "worker the driver's code")
+    if theirs[0] != ours:
+        return (f"the Dask worker ({theirs[1]}) ran other code than the driver (code_sha256 {theirs[0]}, the "
+                f"driver's {ours}: its harness, methods or plugins differ); its row is not kept: give every "
+                "worker the driver's code")
+    mine, versions = _versions(), theirs[2] if len(theirs) == 3 else None
+    other = sorted(k for k in mine if isinstance(versions, dict) and versions.get(k, mine[k]) != mine[k])
+    if other:
+        return (f"the Dask worker ({theirs[1]}) has other package versions than the driver ("
+                + ", ".join(f"{k} {versions[k]}, the driver's {mine[k]}" for k in other)
+                + "): the metrics may differ; its row is not kept: give every worker the driver's environment")
+    return None
 
 
 SCHEDULER_REASONS = ("scheduler-connection-lost", "scheduler-restart")
@@ -702,7 +716,7 @@ def _subprocess_main(out_path: str) -> int:
     (``setsid`` and a double fork re-parents them here), then ends as the case did: the same
     exit code, or killed by the same signal."""
     case, want_meshes = pickle.load(sys.stdin.buffer)
-    from ..provenance import code_hash
+    from ..provenance import code_hash, package_versions
     from ..runner import run_case
     from .isolation import become_subreaper, reap_strays
     become_subreaper()
@@ -710,7 +724,7 @@ def _subprocess_main(out_path: str) -> int:
     if pid == 0:
         try:
             result = run_case(case, want_meshes=want_meshes)
-            result[0][CODE_KEY] = code_hash(case.plugins)     # the code this process loaded and ran
+            result[0][CODE_KEY] = (code_hash(case.plugins), package_versions())   # what this process loaded and ran
             tmp = out_path + ".part"
             with open(tmp, "wb") as fh:
                 pickle.dump(result, fh, protocol=pickle.HIGHEST_PROTOCOL)
