@@ -580,3 +580,29 @@ def test_a_daemonic_workers_case_leaves_no_process_behind(tmp_path, monkeypatch)
         except psutil.NoSuchProcess:
             return False
     assert not [p for p in pids if alive(p)], pids
+
+
+def test_the_executors_own_cluster_restarts_workers_that_fork():
+    """Without --scheduler the executor starts a LocalCluster of non-daemonic workers (they fork
+    their cases); a worker the nanny restarted was daemonic, so every later case of it took the
+    slower subprocess path. The setting holds until the executor closes, and is then restored."""
+    from harness.executors.dask import _daemonic
+    before = dask.config.get("distributed.worker.daemon", default=True)
+    ex = DaskExecutor(workers=1, timeout=60)
+    try:
+        pid = next(iter(ex.client.run(os.getpid).values()))
+        os.kill(pid, signal.SIGKILL)
+        t0 = time.time()
+        while time.time() - t0 < 60:
+            try:
+                now = ex.client.run(os.getpid)
+            except Exception:  # noqa: BLE001 - no worker yet
+                now = {}
+            if now and pid not in now.values():
+                break
+            time.sleep(0.2)
+        assert now and pid not in now.values(), "the worker did not come back"
+        assert list(ex.client.run(_daemonic).values()) == [False]
+    finally:
+        ex.close()
+    assert dask.config.get("distributed.worker.daemon", default=True) == before

@@ -153,12 +153,20 @@ class DaskExecutor:
         self._cluster = None
         self._own_client = True
         self._futures: dict = {}
+        self._no_daemon = None
         if scheduler is None:
-            with dask.config.set({"distributed.worker.daemon": False}):
+            # the nanny reads this setting each time it starts a worker process, a restart too (a
+            # daemonic worker may not fork: its cases would take the slower subprocess path), so it
+            # holds until `close`
+            self._no_daemon = dask.config.set({"distributed.worker.daemon": False})
+            try:
                 self._cluster = LocalCluster(n_workers=max(1, int(workers or usable_cpus())),
                                              threads_per_worker=1, processes=True,
                                              dashboard_address=None)
-            self.client = Client(self._cluster)
+                self.client = Client(self._cluster)
+            except BaseException:
+                self._no_daemon.__exit__(None, None, None)
+                raise
         elif isinstance(scheduler, Client):
             self.client, self._own_client = scheduler, False
         elif hasattr(scheduler, "scheduler_address"):          # a cluster object (LocalCluster, ...)
@@ -372,6 +380,9 @@ class DaskExecutor:
             if self._cluster is not None:
                 self._cluster.close()
         finally:
+            if self._no_daemon is not None:
+                self._no_daemon.__exit__(None, None, None)
+                self._no_daemon = None
             for lg, lv in zip(quiet, levels):
                 lg.setLevel(lv)
 
