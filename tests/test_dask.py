@@ -606,3 +606,39 @@ def test_the_executors_own_cluster_restarts_workers_that_fork():
     finally:
         ex.close()
     assert dask.config.get("distributed.worker.daemon", default=True) == before
+
+
+def test_a_forking_workers_crashed_case_leaves_no_process_behind(tmp_path, monkeypatch):
+    """The case process is a subreaper that kills what its method left when the case ends; when it
+    crashed first, a grandchild in a session of its own went to init and outlived the run on a
+    forking worker. The worker is now a subreaper for its cases and kills such orphans; its own
+    children (here a sleep started on it) stay."""
+    monkeypatch.setenv("HOSTILE_MARK_DIR", str(tmp_path))          # the workers inherit it
+    cfg = load_config({"plugins": ["tests.plugins.hostile"], "meshes": ["knight"], "time_budget": 0,
+                       "tasks": {"smoothing": {"methods": [{"name": "hostile.escape",
+                                                            "params": {"crash": [True, False]}}]}}})
+    ex = DaskExecutor(workers=1, timeout=60)
+    try:
+        keep = next(iter(ex.client.run(_start_sleep).values()))
+        rows = [row for _, row, _ in ex.run(cfg.cases)]
+        alive_keep = next(iter(ex.client.run(_alive_pid, keep).values()))
+    finally:
+        ex.close()
+    assert sorted(r["status"] for r in rows) == ["error", "ok"], rows
+    pids = [int(p.read_text()) for p in tmp_path.glob("escaped-*.pid")]
+    assert len(pids) >= 2, pids
+    time.sleep(0.3)
+    assert not [p for p in pids if psutil.pid_exists(p) and psutil.Process(p).status() != psutil.STATUS_ZOMBIE], pids
+    assert alive_keep
+
+
+def _start_sleep():
+    import subprocess as sp
+    import harness.executors.dask as d
+    d._KEEP = sp.Popen(["sleep", "60"])
+    return d._KEEP.pid
+
+
+def _alive_pid(pid):
+    import psutil as ps
+    return ps.pid_exists(pid) and ps.Process(pid).status() != ps.STATUS_ZOMBIE

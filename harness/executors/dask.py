@@ -507,7 +507,8 @@ def run_task(case: Case, blobs: dict, timeout: float | None, want_meshes: bool):
     else:
         _warm(case)
         code, versions = _code_of(case.plugins), _versions()   # the worker's loaded code, which its forked cases run
-        from .isolation import run_isolated
+        from .isolation import reap_orphans_here, run_isolated
+        reap_orphans_here()                       # what a crashed case left comes back to the worker, and dies
         row, meshes = run_isolated(case, timeout, want_meshes, stop=_cancelled)
     if row.get("status") == "unavailable":      # which machine lacks the library
         row["error"] = f"{row.get('error') or ''} (on the worker at {_worker_name()})".lstrip()

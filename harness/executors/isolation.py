@@ -361,14 +361,43 @@ def cancelled_row(case: Case) -> dict:
     return row
 
 
+_RUNNING: set = set()              # pids of the case processes `run_isolated` has running, any thread
+_RUNNING_LOCK = threading.Lock()    # held while one starts (until registered) and while orphans are reaped
+_REAP = {"on": False}
+
+
+def reap_orphans_here() -> None:
+    """Make this process a child subreaper for the cases `run_isolated` runs in it (a Dask worker
+    forking cases from several threads): the processes a case leaves behind after its case
+    process died first (a crash, a timeout) come here and are killed when a case ends. Only
+    children in another session than this process's are touched (a case runs in a session of its
+    own, and so do processes that left it): the process's own children stay."""
+    with _RUNNING_LOCK:
+        if not _REAP["on"]:
+            _REAP["on"] = become_subreaper()
+
+
+def _reap_orphans() -> None:
+    if not _REAP["on"]:
+        return
+    with _RUNNING_LOCK:
+        me, keep = os.getsid(0), set(_RUNNING)
+        for c in _children(os.getpid()):
+            with contextlib.suppress(OSError):
+                if os.getsid(c) == me:
+                    keep.add(c)
+        reap_strays(keep)
+
+
 def run_isolated(case: Case, timeout: float | None = None, want_meshes: bool = False, want_view: bool = False,
                  stop=None):
     """Run one case in a fresh child process; returns ``(row, extras)``, never raises.
     ``stop``: a callable polled twice a second; when it returns true the case is killed (its
     caller gave up on it) and the row says so."""
     from multiprocessing.connection import wait as mp_wait
-    with signals_blocked():
+    with _RUNNING_LOCK, signals_blocked():
         job = _Job(case, want_meshes, want_view)
+        _RUNNING.add(job.proc.pid)
     try:
         deadline = None if timeout is None else time.perf_counter() + timeout
         while True:
@@ -384,3 +413,7 @@ def run_isolated(case: Case, timeout: float | None = None, want_meshes: bool = F
     except BaseException:
         job.abort()
         raise
+    finally:
+        with _RUNNING_LOCK:
+            _RUNNING.discard(job.proc.pid)
+        _reap_orphans()
