@@ -20,7 +20,7 @@ refused:
 * flags regress when a good value turns bad: ``SYM LOC LIN POS psd operator_symmetric manifold``
   true -> false, ``diverged topology_changed`` false -> true; ``loc_violations`` may not grow;
 * ``out_faces`` regresses when its miss of ``target_faces`` grows by more than
-  ``max(2 faces, 1 % of the target)`` (the conformance tolerance);
+  ``1 % of the target + 2 faces`` (the task's `target_tolerance`, which decides ``over_target``);
 * a value that becomes blank (not measurable any more) regresses; one that appears improves;
 * time is decided on the stored samples (``times``): it regresses when B is slower with
   statistical significance *and* by a minimum effect: the one-sided Mann-Whitney U test of
@@ -84,6 +84,7 @@ from pathlib import Path
 
 from .errors import ShootoutError
 from .leaderboard import params_text
+from .tasks.simplification import target_tolerance
 from .results import RunFolder
 from .schema import fmt
 from .schema import number as _num
@@ -178,7 +179,7 @@ def judge(metric: str, a, b, row_a=None, row_b=None, rule: Rule | None = None) -
         if t is None:
             return "same" if x == y else "changed"
         miss_a, miss_b = abs(x - t), abs(y - t)
-        tol = max(2.0, 0.01 * t)
+        tol = target_tolerance(t)
         if miss_b > miss_a + tol:
             return "regression"
         return "improvement" if miss_b < miss_a - tol else "same"

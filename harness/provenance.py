@@ -9,7 +9,10 @@ from importlib import metadata
 from pathlib import Path
 
 VERSION_PACKAGES = ["numpy", "scipy", "pandas", "libigl", "pymeshlab", "fast-simplification", "pygel3d",
-                    "numba", "robust-laplacian", "pyfqmr", "distributed", "mesh-shootout"]
+                    "numba", "robust-laplacian", "pyfqmr", "distributed", "mesh-shootout",
+                    # the other backends and the sparse solvers the methods may call
+                    "potpourri3d", "pygeodesic", "meshoptimizer", "trimesh", "open3d-cpu", "open3d",
+                    "cholespy", "qdldl", "pypardiso", "mkl"]
 
 
 def package_versions() -> dict:

@@ -22,7 +22,7 @@ eigenpairs give the same value at any mesh scale; ``orthogonality_error``:
 eigenvectors are returned and ``k >= 4``): the heat kernel signature (`harness.metrics.hks`)
 from the first ``(L + 1)^2 <= k`` returned pairs (whole multiplets, degrees ``l <= L``: a
 multiplet cut at ``k`` would make the signature depend on which basis of its eigenspace the
-solver returned, by up to 9% here on icospheres at ``k = 17``) at 4 times log-spaced in
+solver returned, by more than the metric's tolerance) at 4 times log-spaced in
 ``[4 ln 10 / lambda*_max, 4 ln 10 / lambda*_1]`` (the analytic eigenvalues of those pairs), max
 over vertices and times of ``|HKS - HKS*| / HKS*`` against the sphere's exact HKS (all terms:
 the truncation is part of the error, below ``1e-4`` at the smallest time for ``k <= 2000``).
