@@ -382,3 +382,21 @@ def test_shootout_report_rebuilds_the_rankings_too(tiny_run, tmp_path):
         (d / n).unlink()
     assert cli(["report", str(d)]) == 0
     assert {n: (d / n).read_text() for n in names} == before
+
+
+def test_the_report_shows_the_run_tasks_in_their_declared_order(tmp_path):
+    """An outside review: the report always added sections for laplacian, smoothing and
+    simplification ("This run has no laplacian cases" on a smoothing run) and put every other kind
+    after them, whatever its declared order."""
+    harness.run({"name": "o", "time_budget": 0, "meshes": ["knight"],
+                 "tasks": {"spectrum": {"methods": ["scratch.spectrum"], "params": {"k": 6}},
+                           "smoothing": {"methods": ["scratch.explicit"]}}}, out=tmp_path / "o", quiet=True, workers=1)
+    page = (tmp_path / "o" / "report.html").read_text()
+    assert "task-laplacian" not in page and "task-simplification" not in page
+    assert page.index("id='task-smoothing'") < page.index("id='task-spectrum'")
+    meta = json.loads((tmp_path / "o" / "run.json").read_text())
+    meta["tasks"]["spectrum"]["order"] = 1                       # a kind declared first comes first
+    (tmp_path / "o" / "run.json").write_text(json.dumps(meta))
+    build_report(tmp_path / "o")
+    page = (tmp_path / "o" / "report.html").read_text()
+    assert page.index("id='task-spectrum'") < page.index("id='task-smoothing'")

@@ -291,7 +291,6 @@ def _header_html(meta, frames, run_dir) -> str:
 # ----------------------------------------------------------------------------- page
 
 SECTIONS = {"property_matrix": property_matrix_section}     # extra sections a task may declare
-BUILTIN_ORDER = ("laplacian", "smoothing", "simplification")
 
 
 def collect(run_dir) -> dict:
@@ -324,7 +323,8 @@ def _leaderboard_files_text(run_dir) -> str:
     when it finishes; an interrupted run, `eval` and `shootout report` do not)."""
     have = [n for n in REPORT_FILES if n.startswith("leaderboard.") and (Path(run_dir) / n).is_file()]
     if not have:
-        return "This run folder has no leaderboard files (they are written when a run finishes)."
+        return ("This run folder has no leaderboard files (they are written when a run finishes, and by "
+                "`shootout report`).")
     return "Also in " + ", ".join(have) + "."
 
 
@@ -342,10 +342,12 @@ def _task_section(task, spec, frames) -> str:
 def render(run_dir) -> str:
     data = collect(run_dir)
     meta, frames, specs = data["meta"], data["frames"], dict(data["specs"])
-    for t in BUILTIN_ORDER:                   # the three original task kinds always have a section
-        if t not in specs and t in _tasks.names():
-            specs[t] = _tasks.get(t).spec()
-    order = sorted(specs, key=lambda t: (BUILTIN_ORDER.index(t) if t in BUILTIN_ORDER else 9, t))
+    def position(t):                          # the declared order: recorded, else this version's
+        o = specs[t].get("order")
+        if not isinstance(o, (int, float)) or isinstance(o, bool):
+            o = _tasks.get(t).order if t in _tasks.names() else 100
+        return (o, t)
+    order = sorted(specs, key=position)
     views, views_note = data["views"], None
     if not views and not (Path(run_dir) / "views").is_dir() and frames:
         why = ({"interrupted": "the run was interrupted before its views were computed",

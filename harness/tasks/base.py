@@ -163,7 +163,8 @@ class Task:
         return {"name": self.name, "title": self.title, "intro": self.intro,
                 "metrics": [m.spec() for m in self.metrics], "view_metric": self.view_metric,
                 "axis_params": sorted(self.axis_params), "sections": list(self.sections),
-                "params": sorted(self.params), "invalid_when": [r.spec() for r in self.invalid_when]}
+                "params": sorted(self.params), "invalid_when": [r.spec() for r in self.invalid_when],
+                "order": self.order}
 
 
 def float_array(name: str, what: str, X, shape: tuple) -> np.ndarray:
