@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -111,7 +112,45 @@ def _fan(polys: list[list[int]]) -> tuple[np.ndarray, int]:
     return np.asarray(tris, dtype=np.int64).reshape(-1, 3), n_poly
 
 
+_OBJ_V = re.compile(r"^[ \t]*v(?=[ \t\r]|$)([^\n]*)", re.M)
+_OBJ_F = re.compile(r"^[ \t]*f(?=[ \t\r]|$)([^\n]*)", re.M)
+
+
+def _numbers(lines: list[str], dtype, per_line: int):
+    """The whitespace-separated numbers of ``lines``, exactly ``per_line`` each, as one array;
+    None if any line holds another count or a token that is not such a number."""
+    import warnings
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")      # a token it cannot read ends the parse early: counted below
+            a = np.fromstring(" ".join(lines), dtype=dtype, sep=" ") if lines else np.zeros(0, dtype)
+    except (ValueError, OverflowError):          # or is refused at once
+        return None
+    if len(a) != per_line * len(lines) or sum(len(ln.split()) for ln in lines) != len(a):
+        return None
+    return a.reshape(-1, per_line)
+
+
+def _read_obj_fast(text: str):
+    """`_read_obj` for the plain case, vectorised: ``(V, F)`` when every vertex line holds three
+    numbers, every face line three positive indices without ``/`` within the vertices and lines
+    end with ``\n`` or ``\r\n``; None otherwise (the general reader decides, and words the
+    errors)."""
+    if text.count("\r") != text.count("\r\n") or any(c in text for c in "\x0b\x0c\x1c\x1d\x1e\x85\u2028\u2029"):
+        return None                              # other line breaks: splitlines' rules, in the general reader
+    vs, fs = _OBJ_V.findall(text), _OBJ_F.findall(text)
+    if any("/" in f for f in fs):
+        return None
+    V, F = _numbers(vs, np.float64, 3), _numbers(fs, np.int64, 3)
+    if V is None or F is None or (len(F) and (F.min() < 1 or F.max() > len(V))):
+        return None
+    return V, F - 1
+
+
 def _read_obj(text: str):
+    fast = _read_obj_fast(text)
+    if fast is not None:
+        return fast
     verts, polys = [], []
     top = (0, 0)                             # the largest (1-based) index and its line
     for ln, line in enumerate(text.splitlines(), 1):

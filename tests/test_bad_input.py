@@ -490,3 +490,44 @@ def test_a_file_changed_after_the_run_started_is_an_error_row(tmp_path):
     df = frames["laplacian"]
     assert len(df) == 2 and (df["status"] == "error").all(), df[["method", "status", "error"]]
     assert df["error"].str.contains("the file changed since the run started").all(), df["error"].tolist()
+
+
+def test_the_vectorised_obj_reader_equals_the_general_one(bad_dir, tmp_path):
+    """A plain OBJ (three numbers a vertex, three indices a face) is read by numpy in one pass;
+    it must give exactly the general reader's arrays, and leave every other file (slashes,
+    polygons, negative or out-of-range indices, other line breaks, short lines) to it."""
+    import harness.mesh as M
+    rng = np.random.default_rng(3)
+    V = rng.standard_normal((500, 3)) * 10.0 ** rng.integers(-8, 8, (500, 1))
+    F = rng.integers(0, 500, (900, 3))
+    lines = [f"v {float(x)!r} {float(y)!r}\t{z:.17g}" for x, y, z in V] + ["# c", "vn 0 0 1", "g x"] + \
+            [f"  f {a + 1} {b + 1} {c + 1}  " for a, b, c in F]
+    texts = {"plain": "\n".join(lines), "crlf": "\r\n".join(lines) + "\r\n"}
+    texts["four"] = texts["plain"].replace("v ", "v 1 ", 1)               # a vertex with four numbers
+    texts["short"] = texts["plain"].replace("  f ", "f 1 2\n  f ", 1)     # a face with two
+    texts["cr"] = texts["plain"].replace("\n", "\r", 3)
+    texts["negative"] = texts["plain"] + "\nf -1 -2 -3"
+    texts["word"] = texts["plain"].replace("v ", "v x", 1)
+    for p in sorted(bad_dir.glob("*.obj")):
+        texts[p.name] = p.read_bytes().decode("utf-8", errors="replace")
+    for name, text in texts.items():
+        fast = M._read_obj_fast(text)
+        try:
+            V0, polys = _general(M, text)
+        except Exception:  # noqa: BLE001 - the general reader refuses it: the fast one must not take it
+            assert fast is None, name
+            continue
+        if fast is not None:
+            F0, n_poly = M._fan(polys)
+            assert n_poly == 0 and np.array_equal(fast[0], V0, equal_nan=True) and np.array_equal(fast[1], F0), name
+    assert M._read_obj_fast(texts["plain"]) is not None and M._read_obj_fast(texts["crlf"]) is not None
+    for name in ("four", "short", "cr", "negative", "word"):
+        assert M._read_obj_fast(texts[name]) is None, name
+
+
+def _general(M, text):
+    fast, M._read_obj_fast = M._read_obj_fast, lambda t: None
+    try:
+        return M._read_obj(text)
+    finally:
+        M._read_obj_fast = fast
