@@ -492,13 +492,15 @@ def _same_mesh_problems(specs: list[dict], where: list[str]) -> list[str]:
     """One mesh listed twice (same spec, or files with the same bytes: its cases would run once,
     whatever its names), and a ``name:`` that another, different mesh also goes by (the ``mesh``
     column and the noise seed come from it; it would be changed silently to tell them apart)."""
-    P, first = [], {}
+    P, again = [], {}
     ids = [json.dumps(_identity(s), sort_keys=True, default=str) for s in specs]
     for i, ident in enumerate(ids):
-        if ident in first:
-            P.append(f"{where[i]}: the same mesh as {where[first[ident]]} (the same "
-                     f"{'file bytes' if 'file' in specs[i] else 'spec'}): list it once")
-        first.setdefault(ident, i)
+        again.setdefault(ident, []).append(i)
+    for ident, at in again.items():
+        if len(at) > 1:
+            more = f" and {len(at) - 4} more" if len(at) > 4 else ""
+            P.append(f"{', '.join(where[i] for i in at[1:4])}{more}: the same mesh as {where[at[0]]} (the same "
+                     f"{'file bytes' if 'file' in specs[at[0]] else 'spec'}): list it once")
     labels = [datasets.spec_key(s) for s in specs]
     for i, s in enumerate(specs):
         if "name" not in s:

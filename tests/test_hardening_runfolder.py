@@ -172,7 +172,8 @@ def test_a_long_mesh_list_validates_in_seconds():
     with pytest.raises(ConfigError) as err:        # listed with the config's other problems
         load_config({"meshes": ["knight"] * 200_000, "repeats": -1,
                      "tasks": {"laplacian": {"methods": ["scratch.uniform"]}}})
-    assert len(err.value.problems) == 2 and "expands to 200,000 cases" in str(err.value) and "repeats" in str(err.value)
+    assert len(err.value.problems) == 3 and "expands to 200,000 cases" in str(err.value) and "repeats" in str(err.value)
+    assert "meshes[1], meshes[2], meshes[3] and 199996 more: the same mesh as meshes[0]" in str(err.value)
 
 
 def test_a_rejected_config_imports_no_plugin(tmp_path):

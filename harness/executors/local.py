@@ -138,11 +138,24 @@ def _preload_tasks(cases) -> None:
     scan_thread_pools(next((c.threads for c in cases), None))
 
 
+WARM_FILE_MAX = 64 << 20     # mesh files up to this size are read once by the driver
+
+
+def _small_files(mesh: dict) -> bool:
+    """Whether the files of a ``{file: ...}`` (and ``clean:``) mesh are each at most
+    `WARM_FILE_MAX` bytes: the driver reads those itself, while a larger one is left to each
+    case, where ``--timeout`` bounds a read that takes too long."""
+    try:
+        return all(os.path.getsize(mesh[k]) <= WARM_FILE_MAX for k in ("file", "clean") if k in mesh)
+    except (OSError, TypeError):
+        return False
+
+
 def _warm_mesh_cache(cases) -> None:
-    """Load each distinct bundled or procedural mesh (and its noise frame) once in the driver so
-    forked children inherit it. File meshes are never read here: a reader that crashes on a bad
-    file must cost that file's rows, not the driver (best effort: failures fail again, as error
-    rows)."""
+    """Load each distinct mesh (and its noise frame) once in the driver so forked children
+    inherit it instead of reading, repairing and measuring it in every case (best effort:
+    failures fail again in the case, as its error row; the readers raise, they cannot crash the
+    process). Files larger than `WARM_FILE_MAX` are left to the cases."""
     from .. import datasets
 
     def key(c):
@@ -150,7 +163,7 @@ def _warm_mesh_cache(cases) -> None:
     noisy = {key(c) for c in cases if c.adds_noise}
     seen = set()
     for c in cases:
-        if "file" in c.mesh:
+        if "file" in c.mesh and not _small_files(c.mesh):
             continue
         k = key(c)
         if k in seen or len(seen) >= 8:
