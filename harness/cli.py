@@ -68,6 +68,8 @@ def _parser() -> argparse.ArgumentParser:
                     help="default: smoothing when a result has the clean mesh's vertex and face counts, else simplification")
     ev.add_argument("--label", action="append", help="method label of each result, in order (default: file stem)")
     ev.add_argument("--hausdorff-samples", type=_number(int), default=20000, help="area samples per side (as in a config)")
+    ev.add_argument("--hausdorff-eps", type=_number(float), default=1e-3, metavar="EPS",
+                    help="relative gap the certified Hausdorff distance aims for (as in a config; default 1e-3)")
     ev.add_argument("--target-faces", type=_number(int), default=None, metavar="N",
                     help="simplification: the face count the results were asked for (judges over_target)")
     ev.add_argument("--target-ratio", type=_number(float), default=None, metavar="R",
@@ -309,7 +311,7 @@ def _cmd_eval(a) -> int:
     from .scoring import eval_files
     frames = eval_files(a.clean, a.results, a.out, noisy=a.noisy, task=a.task, labels=a.label,
                         hausdorff_samples=a.hausdorff_samples, target_faces=a.target_faces,
-                        target_ratio=a.target_ratio)
+                        target_ratio=a.target_ratio, hausdorff_eps=a.hausdorff_eps)
     print(_eval_summary(frames, Path(a.out)))
     return 0
 

@@ -175,6 +175,13 @@ def samples_problem(hs) -> str | None:
     return f"expected an integer in [0, {MAX_SAMPLES:,}], got {yaml_input.short(hs)}"
 
 
+def eps_problem(eps) -> str | None:
+    """What is wrong with a ``hausdorff_eps`` value, or None."""
+    if _is_num(eps) and 1e-9 <= eps <= 1:
+        return None
+    return f"expected a relative gap in [1e-9, 1], got {yaml_input.short(eps)}"
+
+
 def load_config(source, base_dir: Path | None = None, label: str = "<config>") -> Config:
     """Parse and validate a config given as a path, YAML text or dict; ``label`` names a dict or
     text in messages (a path names itself)."""
@@ -245,8 +252,8 @@ def _validate(raw: dict, label: str, base_dir: Path, found=()) -> Config:
     if samples_problem(hs):
         P.append(f"hausdorff_samples: {samples_problem(hs)}")
     eps = raw.get("hausdorff_eps", 1e-3)
-    if not _is_num(eps) or not 1e-9 <= eps <= 1:
-        P.append(f"hausdorff_eps: expected a relative gap in [1e-9, 1], got {yaml_input.short(eps)}")
+    if eps_problem(eps):
+        P.append(f"hausdorff_eps: {eps_problem(eps)}")
         eps = 1e-3
     report = raw.get("report", {})
     if not isinstance(report, dict):

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from . import tasks
-from .config import name_problem, samples_problem
+from .config import eps_problem, name_problem, samples_problem
 from .errors import ShootoutError, problems_error
 from .mesh import Mesh, missing_file_problem, read_mesh, validate
 from .provenance import code_hash, git_commit, git_dirty, machine_info, now_iso, package_versions
@@ -35,7 +35,8 @@ def _result(task_name: str, V, F):
 
 
 def evaluate(V, F, V_clean, F_clean, task: str = "smoothing", V_noisy=None, hausdorff_samples: int = 20000,
-             target_faces: int | None = None, target_ratio: float | None = None, what: str = "result") -> dict:
+             target_faces: int | None = None, target_ratio: float | None = None, what: str = "result",
+             hausdorff_eps: float = 1e-3) -> dict:
     """The task's metrics of a result ``(V, F)`` against the clean mesh ``(V_clean, F_clean)``.
 
     The clean mesh gets a run's documented repairs first (faces with a repeated vertex,
@@ -49,14 +50,17 @@ def evaluate(V, F, V_clean, F_clean, task: str = "smoothing", V_noisy=None, haus
     not judged). ``V_noisy``: the input the result was made from (smoothing: gives the
     ``input_*`` columns; blank without it), finite, in either vertex order. ``F``: integer
     indices. Lengths are fractions of the clean mesh's bounding-box diagonal, as in a run.
-    `ShootoutError` listing every problem on input that breaks these preconditions (``what``
-    names the result in its messages).
+    ``hausdorff_samples``, ``hausdorff_eps``: a config's settings of those names. `ShootoutError`
+    listing every problem on input that breaks these preconditions (``what`` names the result in
+    its messages).
     """
     P = []
     if task not in ("smoothing", "simplification"):
         P.append(f"task: eval scores smoothing and simplification results, not {task!r}")
     if samples_problem(hausdorff_samples):
         P.append(f"hausdorff_samples: {samples_problem(hausdorff_samples)}")
+    if eps_problem(hausdorff_eps):
+        P.append(f"hausdorff_eps: {eps_problem(hausdorff_eps)}")
     P += target_problems(target_faces, target_ratio)
     if task == "simplification" and F is None:
         P.append("F: a simplification result needs its faces")
@@ -82,7 +86,8 @@ def evaluate(V, F, V_clean, F_clean, task: str = "smoothing", V_noisy=None, haus
     if task == "smoothing":
         V = in_clean_order(np.asarray(V, dtype=np.float64), F, clean, n_raw, F_raw, what)
         F = None
-    inp = CaseInput(clean, V_in, clean.F, clean.diagonal(), {"hausdorff_samples": hausdorff_samples})
+    inp = CaseInput(clean, V_in, clean.F, clean.diagonal(), {"hausdorff_samples": hausdorff_samples,
+                                                              "hausdorff_eps": hausdorff_eps})
     res = _result(task, V, F)
     t = tasks.get(task)
     res = t.validate_result("result", res, inp.V, inp.F)
@@ -152,7 +157,7 @@ def _label(path: Path, labels, i) -> str:
 
 def eval_files(clean, results, out, noisy=None, task: str | None = None, labels=None,
                hausdorff_samples: int = 20000, target_faces: int | None = None,
-               target_ratio: float | None = None) -> dict:
+               target_ratio: float | None = None, hausdorff_eps: float = 1e-3) -> dict:
     """Score result files against ``clean`` (and ``noisy``); write a run folder at ``out``.
     ``target_faces`` / ``target_ratio``: what the simplification results were asked for (see
     `evaluate`)."""
@@ -166,7 +171,7 @@ def eval_files(clean, results, out, noisy=None, task: str | None = None, labels=
     entries = [{"file": r, "clean": Path(clean), "noisy": Path(noisy) if noisy else None, "task": task,
                 "label": _label(r, labels, i), "target_faces": target_faces, "target_ratio": target_ratio}
                for i, r in enumerate(results)]
-    return eval_entries(entries, out, hausdorff_samples,
+    return eval_entries(entries, out, hausdorff_samples, hausdorff_eps=hausdorff_eps, config=
                         {"eval": {"clean": str(clean), "noisy": noisy and str(noisy), "results": [str(r) for r in results],
                                   **({"target_faces": target_faces} if target_faces is not None else {}),
                                   **({"target_ratio": target_ratio} if target_ratio is not None else {})}},
@@ -174,7 +179,7 @@ def eval_files(clean, results, out, noisy=None, task: str | None = None, labels=
 
 
 def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, config: dict | None = None,
-                 problems=()) -> dict:
+                 problems=(), hausdorff_eps: float = 1e-3) -> dict:
     """Score each ``{file, clean, noisy, task, label, target_faces, target_ratio}`` entry (paths;
     all but ``file`` and ``clean`` optional) and write one run folder at ``out`` with its report;
     ``problems`` (the caller's) join this function's in one `problems_error`, nothing written."""
@@ -185,6 +190,8 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
     P = list(problems) + out_dir_problems(out)   # nothing of the user's is replaced or deleted
     if samples_problem(hausdorff_samples):
         P.append(f"--hausdorff-samples: {samples_problem(hausdorff_samples)}")
+    if eps_problem(hausdorff_eps):
+        P.append(f"--hausdorff-eps: {eps_problem(hausdorff_eps)}")
     for e in entries:
         for p in [e["file"], e["clean"]] + ([e["noisy"]] if e.get("noisy") else []):
             why = missing_file_problem(p)
@@ -238,7 +245,7 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
             if t == "simplification" and not any(v is not None for v in target.values()):
                 notes.append("no target given (--target-faces or --target-ratio): over_target is not judged")
             row.update(evaluate(r.V, r.F, raw.V, raw.F, task=t, V_noisy=V_in, hausdorff_samples=hausdorff_samples,
-                                **target, what=rp.name))
+                                hausdorff_eps=hausdorff_eps, **target, what=rp.name))
             row["error"] = "; ".join(notes)
         except Exception as exc:  # noqa: BLE001 - any failure scoring one file is that file's error row
             row.update(status="error", error=(f"{type(exc).__name__}: {exc}" if not isinstance(exc, ShootoutError)
@@ -283,8 +290,10 @@ def results_config(raw: dict, base_dir: Path, source: str = "<config>") -> tuple
     `ConfigError` from ``source`` listing every problem with its key path."""
     from .errors import ConfigError
     P = []
-    for k in sorted(set(raw) - {"name", "results", "hausdorff_samples"}):
-        P.append(f"{k}: unknown key in a results config; expected name, results, hausdorff_samples")
+    for k in sorted(set(raw) - {"name", "results", "hausdorff_samples", "hausdorff_eps"}):
+        P.append(f"{k}: unknown key in a results config; expected name, results, hausdorff_samples, hausdorff_eps")
+    if eps_problem(raw.get("hausdorff_eps", 1e-3)):
+        P.append(f"hausdorff_eps: {eps_problem(raw.get('hausdorff_eps'))}")
     if name_problem(raw.get("name", "eval")):
         P.append(f"name: {name_problem(raw.get('name', 'eval'))}")
     hs = raw.get("hausdorff_samples", 20000)

@@ -183,7 +183,7 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
         entries, hs = results_config(raw[0], raw[1],
                                      given if given and "\n" not in given and Path(given).is_file() else "<config>")
         out_dir = Path(out) if out else Path("results") / str(raw[0].get("name") or "eval")
-        return eval_entries(entries, out_dir, hs, raw[0])
+        return eval_entries(entries, out_dir, hs, raw[0], hausdorff_eps=raw[0].get("hausdorff_eps", 1e-3))
     cfg: Config = config_or_path if isinstance(config_or_path, Config) else load_config(config_or_path)
     out_dir = Path(out) if out else Path("results") / cfg.name
     folder = RunFolder(out_dir)

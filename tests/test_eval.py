@@ -335,3 +335,20 @@ def test_two_evals_of_the_same_file_match_whether_the_task_was_given_or_detected
     ids = [pd.read_csv(d / "smoothing.csv")["case_id"].tolist() for d in (a, b)]
     assert ids[0] == ids[1], ids
     assert cli(["compare", str(a), str(b), "--no-time"]) == 0
+
+
+def test_eval_takes_the_runs_hausdorff_eps(tmp_path):
+    """eval used 1e-3 whatever the run it was matched against had set, so a run's simplified mesh
+    re-scored by eval could bracket its Hausdorff distance otherwise. It takes --hausdorff-eps."""
+    from harness import datasets
+    src = datasets.load("fandisk")
+    V, F = src.clean.V, src.clean.F
+    simp = methods.get("scratch.qem")(V, F, target_faces=len(F) // 10)
+    loose = harness.evaluate(simp.V, simp.F, V, F, task="simplification", target_faces=len(F) // 10,
+                             hausdorff_samples=0, hausdorff_eps=0.5)
+    tight = harness.evaluate(simp.V, simp.F, V, F, task="simplification", target_faces=len(F) // 10,
+                             hausdorff_samples=0, hausdorff_eps=1e-6)
+    assert tight["hausdorff_gap"] <= 1e-6 < loose["hausdorff_gap"] <= 0.5
+    assert tight["hausdorff"] <= tight["hausdorff_upper"] <= loose["hausdorff_upper"]
+    assert cli(["eval", str(PAIR / "Noisy.obj"), "--clean", str(PAIR / "Original.obj"), "--hausdorff-eps", "2",
+                "--out", str(tmp_path / "o")]) == 2 and not (tmp_path / "o").exists()
