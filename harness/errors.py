@@ -1,4 +1,5 @@
 """Exceptions of the harness: each becomes a one-line user message, never a traceback."""
+import contextlib
 
 
 class ShootoutError(Exception):
@@ -41,6 +42,33 @@ def on_interrupt(signum=None, frame=None):
     global _INTERRUPTED
     _INTERRUPTED = True
     raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def interrupts_deferred():
+    """While compiled code is loaded (numba through llvmlite), an interrupt only sets the flag:
+    a KeyboardInterrupt raised inside llvmlite's callbacks crashed the process (SIGSEGV). The
+    interrupt is raised when the block ends. Only in the main thread where `on_interrupt` is
+    installed; elsewhere nothing changes."""
+    import signal
+    import threading
+    sigs = (signal.SIGINT, signal.SIGTERM)
+    if threading.current_thread() is not threading.main_thread() or \
+            any(signal.getsignal(s) is not on_interrupt for s in sigs):
+        yield
+        return
+
+    def remember(signum=None, frame=None):
+        global _INTERRUPTED
+        _INTERRUPTED = True
+    for s in sigs:
+        signal.signal(s, remember)
+    try:
+        yield
+    finally:
+        for s in sigs:
+            signal.signal(s, on_interrupt)
+    check_interrupt()
 
 
 def check_interrupt() -> None:

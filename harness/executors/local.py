@@ -123,18 +123,20 @@ def _preload_tasks(cases) -> None:
     the preloads brought in; the case processes inherit the limit)."""
     from .. import tasks
     from ..core import geometry
+    from ..errors import interrupts_deferred
     from ..runner import scan_thread_pools
-    try:
-        geometry.warm()
-    except Exception:  # noqa: BLE001 - the numpy path below the threshold still works
-        pass
-    for name in sorted({c.task for c in cases}):
+    with interrupts_deferred():          # a KeyboardInterrupt inside llvmlite crashed the driver
         try:
-            fn = tasks.get(name).preload
-            if fn is not None:
-                fn()
-        except Exception:  # noqa: BLE001 - a failure here shows again, as the cases' rows
+            geometry.warm()
+        except Exception:  # noqa: BLE001 - the numpy path below the threshold still works
             pass
+        for name in sorted({c.task for c in cases}):
+            try:
+                fn = tasks.get(name).preload
+                if fn is not None:
+                    fn()
+            except Exception:  # noqa: BLE001 - a failure here shows again, as the cases' rows
+                pass
     scan_thread_pools(next((c.threads for c in cases), None))
 
 
@@ -157,6 +159,7 @@ def _warm_mesh_cache(cases) -> None:
     failures fail again in the case, as its error row; the readers raise, they cannot crash the
     process). Files larger than `WARM_FILE_MAX` are left to the cases."""
     from .. import datasets
+    from ..errors import interrupts_deferred
 
     def key(c):
         return repr(sorted(c.mesh.items()))
@@ -169,10 +172,11 @@ def _warm_mesh_cache(cases) -> None:
         if k in seen or len(seen) >= 8:
             continue
         seen.add(k)
-        try:
-            src = datasets.cached(c.mesh)
-            src.clean.input_notes            # computed once, inherited by every case of the mesh
-            if src.noisy_V is None and k in noisy:
-                src.clean.noise_frame        # computed once, inherited by every case of the mesh
-        except Exception:  # noqa: BLE001 - the case's own child reports it as an error row
-            pass
+        with interrupts_deferred():          # compiled kernels load here: see `_preload_tasks`
+            try:
+                src = datasets.cached(c.mesh)
+                src.clean.input_notes        # computed once, inherited by every case of the mesh
+                if src.noisy_V is None and k in noisy:
+                    src.clean.noise_frame    # computed once, inherited by every case of the mesh
+            except Exception:  # noqa: BLE001 - the case's own child reports it as an error row
+                pass
