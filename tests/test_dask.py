@@ -244,9 +244,12 @@ def test_the_worker_cache_is_private_and_checked_by_content(tmp_path):
 def test_daemonic_worker_fallback_isolates_too(tmp_path):
     """`run_in_subprocess` (used on daemonic workers): crash, timeout and ok rows as locally."""
     cfg = load_config({"plugins": ["tests.plugins.crashy"], "meshes": ["knight"],
-                       "tasks": {"laplacian": {"methods": ["crashy.segfault", "crashy.sleep"]}}})
+                       "tasks": {"laplacian": {"methods": ["crashy.segfault", "crashy.sleep", "crashy.kill9",
+                                                           "crashy.exit"]}}})
     rows = {c.method: run_in_subprocess(c, timeout=4)[0] for c in cfg.cases}
     assert rows["crashy.segfault"]["status"] == "error" and "SIGSEGV" in rows["crashy.segfault"]["error"]
+    assert "died: SIGKILL" in rows["crashy.kill9"]["error"], rows["crashy.kill9"]      # as the OOM killer's
+    assert "exited with code 3" in rows["crashy.exit"]["error"], rows["crashy.exit"]
     assert rows["crashy.sleep"]["status"] == "timeout"      # (an ok row: the shipped-file test)
     # its own session: os.killpg(0, SIGTERM) in the case reaches the case, not the worker (it killed
     # a daemonic worker and its nanny)

@@ -645,7 +645,7 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
     method may print to stdout). The child holds stdin open and exits when it reaches EOF,
     so it dies with this process. It runs the case behind a guard (`_subprocess_main`) that
     kills every process the case left, even in a session of its own. Crash -> ``error`` row
-    naming the signal; past ``timeout`` -> stopped (SIGTERM to the guard, SIGKILL 5 s later),
+    naming the signal; past ``timeout`` -> stopped (SIGTERM to the guard, SIGKILL 10 s later),
     ``timeout`` row; ``stop()`` true (polled twice a second) -> stopped.
     """
     fd, out_path = tempfile.mkstemp(prefix="shootout-case-", suffix=".pkl")
@@ -680,7 +680,7 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
                 if timed_out or (stop is not None and stop()):
                     proc.terminate()     # the guard kills the case and what it left, then ends
                     try:
-                        proc.wait(5)
+                        proc.wait(10)
                     except subprocess.TimeoutExpired:
                         proc.kill()
                         proc.wait()
@@ -752,7 +752,8 @@ def _subprocess_main(out_path: str) -> int:
     def die_as(sig: int):             # ended by ``sig``, as the worker will read it
         import faulthandler
         faulthandler.disable()
-        signal.signal(sig, signal.SIG_DFL)
+        with contextlib.suppress(OSError, ValueError):   # SIGKILL and SIGSTOP cannot be handled: no need
+            signal.signal(sig, signal.SIG_DFL)
         os.kill(os.getpid(), sig)
         os._exit(128 + sig)
 

@@ -28,6 +28,12 @@ def segfault(V, F):
     ctypes.string_at(0)
 
 
+@register("crashy.kill9", task="laplacian", library="crashy")
+def kill9(V, F):
+    """SIGKILLs its own process, as the kernel's out-of-memory killer would."""
+    os.kill(os.getpid(), 9)
+
+
 @register("crashy.sleep", task="laplacian", library="crashy")
 def sleep_forever(V, F):
     """Never returns (until killed by the timeout)."""
