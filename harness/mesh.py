@@ -112,39 +112,34 @@ def _fan(polys: list[list[int]]) -> tuple[np.ndarray, int]:
     return np.asarray(tris, dtype=np.int64).reshape(-1, 3), n_poly
 
 
-_OBJ_V = re.compile(r"^[ \t]*v(?=[ \t\r]|$)([^\n]*)", re.M)
-_OBJ_F = re.compile(r"^[ \t]*f(?=[ \t\r]|$)([^\n]*)", re.M)
-
-
-def _numbers(lines: list[str], dtype, per_line: int):
-    """The whitespace-separated numbers of ``lines``, exactly ``per_line`` each, as one array;
-    None if any line holds another count or a token that is not such a number."""
-    import warnings
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")      # a token it cannot read ends the parse early: counted below
-            a = np.fromstring(" ".join(lines), dtype=dtype, sep=" ") if lines else np.zeros(0, dtype)
-    except (ValueError, OverflowError):          # or is refused at once
-        return None
-    if len(a) != per_line * len(lines) or sum(len(ln.split()) for ln in lines) != len(a):
-        return None
-    return a.reshape(-1, per_line)
+_OBJ_V_ANY = re.compile(r"^[ \t]*v(?=[ \t\r]|$)", re.M)
+_OBJ_F_ANY = re.compile(r"^[ \t]*f(?=[ \t\r]|$)", re.M)
+_OBJ_V3 = re.compile(r"^[ \t]*v[ \t]+([^ \t\r\n]+[ \t]+[^ \t\r\n]+[ \t]+[^ \t\r\n]+)[ \t\r]*$", re.M)
+_OBJ_F3 = re.compile(r"^[ \t]*f[ \t]+([0-9]+[ \t]+[0-9]+[ \t]+[0-9]+)[ \t\r]*$", re.M)
 
 
 def _read_obj_fast(text: str):
-    """`_read_obj` for the plain case, vectorised: ``(V, F)`` when every vertex line holds three
-    numbers, every face line three positive indices without ``/`` within the vertices and lines
-    end with ``\n`` or ``\r\n``; None otherwise (the general reader decides, and words the
-    errors)."""
-    if text.count("\r") != text.count("\r\n") or any(c in text for c in "\x0b\x0c\x1c\x1d\x1e\x85\u2028\u2029"):
-        return None                              # other line breaks: splitlines' rules, in the general reader
-    vs, fs = _OBJ_V.findall(text), _OBJ_F.findall(text)
-    if any("/" in f for f in fs):
+    """`_read_obj` for the plain case, vectorised: ``(V, F)`` when the text is ASCII with ``\n``
+    or ``\r\n`` line ends and no other whitespace than spaces and tabs, every vertex line holds
+    exactly three numbers and every face line exactly three indices from 1 to the vertex count;
+    None otherwise (the general reader decides, and words the errors)."""
+    if not text.isascii() or text.count("\r") != text.count("\r\n") or \
+            any(c in text for c in "\x0b\x0c\x1c\x1d\x1e\x1f"):
+        return None                              # whitespace str.split knows and these patterns do not
+    vs, fs = _OBJ_V3.findall(text), _OBJ_F3.findall(text)
+    if len(vs) != len(_OBJ_V_ANY.findall(text)) or len(fs) != len(_OBJ_F_ANY.findall(text)):
+        return None                              # a line of another shape: a short one, a comment after it
+    body = " ".join(vs)
+    if "(" in body:                              # numpy reads nan(...), Python's float does not
         return None
-    V, F = _numbers(vs, np.float64, 3), _numbers(fs, np.int64, 3)
-    if V is None or F is None or (len(F) and (F.min() < 1 or F.max() > len(V))):
+    try:
+        V = np.fromstring(body, dtype=np.float64, sep=" ") if vs else np.zeros(0)
+        F = np.fromstring(" ".join(fs), dtype=np.int64, sep=" ") if fs else np.zeros(0, np.int64)
+    except (ValueError, OverflowError):          # a token that is not a number
         return None
-    return V, F - 1
+    if len(V) != 3 * len(vs) or len(F) != 3 * len(fs) or (len(F) and (F.min() < 1 or F.max() > len(vs))):
+        return None
+    return V.reshape(-1, 3), F.reshape(-1, 3) - 1
 
 
 def _read_obj(text: str):
