@@ -335,6 +335,19 @@ def test_two_evals_of_the_same_file_match_whether_the_task_was_given_or_detected
     ids = [pd.read_csv(d / "smoothing.csv")["case_id"].tolist() for d in (a, b)]
     assert ids[0] == ids[1], ids
     assert cli(["compare", str(a), str(b), "--no-time"]) == 0
+    import hashlib                                 # and an eval folder of an earlier version still matches
+    sha = [hashlib.sha1(p.read_bytes()).hexdigest() for p in (PAIR / "Original.obj",)]
+    assert ids[0] == [hashlib.sha1(json.dumps(["mine", sha[0], None, None]).encode()).hexdigest()[:12]]
+
+
+def test_a_target_given_without_a_task_scores_a_simplification(tmp_path):
+    """A review: with --target-faces and no --task, a result with the clean mesh's counts was
+    scored as a perfect smoothing result and the target dropped silently."""
+    clean = str(PAIR / "Original.obj")
+    assert cli(["eval", clean, "--clean", clean, "--target-faces", "100", "--out", str(tmp_path / "o"),
+                "--hausdorff-samples", "200"]) == 0
+    row = pd.read_csv(tmp_path / "o" / "simplification.csv").iloc[0]
+    assert row["target_faces"] == 100 and row["over_target"], row
 
 
 def test_eval_takes_the_runs_hausdorff_eps(tmp_path):
