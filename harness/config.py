@@ -400,8 +400,10 @@ def _check_meshes(meshes, base_dir: Path, P: list, key: str = "meshes") -> list[
     if not isinstance(meshes, list) or not meshes:
         P.append(f"{key}: expected a non-empty list of meshes")
         return out
+    marks = []                                   # (specs, problems) so far as each entry starts
     for i, m in enumerate(meshes):
         at = f"{key}[{i}]"
+        marks.append((len(out), len(P)))
         if isinstance(m, str):
             if datasets.resolve_bundled(m):
                 out.append({"bundled": datasets.resolve_bundled(m)})
@@ -491,7 +493,10 @@ def _check_meshes(meshes, base_dir: Path, P: list, key: str = "meshes") -> list[
                 where.append(at)
         else:
             P.append(f"{at}: expected a bundled name, {{procedural: ...}} or {{file: ...}}, got {yaml_input.short(m)}")
-    P += _same_mesh_problems(out, where)
+    marks.append((len(out), len(P)))
+    ok = [j for (k0, p0), (k1, p1) in zip(marks, marks[1:]) if p1 == p0 for j in range(k0, k1)]
+    # (an entry with a problem of its own may stand for another mesh than it reads as: not compared)
+    P += _same_mesh_problems([out[j] for j in ok], [where[j] for j in ok])
     return out
 
 
@@ -508,14 +513,15 @@ def _same_mesh_problems(specs: list[dict], where: list[str]) -> list[str]:
             more = f" and {len(at) - 4} more" if len(at) > 4 else ""
             P.append(f"{', '.join(where[i] for i in at[1:4])}{more}: the same mesh as {where[at[0]]} (the same "
                      f"{'file bytes' if 'file' in specs[at[0]] else 'spec'}): list it once")
-    labels = [datasets.spec_key(s) for s in specs]
+    base, final = [datasets.spec_key(s) for s in specs], _unique_labels(specs)
     for i, s in enumerate(specs):
-        if "name" not in s:
-            continue
-        other = next((j for j in range(len(specs)) if j != i and labels[j] == s["name"] and ids[j] != ids[i]), None)
-        if other is not None and not (other < i and "name" in specs[other]):     # a pair of names: said once
-            P.append(f"{where[i]}.name: {s['name']!r} is also the label of {where[other]}, another mesh: give each "
-                     "mesh a label of its own (it names the mesh column and seeds the noise)")
+        if "name" not in s or final[i] == s["name"]:
+            continue                              # a name the run keeps as it is
+        other = next((j for j in range(len(specs)) if j != i and ids[j] != ids[i] and s["name"] in (base[j], final[j])),
+                     None)
+        whose = f"the label of {where[other]}, another mesh" if other is not None else "another mesh's label"
+        P.append(f"{where[i]}.name: {s['name']!r} is also {whose} (the run would call this one {final[i]!r}): give "
+                 "each mesh a label of its own (it names the mesh column and seeds the noise)")
     return P
 
 

@@ -288,6 +288,20 @@ def test_config_errors_name_key_path(patch, needle):
     assert any(needle in p for p in probs), probs
 
 
+def test_a_name_is_checked_against_the_labels_the_run_would_give(tmp_path):
+    """A review: two x.obj in other folders are labelled a-x and b-x, so `name: a-x` on a third mesh
+    was renamed a-x-1 silently; and an entry whose own value was refused (subdivisions: 99 falls back
+    to the default) was also called the same mesh as another: a problem that is not one."""
+    for d, src in (("a", KNIGHT), ("b", BUNNY)):
+        (tmp_path / d).mkdir()
+        (tmp_path / d / "x.off").write_bytes(src.read_bytes())
+    probs = _problems({**GOOD, "meshes": [{"file": str(tmp_path / "a" / "x.off")}, {"file": str(tmp_path / "b" / "x.off")},
+                                          {"file": str(MESH_DIR / "fertility.off"), "name": "a-x"}]})
+    assert len(probs) == 1 and "meshes[2].name: 'a-x' is also the label of meshes[0]" in probs[0], probs
+    probs = _problems({**GOOD, "meshes": ["sphere", {"procedural": "sphere", "subdivisions": 99}]})
+    assert len(probs) == 1 and "subdivisions" in probs[0], probs
+
+
 def test_three_mistakes_reported_together_and_nothing_written(tmp_path, capsys):
     cfg = tmp_path / "bad.yaml"
     cfg.write_text("name: bad\nrepeats: -1\nmeshes: [bunyy]\nnoise: [{model: none}]\n"
