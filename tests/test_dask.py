@@ -606,6 +606,9 @@ def test_the_executors_own_cluster_restarts_workers_that_fork():
             time.sleep(0.2)
         assert now and pid not in now.values(), "the worker did not come back"
         assert list(ex.client.run(_daemonic).values()) == [False]
+        other = DaskExecutor(workers=1, timeout=60)     # a second executor's close keeps the first one's
+        other.close()
+        assert dask.config.get("distributed.worker.daemon", default=True) is False
     finally:
         ex.close()
     assert dask.config.get("distributed.worker.daemon", default=True) == before

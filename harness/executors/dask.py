@@ -153,19 +153,21 @@ class DaskExecutor:
         self._cluster = None
         self._own_client = True
         self._futures: dict = {}
-        self._no_daemon = None
+        self._no_daemon = False
         if scheduler is None:
             # the nanny reads this setting each time it starts a worker process, a restart too (a
             # daemonic worker may not fork: its cases would take the slower subprocess path), so it
-            # holds until `close`
-            self._no_daemon = dask.config.set({"distributed.worker.daemon": False})
+            # holds until `close` (of the last executor with a cluster of its own)
+            _hold_no_daemon(+1)
+            self._no_daemon = True
             try:
                 self._cluster = LocalCluster(n_workers=max(1, int(workers or usable_cpus())),
                                              threads_per_worker=1, processes=True,
                                              dashboard_address=None)
                 self.client = Client(self._cluster)
             except BaseException:
-                self._no_daemon.__exit__(None, None, None)
+                _hold_no_daemon(-1)
+                self._no_daemon = False
                 raise
         elif isinstance(scheduler, Client):
             self.client, self._own_client = scheduler, False
@@ -380,11 +382,28 @@ class DaskExecutor:
             if self._cluster is not None:
                 self._cluster.close()
         finally:
-            if self._no_daemon is not None:
-                self._no_daemon.__exit__(None, None, None)
-                self._no_daemon = None
+            if self._no_daemon:
+                _hold_no_daemon(-1)
+                self._no_daemon = False
             for lg, lv in zip(quiet, levels):
                 lg.setLevel(lv)
+
+
+_NO_DAEMON = {"holders": 0, "setting": None}
+_NO_DAEMON_LOCK = threading.Lock()
+
+
+def _hold_no_daemon(step: int) -> None:
+    """Count the executors whose own LocalCluster needs non-daemonic workers (``step`` +1 or -1):
+    the first sets ``distributed.worker.daemon: False``, the last one's close restores it."""
+    import dask
+    with _NO_DAEMON_LOCK:
+        _NO_DAEMON["holders"] += step
+        if step > 0 and _NO_DAEMON["holders"] == 1:
+            _NO_DAEMON["setting"] = dask.config.set({"distributed.worker.daemon": False})
+        elif step < 0 and _NO_DAEMON["holders"] == 0 and _NO_DAEMON["setting"] is not None:
+            _NO_DAEMON["setting"].__exit__(None, None, None)
+            _NO_DAEMON["setting"] = None
 
 
 def ship_files(cases):
@@ -553,12 +572,23 @@ def other_code(row: dict, case: Case) -> str | None:
                 f"driver's {ours}: its harness, methods or plugins differ); its row is not kept: give every "
                 "worker the driver's code")
     mine, versions = _versions(), theirs[2] if len(theirs) == 3 else None
-    other = sorted(k for k in mine if isinstance(versions, dict) and versions.get(k, mine[k]) != mine[k])
+    other = sorted(k for k in mine if isinstance(versions, dict) and _differ(k, versions.get(k), mine[k]))
     if other:
         return (f"the Dask worker ({theirs[1]}) has other package versions than the driver ("
                 + ", ".join(f"{k} {versions[k]}, the driver's {mine[k]}" for k in other)
                 + "): the metrics may differ; its row is not kept: give every worker the driver's environment")
     return None
+
+
+def _differ(package: str, theirs, ours) -> bool:
+    """Whether a worker's version of ``package`` differs from the driver's in a way the metrics
+    could show: both installed and not equal (Python: another major or minor version). A package
+    missing on one side is not compared: a method that needs it is `unavailable` there."""
+    if theirs is None or ours is None:
+        return False
+    if package == "python":
+        return str(theirs).split(".")[:2] != str(ours).split(".")[:2]
+    return theirs != ours
 
 
 SCHEDULER_REASONS = ("scheduler-connection-lost", "scheduler-restart")
