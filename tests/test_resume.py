@@ -1,6 +1,7 @@
 """Durability and resume (issue 7): a run killed with SIGKILL mid-way leaves parseable CSVs,
 ``--resume`` finishes it with no duplicate and no lost ok row, a changed config is refused
 (exit 2, nothing touched), and no case process outlives a killed driver."""
+import contextlib
 import csv
 import io
 import os
@@ -239,7 +240,11 @@ def test_case_processes_die_with_a_killed_driver(tmp_path):
     kids = []
     while len(kids) < 2:
         assert proc.poll() is None and time.time() - t0 < 60, "children did not start"
-        kids = [k.pid for k in driver.children(recursive=True)]
+        kids = []                                  # the case processes: forks of the driver (not its git call)
+        for k in driver.children(recursive=True):
+            with contextlib.suppress(psutil.Error):
+                if k.exe() == driver.exe():
+                    kids.append(k.pid)
         time.sleep(0.1)
     time.sleep(0.5)
     try:

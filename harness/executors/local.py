@@ -62,7 +62,7 @@ class LocalExecutor:
 
     def run(self, cases, want_meshes=False):
         todo = list(cases)
-        _warm_mesh_cache(todo)
+        _warm_mesh_cache(todo, self.timeout)
         _preload_tasks(todo)
         todo.reverse()
         running: list[_Job] = []
@@ -140,24 +140,50 @@ def _preload_tasks(cases) -> None:
     scan_thread_pools(next((c.threads for c in cases), None))
 
 
-WARM_FILE_MAX = 64 << 20     # mesh files up to this size are read once by the driver
-
-
-def _small_files(mesh: dict) -> bool:
-    """Whether the files of a ``{file: ...}`` (and ``clean:``) mesh are each at most
-    `WARM_FILE_MAX` bytes: the driver reads those itself, while a larger one is left to each
-    case, where ``--timeout`` bounds a read that takes too long."""
+def _load_in_child(spec: dict, frame: bool, timeout: float | None):
+    """The `harness.datasets.Source` of a ``{file: ...}`` mesh (with its input notes, and its
+    noise frame if ``frame``) read in a child process, or None when that fails or takes longer
+    than ``timeout``: a file that is slow, huge or hostile to read costs that child, not the
+    driver, and its cases read it again under their own timeout."""
+    from multiprocessing.connection import wait as mp_wait
+    from .isolation import _context
+    ctx = _context()
+    recv, send = ctx.Pipe(duplex=False)
+    proc = ctx.Process(target=_loader, args=(send, spec, frame), daemon=True)
+    with signals_blocked():
+        proc.start()
+    send.close()
     try:
-        return all(os.path.getsize(mesh[k]) <= WARM_FILE_MAX for k in ("file", "clean") if k in mesh)
-    except (OSError, TypeError):
-        return False
+        if mp_wait([recv, proc.sentinel], timeout) and recv.poll(0):
+            return recv.recv()
+        return None
+    except (EOFError, OSError):
+        return None
+    finally:
+        recv.close()
+        if proc.is_alive():
+            proc.kill()
+        proc.join()
 
 
-def _warm_mesh_cache(cases) -> None:
+def _loader(conn, spec: dict, frame: bool) -> None:
+    from .. import datasets
+    try:
+        src = datasets.cached(spec)
+        src.clean.input_notes
+        if frame and src.noisy_V is None:
+            src.clean.noise_frame
+        conn.send(src)
+    except BaseException:  # noqa: BLE001 - the cases read it again and say why
+        pass
+    os._exit(0)                                   # none of the driver's exit handlers
+
+
+def _warm_mesh_cache(cases, timeout: float | None = None) -> None:
     """Load each distinct mesh (and its noise frame) once in the driver so forked children
     inherit it instead of reading, repairing and measuring it in every case (best effort:
-    failures fail again in the case, as its error row; the readers raise, they cannot crash the
-    process). Files larger than `WARM_FILE_MAX` are left to the cases."""
+    failures fail again in the case, as its error row). Mesh files are read in a child process
+    (`_load_in_child`, bounded by the run's ``timeout``), the driver keeps what it returns."""
     from .. import datasets
     from ..errors import interrupts_deferred
 
@@ -166,12 +192,15 @@ def _warm_mesh_cache(cases) -> None:
     noisy = {key(c) for c in cases if c.adds_noise}
     seen = set()
     for c in cases:
-        if "file" in c.mesh and not _small_files(c.mesh):
-            continue
         k = key(c)
         if k in seen or len(seen) >= 8:
             continue
         seen.add(k)
+        if "file" in c.mesh:
+            src = _load_in_child(c.mesh, k in noisy, timeout)
+            if src is not None:
+                datasets.prime(c.mesh, src)
+            continue
         with interrupts_deferred():          # compiled kernels load here: see `_preload_tasks`
             try:
                 src = datasets.cached(c.mesh)
