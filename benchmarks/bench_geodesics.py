@@ -5,8 +5,12 @@ Run:  .venv/bin/python benchmarks/bench_geodesics.py [--subdivisions 7,8] [--pai
 
 Meshes: icosphere subdivisions 7 (327,680 faces) and 8 (1,310,720 faces). All three are run in
 one process, alternating (scratch, libigl, potpourri3d) per round, after a warm-up on a small
-mesh; each prints the median over rounds of its precomputation time and per-source time (each
-method's own split), the min-max of the per-round ratios to scratch.heat, with the load average.
+mesh and at each size; each prints the median over rounds of its precomputation time and
+per-source time (each method's own split), the min-max of the per-round ratios to scratch.heat,
+how far its distances are from scratch.heat's (libigl's must agree to 1e-8: MISMATCH and exit 1
+otherwise; potpourri3d uses geometry-central's robust intrinsic operator by default, so it
+differs), with the load average and the math libraries' thread counts (scratch.heat's solver
+may use several threads, the libraries' own one).
 Before every call the harness's solver helpers forget the symbolic analyses of earlier calls
 (`harness.runner.forget_inputs`, as a run does before every sample): every call pays for its
 ordering like a first call, as the libraries' do.
@@ -32,30 +36,43 @@ def main(argv=None) -> int:
     from harness import datasets
     from harness.runner import forget_inputs
     names = ["scratch.heat", "libigl.heat", "potpourri3d.heat"]
-    V, F = datasets.icosphere(3)
-    for m in names:
-        methods.get(m)(V, F, sources=1)
+    import numpy as np
+    from threadpoolctl import threadpool_info
     print(f"load average {os.getloadavg()}")
+    bad = 0
     for s in map(int, a.subdivisions.split(",")):
         V, F = datasets.icosphere(s)
+        for m in names:                          # warm-up at this size: one-off costs of a first call
+            forget_inputs()
+            methods.get(m)(V, F, sources=1)
         pre = {m: [] for m in names}
         per = {m: [] for m in names}
         for _ in range(a.pairs):
+            D = {}
             for m in names:
                 forget_inputs()
                 r = methods.get(m)(V, F, sources=a.sources)
                 pre[m].append(r.precompute_s)
                 per[m].append(r.per_source_s)
+                D[m] = np.asarray(r.D)
+        # the same operator and time step: libigl equals ours to rounding; geometry-central's
+        # robust intrinsic-Delaunay operator (potpourri3d's default) differs at the order of h^2
+        gap = {m: float(np.abs(D[m] - D["scratch.heat"]).max() / np.abs(D["scratch.heat"]).max()) for m in names}
+        if not gap["libigl.heat"] <= 1e-8:
+            bad += 1
+            print(f"MISMATCH: icosphere {s}: libigl.heat and scratch.heat differ by {gap['libigl.heat']:.1e}")
         print(f"\nicosphere {s}: {len(V):,} vertices, {len(F):,} faces, {a.sources} sources, {a.pairs} rounds, "
-              f"load average {os.getloadavg()[0]:.2f}")
+              f"load average {os.getloadavg()[0]:.2f}; math-library threads: "
+              + ", ".join(sorted({f"{p.get('internal_api')} {p.get('num_threads')}" for p in threadpool_info()})))
         p0, q0 = statistics.median(pre["scratch.heat"]), statistics.median(per["scratch.heat"])
         for m in names:
             p, q = statistics.median(pre[m]), statistics.median(per[m])
             rp = [x / y for x, y in zip(pre[m], pre["scratch.heat"])]
             rq = [x / y for x, y in zip(per[m], per["scratch.heat"])]
             print(f"  {m:18s} precompute {p:8.3f} s ({statistics.median(rp):5.2f}x scratch, {min(rp):.2f}-{max(rp):.2f})"
-                  f"   per source {q:7.3f} s ({statistics.median(rq):5.2f}x, {min(rq):.2f}-{max(rq):.2f})")
-    return 0
+                  f"   per source {q:7.3f} s ({statistics.median(rq):5.2f}x, {min(rq):.2f}-{max(rq):.2f})"
+                  f"   distances differ from scratch.heat by {gap[m]:.1e} (relative)")
+    return 1 if bad else 0
 
 
 if __name__ == "__main__":

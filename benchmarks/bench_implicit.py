@@ -196,8 +196,13 @@ def main(argv=None):
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(out, fh, indent=2)
+    wrong = [r["solver"] for r in rows + baselines if r.get("rel_error") is not None and not r["rel_error"] <= 1e-8]
+    for name in wrong:
+        print(f"MISMATCH: {name} differs from the automatic solver's solution by more than 1e-8 (relative)")
+    out["mismatch"] = wrong
+    print(f"load average {os.getloadavg()[0]:.2f}")
     return out
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(1 if main()["mismatch"] else 0)

@@ -12,9 +12,10 @@ cotan W with the Voronoi mass, and spectral smoothing built on them. Routes:
 
 Run:  .venv/bin/python benchmarks/bench_spectrum.py [--k 200] [--pairs 3]
 
-The routes alternate in one process after a warm-up on a small mesh; per round the ratios are
-formed and their median, min and max printed with the load average; the eigenvalues of the
-routes are compared.
+The routes alternate in one process after a warm-up on a small mesh, with ``--threads`` math
+threads each; per round the ratios are formed and their median, min and max printed with the
+load average and the thread counts; the eigenvalues of the routes must agree (relative 1e-8:
+MISMATCH and exit 1 otherwise).
 """
 from __future__ import annotations
 
@@ -34,7 +35,13 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--k", type=int, default=200)
     ap.add_argument("--pairs", type=int, default=3)
+    ap.add_argument("--threads", type=int, default=1,
+                    help="math-library threads for every route (default 1, as a case of a run with one "
+                         "worker per core has; with the libraries' defaults the times vary several-fold "
+                         "on a shared machine)")
     a = ap.parse_args(argv)
+    from threadpoolctl import threadpool_limits
+    threadpool_limits(a.threads)
     import scipy.sparse as sp
     from scipy.sparse.linalg import eigsh
 
@@ -73,7 +80,10 @@ def main(argv=None) -> int:
             t = time.perf_counter()
             out[name] = f(W, M, m.V, m.F, a.k)
             T[name].append(time.perf_counter() - t)
-    print(f"armadillo {len(m.F):,} faces, k = {a.k}, {a.pairs} rounds, load average {load0} -> {os.getloadavg()}")
+    from threadpoolctl import threadpool_info
+    threads = ", ".join(sorted({f"{p.get('internal_api')} {p.get('num_threads')}" for p in threadpool_info()}))
+    print(f"armadillo {len(m.F):,} faces, k = {a.k}, {a.pairs} rounds, load average {load0} -> {os.getloadavg()}; "
+          f"math-library threads: {threads}")
     for name in routes:
         print(f"  {name:13s} median {statistics.median(T[name]):6.2f} s")
 
@@ -87,11 +97,16 @@ def main(argv=None) -> int:
     fastest = min(("bands", "arpack", "plain"), key=lambda r: statistics.median(T[r]))
     ratio("spectral", fastest, f"scratch.spectral / fastest route ({fastest})")
     ratio("spectral", "spectral_old", "scratch.spectral / its one-ARPACK-run version")
+    bad = 0
     for x, y in (("bands", "plain"), ("arpack", "plain")):
-        print(f"  max relative eigenvalue difference {x} vs {y}: {np.abs(out[x] - out[y]).max() / out[y].max():.1e}")
+        d = np.abs(out[x] - out[y]).max() / out[y].max()
+        print(f"  max relative eigenvalue difference {x} vs {y}: {d:.1e}")
+        if not d <= 1e-8:
+            bad += 1
+            print(f"MISMATCH: the eigenvalues of {x} and {y} differ by {d:.1e} (relative to the largest)")
     print(f"  smoothed coordinates, bands vs one run: max difference "
           f"{np.abs(out['spectral'] - out['spectral_old']).max() / np.ptp(m.V, axis=0).max():.1e} of the box")
-    return 0
+    return 1 if bad else 0
 
 
 if __name__ == "__main__":

@@ -3,7 +3,7 @@ registered method call, identity mass included) against the pipeline a user woul
 libigl, ``A = igl.adjacency_matrix(F); W = (A - diags(A.sum(1))).tocsr()``, on the bundled
 armadillo (86k faces) and a subdivision-8 icosphere (1.31M faces).
 
-Run:  .venv/bin/python benchmarks/bench_uniform.py [--pairs 7]
+Run:  .venv/bin/python benchmarks/bench_uniform.py [--pairs 7] [--subdivisions 8]
 
 The two alternate in one process (warm); the per-pair ratio ours/libigl is printed as median
 (min-max) with the load average, and the two matrices are checked equal.
@@ -25,6 +25,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--pairs", type=int, default=7)
+    ap.add_argument("--subdivisions", type=int, default=8, help="of the icosphere (8: 1.31M faces)")
     a = ap.parse_args(argv)
     import igl
     import scipy.sparse as sp
@@ -39,7 +40,7 @@ def main(argv=None) -> int:
     ours = methods.get("scratch.uniform")
     print(f"load average {os.getloadavg()}")
     for label, (V, F) in (("armadillo", (datasets.load("armadillo").clean.V, datasets.load("armadillo").clean.F)),
-                          ("icosphere 8", datasets.icosphere(8))):
+                          (f"icosphere {a.subdivisions}", datasets.icosphere(a.subdivisions))):
         n = len(V)
         assert abs(ours(V, F).W - user(F, n)).max() == 0
         r = []

@@ -20,7 +20,7 @@ SMALL = {
     "bench_measure.py": ["--mesh", "bunny", "--repeats", "1"],
     "bench_qem.py": ["--sizes", "200k", "--repeats", "1"],
     "bench_spectrum.py": ["--k", "10", "--pairs", "1"],
-    "bench_uniform.py": ["--pairs", "1"],
+    "bench_uniform.py": ["--pairs", "1", "--subdivisions", "4"],
     "scale_run.py": ["--subdivisions", "3"],
 }
 
