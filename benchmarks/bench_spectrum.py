@@ -70,6 +70,7 @@ def main(argv=None) -> int:
     Ws, Ms = operator_and_mass(Vs, Fs, "cotan", "voronoi")
     for f in routes.values():
         f(Ws, Ms, Vs, Fs, 120)
+    threadpool_limits(a.threads)                 # again: the warm-up loaded more libraries (MKL)
     m = datasets.load("armadillo").clean
     W, M = operator_and_mass(m.V, m.F, "cotan", "voronoi")
     T = {r: [] for r in routes}

@@ -165,12 +165,22 @@ def params_text(params: dict) -> str:
     return ",".join(f"{k}={label_value(params[k])}" for k in sorted(params) if params[k] is not None)
 
 
-def _variant(df: pd.DataFrame, axis: set, defaults=None) -> pd.Series:
-    """Method plus the parameters `label_keys` names (`label_text`)."""
-    ps = [json.loads(p) if isinstance(p, str) and p else {} for p in df["params"]]
-    keys = label_keys(df["method"], ps, axis, defaults)
-    out = [label_text(m, p, keys.get(m, ())) for m, p in zip(df["method"], ps)]
-    return pd.Series(out, index=df.index)
+def params_of(s) -> dict:
+    """A row's ``params`` JSON as a dict ({} when it is blank or not a JSON object)."""
+    try:
+        p = json.loads(s) if isinstance(s, str) and s else {}
+        return p if isinstance(p, dict) else {}
+    except json.JSONDecodeError:
+        return {}
+
+
+def variant_labels(df, axis_params=frozenset(), defaults=None) -> list[str]:
+    """Method name plus the parameters `label_keys` names: those that vary between this method's
+    rows and those set away from its default (axis params excluded); `label_text` writes them.
+    The report, the leaderboard and the winners label rows with this one function."""
+    ps = [params_of(s) for s in df["params"]] if "params" in df else [{} for _ in range(len(df))]
+    keys = label_keys(df["method"], ps, set(axis_params), defaults)
+    return [label_text(m, p, keys.get(m, ())) for m, p in zip(df["method"], ps)]
 
 
 FAILED = ("error", "timeout")     # a method's own failure: ranks last; "unavailable" is not run (missing)
@@ -218,7 +228,7 @@ def _cells(spec: dict, df: pd.DataFrame, axis_params=()) -> pd.DataFrame:
     """``df`` with ``_variant``, ``_invalid`` and ``_cell`` (see `cell_values`): the same for
     every metric of the task."""
     d = df.copy()
-    d["_variant"] = _variant(d, set(axis_params), (spec or {}).get("method_defaults"))
+    d["_variant"] = variant_labels(d, set(axis_params), (spec or {}).get("method_defaults"))
     d["_invalid"] = (validity(spec, d, measured=True) != "") & d["status"].isin(FAILED + ("ok",))
     d["_unmeasured"] = not_measured(spec, d) if "status" in d else False
     ps = [json.loads(p) if isinstance(p, str) and p else {} for p in d["params"]]

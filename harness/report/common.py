@@ -8,6 +8,7 @@ import re
 
 import numpy as np
 
+from ..leaderboard import params_of, variant_labels  # noqa: F401  (one labelling for every reader)
 from ..schema import fmt  # noqa: F401  (the report's formatter is the project's)
 
 
@@ -15,25 +16,8 @@ def esc(x) -> str:
     return html.escape("" if x is None else str(x))
 
 
-def params_of(s) -> dict:
-    try:
-        p = json.loads(s) if isinstance(s, str) and s else {}
-        return p if isinstance(p, dict) else {}
-    except json.JSONDecodeError:
-        return {}
-
-
 def short(v) -> str:
     return json.dumps(v) if isinstance(v, (dict, list)) else str(v)
-
-
-def variant_labels(df, axis_params=frozenset(), defaults=None) -> list[str]:
-    """Method name plus the parameters `harness.leaderboard.label_keys` names: those that vary
-    between this method's rows and those set away from its default (axis params excluded)."""
-    from ..leaderboard import label_keys, label_text
-    ps = [params_of(s) for s in df["params"]] if "params" in df else [{} for _ in range(len(df))]
-    keys = label_keys(df["method"], ps, set(axis_params), defaults)
-    return [label_text(m, p, keys.get(m, ())) for m, p in zip(df["method"], ps)]
 
 
 def natural_key(s: str):
