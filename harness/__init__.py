@@ -21,13 +21,13 @@ def evaluate(V, F, V_clean, F_clean, **kwargs):
 def load_run(run_dir):
     """All rows of a run folder as one tidy DataFrame (every task's CSV; ``params`` expanded into one
     column per parameter, named as the parameter, or ``param_<name>`` where that name is taken)."""
-    import json
 
     import pandas as pd
 
     from pathlib import Path
 
     from .errors import ShootoutError
+    from .leaderboard import params_of
     from .results import RunFolder
     if not Path(run_dir).is_dir():
         raise ShootoutError(f"{run_dir}: no such run folder")
@@ -39,7 +39,7 @@ def load_run(run_dir):
     if not frames:
         return pd.DataFrame()
     df = pd.concat(list(frames.values()), ignore_index=True, sort=False)
-    params = [json.loads(p) if isinstance(p, str) and p else {} for p in df.get("params", [])]
+    params = [params_of(p) for p in df.get("params", [])]
     keys = sorted({k for p in params for k in p})
     cols = pd.DataFrame({(k if k not in df.columns else f"param_{k}"): [p.get(k) for p in params] for k in keys},
                         index=df.index)

@@ -48,8 +48,9 @@ def on_interrupt(signum=None, frame=None):
 def interrupts_deferred():
     """While compiled code is loaded (numba through llvmlite), an interrupt only sets the flag:
     a KeyboardInterrupt raised inside llvmlite's callbacks crashed the process (SIGSEGV). The
-    interrupt is raised when the block ends. Only in the main thread where `on_interrupt` is
-    installed; elsewhere nothing changes."""
+    interrupt is raised when the block ends; a second one ends the process at once (exit 130,
+    its run folder as an interrupted driver leaves it: ``--resume`` continues). Only in the main
+    thread where `on_interrupt` is installed; elsewhere nothing changes."""
     import signal
     import threading
     sigs = (signal.SIGINT, signal.SIGTERM)
@@ -60,6 +61,11 @@ def interrupts_deferred():
 
     def remember(signum=None, frame=None):
         global _INTERRUPTED
+        if _INTERRUPTED:
+            import os
+            os.write(2, b"shootout: interrupted again while compiled code was loading: stopped at once "
+                        b"(continue with --resume)\n")
+            os._exit(130)
         _INTERRUPTED = True
     for s in sigs:
         signal.signal(s, remember)

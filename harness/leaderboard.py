@@ -231,7 +231,7 @@ def _cells(spec: dict, df: pd.DataFrame, axis_params=()) -> pd.DataFrame:
     d["_variant"] = variant_labels(d, set(axis_params), (spec or {}).get("method_defaults"))
     d["_invalid"] = (validity(spec, d, measured=True) != "") & d["status"].isin(FAILED + ("ok",))
     d["_unmeasured"] = not_measured(spec, d) if "status" in d else False
-    ps = [json.loads(p) if isinstance(p, str) and p else {} for p in d["params"]]
+    ps = [params_of(p) for p in d["params"]]
     text = lambda col: [("" if pd.isna(v) else str(v)) for v in d[col]] if col in d else [""] * len(d)  # noqa: E731
     d["_cell"] = [CELL_SEP.join(t) for t in zip(text("mesh"), text("noise_model"), text("noise_level"),
                                            [json.dumps({k: p.get(k) for k in sorted(axis_params)}) for p in ps])]

@@ -134,13 +134,14 @@ def _sha1_path(p: str, size: int, mtime_ns: int) -> str | None:
         return None
 
 
-def _eval_id(e: dict, task: str | None, seen: set) -> str:
-    """A scored file's case id: a hash of its label, the clean (and noisy) mesh's bytes, ``task``
-    (None unless it was given and differs from the one the result's counts point to, as earlier
-    versions hashed a detected task) and its target when one was given, so that two evals' rows of
-    one label match in `shootout compare` whatever order the files were given in and whether the
-    task was given or detected (the files themselves may differ: that is what compare measures); a
-    repeat of a label within one eval gets the next free id."""
+def _eval_id(e: dict, task: str, seen: set) -> str:
+    """A scored file's case id: a hash of its label, the clean (and noisy) mesh's bytes, the
+    ``task`` its row is scored under (given or detected: the CSV it goes to) and its target when
+    one was given, so that two evals' rows of one label match in `shootout compare` whatever
+    order the files were given in and whether the task was given or detected (the files
+    themselves may differ: that is what compare measures); a repeat of a label within one eval
+    gets the next free id. Versions before 2026-11-27 hashed the task as given (none when
+    detected): their eval folders share no case id with this version's."""
     key = [e.get("label") or Path(e["file"]).stem, _sha1_file(e["clean"]), _sha1_file(e["noisy"]) if e.get("noisy") else None, task]
     key += [[k, e[k]] for k in ("target_faces", "target_ratio") if e.get(k) is not None]
     i = 0
@@ -201,7 +202,6 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
     if P:                                        # every problem at once, nothing written
         raise problems_error(list(dict.fromkeys(P)))
     rows: list[tuple[dict, bool]] = []          # each file's row, and whether its task was given
-    detected: dict[int, str] = {}               # the task each readable result's counts point to
     cleans: dict = {}
     seen_ids: set = set()
     for i, e in enumerate(entries):
@@ -237,9 +237,9 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
             if r.repairs:
                 notes.append(f"result read with repairs: {'; '.join(r.repairs)}")
             same_faces = len(r.F) in (cmesh.n_faces, m_raw)
-            detected[i] = "smoothing" if len(r.V) in (cmesh.n_vertices, n_raw) and same_faces else "simplification"
+            detected = "smoothing" if len(r.V) in (cmesh.n_vertices, n_raw) and same_faces else "simplification"
             targeted = any(e.get(k) is not None for k in ("target_faces", "target_ratio"))
-            t = row["task"] = e.get("task") or ("simplification" if targeted else detected[i])
+            t = row["task"] = e.get("task") or ("simplification" if targeted else detected)
             if t == "smoothing" and not same_faces:
                 raise ShootoutError(f"{rp.name}: {len(r.F)} faces, but the clean mesh has {cmesh.n_faces}: a "
                                     "smoothing result keeps the clean mesh's faces (use --task simplification to "
@@ -259,9 +259,8 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
         for r, asked in rows:
             if r["status"] != "ok" and not asked:
                 r["task"] = next(iter(scored))
-    for i, (e, (r, _)) in enumerate(zip(entries, rows)):     # the task as given, unless detection agrees
-        given = e.get("task")
-        r["case_id"] = _eval_id(e, None if given is None or given == detected.get(i) else given, seen_ids)
+    for e, (r, _) in zip(entries, rows):
+        r["case_id"] = _eval_id(e, r["task"], seen_ids)
     rows_by_task: dict[str, list] = {}
     for r, _ in rows:
         rows_by_task.setdefault(r["task"], []).append(r)

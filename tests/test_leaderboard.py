@@ -468,3 +468,18 @@ def test_a_published_pairs_case_that_did_not_run_joins_its_pairs_cell():
     lb = L.leaderboard(full, spec).set_index("method")
     assert lb["missing_cells"].to_dict() == {"A": 0, "B": 1}
     assert len(L.cell_values(spec["curvature"], full["curvature"], "K_rel_l2")[0]) == 2   # no phantom cell
+
+
+def test_a_row_whose_params_are_not_json_is_labelled_not_a_crash(tiny_run):
+    """The leaderboard read each row's params with json.loads in two places of its own: one
+    unreadable value (possible through the Python API) raised in leaderboard() and winners(),
+    where the report reads {}. One reader (`params_of`) serves every labelling now."""
+    import json
+    from harness.results import RunFolder
+    frames = RunFolder(tiny_run).frames()
+    specs = json.loads((tiny_run / "run.json").read_text())["tasks"]
+    df = frames["smoothing"].copy()
+    df.loc[df.index[0], "params"] = "{"
+    L.leaderboard({"smoothing": df}, specs)
+    L.winners({"smoothing": df}, specs)
+    assert L.variant_labels(df)[0].startswith(df["method"].iloc[0])

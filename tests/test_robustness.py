@@ -150,3 +150,60 @@ def test_the_driver_reads_mesh_files_in_a_child_under_the_runs_timeout(tmp_path)
     assert _load_in_child({**spec, "file": str(tmp_path / "bad.obj"), "file_sha1": None}, False, 60) is None
     frames = harness.run(cfg, out=tmp_path / "o", quiet=True, workers=1)
     assert frames["smoothing"]["status"].tolist() == ["ok"]
+
+
+def test_the_mesh_loader_dies_with_a_killed_driver_and_holds_no_lock(tmp_path):
+    """A review: the driver's mesh-loading child inherited the run folder's lock and blocked
+    signals, and outlived a driver killed by SIGKILL (3.4 GB, 20 s on a hostile file), so a
+    --resume right after was refused. It dies with the driver and holds no lock of its own."""
+    import signal
+    import time
+
+    import psutil
+    n = 1_500_000                                  # one huge polygon: seconds to read
+    with open(tmp_path / "big.obj", "w") as fh:
+        fh.write("".join(f"v {i % 997} {i % 991} {i % 983}\n" for i in range(n)))
+        fh.write("f " + " ".join(map(str, range(1, n + 1))) + "\n")
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text(json.dumps({"name": "big", "time_budget": 0, "meshes": [{"file": str(tmp_path / "big.obj")}],
+                               "tasks": {"laplacian": {"methods": ["scratch.uniform"]}}}))
+    out = tmp_path / "o"
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    p = subprocess.Popen([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(out), "--quiet"],
+                         cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        driver, kids, t0 = psutil.Process(p.pid), [], time.time()
+        while not kids and time.time() - t0 < 60 and p.poll() is None:
+            kids = [k for k in driver.children() if k.exe() == driver.exe()]
+            time.sleep(0.05)
+        assert kids, "no loader started"
+        os.kill(p.pid, signal.SIGKILL)
+        p.wait(10)
+        gone, alive = psutil.wait_procs(kids, timeout=5)
+        assert not alive, "the loader outlived the driver"
+    finally:
+        if p.poll() is None:
+            p.kill()
+    r = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(out), "--resume",
+                        "--timeout", "1", "--quiet"], cwd=ROOT, env=env, capture_output=True, text=True, timeout=120)
+    assert "another run is using this folder" not in r.stderr, r.stderr
+
+
+def test_an_interrupt_while_compiled_code_loads_waits_and_a_second_one_stops_at_once():
+    """An interrupt inside llvmlite's callbacks crashed the driver (SIGSEGV); while kernels load
+    it only sets the flag and is raised at the end of the block, and a second one ends the
+    process at once (a cold compile can take tens of seconds)."""
+    code = ("import os, signal, time\n"
+            "from harness.errors import interrupts_deferred, on_interrupt\n"
+            "signal.signal(signal.SIGINT, on_interrupt); signal.signal(signal.SIGTERM, on_interrupt)\n"
+            "try:\n"
+            "    with interrupts_deferred():\n"
+            "        os.kill(os.getpid(), signal.SIGINT); time.sleep(0.2); print('went on', flush=True)\n"
+            "except KeyboardInterrupt:\n"
+            "    print('raised after', flush=True)\n"
+            "with interrupts_deferred():\n"
+            "    os.kill(os.getpid(), signal.SIGINT); time.sleep(5); print('not reached', flush=True)\n")
+    r = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)},
+                       capture_output=True, text=True, timeout=60)
+    assert r.stdout.split() == ["went", "on", "raised", "after"], r.stdout + r.stderr
+    assert r.returncode == 130 and "interrupted again" in r.stderr, (r.returncode, r.stderr)

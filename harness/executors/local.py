@@ -62,8 +62,10 @@ class LocalExecutor:
 
     def run(self, cases, want_meshes=False):
         todo = list(cases)
+        _preload_tasks(todo)                   # compiled code first: the mesh loaders inherit it
         _warm_mesh_cache(todo, self.timeout)
-        _preload_tasks(todo)
+        from ..runner import scan_thread_pools
+        scan_thread_pools(next((c.threads for c in todo), None))    # last: after every library loaded
         todo.reverse()
         running: list[_Job] = []
         before = set(_children(os.getpid())) if REAP else set()     # the driver's own children stay
@@ -118,13 +120,12 @@ class LocalExecutor:
 
 def _preload_tasks(cases) -> None:
     """Run each task's ``preload`` (compiled measuring code) once in the driver, so forked case
-    processes inherit it instead of loading it again (best effort: harness code, never a method's);
-    then scan the thread pools and limit them to the cases' threads (last: after every library
-    the preloads brought in; the case processes inherit the limit)."""
+    processes inherit it instead of loading it again (best effort: harness code, never a method's).
+    An interrupt meanwhile is deferred to the end (`harness.errors.interrupts_deferred`; a second
+    one ends the process at once)."""
     from .. import tasks
     from ..core import geometry
     from ..errors import interrupts_deferred
-    from ..runner import scan_thread_pools
     with interrupts_deferred():          # a KeyboardInterrupt inside llvmlite crashed the driver
         try:
             geometry.warm()
@@ -137,7 +138,6 @@ def _preload_tasks(cases) -> None:
                     fn()
             except Exception:  # noqa: BLE001 - a failure here shows again, as the cases' rows
                 pass
-    scan_thread_pools(next((c.threads for c in cases), None))
 
 
 def _load_in_child(spec: dict, frame: bool, timeout: float | None):
@@ -149,7 +149,7 @@ def _load_in_child(spec: dict, frame: bool, timeout: float | None):
     from .isolation import _context
     ctx = _context()
     recv, send = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_loader, args=(send, spec, frame), daemon=True)
+    proc = ctx.Process(target=_loader, args=(send, spec, frame, os.getpid()), daemon=True)
     with signals_blocked():
         proc.start()
     send.close()
@@ -166,8 +166,24 @@ def _load_in_child(spec: dict, frame: bool, timeout: float | None):
         proc.join()
 
 
-def _loader(conn, spec: dict, frame: bool) -> None:
+def _loader(conn, spec: dict, frame: bool, driver: int) -> None:
+    import signal
+
     from .. import datasets
+    from ..results import close_inherited_locks
+    from .isolation import _SIGNALS
+    close_inherited_locks()                       # the run folder's lock stays the driver's alone
+    input_store.drop_lock()
+    try:                                          # dies with the driver (SIGKILL to it too)
+        import ctypes
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)     # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+    if os.getppid() != driver:                    # it died before the line above
+        os._exit(0)
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, _SIGNALS)
     try:
         src = datasets.cached(spec)
         src.clean.input_notes
@@ -185,7 +201,6 @@ def _warm_mesh_cache(cases, timeout: float | None = None) -> None:
     failures fail again in the case, as its error row). Mesh files are read in a child process
     (`_load_in_child`, bounded by the run's ``timeout``), the driver keeps what it returns."""
     from .. import datasets
-    from ..errors import interrupts_deferred
 
     def key(c):
         return repr(sorted(c.mesh.items()))
@@ -201,11 +216,10 @@ def _warm_mesh_cache(cases, timeout: float | None = None) -> None:
             if src is not None:
                 datasets.prime(c.mesh, src)
             continue
-        with interrupts_deferred():          # compiled kernels load here: see `_preload_tasks`
-            try:
-                src = datasets.cached(c.mesh)
-                src.clean.input_notes        # computed once, inherited by every case of the mesh
-                if src.noisy_V is None and k in noisy:
-                    src.clean.noise_frame    # computed once, inherited by every case of the mesh
-            except Exception:  # noqa: BLE001 - the case's own child reports it as an error row
-                pass
+        try:
+            src = datasets.cached(c.mesh)
+            src.clean.input_notes            # computed once, inherited by every case of the mesh
+            if src.noisy_V is None and k in noisy:
+                src.clean.noise_frame        # computed once, inherited by every case of the mesh
+        except Exception:  # noqa: BLE001 - the case's own child reports it as an error row
+            pass
