@@ -126,6 +126,20 @@ def test_a_scheduler_that_went_is_told_from_a_task_cancelled_for_itself():
     assert not scheduler_went(FutureCancelledError("k", None)) and not scheduler_went(RuntimeError("scheduler-restart"))
 
 
+def _told_then_not(cluster, pretend, value):
+    """The rows of a one-case run while the workers run ``pretend(value)``, then after ``pretend(None)``."""
+    cfg = load_config({"name": "t", "time_budget": 0, "meshes": ["knight"],
+                       "tasks": {"smoothing": {"methods": ["scratch.taubin"]}}})
+    ex = DaskExecutor(timeout=60, scheduler=cluster.scheduler_address)
+    try:
+        ex.client.run(pretend, value)
+        rows = [row for _, row, _ in ex.run(cfg.cases)]
+        ex.client.run(pretend, None)
+        return rows, [row for _, row, _ in ex.run(cfg.cases)]
+    finally:
+        ex.close()
+
+
 def _pretend_other_code(code):
     import harness.executors.dask as d
     d._CODE.clear()
@@ -139,16 +153,7 @@ def test_a_worker_running_other_code_costs_its_rows_not_a_mixed_folder(cluster):
     against a local run, nothing said). A row from a worker whose sources hash otherwise is an
     error row naming both hashes. (The workers here are told another hash: the same thing to the
     driver as another checkout.)"""
-    cfg = load_config({"name": "t", "time_budget": 0, "meshes": ["knight"],
-                       "tasks": {"smoothing": {"methods": ["scratch.taubin"]}}})
-    ex = DaskExecutor(timeout=60, scheduler=cluster.scheduler_address)
-    try:
-        ex.client.run(_pretend_other_code, "0123456789abcdef")
-        rows = [row for _, row, _ in ex.run(cfg.cases)]
-        ex.client.run(_pretend_other_code, None)
-        again = [row for _, row, _ in ex.run(cfg.cases)]
-    finally:
-        ex.close()
+    rows, again = _told_then_not(cluster, _pretend_other_code, "0123456789abcdef")
     assert [r["status"] for r in rows] == ["error"] and "ran other code than the driver" in rows[0]["error"]
     assert "0123456789abcdef" in rows[0]["error"] and "_worker_code" not in rows[0]
     assert [r["status"] for r in again] == ["ok"] and "_worker_code" not in again[0]
@@ -165,16 +170,7 @@ def test_a_worker_with_other_package_versions_costs_its_rows(cluster):
     """Only the sources were compared: a worker with another numpy (or libigl, ...) made rows the
     run recorded as the driver's environment's. A row from a worker whose package versions differ
     is an error row naming each difference."""
-    cfg = load_config({"name": "t", "time_budget": 0, "meshes": ["knight"],
-                       "tasks": {"smoothing": {"methods": ["scratch.taubin"]}}})
-    ex = DaskExecutor(timeout=60, scheduler=cluster.scheduler_address)
-    try:
-        ex.client.run(_pretend_other_numpy, "1.0.0")
-        rows = [row for _, row, _ in ex.run(cfg.cases)]
-        ex.client.run(_pretend_other_numpy, None)
-        again = [row for _, row, _ in ex.run(cfg.cases)]
-    finally:
-        ex.close()
+    rows, again = _told_then_not(cluster, _pretend_other_numpy, "1.0.0")
     assert [r["status"] for r in rows] == ["error"] and "other package versions" in rows[0]["error"]
     assert "numpy 1.0.0, the driver's" in rows[0]["error"] and "_worker_code" not in rows[0]
     assert [r["status"] for r in again] == ["ok"]
