@@ -176,7 +176,8 @@ def eval_files(clean, results, out, noisy=None, task: str | None = None, labels=
     return eval_entries(entries, out, hausdorff_samples, hausdorff_eps=hausdorff_eps, config=
                         {"eval": {"clean": str(clean), "noisy": noisy and str(noisy), "results": [str(r) for r in results],
                                   **({"target_faces": target_faces} if target_faces is not None else {}),
-                                  **({"target_ratio": target_ratio} if target_ratio is not None else {})}},
+                                  **({"target_ratio": target_ratio} if target_ratio is not None else {}),
+                                  "hausdorff_samples": hausdorff_samples, "hausdorff_eps": hausdorff_eps}},
                         problems=P)
 
 
