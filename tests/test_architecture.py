@@ -150,7 +150,7 @@ def test_a_run_with_a_plugin_is_reported_after_the_plugin_is_gone(tmp_path):
     plug = tmp_path / "plug"
     plug.mkdir()
     (plug / "ghostlab_plugin.py").write_text(PLUGIN)
-    cfg = {"name": "ghost", "hausdorff_samples": 300, "save_meshes": False, "plugins": ["ghostlab_plugin"],
+    cfg = {"name": "ghost", "hausdorff_samples": 300, "time_budget": 0, "save_meshes": False, "plugins": ["ghostlab_plugin"],
            "meshes": ["knight"], "noise": [{"model": "gaussian_normal", "levels": [0.2]}],
            "tasks": {"smoothing": {"methods": ["ghostlab.shrink", "scratch.explicit"]}}}
     (plug / "ghost.yaml").write_text(json.dumps(cfg))

@@ -327,7 +327,7 @@ def test_bad_yaml_exit_2(tmp_path, capsys):
 def test_cli_end_to_end(tmp_path):
     cfg = tmp_path / "e2e.yaml"
     cfg.write_text(
-        "name: e2e\nrepeats: 2\nsave_meshes: true\nmeshes: [knight, {procedural: plane_delaunay, n_points: 80}]\n"
+        "name: e2e\nrepeats: 2\ntime_budget: 0\nsave_meshes: true\nmeshes: [knight, {procedural: plane_delaunay, n_points: 80}]\n"
         "noise: [{model: none}, {model: gaussian_normal, levels: [0.2]}]\n"
         "tasks:\n  laplacian: {methods: [scratch.uniform, scratch.cotan, libigl.cotan]}\n"
         "  smoothing: {methods: [{name: scratch.explicit, params: {iterations: [2, 4]}}]}\n"
