@@ -6,6 +6,7 @@ raised once as a `ConfigError`; nothing is written before validation passes.
 from __future__ import annotations
 
 import difflib
+import functools
 import hashlib
 import itertools
 import json
@@ -119,6 +120,13 @@ def _resolved(meth, params: dict) -> dict:
     return meth.with_defaults(params)
 
 
+@functools.lru_cache(maxsize=256)
+def _file_sha1(path: str, size: int, mtime_ns: int) -> str:
+    """The sha1 of a file's bytes, read once per config load for a file of that size and time
+    (the duplicate check and the case ids both need it)."""
+    return hashlib.sha1(Path(path).read_bytes()).hexdigest()
+
+
 def _identity(spec: dict) -> dict:
     """What defines a mesh for the case id: file contents (sha1), not where the file lies."""
     out = {}
@@ -126,7 +134,8 @@ def _identity(spec: dict) -> dict:
         if k.endswith("_sha1"):
             continue                      # a case's record of the bytes it must read (`expand_cases`)
         if k in ("file", "clean"):
-            out[k + "_sha1"] = hashlib.sha1(Path(v).read_bytes()).hexdigest()
+            st = Path(v).stat()
+            out[k + "_sha1"] = _file_sha1(str(Path(v).resolve()), st.st_size, st.st_mtime_ns)
         elif k == "name":
             continue                      # a label only: renaming a mesh keeps its case ids
         else:
