@@ -6,7 +6,6 @@ raised once as a `ConfigError`; nothing is written before validation passes.
 from __future__ import annotations
 
 import difflib
-import functools
 import hashlib
 import itertools
 import json
@@ -20,7 +19,7 @@ import yaml
 
 from . import datasets, yaml_input
 from .errors import ConfigError, ShootoutError
-from .mesh import SUPPORTED, missing_file_problem
+from .mesh import SUPPORTED, file_sha1, missing_file_problem
 from .noise import MODELS
 
 TOP_KEYS = {"name", "repeats", "save_meshes", "plugins", "seed", "meshes", "noise", "tasks",
@@ -120,13 +119,6 @@ def _resolved(meth, params: dict) -> dict:
     return meth.with_defaults(params)
 
 
-@functools.lru_cache(maxsize=256)
-def _file_sha1(path: str, size: int, mtime_ns: int) -> str:
-    """The sha1 of a file's bytes, read once per config load for a file of that size and time
-    (the duplicate check and the case ids both need it)."""
-    return hashlib.sha1(Path(path).read_bytes()).hexdigest()
-
-
 def _identity(spec: dict) -> dict:
     """What defines a mesh for the case id: file contents (sha1), not where the file lies."""
     out = {}
@@ -134,8 +126,7 @@ def _identity(spec: dict) -> dict:
         if k.endswith("_sha1"):
             continue                      # a case's record of the bytes it must read (`expand_cases`)
         if k in ("file", "clean"):
-            st = Path(v).stat()
-            out[k + "_sha1"] = _file_sha1(str(Path(v).resolve()), st.st_size, st.st_mtime_ns)
+            out[k + "_sha1"] = file_sha1(v)
         elif k == "name":
             continue                      # a label only: renaming a mesh keeps its case ids
         else:

@@ -401,6 +401,19 @@ def missing_file_problem(path) -> str | None:
     return "is not a regular file (a pipe, socket or device); give a mesh file" if path.exists() else "no such file"
 
 
+def file_sha1(path) -> str:
+    """The sha1 hex digest of a file's bytes, read once per process for a given resolved path,
+    size and modification time (a config's case ids and duplicate check, and `eval`'s case ids,
+    all ask for it); `OSError` when the file cannot be read."""
+    st = Path(path).stat()
+    return _sha1_of(str(Path(path).resolve()), st.st_size, st.st_mtime_ns)
+
+
+@functools.lru_cache(maxsize=256)
+def _sha1_of(path: str, size: int, mtime_ns: int) -> str:
+    return hashlib.sha1(Path(path).read_bytes()).hexdigest()
+
+
 def read_mesh(path, name: str | None = None, repair: bool = True, sha1: str | None = None,
               finite: bool = True) -> Mesh:
     """Read a triangle mesh file and validate it (see the module docstring for the policy).

@@ -8,7 +8,6 @@ mesh after the documented repairs); a simplification result is compared as a sur
 """
 from __future__ import annotations
 
-import functools
 import hashlib
 import json
 import sys
@@ -19,7 +18,7 @@ import numpy as np
 from . import tasks
 from .config import eps_problem, name_problem, samples_problem
 from .errors import ShootoutError, problems_error
-from .mesh import Mesh, missing_file_problem, read_mesh, validate
+from .mesh import Mesh, file_sha1, missing_file_problem, read_mesh, validate
 from .provenance import code_hash, git_commit, git_dirty, machine_info, now_iso, package_versions
 from .results import Frames, RunFolder, out_dir_problems
 from .tasks.base import CaseInput
@@ -120,16 +119,7 @@ def target_problems(target_faces, target_ratio, at: str = "") -> list[str]:
 
 def _sha1_file(p) -> str | None:
     try:
-        st = Path(p).stat()
-    except OSError:
-        return None
-    return _sha1_path(str(Path(p).resolve()), st.st_size, st.st_mtime_ns)
-
-
-@functools.lru_cache(maxsize=64)
-def _sha1_path(p: str, size: int, mtime_ns: int) -> str | None:
-    try:
-        return hashlib.sha1(Path(p).read_bytes()).hexdigest()
+        return file_sha1(p)
     except OSError:
         return None
 
