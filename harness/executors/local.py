@@ -186,13 +186,19 @@ def _loader(conn, spec: dict, frame: bool, driver: int) -> None:
     signal.pthread_sigmask(signal.SIG_UNBLOCK, _SIGNALS)
     try:
         src = datasets.cached(spec)
-        src.clean.input_notes
-        if frame and src.noisy_V is None:
-            src.clean.noise_frame
+        _compute_facts(src, frame)
         conn.send(src)
     except BaseException:  # noqa: BLE001 - the cases read it again and say why
         pass
     os._exit(0)                                   # none of the driver's exit handlers
+
+
+def _compute_facts(src, frame: bool) -> None:
+    """The facts of an input every case of it reads (its notes; its noise frame when ``frame``
+    and the noise is not given), computed once where the driver keeps them."""
+    src.clean.input_notes
+    if frame and src.noisy_V is None:
+        src.clean.noise_frame
 
 
 def _warm_mesh_cache(cases, timeout: float | None = None) -> None:
@@ -217,9 +223,6 @@ def _warm_mesh_cache(cases, timeout: float | None = None) -> None:
                 datasets.prime(c.mesh, src)
             continue
         try:
-            src = datasets.cached(c.mesh)
-            src.clean.input_notes            # computed once, inherited by every case of the mesh
-            if src.noisy_V is None and k in noisy:
-                src.clean.noise_frame        # computed once, inherited by every case of the mesh
+            _compute_facts(datasets.cached(c.mesh), k in noisy)
         except Exception:  # noqa: BLE001 - the case's own child reports it as an error row
             pass
