@@ -271,3 +271,100 @@ def test_potpourri_heat_is_the_neumann_heat_method_on_open_meshes():
         avg = methods.get("scratch.heat")(s.V, s.F, sources=2).D
         assert np.abs(pp - neu).max() <= 2e-4 * pp.max()
         assert np.abs(pp - avg).max() >= 0.02 * pp.max()
+
+
+def _obtuse_plane(n=30, jitter=0.6, seed=3):
+    """A jittered grid of the unit square, each cell split along a random diagonal (obtuse
+    triangles), z = 0."""
+    rng = np.random.default_rng(seed)
+    x, y = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n))
+    P = np.c_[x.ravel(), y.ravel()]
+    inner = (P.min(1) > 0) & (P.max(1) < 1)
+    P[inner] += (rng.random((inner.sum(), 2)) - 0.5) * jitter / (n - 1)
+    F = []
+    for i in range(n - 1):
+        for j in range(n - 1):
+            a = i * n + j
+            b, c, d = a + 1, a + n, a + n + 1
+            F += [[a, b, d], [a, d, c]] if rng.random() < 0.5 else [[a, b, c], [b, d, c]]
+    return np.c_[P, np.zeros(len(P))], np.array(F, dtype=np.int64)
+
+
+def test_negative_distances_on_a_disconnected_mesh_fail_the_case(tmp_path):
+    """libigl's heat method takes its result's sign from the mean over all vertices: on two copies
+    of a noisy obtuse plane it negated one source's distances on its own copy (min -1.18; a mean
+    relative error of 0.67 in an ok row, against 0.02 for its twin). Such a row is an error naming
+    the negative distances; the twin's row stays ok."""
+    from harness.mesh import write_obj
+    V, F = _obtuse_plane()
+    write_obj(tmp_path / "disc.obj", np.r_[V, V + [2, 0, 0]], np.r_[F, F + len(V)])
+    run({"name": "geo", "repeats": 1, "time_budget": 0, "meshes": [{"file": str(tmp_path / "disc.obj")}],
+         "noise": [{"model": "gaussian_normal", "levels": [0.3]}],
+         "tasks": {"geodesics": {"methods": ["scratch.heat", "libigl.heat"], "params": {"sources": 3}}}},
+        out=tmp_path / "run", quiet=True)
+    df = pd.read_csv(tmp_path / "run" / "geodesics.csv").set_index("method")
+    assert df.loc["scratch.heat", "status"] == "ok" and df.loc["scratch.heat", "rel_error_mean"] < 0.05
+    assert df.loc["libigl.heat", "status"] == "error"
+    assert "negative distances" in df.loc["libigl.heat", "error"], df.loc["libigl.heat", "error"]
+
+
+def test_a_negative_distance_at_a_reachable_vertex_fails_and_rounding_does_not():
+    """The task's own check on two copies of a plane: -1e-3 of the largest distance at a reachable
+    vertex fails naming it, -1e-9 passes (rounding next to a source), -5 at an unreachable vertex
+    passes."""
+    from harness import tasks
+    from harness.errors import MethodFailed
+    from harness.mesh import validate
+    from harness.tasks.base import CaseInput
+    from harness.tasks.geodesics import GeodesicResult
+    task = tasks.get("geodesics")
+    V, F = _obtuse_plane(12)
+    clean = validate(np.r_[V, V + [2, 0, 0]], np.r_[F, F + len(V)], repair=False)
+    inp = CaseInput(clean, clean.V, clean.F, clean.diagonal(), {})
+    params = {"sources": 1, "source_seed": 0}
+    s = int(source_vertices(len(clean.V), 1, 0)[0])
+    own = np.arange(len(clean.V)) // len(V) == s // len(V)
+    D = np.where(own, np.linalg.norm(clean.V - clean.V[s], axis=1), -5.0)
+    assert task.measure(inp, GeodesicResult(D[None, :].copy()), params)["rel_error_max"] < 1e-12
+    for dip, fails in ((1e-9, False), (1e-3, True)):
+        bad = D.copy()
+        bad[np.flatnonzero(own & (np.arange(len(D)) != s))[0]] = -dip * D.max()
+        if fails:
+            with pytest.raises(MethodFailed, match="negative distances at 1 vertex"):
+                task.measure(inp, GeodesicResult(bad[None, :]), params)
+        else:
+            assert task.measure(inp, GeodesicResult(bad[None, :]), params)["unreachable_fraction"] == 0.5
+
+
+def test_meshlab_geodesic_refuses_a_source_with_a_twin_vertex():
+    """MeshLab's filter starts from the vertex nearest a point: on a mesh cut along a seam (the
+    seam's vertices doubled) a source on the seam measured from its other copy, 0 over its whole
+    side, in an ok row. It is an error naming the twin; a source off the seam still runs."""
+    V, F = _obtuse_plane(12)
+    seam = np.flatnonzero(np.isclose(V[:, 0], V[5, 0]))            # the grid column of vertex 5
+    copy = {int(v): len(V) + i for i, v in enumerate(seam)}
+    V2 = np.r_[V, V[seam]]
+    side = (V[F][:, :, 0].mean(axis=1) > V[5, 0])
+    F2 = F.copy()
+    for f in np.flatnonzero(side):
+        F2[f] = [copy.get(int(v), int(v)) for v in F[f]]
+    geo = methods.get("meshlab.geodesic")
+    with pytest.raises(ValueError, match=f"source vertex 5 shares its position with vertex/vertices \\[{copy[5]}\\]"):
+        geo.func(V2, F2, sources=np.array([5]))
+    D = geo.func(V2, F2, sources=np.array([1])).D
+    assert D[0, 1] == 0 and D.max() > 0
+
+
+def test_the_exact_reference_does_not_depend_on_the_mesh_scale():
+    """Kirsanov's code (libigl's exact_geodesic) has absolute tolerances: on a noisy obtuse plane
+    scaled by 1e-6 its answer was 1.4e-3 (max relative) off its unit-scale answer. The reference is
+    computed on the mesh scaled to a unit diagonal: equal to 1e-9 at 1e-6, 1 and 1e6, and 1e6
+    away from the origin."""
+    from harness.tasks.geodesics import exact_polyhedral
+    V, F = _obtuse_plane()
+    V = V + 0.3 / 29 * np.random.default_rng(0).standard_normal(V.shape) * [0, 0, 1]
+    src = np.array([0, 400])
+    base = exact_polyhedral(V, F, src)
+    for scale, shift in ((1e-6, 0.0), (1e6, 0.0), (1.0, 1e6)):
+        D = exact_polyhedral(V * scale + shift, F, src) / scale
+        assert np.abs(D - base).max() <= 1e-9 * base.max(), (scale, shift, np.abs(D - base).max() / base.max())

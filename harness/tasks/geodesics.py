@@ -8,7 +8,8 @@ Reference (``reference_exact``): on procedural meshes the analytic geodesic dist
 surface the mesh samples (sphere: great-circle ``r arccos(x . s / r^2)``; planes (the unit
 square, convex): Euclidean; open cylinder: ``sqrt((r dtheta)^2 + dz^2)`` unrolled), ``False``;
 otherwise the exact polyhedral distance on the mesh (libigl ``exact_geodesic``, the
-Mitchell-Mount-Papadimitriou algorithm of Surazhsky et al. 2005), ``True``.
+Mitchell-Mount-Papadimitriou algorithm of Surazhsky et al. 2005, run on the mesh centred and
+scaled to a unit bounding-box diagonal, then scaled back: its tolerances are absolute), ``True``.
 
 Columns: ``rel_error_mean`` / ``rel_error_max`` = mean / max over sources and vertices of
 ``|D - D*| / D*`` over vertices farther than ``EXCLUDE = 3`` mean edge lengths from the source
@@ -18,12 +19,14 @@ area-weighted mean over faces (outside the excluded disc) of ``| |grad D| - 1 |`
 the exact distance has unit gradient almost everywhere, but its linear interpolant on the mesh
 does not (0.03 on bunny), so a lower value is not a better distance; ``symmetry_error`` (two or more sources) the max
 over source pairs of ``|D_a(b) - D_b(a)| / D*(a, b)``; ``precompute_s`` and ``per_source_s``
-as the method reports them (factorizations once, then the per-source work; blank when the
-method does not split its time).
+as the method reports them in the last timed call (factorizations once, then the per-source
+work; one call's split, not a median as ``time_s``; blank when the method does not split its time).
 
 Disconnected meshes: a vertex in another connected component than the source (vertices joined
 by faces) is unreachable. A method may return any value there (``+inf`` is the convention; a
-NaN or -inf anywhere, or a non-finite value at a reachable vertex, fails the case); the errors,
+NaN or -inf anywhere, a non-finite value at a reachable vertex, or a negative one there below
+``-1e-6`` of the largest ``|D|`` (no distance; libigl's heat method, which takes the sign of its
+result from the mean over all vertices, returns such on a disconnected mesh), fails the case); the errors,
 the gradient and the symmetry are measured over reachable vertices and source pairs only, and
 ``unreachable_fraction`` says how many (source, vertex) pairs were left out.
 """
@@ -38,6 +41,7 @@ from ..errors import MethodFailed
 from .base import Invalid, Metric, Task, float_array
 
 EXCLUDE = 3.0
+NEGATIVE = 1e-6    # a distance below -NEGATIVE * max |D| at a reachable vertex fails the case
 
 PARAMS = {
     "sources": Param("sources", 1, "int", low=1, high=64, doc="number of source vertices (seeded choice)"),
@@ -144,9 +148,14 @@ def exact_polyhedral(V: np.ndarray, F: np.ndarray, sources) -> np.ndarray:
         from ..errors import InvalidMeshError
         raise InvalidMeshError(f"no geodesic reference: {why}")
     import igl
+    # The implementation's tolerances are absolute: it runs on the mesh centred and scaled to a
+    # unit bounding-box diagonal (at a 1e-6 scale it is otherwise 1e-3 off its own unit answer).
+    lo, hi = V.min(axis=0), V.max(axis=0)
+    scale = float(np.linalg.norm(hi - lo)) or 1.0
+    Vu = (V - (lo + hi) / 2) / scale
     VT = np.arange(len(V), dtype=np.int64)
-    return np.stack([np.asarray(igl.exact_geodesic(V, F, VS=np.array([int(s)], np.int64), VT=VT), dtype=np.float64)
-                     for s in np.atleast_1d(sources)])
+    return scale * np.stack([np.asarray(igl.exact_geodesic(Vu, F, VS=np.array([int(s)], np.int64), VT=VT),
+                                        dtype=np.float64) for s in np.atleast_1d(sources)])
 
 
 def reference(inp, sources: np.ndarray) -> tuple[np.ndarray, bool]:
@@ -179,6 +188,13 @@ def measure(inp, result, params) -> dict:
     if not np.isfinite(D[reach]).all():
         raise MethodFailed(f"returned {int((~np.isfinite(D[reach])).sum())} non-finite distance(s) at vertices "
                            "connected to the source")
+    scale = np.abs(D[reach]).max() if reach.any() else 0.0
+    neg = reach & (D < -NEGATIVE * scale)
+    if neg.any():
+        k = int(np.flatnonzero(neg.any(axis=1))[0])
+        raise MethodFailed(f"returned negative distances at {int(neg.sum())} vertex/vertices connected to their "
+                           f"source (source {int(src[k])}: {int(neg[k].sum())} of {int(reach[k].sum())}, min "
+                           f"{float(D[k][reach[k]].min()):.4g} against a largest |D| of {scale:.4g})")
     h = mean_edge_length(V, F)
     far = reach & (ref > EXCLUDE * h)
     err = np.abs(np.where(reach, D, 0.0) - ref)
@@ -264,14 +280,19 @@ TASK = Task(
         Metric("symmetry_error", "lower", "max over source pairs |D_a(b) - D_b(a)| / D*(a, b)", **_E),
         Metric("unreachable_fraction", "input", "fraction of (source, vertex) pairs in another connected component "
                "than the source (left out of every error)", **_E),
-        Metric("precompute_s", "info", "the method's precomputation time (its own split)", unit="s"),
-        Metric("per_source_s", "info", "the method's time per source after precomputation (its own split)", unit="s"),
+        Metric("precompute_s", "info", "the method's precomputation time (its own split, last timed call)", unit="s"),
+        Metric("per_source_s", "info", "the method's time per source after precomputation (its own split, last timed call)", unit="s"),
     ),
     params=PARAMS, prepare=prepare, measure=measure, check_result=_check, view=view, view_metric="rel_error_mean",
     axis_params=frozenset({"sources", "source_seed"}),     # methods are ranked against each other per source set
     output_mesh=output_mesh, order=50, checks=(("zero_at_source", _zero_at_source),),
     input_facts=("geodesic_reference",),
     # where no analytic distance exists the reference is libigl's exact_geodesic: that method
-    # scores 0 by construction there, which is no measurement of it (left out of the rankings)
+    # (and pygeodesic, the same code) scores 0 by construction there, which is no measurement of
+    # it (left out of the rankings)
     invalid_when=(Invalid("reference_exact", "==", "is the reference itself (0 by construction)", value=True,
-                          method="libigl.exact_geodesic", missing=True),))
+                          method="libigl.exact_geodesic", missing=True),
+                  # pygeodesic wraps the same C++ code (Kirsanov's geodesic library) as libigl's
+                  Invalid("reference_exact", "==", "runs the reference's own code (Kirsanov's geodesic library, "
+                          "which libigl's exact_geodesic wraps too): 0 by construction", value=True,
+                          method="pygeodesic.exact", missing=True)))

@@ -4,8 +4,9 @@
 ``2 pi - sum theta`` at every vertex (boundary vertices included, measured against 2 pi, so it is
 not a curvature there); the adapter divides it by the mixed Voronoi area of
 ``igl.massmatrix(VORONOI)`` to give the pointwise K of the task.
-``libigl.principal_curvature``: ``igl.principal_curvature`` (quadric fitting in a neighbourhood
-of ``radius`` times the average edge length; Panozzo, Puppo & Rocca 2010) returns the maximal and
+``libigl.principal_curvature``: ``igl.principal_curvature`` (quadric fitting over the
+``radius``-ring of each vertex: libigl's default ``useKring``, under which ``radius`` counts
+rings of edges, not edge lengths; Panozzo, Puppo & Rocca 2010) returns the maximal and
 minimal principal curvature values ``PV1 >= PV2`` with the sign of the vertex normals (positive
 on a sphere with outward normals, as the task's); ``K = PV1 PV2``, ``H = (PV1 + PV2) / 2``.
 Vertices libigl reports as bad (no fit) make the call fail, naming them.
@@ -33,7 +34,7 @@ def gaussian_curvature(V, F):
 
 @register("libigl.principal_curvature", task="curvature", library="libigl", requires=("igl",),
           params={"radius": Param("radius", 5, "int", low=2, high=100,
-                                  doc="neighbourhood size in average edge lengths (igl's radius)")})
+                                  doc="neighbourhood: the k-ring of each vertex, k = radius (igl's radius, useKring)")})
 def principal_curvature(V, F, *, radius=5):
     """``igl.principal_curvature(V, F, radius)`` values (module docstring)."""
     import igl

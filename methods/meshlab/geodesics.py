@@ -5,7 +5,9 @@ the source vertex's position, with no distance cap (VCGLib's ``tri::Geodesic``: 
 front propagation whose updates go across triangles, not only along edges, so it is close to the
 polyhedral distance: 6e-7 relative on a flat Delaunay mesh, 0.25% on an icosphere).
 MeshLab keeps vertex quality in single precision and recomputes everything per source
-(``precompute_s`` is not split out). MeshLab's heat-method filter
+(``precompute_s`` is not split out). The filter takes the source as a point and starts from the
+vertex nearest to it: a source vertex that shares its position with another vertex (a seam) is
+ambiguous, and the case fails saying so rather than measure from the other copy. MeshLab's heat-method filter
 (``compute_scalar_by_heat_geodesic_distance_from_selection_per_vertex``) has no adapter: it
 crashed the process (segmentation fault) on the bundled knight mesh.
 """
@@ -27,6 +29,12 @@ def geodesic(V, F, *, sources):
     import pymeshlab
     t0 = time.perf_counter()
     ms = _meshset(V, F)                  # one mesh for every source: the filter writes quality only
+    for s in sources:
+        twins = np.flatnonzero((V == V[int(s)]).all(axis=1))
+        if len(twins) > 1:
+            raise ValueError(f"meshlab.geodesic: source vertex {int(s)} shares its position with vertex/vertices "
+                             f"{[int(t) for t in twins if t != s][:5]}; the filter starts from a point, so it "
+                             "could start from another copy")
     D = []
     for s in sources:
         ms.compute_scalar_by_geodesic_distance_from_given_point_per_vertex(
