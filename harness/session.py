@@ -99,10 +99,7 @@ def method_sources(cfg: Config) -> dict:
     from importlib import metadata
     from .plugins import import_methods
     methods = import_methods()
-    try:
-        dists = metadata.packages_distributions()
-    except Exception:  # noqa: BLE001 - provenance must never fail a run
-        dists = {}
+    dists = None
     out = {}
     for name in sorted({c.method for c in cfg.cases}):
         try:
@@ -110,9 +107,15 @@ def method_sources(cfg: Config) -> dict:
         except KeyError:
             continue
         top = mod.split(".")[0]
-        dist = (dists.get(top) or [None])[0]
         if top == "methods":
             dist = "mesh-shootout"
+        else:
+            if dists is None:               # every installed distribution's files: read once, when needed
+                try:
+                    dists = metadata.packages_distributions()
+                except Exception:  # noqa: BLE001 - provenance must never fail a run
+                    dists = {}
+            dist = (dists.get(top) or [None])[0]
         try:
             ver = metadata.version(dist) if dist else None
         except metadata.PackageNotFoundError:

@@ -607,3 +607,25 @@ def test_methods_lists_a_plugins_methods(tmp_path):
     r = subprocess.run([sys.executable, "-m", "harness.cli", "methods", "--plugin", "no_such_mod_zz"],
                        cwd=tmp_path, capture_output=True, text=True, env=env, timeout=120)
     assert r.returncode == 2 and "--plugin no_such_mod_zz: cannot import it" in r.stderr
+
+
+def test_method_sources_name_each_methods_module_and_distribution(monkeypatch):
+    """run.json's method_sources: our methods are mesh-shootout's at its version; a plugin's
+    module is looked up among the installed distributions (none for the test plugins)."""
+    from importlib import metadata
+
+    from harness.config import load_config
+    from harness.session import method_sources
+    calls = []
+    real = metadata.packages_distributions
+    monkeypatch.setattr(metadata, "packages_distributions", lambda: calls.append(1) or real())
+    cfg = load_config({"meshes": ["knight"], "noise": [{"model": "none"}],
+                       "tasks": {"smoothing": {"methods": ["scratch.explicit"]}}})
+    got = method_sources(cfg)
+    assert got["scratch.explicit"]["module"].startswith("methods.") and not calls     # no scan of every distribution
+    assert got["scratch.explicit"]["distribution"] == "mesh-shootout"
+    assert got["scratch.explicit"]["version"] == metadata.version("mesh-shootout")
+    cfg = load_config({"plugins": ["tests.plugins.crashy"], "meshes": ["knight"], "noise": [{"model": "none"}],
+                       "tasks": {"smoothing": {"methods": ["scratch.explicit", "crashy.nan_smooth"]}}})
+    got = method_sources(cfg)
+    assert got["crashy.nan_smooth"] == {"module": "tests.plugins.crashy", "distribution": None, "version": None} and calls
