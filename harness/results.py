@@ -287,12 +287,20 @@ class RunFolder:
         if not p.exists():
             return []
         text = p.read_bytes().decode("utf-8-sig")           # no newline translation; a BOM is no column name
-        lines = text.splitlines(keepends=True)
-        if lines and not lines[-1].endswith("\n"):
-            lines = lines[:-1]
-        rows = list(csv.DictReader(io.StringIO("".join(lines))))
+        records = []
+        try:                    # records, not lines: a quoted field may hold a newline, \r or \u2028
+            for rec in csv.reader(io.StringIO(text, newline="")):
+                records.append(rec)
+        except csv.Error:       # the file ends inside a quoted field: a torn last row, not kept
+            pass
+        else:
+            if records and not text.endswith("\n"):        # every row is written ending in a newline
+                records.pop()
         n = len(columns(task))
-        return [r for r in rows if None not in r and len(r) == n]
+        if not records or len(records[0]) != n:
+            return []
+        head = records[0]
+        return [dict(zip(head, rec)) for rec in records[1:] if len(rec) == n]
 
     def recorded_tasks(self) -> list[str]:
         """The task kinds run.json (of ours) says this folder's run had, installed here or not."""
@@ -409,8 +417,19 @@ class RunFolder:
             data = head.getvalue() + data
         fd = os.open(p, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o666)
         try:
-            os.write(fd, data.encode())
-            os.fsync(fd)
+            start = os.fstat(fd).st_size
+            buf = memoryview(data.encode())
+            try:
+                while buf:                  # a short write (a full disk, a file size limit) leaves no part row
+                    n = os.write(fd, buf)
+                    if n <= 0:
+                        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(p))
+                    buf = buf[n:]
+                os.fsync(fd)
+            except BaseException:
+                with contextlib.suppress(OSError):
+                    os.ftruncate(fd, start)
+                raise
         finally:
             os.close(fd)
 

@@ -580,6 +580,43 @@ def test_a_file_size_limit_or_full_temporary_files_is_one_message_naming_where(t
     assert "TMPDIR" not in inside and "disk is full" in inside
 
 
+def test_a_short_write_leaves_no_part_row_and_a_torn_quoted_row_is_not_kept(tmp_path):
+    """An outside review: on a nearly full disk a row holding a multi-line note was written in
+    part (``os.write``'s count was not checked) and its torn end, cut after a newline inside the
+    quoted note, passed the line-based torn-line check; --resume kept it as an ok case with no
+    metrics, never run again. A short write now truncates the file back and raises; the reader
+    parses records, so a row cut inside a quoted field, or short of columns, is dropped."""
+    from harness.results import RunFolder
+    folder = RunFolder(tmp_path / "o")
+    row = {"case_id": "abc123", "task": "smoothing", "mesh": "m", "noise_model": "none", "noise_level": 0.0,
+           "seed": 0, "method": "scratch.taubin", "library": "scratch", "params": "{}", "status": "ok",
+           "error": "the method warned: first line\nsecond line\u2028third\rfourth"}
+    folder.append("smoothing", row)
+    p = folder.csv_path("smoothing")
+    whole = p.read_bytes()
+    assert [r["error"] for r in folder.read_rows("smoothing")] == [row["error"]]
+    cut = whole.index(b"second line")                           # just after the newline inside the note
+    for end in (cut, cut + 3, len(whole) - 1):
+        p.write_bytes(whole + whole[whole.index(b"\n") + 1:][: end - whole.index(b"\n") - 1])
+        assert [r["case_id"] for r in folder.read_rows("smoothing")] == ["abc123"], end
+    short = whole.decode().splitlines(keepends=True)
+    p.write_text(short[0] + "def456,smoothing,m\n" + "".join(short[1:]))     # a row short of columns
+    assert [r["case_id"] for r in folder.read_rows("smoothing")] == ["abc123"]
+    p.write_bytes(whole)
+    big = {**row, "case_id": "def456", "error": "x" * 20000}
+    code = ("import resource, sys\n"
+            "from harness.results import RunFolder\n"
+            f"resource.setrlimit(resource.RLIMIT_FSIZE, ({len(whole) + 4096}, {len(whole) + 4096}))\n"
+            "try:\n"
+            f"    RunFolder(sys.argv[1]).append('smoothing', {big!r})\n"
+            "except OSError as e:\n"
+            "    print('raised', e.errno)\n")
+    r = subprocess.run([sys.executable, "-c", code, str(folder.path)], cwd=ROOT, capture_output=True, text=True,
+                       timeout=60, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert r.stdout.startswith("raised"), (r.stdout, r.stderr[-500:])
+    assert p.read_bytes() == whole                              # nothing of the new row is left
+
+
 def test_a_carriage_return_in_a_label_survives_every_csv_the_run_writes(tmp_path):
     """A review of plan.csv: a bare \\r in a mesh label (a file name may hold one) was written
     unquoted, so readers split the row there: plan.csv, and the task CSVs before it, were then

@@ -202,7 +202,7 @@ TASK = Task(
         Metric("eig_rel_error_mean", "lower", "mean of the same", rank=True, **_E),
         Metric("eig0", "info", "smallest eigenvalue, 1/length^2 (0 up to rounding on a connected mesh, open ones "
                "too: the constants are in the kernel under the natural Neumann condition; one 0 per component)"),
-        Metric("eig_max", "info", "largest of the k eigenvalues"),
+        Metric("eig_max", "info", "largest of the k eigenvalues, 1/length^2 (input units: it scales as 1/s^2 with the mesh)"),
         Metric("k_returned", "info", "eigenpairs returned", kind="int"),
         Metric("residual_max", "lower", "max_i ||W x_i + lambda_i M x_i||_(M^-1) / (||x_i||_M max(|lambda_i|, "
                "first non-zero |lambda|)), scale-free", **_E),
