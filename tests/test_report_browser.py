@@ -176,7 +176,7 @@ def check_report_in_browser(report: Path, screenshot: Path | None = None, timeou
                         [...g.querySelectorAll('svg.chart circle')].filter(c => c.getAttribute('fill') === '#777').length])),
                     legends: [...document.querySelectorAll('.legend')].map(l => [...l.querySelectorAll('span')]
                         .filter(sp => !sp.querySelector('i.ref')).map(sp => [sp.textContent, sp.querySelector('i').style.background])),
-                    height: document.documentElement.scrollHeight};
+                    height: document.documentElement.scrollHeight, title: document.title};
         })()""")
         if interact:
             _interact(cdp, state)
@@ -288,6 +288,22 @@ def test_generic_section_plots_parameter_sweeps_and_level_lines(tmp_path):
     assert s["view3d"] == "ready" and s["painted"] == s["canvases"] > 0
     cdp_titles = s.get("groupTitles") or []
     assert any("vs t_factor" in t for t in cdp_titles), cdp_titles
+    # an outside review: a view's face count and a metric's unit, tampered in the run folder, reached
+    # innerHTML unescaped; rebuilding the report must run none of it
+    from harness.report.html import build_report
+    payload = "<img src=x onerror=\"document.title='PWN'\">"
+    v0 = sorted((tmp_path / "views").glob("0*.json"))[0]
+    view = json.loads(v0.read_text())
+    view["meshes"][0]["nf"] = payload
+    v0.write_text(json.dumps(view))
+    meta = json.loads((tmp_path / "run.json").read_text())
+    for m in meta["tasks"]["geodesics"]["metrics"]:
+        m["unit"] = payload
+    (tmp_path / "run.json").write_text(json.dumps(meta))
+    build_report(tmp_path)
+    s = check_report_in_browser(tmp_path / "report.html", interact=False)
+    assert s["title"] != "PWN" and s["foreign_requests"] == [] and s["exceptions"] == [], (s["title"], s["foreign_requests"])
+    assert s["view3d"] == "ready"
 
 
 def _write_rows(path, rows):

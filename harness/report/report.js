@@ -901,7 +901,7 @@
     v.meshes.forEach(function (m, j) {
       var cv = el('canvas', {width: Math.round(size * dpr), height: Math.round(size * dpr),
         style: 'width:' + size + 'px;height:' + size + 'px'});
-      var capHtml = '<b>' + esc(m.label) + '</b> — ' + m.nf.toLocaleString('en') + ' faces' + (m.note ? ' (' + esc(m.note) + ')' : '') +
+      var capHtml = '<b>' + esc(m.label) + '</b> — ' + esc(isNum(m.nf) ? m.nf.toLocaleString('en') : String(m.nf)) + ' faces' + (m.note ? ' (' + esc(m.note) + ')' : '') +
         '<br>' + esc(m.what) + (isNum(m.emean) ? '<br>mean ' + fmt(m.emean, 3) + (m.signed && isNum(m.eminv) ?
           ', min ' + fmt(m.eminv, 3) : '') + ', max ' + fmt(m.emaxv, 3) : '');
       var cap = el('figcaption', {html: capHtml});
@@ -1100,8 +1100,8 @@
       plots.appendChild(el('h4', {text: 'Best method per mesh, noise level' + (axes ? ' and setting' : '') + ' by ' + key +
         ' (mean over seeds)'}));
       plots.appendChild(bt);
-      var panels = panelGroup(plots, key + ' vs time, per mesh' + (axes ? ' and setting' : ''), 'One point per case; ' + m.better +
-        ' is better' + (m.unit ? ' (' + m.unit + ')' : '') + '.', function () { return legend(d.variants, d.colors, hidden, render); });
+      var panels = panelGroup(plots, key + ' vs time, per mesh' + (axes ? ' and setting' : ''), 'One point per case; ' + esc(m.better) +
+        ' is better' + (m.unit ? ' (' + esc(m.unit) + ')' : '') + '.', function () { return legend(d.variants, d.colors, hidden, render); });
       groupBy(vis.filter(function (r) { return isNum(r.time_s); }), function (r) {
         return r.mesh + ' · ' + r._noise + (r._axis ? ' · ' + r._axis : '');        // one panel per setting (e.g. k)
       }).forEach(function (rs, title) {
