@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -143,8 +144,29 @@ def _eval_id(e: dict, task: str, seen: set) -> str:
         i += 1
 
 
-def _label(path: Path, labels, i) -> str:
-    return labels[i] if labels and i < len(labels) else path.stem
+def _label(path: Path, labels, i) -> str | None:
+    return labels[i] if labels and i < len(labels) else None
+
+
+def default_labels(paths: list) -> list[str]:
+    """Each result file's label when none is given: its name without the extension, or, where
+    other files of one eval share that name (``toolA/out.obj``, ``toolB/out.obj``), the fewest
+    trailing folders that tell them apart (``toolA/out``, ``toolB/out``): a label, and so a case
+    id, that does not depend on the order the files were given in."""
+    paths = [Path(p) for p in paths]
+    parts = [Path(os.path.abspath(p)).with_suffix("").parts[1:] for p in paths]     # no root
+    out = [p.stem for p in paths]
+    for stem in {s for s in out if out.count(s) > 1}:
+        group = [i for i, s in enumerate(out) if s == stem]
+        if len({parts[i] for i in group}) < 2:
+            continue                            # one file given twice: the same label
+        depth = max(len(parts[i]) for i in group)
+        for n in range(2, depth + 1):
+            if len({parts[i][-n:] for i in group}) == len({parts[i] for i in group}):
+                break
+        for i in group:
+            out[i] = "/".join(parts[i][-n:])
+    return out
 
 
 def eval_files(clean, results, out, noisy=None, task: str | None = None, labels=None,
@@ -192,6 +214,8 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
                 P.append(f"{p}: {why}")
     if P:                                        # every problem at once, nothing written
         raise problems_error(list(dict.fromkeys(P)))
+    auto = default_labels([e["file"] for e in entries])
+    entries = [e if e.get("label") else {**e, "label": auto[i]} for i, e in enumerate(entries)]
     rows: list[tuple[dict, bool]] = []          # each file's row, and whether its task was given
     cleans: dict = {}
     seen_ids: set = set()

@@ -366,3 +366,28 @@ def test_eval_takes_the_runs_hausdorff_eps(tmp_path):
     assert tight["hausdorff"] <= tight["hausdorff_upper"] <= loose["hausdorff_upper"]
     assert cli(["eval", str(PAIR / "Noisy.obj"), "--clean", str(PAIR / "Original.obj"), "--hausdorff-eps", "2",
                 "--out", str(tmp_path / "o")]) == 2 and not (tmp_path / "o").exists()
+
+
+def test_results_sharing_a_file_name_are_labelled_by_their_folders_in_any_order(tmp_path):
+    """An outside review: ``toolA/out.obj`` and ``toolB/out.obj`` were both labelled ``out`` and
+    the second got the next free id, so two evals of the same files in another order swapped
+    ids and compare saw 10 regressions. Their labels are now ``toolA/out`` and ``toolB/out``."""
+    import shutil
+
+    from harness.scoring import default_labels
+    clean = str(PAIR / "Original.obj")
+    for tool in ("toolA", "toolB"):
+        (tmp_path / tool).mkdir()
+    shutil.copy(PAIR / "Noisy.obj", tmp_path / "toolA" / "out.obj")
+    m = read_mesh(PAIR / "Noisy.obj")
+    from harness.mesh import write_obj
+    write_obj(tmp_path / "toolB" / "out.obj", m.V * 0.999 + 0.001 * m.V.mean(axis=0), m.F)
+    a, b = [str(tmp_path / t / "out.obj") for t in ("toolA", "toolB")]
+    assert cli(["eval", a, b, "--clean", clean, "--out", str(tmp_path / "ab")]) == 0
+    assert cli(["eval", b, a, "--clean", clean, "--out", str(tmp_path / "ba")]) == 0
+    dfs = [pd.read_csv(tmp_path / d / "smoothing.csv").set_index("method") for d in ("ab", "ba")]
+    assert sorted(dfs[0].index) == ["toolA/out", "toolB/out"]
+    assert (dfs[0].loc[["toolA/out", "toolB/out"], "case_id"] == dfs[1].loc[["toolA/out", "toolB/out"], "case_id"]).all()
+    assert cli(["compare", str(tmp_path / "ab"), str(tmp_path / "ba"), "--no-time"]) == 0
+    assert default_labels(["x/a/r.obj", "y/a/r.obj", "z/q.ply"]) == ["x/a/r", "y/a/r", "q"]
+    assert default_labels(["x/r.obj", "x/r.obj"]) == ["r", "r"]            # one file twice: one label
