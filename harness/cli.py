@@ -453,6 +453,10 @@ def _main(argv) -> int:
         except (OSError, ValueError):
             pass
         return 0
+    except OSError as exc:               # a file that cannot be written or read (permissions, a folder in its place)
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"shootout: {where}{exc.strerror or exc}", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

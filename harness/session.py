@@ -15,7 +15,7 @@ from pathlib import Path
 
 from . import tasks
 from .config import Config, load_config
-from .errors import ShootoutError, check_interrupt, problems_error
+from .errors import RunInterrupted, ShootoutError, check_interrupt, problems_error
 from .executors import EXECUTORS, make_executor
 from .mesh import write_ply
 from .provenance import code_hash, git_commit, git_dirty, machine_info, now_iso, package_versions, usable_cpus
@@ -591,7 +591,9 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         folder.remove_temporaries()
         if exc.errno in NO_ROOM:
             raise DiskFull(_no_room(exc, out_dir)) from None
-        raise
+        raise RunInterrupted(f"{exc.filename or out_dir}: {exc.strerror or exc}: the run could not write its "
+                             "files (was the run folder changed while it ran?); the rows written so far are kept: "
+                             "mend it and run again with --resume") from None
     except BaseException:
         meta["status"] = "interrupted"        # never 'finished' when something escaped the executor
         raise
@@ -622,7 +624,11 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
             session["fixed_cost_per_case_s"] = meta["fixed_cost_per_case_s"]
         elif prev_meta and isinstance(prev_meta.get("fixed_cost_per_case_s"), dict):
             meta["fixed_cost_per_case_s"] = prev_meta["fixed_cost_per_case_s"]   # the last session that ran cases
-        meta.update(finished=session["finished"], status_counts=folder.status_counts(),
+        try:
+            on_disk = folder.status_counts()
+        except (OSError, ShootoutError):       # a CSV that cannot be read now: this session's counts
+            on_disk = counts
+        meta.update(finished=session["finished"], status_counts=on_disk,
                     status_counts_this_session=counts, sessions=prev_sessions + [session],
                     wall_s=round(wall + sum(x.get("wall_s") or 0 for x in prev_sessions), 3))
         try:

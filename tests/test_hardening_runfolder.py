@@ -617,6 +617,42 @@ def test_a_short_write_leaves_no_part_row_and_a_torn_quoted_row_is_not_kept(tmp_
     assert p.read_bytes() == whole                              # nothing of the new row is left
 
 
+def test_a_csv_that_cannot_be_written_interrupts_the_run_with_a_message(tmp_path, monkeypatch):
+    """An outside review: a folder put in place of smoothing.csv mid-run was two chained
+    tracebacks (the write, then the status count of the unreadable CSV) and run.json stayed
+    'running'. It is a message naming the file (exit 1), run.json 'interrupted', and the run
+    resumes once mended; `shootout report` where report.html cannot be replaced is a message too."""
+    import harness
+    from harness.errors import RunInterrupted
+    from harness.results import RunFolder
+    out = tmp_path / "o"
+    real = RunFolder.append
+    seen = []
+
+    def append(self, task, row):
+        seen.append(row["case_id"])
+        if len(seen) == 2:                      # the second row: the CSV is a folder now
+            p = self.csv_path(task)
+            p.rename(p.with_name("moved.csv"))
+            p.mkdir()
+        return real(self, task, row)
+    monkeypatch.setattr(RunFolder, "append", append)
+    with pytest.raises(RunInterrupted, match="smoothing.csv: Is a directory: the run could not write its files"):
+        harness.run({**SMALL, "name": "x"}, out=out, quiet=True, workers=1)
+    assert json.loads((out / "run.json").read_text())["status"] == "interrupted"
+    monkeypatch.setattr(RunFolder, "append", real)
+    (out / "smoothing.csv").rmdir()
+    (out / "moved.csv").rename(out / "smoothing.csv")
+    harness.run({**SMALL, "name": "x"}, out=out, quiet=True, workers=1, resume=True)
+    assert json.loads((out / "run.json").read_text())["status"] == "finished"
+    assert len(pd.read_csv(out / "smoothing.csv")) == 2
+    (out / "report.html").unlink()
+    (out / "report.html").mkdir()
+    (out / "report.html" / "keep").write_text("x")
+    r = cli(["report", out])
+    assert r.returncode == 1 and "Traceback" not in r.stderr and "report.html" in r.stderr, r.stderr[-600:]
+
+
 def test_a_carriage_return_in_a_label_survives_every_csv_the_run_writes(tmp_path):
     """A review of plan.csv: a bare \\r in a mesh label (a file name may hold one) was written
     unquoted, so readers split the row there: plan.csv, and the task CSVs before it, were then
