@@ -470,7 +470,11 @@ def _check_meshes(meshes, base_dir: Path, P: list, key: str = "meshes") -> list[
                     P.append(f"{at}.{k}: {f} {missing_file_problem(path)}")
                     continue
                 if not path.is_file():
-                    P.append(f"{at}.{k}: file not found: {f} (relative paths are resolved against {base_dir})")
+                    if path.exists() or path.is_symlink():     # a pipe, a device, a dangling or looping link
+                        why = missing_file_problem(path) if path.exists() else "is a symbolic link to nothing readable"
+                        P.append(f"{at}.{k}: {f} {why}")
+                    else:
+                        P.append(f"{at}.{k}: file not found: {f} (relative paths are resolved against {base_dir})")
                     continue
                 if path.suffix.lower() not in SUPPORTED:
                     P.append(f"{at}.{k}: unsupported extension {yaml_input.short(path.suffix)} of {f}; expected one of {list(SUPPORTED)}")

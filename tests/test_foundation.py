@@ -175,6 +175,16 @@ def test_a_pipe_given_as_a_mesh_is_not_called_missing(tmp_path):
     os.mkfifo(tmp_path / "scan.obj")
     assert missing_file_problem(tmp_path / "scan.obj").startswith("is not a regular file")
     assert missing_file_problem(tmp_path / "nothing.obj") == "no such file"
+    # in a config too (a review: a pipe and a looping link were "file not found")
+    from harness.config import load_config
+    from harness.errors import ConfigError
+    (tmp_path / "loop.obj").symlink_to(tmp_path / "loop.obj")
+    with pytest.raises(ConfigError) as e:
+        load_config({"meshes": [{"file": str(tmp_path / n)} for n in ("scan.obj", "loop.obj", "none.obj")],
+                     "tasks": {"smoothing": {"methods": ["scratch.explicit"]}}})
+    msg = str(e.value)
+    assert "scan.obj is not a regular file" in msg and "loop.obj is a symbolic link to nothing readable" in msg
+    assert "file not found: " + str(tmp_path / "none.obj") in msg and msg.count("file not found") == 1
 
 
 # ----------------------------------------------------------------------------- noise
