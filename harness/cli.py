@@ -99,6 +99,9 @@ def _cmd_run(a) -> int:
     from .results import out_dir_problems
     from .session import run_args_problems
     P = run_args_problems(a.workers, a.timeout, a.executor, a.scheduler)   # every problem, then one message
+    if a.out is not None and not a.out.strip():
+        P.append("--out: an empty path; give the run folder, or leave --out out for results/<name>")
+        a.out = None
     try:
         check_output_file(a.export_benchmark_json, "--export-benchmark-json", protect=[a.config], kind="json")
     except ShootoutError as exc:

@@ -180,6 +180,7 @@ def eval_files(clean, results, out, noisy=None, task: str | None = None, labels=
     P = [p.replace("--target_faces", "--target-faces").replace("--target_ratio", "--target-ratio") for p in P]
     if labels and len(labels) != len(results):
         P.append(f"--label: {len(labels)} label(s) for {len(results)} result file(s)")
+
     if task == "smoothing" and (target_faces is not None or target_ratio is not None):
         P.append("--target-faces, --target-ratio: a smoothing result has no target (drop them, or --task simplification)")
     entries = [{"file": r, "clean": Path(clean), "noisy": Path(noisy) if noisy else None, "task": task,
@@ -200,6 +201,8 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
     ``problems`` (the caller's) join this function's in one `problems_error`, nothing written."""
     from . import datasets
     from .report import build_report
+    if not str(out).strip():                 # Path("") would be the current folder
+        raise problems_error(list(problems) + ["--out: an empty path; give the folder to write"])
     out = Path(out)
     folder = RunFolder(out)
     P = list(problems) + out_dir_problems(out)   # nothing of the user's is replaced or deleted

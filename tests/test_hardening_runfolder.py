@@ -669,3 +669,17 @@ def test_a_carriage_return_in_a_label_survives_every_csv_the_run_writes(tmp_path
     assert load_csv(folder.csv_path("smoothing"))["mesh"].tolist() == [row["mesh"], "plain"]
     folder.write_plan([row])
     assert [r["mesh"] for r in folder.read_plan()] == [row["mesh"]]
+
+
+def test_an_empty_out_is_refused_not_taken_for_the_default(tmp_path, capsys, monkeypatch):
+    """An outside review: ``--out ""`` ran into results/<name> (run) or the current folder (eval)."""
+    from harness.cli import main
+    monkeypatch.chdir(tmp_path)
+    cfg = write_cfg(tmp_path / "c.yaml", SMALL)
+    bunny = str(ROOT / "harness" / "data" / "meshes" / "bunny.obj")
+    assert main(["run", str(cfg), "--out", "", "--workers", "0"]) == 2
+    err = capsys.readouterr().err
+    assert "--out: an empty path" in err and "--workers" in err              # with the other problems
+    assert main(["eval", bunny, "--clean", bunny, "--out", " "]) == 2
+    assert "--out: an empty path" in capsys.readouterr().err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.yaml"]
