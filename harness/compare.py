@@ -101,6 +101,8 @@ class Rule:
     kind: str            # lower | higher | one | true | false | count | target | info | input
     rel: float = 0.01
     abs: float = 0.0
+    se: str = ""         # a sampled metric's standard-error column (`harness.tasks.base.Metric`)
+    se_z: float = 3.0
 
 
 COMMON_RULES = {"n_vertices": Rule("input"), "n_faces": Rule("input"), "peak_rss_mb": Rule("info")}
@@ -111,7 +113,8 @@ def rules_from_specs(specs: dict) -> dict[str, dict[str, Rule]]:
     out = {}
     for task, spec in (specs or {}).items():
         try:
-            out[task] = {m["name"]: Rule(m.get("better", "info"), float(m.get("rel", 0.01)), float(m.get("abs", 0.0)))
+            out[task] = {m["name"]: Rule(m.get("better", "info"), float(m.get("rel", 0.01)), float(m.get("abs", 0.0)),
+                                         str(m.get("se") or ""), float(m.get("se_z", 3.0)))
                          for m in spec.get("metrics", [])}
         except (AttributeError, KeyError, TypeError, ValueError):
             continue
@@ -148,7 +151,9 @@ def _blank(v) -> bool:
 
 
 def judge(metric: str, a, b, row_a=None, row_b=None, rule: Rule | None = None) -> str:
-    """'regression' | 'improvement' | 'changed' (beyond tolerance, no direction) | 'same' (within it)."""
+    """'regression' | 'improvement' | 'changed' (beyond tolerance, no direction) | 'same' (within it).
+    The tolerance is ``max(rel * |a|, abs)``, and for a sampled metric (``rule.se``) at least
+    ``se_z`` times the two rows' combined standard error."""
     rule = rule or rule_for(metric, (row_b or row_a or {}).get("task"))
     if _blank(a) and _blank(b):
         return "same"
@@ -190,6 +195,10 @@ def judge(metric: str, a, b, row_a=None, row_b=None, rule: Rule | None = None) -
             return "same"
         return "regression" if (y > x) == (rule.kind in ("lower", "one")) else "improvement"
     tol = max(rule.rel * abs(x), rule.abs)
+    if rule.se:                  # a sampled metric: within SE_Z combined standard errors is the same
+        sa, sb = _num((row_a or {}).get(rule.se)), _num((row_b or {}).get(rule.se))
+        if sa is not None and sb is not None and math.isfinite(sa) and math.isfinite(sb):
+            tol = max(tol, rule.se_z * math.hypot(sa, sb))
     worse = (y - x) if rule.kind in ("lower", "one") else (x - y)
     if worse > tol:
         return "regression"

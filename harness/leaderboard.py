@@ -302,14 +302,15 @@ def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_para
 
 WINNER_COLUMNS = ["task", "metric", "better", "mesh", "noise_model", "noise_level", "setting", "best", "value",
                   "tied_with_best", "runner_up", "runner_up_value", "tied_with_runner_up", "input_value", "variants",
-                  "invalid_excluded"]
+                  "invalid_excluded", "seeds"]
 
 
 def winners(frames: dict, specs: dict) -> pd.DataFrame:
     """Per task, ranking metric and cell: the best valid variant, the variants tied with it
     (``tied_with_best``, comma-separated: within the metric's tolerance of its mean over seeds,
     `tie_groups`, or, with several seeds, not worse than the best beyond that tolerance on every
-    seed they share) and the runner-up, the best variant outside that tie (invalid results are excluded and counted in
+    seed they share; for a sampled metric the tolerance on a seed is at least ``SE_Z`` times the
+    two values' combined standard error) and the runner-up, the best variant outside that tie (invalid results are excluded and counted in
     ``invalid_excluded``); ``input_value``: the metric of the case's input where the task
     measures it (``input_<metric>``, e.g. smoothing's noisy input), else blank."""
     rows = []
@@ -322,6 +323,9 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
                 continue
             vals, inval = cell_values(spec, df, m["name"], axis, cells)
             per_seed = seed_values(spec, df, m["name"], axis, cells)
+            se_col = m.get("se")                  # a sampled metric: its standard error per seed
+            per_seed_se = (seed_values(spec, df, se_col, axis, cells) if se_col and se_col in df else None)
+            se_z = float(m.get("se_z", 3.0))
             rel, abs_ = tolerance(spec, m["name"])
             given = f"input_{m['name']}"
             inputs = (cell_values(spec, df, given, axis, cells)[0].mean(axis=1) if given in df
@@ -330,6 +334,7 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
                 iv = inputs.get(cell)
                 iv = None if iv is None or pd.isna(iv) else float(iv)
                 ok = v[~inval.loc[cell] & v.notna()]
+                n_seeds = int((per_seed.index.get_level_values(0) == cell).sum())   # the noise draws of the cell
                 mesh, noise, level, setting = cell.split(CELL_SEP, 3)
                 if ok.empty:
                     if inval.loc[cell].any():      # every result invalid: said, not left out
@@ -338,11 +343,14 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
                                      "setting": "" if setting == "{}" else setting, "best": "", "value": None,
                                      "tied_with_best": "", "runner_up": "", "runner_up_value": None,
                                      "tied_with_runner_up": "", "input_value": iv,
-                                     "variants": int(v.notna().sum()), "invalid_excluded": int(inval.loc[cell].sum())})
+                                     "variants": int(v.notna().sum()), "invalid_excluded": int(inval.loc[cell].sum()),
+                                     "seeds": n_seeds})
                     continue
                 order = ok.sort_values(ascending=m["better"] == "lower", kind="stable")
                 sign = -1.0 if m["better"] == "higher" else 1.0
                 S = per_seed.loc[cell] if cell in per_seed.index.get_level_values(0) else None
+                if S is not None and per_seed_se is not None and cell in per_seed_se.index.get_level_values(0):
+                    S = (S, se_z * per_seed_se.loc[cell])
                 tie = _tied_with_first(order, S, sign, rel, abs_)
                 rest = order[[v for v in order.index[1:] if v not in tie]]
                 second = _tied_with_first(rest, S, sign, rel, abs_) if len(rest) else []
@@ -353,7 +361,8 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
                              "runner_up": rest.index[0] if len(rest) else "",
                              "tied_with_runner_up": ", ".join(str(x) for x in second),
                              "runner_up_value": float(rest.iloc[0]) if len(rest) else None, "input_value": iv,
-                             "variants": int(v.notna().sum()), "invalid_excluded": int(inval.loc[cell].sum())})
+                             "variants": int(v.notna().sum()), "invalid_excluded": int(inval.loc[cell].sum()),
+                             "seeds": n_seeds})
     return pd.DataFrame(rows, columns=WINNER_COLUMNS)
 
 
@@ -367,7 +376,10 @@ def _tied_with_first(order: pd.Series, S, sign: float, rel: float, abs_: float) 
 
 def _beaten_on_every_seed(S, best, other, sign: float, rel: float, abs_: float) -> bool:
     """Whether ``best`` is better than ``other`` beyond the tolerance on every seed both have
-    (``S``: seeds x variants); True without a shared seed (the means decide)."""
+    (``S``: seeds x variants, or, for a sampled metric, that and ``SE_Z`` times its standard
+    errors, which widen the tolerance to ``SE_Z sqrt(se_a^2 + se_b^2)`` where larger); True
+    without a shared seed (the means decide)."""
+    S, E = S if isinstance(S, tuple) else (S, None)
     if S is None or best not in S or other not in S:
         return True
     a, b = S[best], S[other]
@@ -375,7 +387,11 @@ def _beaten_on_every_seed(S, best, other, sign: float, rel: float, abs_: float) 
     if not both.any():
         return True
     gap = sign * (b[both] - a[both])
-    return bool((gap > np.maximum(rel * a[both].abs(), abs_)).all())
+    tol = np.maximum(rel * a[both].abs(), abs_)
+    if E is not None and best in E and other in E:
+        ea, eb = E[best].reindex(a.index)[both], E[other].reindex(a.index)[both]
+        tol = np.maximum(tol, np.hypot(ea, eb).fillna(0.0))
+    return bool((gap > tol).all())
 
 
 def _best(r) -> str:
@@ -409,8 +425,24 @@ def winners_markdown(w: pd.DataFrame) -> str:
                 for r in g.itertuples()]
         if inp:
             out.append(f"\ninput: {metric} of the case's input itself; a result worse than it made the input worse.")
+        out.append(_seeds_note(g))
         out.append("")
     return "\n".join(out)
+
+
+def _seeds_note(g: pd.DataFrame) -> str:
+    """What the cells' winners rest on: how many noise draws (seeds), said plainly when one."""
+    noisy = g[g["noise_model"].astype(str) != "none"]
+    if not len(noisy) or "seeds" not in noisy:
+        return ""
+    n = pd.to_numeric(noisy["seeds"], errors="coerce").dropna()
+    if not len(n):
+        return ""
+    lo, hi = int(n.min()), int(n.max())
+    said = f"{lo}" if lo == hi else f"{lo}-{hi}"
+    one = (" A winner from one seed is one noise draw's: another draw may name another method (run more seeds, "
+           "`noise: [{..., seeds: N}]`).") if lo == 1 else ""
+    return f"\nNoisy cells rest on {said} noise seed(s) each.{one}"
 
 
 def winners_latex(w: pd.DataFrame) -> str:

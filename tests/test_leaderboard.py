@@ -496,3 +496,31 @@ def test_a_row_whose_params_are_not_json_is_labelled_not_a_crash(tiny_run):
     L.leaderboard({"smoothing": df}, specs)
     L.winners({"smoothing": df}, specs)
     assert L.variant_labels(df)[0].startswith(df["method"].iloc[0])
+
+
+def test_a_sampled_metric_ties_within_three_standard_errors_and_seeds_are_said():
+    """An outside review: surface_dist_mean (20,000 random points per side) named a sole winner
+    1.5% ahead while each value's standard error was 0.5%, and one extra sample point made
+    compare call it a regression. Within 3 combined standard errors is now a tie (winners) and
+    the same (compare); the winners say how many noise seeds each cell rests on."""
+    from harness import tasks
+    from harness.compare import judge, rules_from_specs
+    spec = tasks.get("simplification").spec()
+    assert [m for m in spec["metrics"] if m["name"] == "surface_dist_mean"][0]["se"] == "surface_dist_mean_se"
+    rows = []
+    for mesh, se in (("wide", 0.005), ("narrow", 0.0001)):
+        for m, v in (("a.qem", 1.0), ("b.qem", 1.015)):
+            rows.append({"mesh": mesh, "noise_model": "gaussian_normal", "noise_level": 0.3, "seed": 0, "method": m,
+                         "params": json.dumps({"target_ratio": 0.5}), "status": "ok", "surface_dist_mean": v,
+                         "surface_dist_mean_se": se * v, "hausdorff": v, "target_faces": 10, "out_faces": 10})
+    df = pd.DataFrame(rows)
+    w = L.winners({"simplification": df}, {"simplification": spec})
+    w = w[w.metric == "surface_dist_mean"].set_index("mesh")
+    assert w.loc["wide", "tied_with_best"].startswith("b.qem") and w.loc["narrow", "tied_with_best"] == ""
+    assert (w["seeds"] == 1).all()
+    assert "rest on 1 noise seed(s) each" in L.winners_markdown(w.reset_index())
+    rule = rules_from_specs({"simplification": spec})["simplification"]["surface_dist_mean"]
+    a, b = rows[0], rows[1]
+    assert judge("surface_dist_mean", 1.0, 1.015, a, b, rule=rule) == "same"            # 1.5% < 3 x 0.71%
+    a, b = rows[2], rows[3]
+    assert judge("surface_dist_mean", 1.0, 1.015, a, b, rule=rule) == "regression"      # SE 0.01%: a change

@@ -509,3 +509,46 @@ def test_no_critical_difference_is_drawn_where_the_friedman_test_does_not_reject
     s = check_report_in_browser(tmp_path / "report.html", interact=False)
     assert s["cdDiagrams"] >= 1 and s["cdCliques"] == 0
     assert any("does not reject" in t for t in s["cdLabels"]) and not any(t.startswith("CD = ") for t in s["cdLabels"])
+
+
+def test_the_report_ties_a_sampled_metric_within_three_standard_errors_as_winners_csv(tmp_path):
+    """surface_dist_mean is sampled: two methods 1.5% apart with 0.5% standard errors tie in the
+    report's table as in winners.csv; with 0.01% standard errors they do not."""
+    import csv
+
+    import pandas as pd
+
+    import harness
+    from harness.cli import main
+    cfg = {"name": "setie", "repeats": 1, "time_budget": 0, "meshes": ["bunny"], "hausdorff_samples": 500,
+           "noise": [{"model": "gaussian_normal", "levels": [0.3]}],
+           "tasks": {"simplification": {"methods": ["libigl.qslim", "scratch.qem"],
+                                        "params": {"target_ratio": [0.5]}}}}
+    harness.run(cfg, out=tmp_path, quiet=True, workers=1)
+    path = tmp_path / "simplification.csv"
+    rows = list(csv.DictReader(path.open()))
+    assert len(rows) == 2 and all(r["status"] == "ok" for r in rows)
+    for se, tied in ((0.005, True), (0.0001, False)):
+        for r in rows:
+            v = 0.01 if r["method"] == "libigl.qslim" else 0.01015
+            r.update(surface_dist_mean=repr(v), surface_dist_mean_se=repr(se * v))
+        _write_rows(path, rows)
+        assert main(["report", str(tmp_path)]) == 0
+        win = pd.read_csv(tmp_path / "winners.csv", keep_default_na=False)
+        win = win[win.metric == "surface_dist_mean"].iloc[0]
+        assert win.best == "libigl.qslim" and win.invalid_excluded == 0 and (win.tied_with_best == "scratch.qem") == tied, win
+        cdp = CDP(tmp_path)
+        try:
+            cdp.open((tmp_path / "report.html").resolve().as_uri())
+            deadline = time.monotonic() + 30
+            while cdp.eval("document.body && document.body.dataset.ready") != "1":
+                assert time.monotonic() < deadline, "the report never set data-ready"
+                cdp.pump(0.2)
+            best = cdp.eval("""(() => {
+                const s = document.querySelector('#plots-simplification select');
+                s.value = 'surface_dist_mean'; s.dispatchEvent(new Event('change'));
+                return [...document.querySelectorAll('#plots-simplification table.best tr')].slice(1)
+                    .map(r => r.textContent); })()""")
+        finally:
+            cdp.close()
+        assert len(best) == 1 and "libigl.qslim" in best[0] and ("(tied: scratch.qem)" in best[0]) == tied, best

@@ -277,27 +277,37 @@
   }
   // the compare tolerance the task declares for a metric (as the leaderboard and winners.csv use it):
   // a value within max(rel * |best|, abs) of the best ties with it
+  // ([2], [3]: a sampled metric's standard-error column and how many combined standard errors tie on a seed)
   function tolOf(spec, key) {
     var m = ((spec || {}).metrics || []).filter(function (x) { return x.name === key; })[0];
-    return [m && isNum(m.rel) ? m.rel : 0.01, m && isNum(m.abs) ? m.abs : 0];
+    return [m && isNum(m.rel) ? m.rel : 0.01, m && isNum(m.abs) ? m.abs : 0, (m && m.se) || '',
+      m && isNum(m.se_z) ? m.se_z : 3];
   }
   function ties(a, best, tol) { return Math.abs(a - best) <= Math.max(tol[0] * Math.abs(best), tol[1]); }
   // with several seeds, a variant ties with the best unless the best is better beyond the tolerance on
   // every seed both have (as winners.csv); rows: the cell's rows, one per variant and seed
+  // (a sampled metric: the tolerance on a seed is at least se_z times the two values' combined standard error)
   function beatenOnEverySeed(rows, best, v, key, tol, lower) {
-    var a = new Map(), b = new Map(), n = 0, all = true;
-    var add = function (m, s, x) { var c = m.get(s) || [0, 0]; c[0] += x; c[1]++; m.set(s, c); };  // mean per seed
+    var a = new Map(), b = new Map(), n = 0, all = true, se = tol[2];
+    var add = function (m, s, x, e) {                  // mean per seed, of the value and of its standard error
+      var c = m.get(s) || [0, 0, 0, 0]; c[0] += x; c[1]++;
+      if (isNum(e)) { c[2] += e; c[3]++; }
+      m.set(s, c);
+    };
     rows.forEach(function (r) {
       if (!isNum(r[key])) return;
       var s = r.seed === undefined || r.seed === null ? '' : String(r.seed);
-      if (r._variant === best) add(a, s, r[key]); else if (r._variant === v) add(b, s, r[key]);
+      var e = se ? r[se] : null;
+      if (r._variant === best) add(a, s, r[key], e); else if (r._variant === v) add(b, s, r[key], e);
     });
     a.forEach(function (ca, s) {
       if (!b.has(s)) return;
       n++;
       var va = ca[0] / ca[1], cb = b.get(s), vb = cb[0] / cb[1];
       var gap = lower ? vb - va : va - vb;
-      if (!(gap > Math.max(tol[0] * Math.abs(va), tol[1]))) all = false;
+      var t = Math.max(tol[0] * Math.abs(va), tol[1]);
+      if (se && ca[3] && cb[3]) t = Math.max(t, tol[3] * Math.hypot(ca[2] / ca[3], cb[2] / cb[3]));
+      if (!(gap > t)) all = false;
     });
     return n === 0 || all;
   }
@@ -362,7 +372,8 @@
   }
   function tiedNote(names) { // ' (tied: a, b)', or ' (tied: 5 others)' with the names on hover
     if (!names.length) return '';
-    return ' <span class="muted" title="within the metric\'s tolerance of the best, or not beaten on every seed: ' +
+    return ' <span class="muted" title="within the metric\'s tolerance of the best, or not beaten on every seed ' +
+      '(a sampled metric: beyond 3 combined standard errors): ' +
       esc(names.join(', ')) +
       '">(tied: ' + (names.length <= 2 ? esc(names.join(', ')) : names.length + ' others') + ')</span>';
   }

@@ -22,6 +22,9 @@ COMMON_COLUMNS = ["case_id", "task", "mesh", "n_vertices", "n_faces", "noise_mod
 BETTER = ("lower", "higher", "one", "true", "false", "count", "target", "info", "input")
 
 
+SE_Z = 3.0      # a sampled metric's values differ only beyond SE_Z combined standard errors (`Metric.se`)
+
+
 @dataclass(frozen=True)
 class Metric:
     """One result column.
@@ -32,7 +35,9 @@ class Metric:
     case's input, not the result). ``rel``/``abs``: the compare tolerance, a change counts when
     it exceeds ``max(rel * |a|, abs)``. ``unit``: ``diag`` (fraction of the clean mesh's
     bounding-box diagonal), ``deg``, ``s``, ``MiB`` or empty. ``kind``: ``float``, ``int``,
-    ``bool`` or ``json`` (a JSON-encoded list).
+    ``bool`` or ``json`` (a JSON-encoded list). ``se``: for a sampled metric, the column of its
+    standard error: two values also count as the same (compare, ties of the winners) while they
+    differ by at most ``SE_Z`` = 3 times their combined standard error ``sqrt(se_a^2 + se_b^2)``.
     """
 
     name: str
@@ -43,14 +48,18 @@ class Metric:
     abs: float = 0.0
     kind: str = "float"
     rank: bool = False          # offered as a ranking metric in the report
+    se: str = ""                # the column of its standard error (a sampled metric), or ""
 
     def __post_init__(self):
         if self.better not in BETTER:
             raise ValueError(f"metric {self.name}: better must be one of {BETTER}, got {self.better!r}")
 
     def spec(self) -> dict:
-        return {"name": self.name, "better": self.better, "doc": self.doc, "unit": self.unit,
-                "rel": self.rel, "abs": self.abs, "kind": self.kind, "rank": self.rank}
+        out = {"name": self.name, "better": self.better, "doc": self.doc, "unit": self.unit,
+               "rel": self.rel, "abs": self.abs, "kind": self.kind, "rank": self.rank}
+        if self.se:
+            out.update(se=self.se, se_z=SE_Z)
+        return out
 
 
 @dataclass(frozen=True)

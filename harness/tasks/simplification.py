@@ -154,7 +154,8 @@ TASK = Task(
                "larger gap); larger when the time or point budget ran out", rel=1.0, abs=1e-3),
         Metric("hausdorff_upper", "info", "certified upper bound of the Hausdorff distance", **_LEN),
         Metric("surface_dist_mean", "lower", "symmetric mean surface distance: average of the two one-sided "
-               "area-weighted means, from hausdorff_samples random points per side", rank=True, **_LEN),
+               "area-weighted means, from hausdorff_samples random points per side", rank=True,
+               se="surface_dist_mean_se", **_LEN),
         Metric("surface_dist_mean_se", "info", "standard error of surface_dist_mean (sampling)", unit="diag"),
         Metric("manifold", "true", "output is edge- and vertex-manifold", kind="bool"),
         Metric("manifold_lost", "false", "the input was manifold and the output is not (an invalid result)",
