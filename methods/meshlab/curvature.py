@@ -3,7 +3,15 @@
 ``meshlab.discrete_curvature``: ``compute_scalar_by_discrete_curvature_per_vertex`` with
 ``Gaussian Curvature`` and ``Mean Curvature`` (VCGLib's discrete operators of Meyer et al. 2003:
 angle defect and cotangent mean curvature over mixed Voronoi areas); pointwise values, H > 0 on a
-sphere with outward normals, as the task's (checked in tests on a sphere and a torus).
+sphere with outward normals, as the task's (checked in tests on a sphere and a torus). Its H is
+the *length* of the mean-curvature vector ``|Hn|``, signed by ``Hn . n``, not the normal
+component ``Hn . n`` of ``scratch.cotan_mean``: the two agree where the vector is along the normal
+and differ most where it is not (up to 0.16 relative on bunny, 0.5 on camelhead, far more on
+noisy meshes; 7.7 against 150 at a bunny vertex whose vector is 88 degrees off the normal), and
+single precision leaves H of order 1e-2 / (mean edge length) at obtuse corners of a flat mesh
+(exactly 0 there). At boundary vertices its K follows another convention than the task's
+``(pi - sum theta) / A`` or libigl's ``(2 pi - sum theta) / A`` (twice the former at a plane's
+corner, unrelated elsewhere). Zero-area faces are refused (their values reach 1e7).
 ``meshlab.principal_curvature``: ``compute_curvature_principal_directions_per_vertex`` with the
 chosen ``method`` (VCGLib's quadric fitting or scale-dependent quadric fitting), reading its two principal values through ``curvcolormethod`` ``Min Curvature`` and
 ``Max Curvature`` (VCGLib's labels do not follow the sign order: the adapter sorts them,
@@ -35,7 +43,13 @@ def _quality(V, ms) -> np.ndarray:
     return out
 
 
+def _refuse_flat(V, F, name) -> None:
+    """``precheck`` of the discrete curvature: no zero-area faces (values reach 1e7 there)."""
+    _no_zero_area(V, F, name, "its mean curvature reaches 1e7 there")
+
+
 @register("meshlab.discrete_curvature", task="curvature", library="pymeshlab", requires=("pymeshlab",),
+          precheck=_refuse_flat,
           cite="Meyer, Desbrun, Schroeder, Barr 2003 (VCGLib discrete curvature)")
 def discrete_curvature(V, F):
     """Gaussian and mean curvature from MeshLab's discrete operators (module docstring)."""
@@ -52,11 +66,11 @@ _SCALED = "Scale Dependent Quadric Fitting"        # the one label that reads ``
 _SCALE = 10.0                                      # its default: percent of the bounding-box diagonal
 
 
-def _no_zero_area(V, F, name) -> None:
+def _no_zero_area(V, F, name, why: str = "VCGLib's principal-curvature filter aborts on them") -> None:
     """``precheck``: VCGLib's principal-curvature filter aborts the process (a double free) on a
-    mesh with zero-area faces."""
+    mesh with zero-area faces, and its discrete curvature is meaningless there."""
     from methods.libigl import refuse_zero_area
-    refuse_zero_area(V, F, name, "VCGLib's principal-curvature filter aborts on them")
+    refuse_zero_area(V, F, name, why)
 
 
 def _scale_read(params) -> str | None:
