@@ -8,9 +8,10 @@ open mesh it uses the Neumann heat solution alone (the lumped barycentric mass),
 average of the Neumann and Dirichlet ones that ``scratch.heat`` and ``libigl.heat`` use by
 default: with ``use_robust`` off it is ``scratch.heat`` with ``boundary: neumann, mass:
 barycentric`` (to 1e-4 of the largest distance on a cylinder and on Delaunay and non-Delaunay
-planes, `tests/test_geodesics.py`; 9e-4 on camelhead); with it on, the nearest setting is
+planes, `tests/test_geodesics.py`; 2e-4 on bunny, 9e-4 on camelhead, 8e-4 on camelhead with
+noise); with it on, the nearest setting is
 ``scratch.heat`` with ``laplacian: tufted, boundary: neumann, mass: barycentric``, which is not
-the same operator (2e-5 to 5e-3 of the largest distance apart on those meshes and woody).
+the same operator (2e-5 to 6e-3 of the largest distance apart on those meshes, woody and noisy ones).
 ``pygeodesic.exact``: ``pygeodesic.geodesic.PyGeodesicAlgorithmExact`` (the exact MMP algorithm
 of Surazhsky et al. 2005, the ``geodesic`` C++ library by Kirsanov), distances to all vertices.
 """

@@ -14,7 +14,10 @@ uniform sums count each neighbour twice and cotangent sums give ``cot a + cot b`
     ``w_ij = cot a_ij + cot b_ij`` (``cotangentweight``, computed in single precision), i.e.
     the vertex itself IS averaged in with weight 1/2 of an edge weight:
     ``x' = x + m_i / (m_i + 1/2) (L x)_i`` with ``m_i = sum_j W_ij`` of the uniform / cotangent
-    ``W``. This equals ``scratch.explicit(step=1, self_weight=0.5)``. Boundary vertices
+    ``W``. This equals ``scratch.explicit(step=1, self_weight=0.5)`` (uniform: to rounding;
+    cotangent: single-precision weights leave 1e-8 to 1e-6 of the diagonal after 5 iterations,
+    growing with them, 6e-4 after 50 on a non-Delaunay plane, and 2e-2 on a mesh with a
+    numerically flat face). Boundary vertices
     (``boundary: true``) average themselves twice with their boundary neighbours only:
     ``x' = (2 x + sum_{boundary nbrs} x_j) / (n_b + 2)``, uniform weights even in cotangent
     mode (``scratch.explicit`` with ``boundary: curve``). ``iterations`` -> ``stepsmoothnum``.
