@@ -10,7 +10,11 @@ Degenerate triangles (policy shared by every operator here)
 A face of zero area (collinear corners or a repeated vertex) contributes nothing: its
 cotangents, its mean-value half-angle tangents and its area are set to 0, so ``W`` and ``M``
 stay finite (the clamping policy of PMP; libigl returns inf/NaN on such faces). Needles
-(tiny but non-zero area) are kept: their weights are large but finite. Edges of zero length
+(tiny but non-zero area) are kept: their weights are large but finite. Zero here means a cross
+product of exactly 0: a numerically flat face (a corner at the rounded midpoint of the opposite
+edge: a cross product of rounding size, 1e-18, and a Heron area of exactly 0, which libigl and
+`harness.core.geometry.zero_area_faces` count as zero-area) is kept as a needle, with weights
+up to ~1e15 that make every solve with the operator ill-conditioned. Edges of zero length
 contribute nothing to the mean value weights (the ``1/|x_i - x_j|`` factor would be inf).
 Unreferenced vertices get an empty row/column (and zero mass).
 

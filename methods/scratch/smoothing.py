@@ -371,7 +371,9 @@ def screened_poisson(V, F, *, alpha=1.0, weights="cotan_area", solver="auto"):
     Poisson equation", SIGGRAPH 2011: minimise ``a^2 |X - X0|_M^2 + |grad X|^2``, whose
     normal equations are the system above. Dividing by ``a^2`` shows it is exactly one
     backward-Euler step with ``h = 1 / a^2``, i.e. ``scratch.implicit`` with
-    ``step = 1 / alpha^2`` and one iteration (tested).
+    ``step = 1 / alpha^2`` and one iteration (tested: equal to rounding; on a mesh with a
+    numerically flat face, whose cotangent weights reach 1e15, the two solves of the same
+    system differ by the conditioning, up to 1e-2 of the diagonal, as two solvers do).
     """
     a2 = float(alpha) ** 2
     if weights == "cotan_area":
