@@ -368,3 +368,15 @@ def test_the_exact_reference_does_not_depend_on_the_mesh_scale():
     for scale, shift in ((1e-6, 0.0), (1e6, 0.0), (1.0, 1e6)):
         D = exact_polyhedral(V * scale + shift, F, src) / scale
         assert np.abs(D - base).max() <= 1e-9 * base.max(), (scale, shift, np.abs(D - base).max() / base.max())
+
+
+def test_a_direct_call_with_an_unreferenced_vertex_says_so():
+    """A review: called from Python on a mesh with a vertex no face uses (a run drops them on
+    loading), scratch.heat failed inside the solver ("Error in computing elimination tree") and
+    scratch.spectrum with "Matrix is not positive definite"; both now name the vertex."""
+    s = datasets.load("knight").clean
+    V = np.r_[s.V, [[9.0, 9.0, 9.0]]]
+    with pytest.raises(ValueError, match=f"1 vertices no face uses \\(first: \\[{len(s.V)}\\]\\)"):
+        methods.get("scratch.heat").func(V, s.F, sources=np.array([0]))
+    with pytest.raises(ValueError, match=f"1 vertices no face uses \\(first: \\[{len(s.V)}\\]\\)"):
+        methods.get("scratch.spectrum").func(V, s.F, k=5)

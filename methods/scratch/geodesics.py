@@ -88,6 +88,10 @@ class HeatSolver:
     def __init__(self, V, F, t_factor=1.0, laplacian="cotan", mass="voronoi", boundary="average", solver="auto"):
         n = len(V)
         self.n = n
+        unused = np.flatnonzero(~referenced(np.asarray(F), n))
+        if unused.size:        # no mass, an empty row: the heat step is singular there
+            raise ValueError(f"{unused.size} vertices no face uses (first: {unused[:5].tolist()}): drop them first "
+                             "(harness.core.geometry.compact)")
         self.l, self.F, W, m, self.C, _ = _operators(V, F, laplacian, mass)
         lone = np.flatnonzero(referenced(np.asarray(F), n) & ~(m > 0))
         if lone.size:          # only on zero-area faces of the triangulation used: an empty row, a singular step

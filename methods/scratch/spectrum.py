@@ -142,6 +142,11 @@ def spectrum(V, F, *, k=20, operator="cotan", mass="voronoi", solver="auto", lin
         if bad.size:
             raise ValueError(f"{bad.size} zero-area face(s) (first: {bad[:5].tolist()}): their cotangents are not "
                              "finite; use operator: intrinsic_delaunay or tufted, or remove them")
+    from harness.core.geometry import referenced
+    unused = np.flatnonzero(~referenced(np.asarray(F), len(V)))
+    if unused.size:                     # no mass there: M is singular and the factorization fails
+        raise ValueError(f"{unused.size} vertices no face uses (first: {unused[:5].tolist()}): they have no mass; "
+                         "drop them first (harness.core.geometry.compact)")
     W, M = operator_and_mass(V, F, operator, mass)
     lam, X = smallest_eigenpairs(W, M, k, solver, linear_solver)
     return SpectrumResult(values=lam, vectors=X, W=W, M=M)
