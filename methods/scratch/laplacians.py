@@ -257,7 +257,11 @@ def intrinsic_delaunay(V, F, *, mass="voronoi"):
     summing to at most pi (`methods.scratch.intrinsic_delaunay`); then cotangent weights
     (Bobenko & Springborn 2007). All interior weights are >= 0 (POS), SYM and LIN hold, but
     flipped edges join vertices that share no mesh edge (LOC fails). Boundary edges are never
-    flipped, so a boundary edge with an obtuse opposite angle keeps a negative weight.
+    flipped, so a boundary edge with an obtuse opposite angle keeps a negative weight; nor is an
+    edge between inconsistently oriented faces, so POS holds on consistently oriented meshes
+    only (10% of a non-Delaunay plane's faces reversed: weights down to -29.5, and libigl's
+    result differs from ours and from its own on the oriented mesh; ``scratch.tufted`` does not
+    depend on the orientation).
     Degenerate faces: a flat (zero-area) triangle has an angle of pi, so its longest edge is
     flipped away when the neighbour allows; remaining zero-area faces contribute 0.
     """
