@@ -144,6 +144,9 @@ def test_property_matrix_and_uniform_note(run_dir):
     assert "weighted Delaunay" in text and "D = diag(1/N" in text
     lin = df[(df.method == "scratch.uniform") & df.lin_error.notna()].lin_error.iloc[0]
     assert f"lin_error = {rh._fmt(lin)}" in text                          # the numbers come from the row
+    worst_loc = int(max(p["LOC"]["worst"] for p in mat.values() if p["LOC"]["worst"] is not None))
+    assert f"max {worst_loc}</span>" in text                                # a count, not 2.14e+03
+    assert "not that its symmetric part is semi-definite" in text
 
 
 def test_views_computed_by_the_session_and_stored_in_the_run_folder(run_dir):

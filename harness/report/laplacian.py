@@ -63,7 +63,9 @@ def _matrix_html(df, defaults=None) -> str:
             size = ""
             if p["worst"] is not None:
                 kind = "min" if lb == "PSD" else "max"
-                size = f"<span class='size'>{kind} {_fmt(p['worst'])}</span>"
+                worst = p["worst"]
+                shown = (str(int(worst)) if lb == "LOC" and float(worst).is_integer() else _fmt(worst))  # a count
+                size = f"<span class='size'>{kind} {shown}</span>"
             if p["fails"] == 0:
                 cells.append(f"<td class='yes' title='{_esc(tip)}'>✓ <small>{p['measured']}/{p['measured']}</small>{size}</td>")
             else:
@@ -74,7 +76,8 @@ def _matrix_html(df, defaults=None) -> str:
             "given number of them. The small number is the worst violation size over the meshes "
             "(<code>sym_error</code>, <code>loc_violations</code>, <code>lin_error</code>, <code>neg_weights</code>, "
             "<code>min_eig</code>); hover a cell for the value on each mesh. Tolerances: SYM 1e-10, LIN 1e-9, "
-            "PSD −1e-10 (relative).</p>")
+            "PSD −1e-10 (relative). For a non-symmetric operator PSD means every eigenvalue of −W has a "
+            "non-negative real part (not that its symmetric part is semi-definite).</p>")
 
 
 def _uniform_note(df) -> str:
