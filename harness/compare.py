@@ -619,6 +619,17 @@ def _change(a, b) -> str:
 ORDER = {"regression": 0, "improvement": 1, "changed": 2, "within tolerance": 3, "inconclusive": 4, "info": 5}
 
 
+def _measurement(meta: dict) -> dict:
+    """A run's measurement settings: run.json's ``measurement``, else its config's keys (an
+    eval's under ``eval``), else the defaults."""
+    got = meta.get("measurement") if isinstance(meta.get("measurement"), dict) else None
+    if got is None:
+        cfg = meta.get("config") if isinstance(meta.get("config"), dict) else {}
+        cfg = cfg.get("eval") if isinstance(cfg.get("eval"), dict) else cfg
+        got = {"hausdorff_samples": cfg.get("hausdorff_samples", 20000), "hausdorff_eps": cfg.get("hausdorff_eps", 1e-3)}
+    return {k: got.get(k) for k in ("hausdorff_samples", "hausdorff_eps") if got.get(k) is not None}
+
+
 def timing_notes(meta_a: dict, meta_b: dict, res: dict) -> list[str]:
     """Why time changes between these two runs may not mean what they seem."""
     notes = []
@@ -703,6 +714,11 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
         print(f"note: not compared, a column only one run's CSV has (another version wrote it?): {cols}"
               + (f" and {len(res['unmatched_columns']) - 8} more" if len(res["unmatched_columns"]) > 8 else ""),
               file=out)
+    ma_, mb_ = _measurement(meta_a), _measurement(meta_b)
+    differ = [f"{k} A {ma_[k]}, B {mb_[k]}" for k in ma_ if k in mb_ and ma_[k] != mb_[k]]
+    if differ:
+        print(f"note: the runs measured with other settings ({'; '.join(differ)}): sampled metrics "
+              "(surface_dist_mean) differ by their sampling too, within their standard errors", file=out)
     if other_rules:
         print(f"note: B declares other rules (direction or tolerance) for {len(other_rules)} metric(s), e.g. "
               f"{', '.join(other_rules[:5])}: A's (the baseline's) are used", file=out)

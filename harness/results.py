@@ -130,7 +130,7 @@ _META_TYPES = {      # run.json's keys and the types its readers rely on
     "name": str, "status": str, "started": str, "finished": str, "command": str, "config_source": str,
     "config_dir": str, "config_hash": str, "git_commit": str, "code_sha256": str, "executor": str, "scheduler": str, "kind": str,
     "config": dict, "machine": dict, "versions": dict, "tasks": dict, "timing": dict, "solver": dict, "tune": dict,
-    "fixed_cost_per_case_s": dict, "status_counts": dict, "method_sources": dict,
+    "fixed_cost_per_case_s": dict, "status_counts": dict, "method_sources": dict, "measurement": dict,
     "workers": int, "n_cases": int, "resumed_ok_cases": int, "wall_s": _NUM, "timeout_s": _NUM,
     "git_dirty": bool, "load_average": list, "sessions": list, "provenance_changed": list,
 }

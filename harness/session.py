@@ -507,6 +507,9 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
             "code_sha256": code_hash(cfg.plugins), "machine": machine_info(),
             "solver": _solver_info(), "command": command, "tasks": task_specs(cfg),
             "method_sources": method_sources(cfg),
+            "measurement": {"hausdorff_samples": cfg.cases[0].hausdorff_samples if cfg.cases else None,
+                            "hausdorff_eps": cfg.cases[0].hausdorff_eps if cfg.cases else None,
+                            "sample_seed": 0},
             "timing": {"threads_per_case": threads, "min_repeats": cfg.repeats,
                        "time_budget_s": cfg.cases[0].time_budget if cfg.cases else None,
                        "protocol": "one untimed cold call on the case's own input (time_cold_s), then samples "

@@ -772,3 +772,21 @@ def test_a_case_label_names_its_seed():
          "params": '{"iterations": 1}'}
     assert _label({**r, "seed": 1}) == "woody gaussian_normal 0.3 seed 1 meshlab.hc[iterations=1]"
     assert _label({**r, "seed": 2}) != _label({**r, "seed": 1}) and "seed" not in _label({**r, "seed": ""})
+
+
+def test_other_measurement_settings_are_noted(tmp_path, capsys):
+    """A review: a rerun with hausdorff_samples 20001 compared case by case with no word that
+    the sampled metrics were sampled otherwise; run.json records the settings, compare notes them."""
+    import harness
+    from harness.compare import compare_runs
+    cfg = {"name": "ms", "repeats": 1, "time_budget": 0, "meshes": ["knight"], "noise": [{"model": "none"}],
+           "tasks": {"simplification": {"methods": ["fast_simplification.qem"], "params": {"target_ratio": [0.5]}}}}
+    harness.run({**cfg, "hausdorff_samples": 500}, out=tmp_path / "a", quiet=True, workers=1)
+    harness.run({**cfg, "hausdorff_samples": 501}, out=tmp_path / "b", quiet=True, workers=1)
+    meta = json.loads((tmp_path / "a" / "run.json").read_text())
+    assert meta["measurement"] == {"hausdorff_samples": 500, "hausdorff_eps": 0.001, "sample_seed": 0}
+    compare_runs(tmp_path / "a", tmp_path / "b", time_factor=None)
+    out = capsys.readouterr().out
+    assert "note: the runs measured with other settings (hausdorff_samples A 500, B 501)" in out, out
+    compare_runs(tmp_path / "a", tmp_path / "a", time_factor=None)
+    assert "other settings" not in capsys.readouterr().out
