@@ -457,8 +457,9 @@ def _main(argv) -> int:
             pass
         return 0
     except OSError as exc:               # a file that cannot be written or read (permissions, a folder in its place)
-        where = f"{exc.filename}: " if exc.filename else ""
-        print(f"shootout: {where}{exc.strerror or exc}", file=sys.stderr)
+        if not exc.filename:             # not a file's problem: the traceback says more
+            raise
+        print(f"shootout: {exc.filename}: {exc.strerror or exc}", file=sys.stderr)
         return 1
 
 

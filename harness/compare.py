@@ -79,7 +79,7 @@ import json
 import math
 import statistics
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from .errors import ShootoutError
@@ -686,8 +686,13 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
     meta_b = RunFolder(run_b).read_run_json() or {}
     rules_a, rules_b = rules_from_specs(meta_a.get("tasks")), rules_from_specs(meta_b.get("tasks"))
     rules = {t: {**rules_b.get(t, {}), **rules_a.get(t, {})} for t in {*rules_a, *rules_b}}   # the baseline's rules
+    for t in rules_a.keys() & rules_b.keys():   # a standard-error column either run names is read (older A: none)
+        for m in rules_a[t].keys() & rules_b[t].keys():
+            if not rules_a[t][m].se and rules_b[t][m].se:
+                rules[t][m] = replace(rules_a[t][m], se=rules_b[t][m].se, se_z=rules_b[t][m].se_z)
     other_rules = sorted(f"{t}.{m}" for t in rules_a.keys() & rules_b.keys()
-                         for m in rules_a[t].keys() & rules_b[t].keys() if rules_a[t][m] != rules_b[t][m])
+                         for m in rules_a[t].keys() & rules_b[t].keys()
+                         if replace(rules_a[t][m], se="", se_z=3.0) != replace(rules_b[t][m], se="", se_z=3.0))
     ca, cb = ((m.get("machine") or {}).get("cpu_count") for m in (meta_a, meta_b))
     threads = tuple((m.get("timing") or {}).get("threads_per_case") if isinstance(m.get("timing"), dict) else None
                     for m in (meta_a, meta_b))

@@ -291,8 +291,10 @@ class RunFolder:
         try:                    # records, not lines: a quoted field may hold a newline, \r or \u2028
             for rec in csv.reader(io.StringIO(text, newline="")):
                 records.append(rec)
-        except csv.Error:       # the file ends inside a quoted field: a torn last row, not kept
-            pass
+        except csv.Error as exc:
+            if "unexpected end of data" not in str(exc):
+                raise           # damaged within, not torn at its end: said, as before
+            # the file ends inside a quoted field: a torn last row, not kept
         else:
             if records and not text.endswith("\n"):        # every row is written ending in a newline
                 records.pop()

@@ -151,23 +151,26 @@ def _label(path: Path, labels, i) -> str | None:
 def default_labels(paths: list) -> list[str]:
     """Each result file's label when none is given: its name without the extension, or, where
     other files of one eval share that name (``toolA/out.obj``, ``toolB/out.obj``), the fewest
-    trailing folders that tell them apart (``toolA/out``, ``toolB/out``): a label, and so a case
-    id, that does not depend on the order the files were given in."""
+    trailing folders that tell them apart (``toolA/out``, ``toolB/out``; with the extension when
+    only it does: ``out.obj``, ``out.ply``): a label, and so a case id, that does not depend on
+    the order the files were given in. One file given twice keeps one label."""
     paths = [Path(p) for p in paths]
-    parts = [Path(os.path.abspath(p)).with_suffix("").parts[1:] for p in paths]     # no root
+    full = [Path(os.path.abspath(p)).parts[1:] for p in paths]           # no root
+    bare = [f[:-1] + (Path(f[-1]).stem,) if f else f for f in full]
     out = [p.stem for p in paths]
     for stem in {s for s in out if out.count(s) > 1}:
         group = [i for i, s in enumerate(out) if s == stem]
-        if len({parts[i] for i in group}) < 2:
+        files = {full[i] for i in group}
+        if len(files) < 2:
             continue                            # one file given twice: the same label
-        depth = max(len(parts[i]) for i in group)
-        for n in range(2, depth + 1):
-            if len({parts[i][-n:] for i in group}) == len({parts[i] for i in group}):
+        depth = max(len(full[i]) for i in group)
+        for parts in (bare, full):              # folders first; the extension only when it alone tells them apart
+            n = next((n for n in range(1, depth + 1) if len({parts[i][-n:] for i in group}) == len(files)), None)
+            if n is not None:
+                for i in group:
+                    out[i] = "/".join(parts[i][-n:])
                 break
-        for i in group:
-            out[i] = "/".join(parts[i][-n:])
     return out
-
 
 def eval_files(clean, results, out, noisy=None, task: str | None = None, labels=None,
                hausdorff_samples: int = 20000, target_faces: int | None = None,

@@ -263,6 +263,15 @@ def _results_config(source):
     return (raw, base) if isinstance(raw, dict) and "results" in raw and "tasks" not in raw else None
 
 
+def _inside(path: Path, folder: Path) -> bool:
+    """Whether ``path`` lies in ``folder`` (both made absolute, links not followed)."""
+    try:
+        Path(os.path.abspath(path)).relative_to(os.path.abspath(folder))
+        return True
+    except ValueError:
+        return False
+
+
 class DiskFull(ShootoutError):
     """The run folder's disk filled up (exit 1: not a config problem)."""
 
@@ -594,7 +603,10 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         folder.remove_temporaries()
         if exc.errno in NO_ROOM:
             raise DiskFull(_no_room(exc, out_dir)) from None
-        raise RunInterrupted(f"{exc.filename or out_dir}: {exc.strerror or exc}: the run could not write its "
+        inside = exc.filename is not None and _inside(Path(str(exc.filename)), out_dir)
+        if not inside:                      # not a file of the run folder (a socket, a fork): as it came
+            raise
+        raise RunInterrupted(f"{exc.filename}: {exc.strerror or exc}: the run could not write its "
                              "files (was the run folder changed while it ran?); the rows written so far are kept: "
                              "mend it and run again with --resume") from None
     except BaseException:

@@ -790,3 +790,27 @@ def test_other_measurement_settings_are_noted(tmp_path, capsys):
     assert "note: the runs measured with other settings (hausdorff_samples A 500, B 501)" in out, out
     compare_runs(tmp_path / "a", tmp_path / "a", time_factor=None)
     assert "other settings" not in capsys.readouterr().out
+
+
+def test_an_older_baseline_without_standard_errors_still_reads_them(tmp_path, capsys):
+    """A review: with A from a version whose run.json declares no standard-error column, A's
+    rules won and a change within sampling noise was a regression, with a note of other rules."""
+    import harness
+    from harness.compare import compare_runs
+    cfg = {"name": "se", "repeats": 1, "time_budget": 0, "meshes": ["knight"], "noise": [{"model": "none"}],
+           "tasks": {"simplification": {"methods": ["fast_simplification.qem"], "params": {"target_ratio": [0.5]}}}}
+    for d in ("a", "b"):
+        harness.run(cfg, out=tmp_path / d, quiet=True, workers=1)
+    meta = json.loads((tmp_path / "a" / "run.json").read_text())
+    for m in meta["tasks"]["simplification"]["metrics"]:
+        m.pop("se", None), m.pop("se_z", None)
+    (tmp_path / "a" / "run.json").write_text(json.dumps(meta))
+    import pandas as pd
+    p = tmp_path / "b" / "simplification.csv"
+    df = pd.read_csv(p)
+    df["surface_dist_mean"] *= 1.015                 # 1.5%: beyond the 1% tolerance, within 3 standard errors
+    df["surface_dist_mean_se"] = df["surface_dist_mean"] * 0.005
+    df.to_csv(p, index=False)
+    assert compare_runs(tmp_path / "a", tmp_path / "b", time_factor=None) == 0
+    out = capsys.readouterr().out
+    assert "REGRESSION" not in out and "other rules" not in out, out

@@ -391,3 +391,4 @@ def test_results_sharing_a_file_name_are_labelled_by_their_folders_in_any_order(
     assert cli(["compare", str(tmp_path / "ab"), str(tmp_path / "ba"), "--no-time"]) == 0
     assert default_labels(["x/a/r.obj", "y/a/r.obj", "z/q.ply"]) == ["x/a/r", "y/a/r", "q"]
     assert default_labels(["x/r.obj", "x/r.obj"]) == ["r", "r"]            # one file twice: one label
+    assert default_labels(["t/out.obj", "t/out.ply"]) == ["out.obj", "out.ply"]   # only the extension differs

@@ -519,6 +519,12 @@ def test_a_sampled_metric_ties_within_three_standard_errors_and_seeds_are_said()
     assert w.loc["wide", "tied_with_best"].startswith("b.qem") and w.loc["narrow", "tied_with_best"] == ""
     assert (w["seeds"] == 1).all()
     assert "rest on 1 noise seed(s) each" in L.winners_markdown(w.reset_index())
+    three = [dict(r, mesh="many", seed=k) for r in rows[:2] for k in range(3)]    # a cell of 3 seeds beside 1-seed ones
+    w3 = L.winners({"simplification": pd.DataFrame(rows + three)}, {"simplification": spec})
+    w3 = w3[w3.metric == "surface_dist_mean"].set_index("mesh")
+    assert w3.loc["many", "seeds"] == 3 and w3.loc["wide", "seeds"] == 1, w3["seeds"]
+    md = L.winners_markdown(w3.reset_index())
+    assert "rest on 1-3 noise seed(s) each" in md and "one noise draw's" in md
     rule = rules_from_specs({"simplification": spec})["simplification"]["surface_dist_mean"]
     a, b = rows[0], rows[1]
     assert judge("surface_dist_mean", 1.0, 1.015, a, b, rule=rule) == "same"            # 1.5% < 3 x 0.71%

@@ -7,7 +7,8 @@ polyhedral distance: 6e-7 relative on a flat Delaunay mesh, 0.25% on an icospher
 MeshLab keeps vertex quality in single precision and recomputes everything per source
 (``precompute_s`` is not split out). The filter takes the source as a point and starts from the
 vertex nearest to it: a source vertex that shares its position with another vertex (a seam) is
-ambiguous, and the case fails saying so rather than measure from the other copy. MeshLab's heat-method filter
+ambiguous (positions closer than single precision's spacing count as shared), and the case fails saying so rather than
+measure from the other copy. MeshLab's heat-method filter
 (``compute_scalar_by_heat_geodesic_distance_from_selection_per_vertex``) has no adapter: it
 crashed the process (segmentation fault) on the bundled knight mesh.
 """
@@ -29,8 +30,9 @@ def geodesic(V, F, *, sources):
     import pymeshlab
     t0 = time.perf_counter()
     ms = _meshset(V, F)                  # one mesh for every source: the filter writes quality only
+    tol = 2.0 ** -23 * float(np.abs(V).max(initial=0.0))   # single precision's spacing at the mesh's coordinates
     for s in sources:
-        twins = np.flatnonzero((V == V[int(s)]).all(axis=1))
+        twins = np.flatnonzero((np.abs(V - V[int(s)]) <= tol).all(axis=1))
         if len(twins) > 1:
             raise ValueError(f"meshlab.geodesic: source vertex {int(s)} shares its position with vertex/vertices "
                              f"{[int(t) for t in twins if t != s][:5]}; the filter starts from a point, so it "
