@@ -602,6 +602,10 @@ def test_a_short_write_leaves_no_part_row_and_a_torn_quoted_row_is_not_kept(tmp_
     short = whole.decode().splitlines(keepends=True)
     p.write_text(short[0] + "def456,smoothing,m\n" + "".join(short[1:]))     # a row short of columns
     assert [r["case_id"] for r in folder.read_rows("smoothing")] == ["abc123"]
+    import csv
+    p.write_text(short[0] + '"' + "x" * 200_000 + '"\n' + "".join(short[1:]))  # damaged within: said, not dropped
+    with pytest.raises(csv.Error, match="field larger"):
+        folder.read_rows("smoothing")
     p.write_bytes(whole)
     big = {**row, "case_id": "def456", "error": "x" * 20000}
     code = ("import resource, sys\n"

@@ -76,6 +76,7 @@ def test_the_range_quantile_equals_scipys_studentized_range(p):
         want = float(stats.studentized_range.ppf(p, k, np.inf))
         assert L.range_quantile(p, k) == pytest.approx(want, rel=1e-12), k
     assert L.range_quantile(0.95, 2) / np.sqrt(2) == pytest.approx(1.959963984540054, rel=1e-12)   # z_0.975
+    assert 6 < L.range_quantile(1 - 1e-16, 1000) <= 64        # past float64's CDF: bounded, not an endless search
 
 
 def test_friedman_is_corrected_for_ties_as_scipy_and_a_full_tie_is_p_one():
