@@ -256,22 +256,13 @@ def _library(name: str):
 
 
 def forget_inputs() -> None:
-    """Drop what is kept between calls about the inputs seen: the pattern-keyed symbolic
-    analyses of `harness.core.solvers`, and the factorization ``pypardiso.spsolve`` keeps in its
-    module-level solver (it reuses it, without solving anew, whenever it sees the same matrix
-    again: a plugin calling it would have every sample flattered by the cold call's
-    factorization), so that every timed call pays for its input like a first call; within one
-    call, repeated factorizations still share them. Compiled code stays loaded: that is warming
-    the code path, not the data. A method's own caches across calls are its author's to avoid."""
-    solvers = sys.modules.get("harness.core.solvers")
-    if solvers is not None:
-        solvers.clear_cache()
-    ps = getattr(sys.modules.get("pypardiso"), "ps", None)
-    if getattr(getattr(ps, "factorized_A", None), "shape", (0, 0)) != (0, 0):   # one kept: forget it
-        try:
-            ps.remove_stored_factorization()
-        except Exception:  # noqa: BLE001 - another pypardiso version: nothing to forget there
-            pass
+    """Drop what is kept between calls about the inputs seen (`harness.core.solvers.forget_inputs`:
+    the solvers' analyses and the sparse libraries' own cached factorizations), so that every
+    timed call pays for its input like a first call; within one call, repeated factorizations
+    still share them. Compiled code stays loaded: that is warming the code path, not the data. A
+    method's own caches across calls are its author's to avoid."""
+    from .core import solvers
+    solvers.forget_inputs()
 
 
 def base_row(case: Case) -> dict:

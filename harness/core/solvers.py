@@ -43,6 +43,7 @@ from __future__ import annotations
 import hashlib
 import importlib
 import os
+import sys
 from collections import OrderedDict
 
 import numpy as np
@@ -197,6 +198,20 @@ def clear_cache() -> None:
         free = getattr(old, "free", None)
         if callable(free):
             free()
+
+
+def forget_inputs() -> None:
+    """`clear_cache`, and the factorization ``pypardiso.spsolve`` keeps in its module-level
+    solver: it reuses it, without solving anew, whenever it sees the same matrix again, so a
+    plugin calling it would have every timed sample flattered by the cold call's factorization.
+    pypardiso is not imported for this (a method that never loaded it has nothing kept)."""
+    clear_cache()
+    ps = getattr(sys.modules.get("pypardiso"), "ps", None)
+    if getattr(getattr(ps, "factorized_A", None), "shape", (0, 0)) != (0, 0):   # one kept: forget it
+        try:
+            ps.remove_stored_factorization()
+        except Exception:  # noqa: BLE001 - another pypardiso version: nothing to forget there
+            pass
 
 
 class Factor:
