@@ -238,6 +238,21 @@ def _cells(spec: dict, df: pd.DataFrame, axis_params=()) -> pd.DataFrame:
     return d
 
 
+def _mean_se(spec: dict, df: pd.DataFrame, metric: str, axis_params=(), cells=None) -> pd.DataFrame | None:
+    """For a sampled metric (a declared ``se`` column): cells x variants of ``se_z`` times the
+    standard error of the metric's mean over the cell's n seeds, ``sqrt(mean(se^2) / n)``; else None."""
+    m = next((m for m in spec.get("metrics", []) if m.get("name") == metric), {})
+    col = m.get("se")
+    if not col or col not in df:
+        return None
+    d = (_cells(spec, df, axis_params) if cells is None else cells).copy()
+    d["_se2"] = pd.to_numeric(d[col], errors="coerce") ** 2
+    mean_sq, _ = cell_values(spec, d, "_se2", axis_params, d)
+    seeds = (d["seed"].astype(str) if "seed" in d else pd.Series("0", index=d.index)).groupby(d["_cell"]).nunique()
+    n = seeds.reindex(mean_sq.index).to_numpy(dtype=np.float64)[:, None]
+    return float(m.get("se_z", 3.0)) * np.sqrt(mean_sq / n)
+
+
 def tolerance(spec: dict, metric: str) -> tuple[float, float]:
     """``(rel, abs)``: the compare tolerance the task declares for ``metric`` (defaults 0.01, 0)."""
     for m in spec.get("metrics", []):
@@ -246,26 +261,30 @@ def tolerance(spec: dict, metric: str) -> tuple[float, float]:
     return 0.01, 0.0
 
 
-def tie_groups(score: np.ndarray, rel: float, abs_: float) -> np.ndarray:
+def tie_groups(score: np.ndarray, rel: float, abs_: float, se: np.ndarray | None = None) -> np.ndarray:
     """Group ids (0 = best) of ``score`` (lower is better; +inf for invalid results, which all tie
     last). Sorted ascending, a value joins the current group when it lies within
-    ``max(rel * |g|, abs_)`` of the group's first (best) value g, else it starts the next group:
-    a chain of small steps cannot tie values that differ by more than the tolerance."""
+    ``max(rel * |g|, abs_)`` of the group's first (best) value g, or, with ``se`` (each value's
+    standard error times ``SE_Z``, a sampled metric), within their combined ``hypot``; else it
+    starts the next group: a chain of small steps cannot tie values that differ by more than the
+    tolerance."""
     score = np.asarray(score, dtype=np.float64)
+    err = np.zeros(len(score)) if se is None else np.nan_to_num(np.asarray(se, dtype=np.float64), nan=0.0)
     order = np.argsort(score, kind="stable")
     gid = np.empty(len(score), np.int64)
-    g, head = -1, None
+    g, head, e_head = -1, None, 0.0
     for i in order:
         v = score[i]
-        if head is None or not (v == head or (np.isfinite(head) and v - head <= max(rel * abs(head), abs_))):
-            g, head = g + 1, v
+        if head is None or not (v == head or (np.isfinite(head) and
+                                              v - head <= max(rel * abs(head), abs_, math.hypot(err[i], e_head)))):
+            g, head, e_head = g + 1, v, err[i]
         gid[i] = g
     return gid
 
 
-def _tied_rank_row(score: np.ndarray, rel: float, abs_: float) -> np.ndarray:
+def _tied_rank_row(score: np.ndarray, rel: float, abs_: float, se: np.ndarray | None = None) -> np.ndarray:
     """Ranks 1..k of one cell's scores, tied within the tolerance (`tie_groups`), average rank per tie."""
-    gid = tie_groups(score, rel, abs_)
+    gid = tie_groups(score, rel, abs_, se)
     ranks = np.empty(len(score))
     start = 0
     for g in range(int(gid.max()) + 1 if len(gid) else 0):
@@ -295,8 +314,10 @@ def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_para
     sign = -1.0 if better == "higher" else 1.0
     score = (sign * complete).where(~inv, np.inf)
     rel, abs_ = tolerance(spec, metric)
-    ranks = pd.DataFrame([_tied_rank_row(r, rel, abs_) for r in score.to_numpy()],
-                         index=score.index, columns=score.columns)
+    err = _mean_se(spec, df, metric, axis_params, cells)        # a sampled metric: SE_Z x its cell means' errors
+    err = None if err is None else err.reindex(index=score.index, columns=score.columns).to_numpy()
+    ranks = pd.DataFrame([_tied_rank_row(r, rel, abs_, None if err is None else err[i])
+                          for i, r in enumerate(score.to_numpy())], index=score.index, columns=score.columns)
     return ranks, missing.sum().to_dict(), inv.sum().to_dict()
 
 
