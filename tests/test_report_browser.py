@@ -14,6 +14,7 @@ from __future__ import annotations
 import base64
 import json
 import os
+import re
 import select
 import shutil
 import subprocess
@@ -363,7 +364,7 @@ def test_winner_tables_show_ties_and_cells_without_a_valid_result(tiny_run, tmp_
     assert "(tied: copy.qem)" in text, text
     # "fastest": the same times are a tie (it named either, run by run)
     (qem,) = [r for r in s["bestRows"] if "fast_simplification.qem (tied: copy.qem)" in r]
-    assert "µscopy.qem (tied: fast_simplification.qem)" in qem, qem
+    assert "µs]copy.qem (tied: fast_simplification.qem)" in qem, qem      # after the best's time and its spread
     none = [r for r in s["bestRows"] if r.startswith("knightno noise") and "no valid result" in r]
     assert none and "worse than the noisy input" in none[0] and "(2 invalid" in none[0], text
     failed = [r for r in s["bestRows"] if "status error" in r]
@@ -382,7 +383,7 @@ def test_winner_tables_show_ties_and_cells_without_a_valid_result(tiny_run, tmp_
     build_report(run)
     s = check_report_in_browser(run / "report.html", interact=False)
     (qem,) = [r for r in s["bestRows"] if "fast_simplification.qem (tied: copy.qem)" in r]
-    assert "µsfast_simplification.qem0." in qem, qem
+    assert "µs]fast_simplification.qem0." in qem, qem
     for p in (path, sm):                         # rows in another order (workers finish in any): the same tables
         rows = list(csv.DictReader(p.open()))
         _write_rows(p, rows[::-1])
@@ -552,3 +553,4 @@ def test_the_report_ties_a_sampled_metric_within_three_standard_errors_as_winner
         finally:
             cdp.close()
         assert len(best) == 1 and "libigl.qslim" in best[0] and ("(tied: scratch.qem)" in best[0]) == tied, best
+        assert re.search(r"s \[[0-9.]+ [µm]?s–[0-9.]+ [µm]?s\]", best[0]), best       # times carry their spread

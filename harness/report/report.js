@@ -55,6 +55,18 @@
     if (s < 1) return fmt(s * 1e3, 3) + ' ms';
     return fmt(s, 3) + ' s';
   }
+  // a median time with the spread of its samples: the smallest first and the largest third quartile
+  // of the variant's rows in the cell (one row per seed), so a bare median is never the whole story
+  function timeCell(t, rows, variant) {
+    if (!isNum(t)) return '';
+    var own = rows.filter(function (r) { return r._variant === variant; });
+    var q1 = own.map(function (r) { return r.time_q1_s; }).filter(isNum);
+    var q3 = own.map(function (r) { return r.time_q3_s; }).filter(isNum);
+    if (!q1.length || !q3.length) return fmtTime(t);
+    return fmtTime(t) + ' <small class="muted" title="interquartile range of the timed samples' +
+      (own.length > 1 ? ' (lowest and highest over the seeds)' : '') + '">[' +
+      fmtTime(Math.min.apply(null, q1)) + '–' + fmtTime(Math.max.apply(null, q3)) + ']</small>';
+  }
   function mean(a) { var s = 0; for (var i = 0; i < a.length; i++) s += a[i]; return s / a.length; }
   function median(a) {
     var b = a.slice().sort(function (x, y) { return x - y; }); var n = b.length;
@@ -645,7 +657,7 @@
         var tr = el('tr', {html: '<td>' + esc(rs[0].mesh) + '</td><td>' + esc(rs[0]._noise) + '</td><td><i style="color:' +
           d.colors[best[4]] + '">●</i> ' + esc(best[4]) + tiedNote(tied) + '</td><td class="num' +
           (isNum(inp) && best[1] > inp ? ' worse" title="worse than the noisy input' : '') + '">' + fmt(best[1], 4) + '</td><td class="num">' +
-          (isNum(inp) ? fmt(inp, 4) : '—') + '</td><td class="num">' + fmtTime(best[0]) + '</td><td>' + front + '</td>'});
+          (isNum(inp) ? fmt(inp, 4) : '—') + '</td><td class="num">' + timeCell(best[0], rs, best[4]) + '</td><td>' + front + '</td>'});
         bt.appendChild(tr);
       });
       plots.appendChild(el('h4', {text: 'Most accurate method per mesh and noise level'}));
@@ -780,9 +792,9 @@
           .map(function (r) { return r._variant; });
         bt.appendChild(el('tr', {html: '<td>' + esc(best.mesh) + '</td><td>' + esc(best._noise) + '</td><td>' + esc(fmt(best._target)) +
           '</td><td><i style="color:' + d.colors[best._variant] + '">●</i> ' + esc(best._variant) + tiedNote(tied) + '</td><td class="num">' + fmt(best[key], 4) +
-          '</td><td class="num">' + best.out_faces + '</td><td class="num">' + fmtTime(best.time_s) + '</td><td>' + esc(fast._variant) +
-          timeTiedNote(fastTied) +
-          '</td><td class="num">' + fmt(fast[key], 4) + '</td><td class="num">' + fmtTime(fast.time_s) + '</td>'}));
+          '</td><td class="num">' + best.out_faces + '</td><td class="num">' + timeCell(best.time_s, rows, best._variant) + '</td><td>' +
+          esc(fast._variant) + timeTiedNote(fastTied) +
+          '</td><td class="num">' + fmt(fast[key], 4) + '</td><td class="num">' + timeCell(fast.time_s, rows, fast._variant) + '</td>'}));
       });
       plots.appendChild(el('h4', {text: 'Most accurate and fastest method per mesh, noise level and target (mean over seeds)'}));
       plots.appendChild(bt);
@@ -1106,7 +1118,7 @@
         bt.appendChild(el('tr', {html: '<td>' + esc(best.mesh) + '</td><td>' + esc(best._noise) + '</td>' +
           (axes ? '<td>' + esc(best._axis || '') + '</td>' : '') + '<td><i style="color:' +
           d.colors[best._variant] + '">●</i> ' + esc(best._variant) + tiedNote(tied) + '</td><td class="num">' + fmt(best[key], 4) +
-          '</td><td class="num">' + fmtTime(best.time_s) + '</td>'}));
+          '</td><td class="num">' + timeCell(best.time_s, rows, best._variant) + '</td>'}));
       });
       plots.appendChild(el('h4', {text: 'Best method per mesh, noise level' + (axes ? ' and setting' : '') + ' by ' + key +
         ' (mean over seeds)'}));
