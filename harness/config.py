@@ -310,8 +310,9 @@ def _validate(raw: dict, label: str, base_dir: Path, found=()) -> Config:
                 hit = sorted({judged[k] for k in datasets.content_keys(m) if k in judged})
                 if hit:
                     what = m.get("bundled") or m.get("procedural") or Path(m.get("file", "?")).name
-                    P.append(f"tune.train[{i}]: {what} is also a test mesh (meshes[{hit[0]}]: the same file, or "
-                             "the same pair's noisy or clean file, or the same procedural mesh); tuning on the "
+                    P.append(f"tune.train[{i}]: {what} is also a test mesh (meshes[{hit[0]}]: the same file, the "
+                             "same vertices and faces saved otherwise, the same pair's noisy or clean file, or the "
+                             "same procedural mesh); tuning on the "
                              "meshes a method is judged on favours the tuned setting: train on other meshes")
 
     try:                       # counted whenever the meshes and tasks allow, to join the other problems

@@ -79,7 +79,8 @@ def resolve_bundled(name: str) -> str | None:
 
 def content_keys(spec: dict) -> set[str]:
     """What a mesh spec is made of, whatever it is called: the sha1 of each file it reads (a
-    bundled mesh's or pair's package files, a file mesh and its clean file), or, for a procedural
+    bundled mesh's or pair's package files, a file mesh and its clean file) and the surface each
+    holds (`_geometry_key`: the same vertices and faces saved otherwise), or, for a procedural
     mesh, its kind and parameters. Two specs sharing a key share a surface (`harness.config`
     refuses training on a test mesh by these)."""
     import hashlib
@@ -96,9 +97,34 @@ def content_keys(spec: dict) -> set[str]:
     for f in files:
         try:
             out.add(hashlib.sha1(Path(f).read_bytes()).hexdigest())
+            st = Path(f).stat()
         except OSError:            # already a problem of its own (file not found)
-            pass
+            continue
+        key = _geometry_key(str(Path(f).resolve()), st.st_size, st.st_mtime_ns)
+        if key:
+            out.add(key)
     return out
+
+
+@functools.lru_cache(maxsize=64)
+def _geometry_key(path: str, size: int, mtime_ns: int) -> str | None:
+    """The surface a mesh file holds, whatever its formatting: a hash of its faces and of its
+    vertices centred and scaled to a unit bounding-box diagonal, rounded to 2^-20 (about 1e-6)
+    of it; None when the file does not read (said elsewhere). The same vertices and faces saved
+    with other number formatting or in another format, moved or scaled, share it (the harness's
+    metrics and noise are scale-free: a scaled copy is the same test)."""
+    import hashlib
+    try:
+        m = read_mesh(path, repair=False)
+    except Exception:  # noqa: BLE001 - an unreadable file is a problem of its own
+        return None
+    V, F = np.asarray(m.V, dtype=np.float64), np.asarray(m.F, dtype=np.int64)
+    if not len(V):
+        return None
+    lo, hi = V.min(axis=0), V.max(axis=0)
+    d = float(np.linalg.norm(hi - lo)) or 1.0
+    q = np.rint((V - (lo + hi) / 2) / d * 2.0 ** 20).astype(np.int64)
+    return "geometry:" + hashlib.sha1(q.tobytes() + b"|" + F.tobytes()).hexdigest()
 
 
 @dataclass

@@ -568,7 +568,8 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
     extra_cases: list = []
     try:
         if cfg.tune is not None:
-            extra_cases = _tune(cfg, ex, out_dir, meta, threads, resume, quiet)
+            extra_cases = _tune(cfg, ex, out_dir, meta, threads, resume, quiet,
+                                previous=(prev_meta or {}).get("tune") if resume else None)
             if resume:                   # rows of tuned settings this choice no longer makes are not this run's
                 ours = {c.case_id for c in list(cfg.cases) + extra_cases}
                 folder.drop_rows(lambda r: r["case_id"] not in ours)
@@ -664,9 +665,12 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
     return Frames(folder.frames(), not_written)
 
 
-def _tune(cfg: Config, ex, out_dir: Path, meta: dict, threads: int, resume: bool, quiet: bool) -> list:
+def _tune(cfg: Config, ex, out_dir: Path, meta: dict, threads: int, resume: bool, quiet: bool,
+          previous: dict | None = None) -> list:
     """Run the training cases of ``tune:`` into ``tune/``, choose each method's setting, and return
-    the tuned test cases (see `harness.tune`)."""
+    the tuned test cases (see `harness.tune`). On ``--resume``, ``previous`` (run.json's ``tune``)
+    is the earlier session's choice: a choice that changed (training cases that failed, e.g. timed
+    out, ran again) is said on stderr and kept in ``changed_on_resume``."""
     from .tune import choose, tuned_cases
     tfolder = RunFolder(out_dir / "tune")
     done = tfolder.keep_ok_rows(known={c.case_id for c in cfg.tune.cases}) if resume else set()
@@ -686,6 +690,17 @@ def _tune(cfg: Config, ex, out_dir: Path, meta: dict, threads: int, resume: bool
     from .datasets import spec_key
     meta["tune"] = {"metric": cfg.tune.metric, "train_meshes": [spec_key(t) for t in cfg.tune.train],
                     "budget": cfg.tune.budget, "seed": cfg.tune.seed, "methods": choice}
+    prev = previous if isinstance(previous, dict) else {}
+    changed = [c for c in prev.get("changed_on_resume") or [] if isinstance(c, dict)]
+    for m, ch in choice.items():
+        before = ((prev.get("methods") or {}).get(m) or {}).get("chosen") if isinstance(prev.get("methods"), dict) else None
+        if before is not None and before != ch["chosen"]:
+            changed.append({"method": m, "before": before, "after": ch["chosen"], "session": meta.get("session_id")})
+            print(f"shootout: tuning: {m}: the choice changed on resume, {before or 'as configured'} -> "
+                  f"{ch['chosen'] or 'as configured'} (training cases that had failed ran again); the earlier "
+                  "choice's test rows are dropped", file=sys.stderr, flush=True)
+    if changed:
+        meta["tune"]["changed_on_resume"] = changed
     return tuned
 
 

@@ -5,7 +5,7 @@ Config::
 
     tune:
       metric: dist_mean          # a metric of the methods' task (its declared direction decides)
-      train: [spot, fandisk]     # mesh list, same syntax as meshes:, none of them a test mesh
+      train: [spot, armadillo]   # mesh list, same syntax as meshes:, none of them a test mesh
       budget: 12                 # settings tried per method: the whole grid if it is smaller, else
       seed: 0                    #   a seeded random sample of it (the defaults are always tried)
       params:
@@ -15,7 +15,9 @@ Selection: for each method, every candidate setting runs on every training (mesh
 seed) of the run's noise models; its score is the mean metric over those cases, and a candidate
 with a failed or invalid case (diverged, ended worse than its noisy input, non-manifold or
 topology-changing output) scores infinitely bad. The best score wins (ties: the earlier
-candidate, the defaults first). The tuned setting then runs on the test meshes as extra cases;
+candidate, the defaults first), but it replaces the setting as configured only when better than
+it beyond the metric's compare tolerance (``max(rel * |default|, abs)``): a difference the
+rankings call a tie chooses nothing. The tuned setting then runs on the test meshes as extra cases;
 ``run.json`` records per method the chosen parameters, the training scores of the defaults and of
 the chosen setting, the number of candidates and the tuned case ids, and the report shows default
 vs tuned side by side. Training rows are kept in ``tune/`` inside the run folder.
@@ -227,6 +229,10 @@ def choose(tune: TuneSpec, frames: dict) -> dict:
             val = sel[tune.metric].astype(float).mean() if not sel.empty else math.nan
             scores.append(math.inf if bad or not math.isfinite(val) else sign * val)
         best = int(np.argmin(scores)) if scores else 0
+        if best and math.isfinite(scores[0]):     # as configured stays unless beaten beyond the tolerance
+            mt = tasks.get(task).metric(tune.metric)
+            if not scores[0] - scores[best] > max(mt.rel * abs(scores[0]), mt.abs):
+                best = 0
         cands = tune.candidates(m)
         out[m] = {"task": task, "chosen": cands[best], "candidates": len(cands),
                   "train_score": None if math.isinf(scores[best]) else sign * scores[best],
