@@ -142,6 +142,38 @@ def _test_mean(rows, metric: str) -> str:
     return val if len(ok) == n else f"{val} ({len(ok)} of {n} ok)"
 
 
+def _paired(every, is_tuned, metric: str, ch: dict, spec: dict) -> str:
+    """Tuned against as configured case by case: pairs of ok rows with the same mesh, noise,
+    level, seed and other parameters; how many the tuned setting is better, tied, worse in beyond
+    the metric's compare tolerance ``max(rel * |as configured|, abs)``, of how many pairs."""
+    import pandas as pd
+
+    from ..leaderboard import tolerance
+    rel, abs_ = tolerance(spec, metric)
+    sign = -1.0 if ch.get("better") == "higher" else 1.0
+    tuned_keys = set(ch.get("chosen") or {})
+
+    def key(r):
+        try:
+            p = {k: v for k, v in json.loads(r["params"]).items() if k not in tuned_keys}
+        except (TypeError, ValueError):
+            p = {}
+        return (str(r.get("mesh")), str(r.get("noise_model")), str(r.get("noise_level")), str(r.get("seed")),
+                json.dumps(p, sort_keys=True))
+    ok = every[(every["status"] == "ok") & pd.to_numeric(every[metric], errors="coerce").notna()]
+    base = {key(r): float(r[metric]) for _, r in ok[~is_tuned[ok.index]].iterrows()}
+    counts = [0, 0, 0]
+    for _, r in ok[is_tuned[ok.index]].iterrows():
+        a = base.get(key(r))
+        if a is None:
+            continue
+        gap = sign * (a - float(r[metric]))              # > 0: tuned better
+        counts[0 if gap > max(rel * abs(a), abs_) else 2 if -gap > max(rel * abs(a), abs_) else 1] += 1
+    n = sum(counts)
+    total = int(is_tuned.sum())
+    return f"{counts[0]} / {counts[1]} / {counts[2]} of {n}" + ("" if n == total else f" ({total} tuned cases)")
+
+
 def _tune_html(meta, frames) -> str:
     """Default vs tuned, per tuned method: the chosen setting, training scores and the test meshes' mean."""
     tune = meta.get("tune")
@@ -153,6 +185,7 @@ def _tune_html(meta, frames) -> str:
         df = frames.get(ch.get("task"))
         tuned_ids = set(ch.get("test_case_ids") or [])
         test_default = test_tuned = test_input = "—"
+        per_case = "—"
         if df is not None and metric in df:
             every = df[df["method"] == m]
             is_tuned = every["case_id"].astype(str).isin(tuned_ids)
@@ -161,14 +194,17 @@ def _tune_html(meta, frames) -> str:
             test_tuned = _test_mean(every[is_tuned], metric) if ch.get("chosen") else "= as configured"
             ok = every[every["status"] == "ok"]
             if f"input_{metric}" in ok and len(ok):
-                test_input = _fmt(float(ok[f"input_{metric}"].mean()), 4)
+                test_input = _fmt(float(ok[f"input_{metric}"][~is_tuned[ok.index]].mean()), 4) \
+                    if (~is_tuned[ok.index]).any() else "—"
+            if ch.get("chosen"):
+                per_case = _paired(every, is_tuned, metric, ch, (meta.get("tasks") or {}).get(ch.get("task")) or {})
         picked = ch.get("chosen") if isinstance(ch.get("chosen"), dict) else {}
         chosen = label_text("", picked, sorted(picked)).strip() or "as configured"    # as the labels write it
         dtrain = "invalid or failed" if ch.get("default_train_score") is None else _fmt(ch["default_train_score"], 4)
         body.append(f"<tr><td>{_esc(m)}</td><td>{_esc(chosen)}</td><td class='num'>{_esc(ch.get('candidates'))}</td>"
                     f"<td class='num'>{_esc(dtrain)}</td><td class='num'>{_fmt(ch.get('train_score'), 4)}</td>"
                     f"<td class='num'>{_esc(test_default)}</td><td class='num'>{_esc(test_tuned)}</td>"
-                    f"<td class='num'>{_esc(test_input)}</td></tr>")
+                    f"<td class='num'>{_esc(per_case)}</td><td class='num'>{_esc(test_input)}</td></tr>")
     better = next((c.get("better") for c in tune["methods"].values() if isinstance(c, dict)), "")
     return (f"<h3>Tuning: as configured vs tuned (by {_esc(metric)}, {_esc(better)} is better)</h3>"
             f"<p>Parameters searched on the training meshes ({_esc(', '.join(tune.get('train_meshes') or []))}), "
@@ -176,7 +212,10 @@ def _tune_html(meta, frames) -> str:
             "than its noisy input) is never chosen. <i>As configured</i>: the method's parameters in the config, its "
             "defaults where the config sets none. Rows of other methods are ranked as configured.</p>"
             "<table class='best tune'><tr><th>method</th><th>chosen</th><th>settings tried</th><th>train, as configured</th>"
-            f"<th>train, chosen</th><th>test, as configured</th><th>test, tuned</th><th>test, noisy input</th></tr>"
+            f"<th>train, chosen</th><th>test, as configured</th><th>test, tuned</th>"
+            "<th title='test cases where both settings are ok, paired by mesh, noise, level and seed: tuned better / "
+            "tied / worse beyond the metric&#39;s compare tolerance'>test, per case: better / tied / worse</th>"
+            "<th>test, noisy input</th></tr>"
             f"{''.join(body)}</table>")
 
 
