@@ -299,14 +299,25 @@ def _validate(raw: dict, label: str, base_dir: Path, found=()) -> Config:
             seen.append(_check_meshes(m, base_dir, P, "tune.train"))
             return seen[-1]
         tune = check_tune(raw["tune"], base_dir, P, tasks, check_train)
-        train = tune.train if tune is not None else seen[0] if (
-            seen and isinstance(raw["tune"].get("train"), list) and len(seen[0]) == len(raw["tune"]["train"])) else []
+        given = raw["tune"].get("train") if isinstance(raw["tune"], dict) else None
+        if tune is not None:
+            train = list(enumerate(tune.train))
+        elif seen and isinstance(given, list) and len(seen[0]) == len(given):
+            train = list(enumerate(seen[0]))
+        elif isinstance(given, list):             # some entries are bad: check the others alone (their problems are listed)
+            train = []
+            for i, entry in enumerate(given):
+                alone = _check_meshes([entry], base_dir, [], "tune.train")
+                if alone:
+                    train.append((i, alone[0]))
+        else:
+            train = []
         if train:                                 # searched on the meshes it is judged on: not a fair test
             judged = {}
             for j, m in enumerate(meshes):
                 for key in datasets.content_keys(m):
                     judged.setdefault(key, j)
-            for i, m in enumerate(train):
+            for i, m in train:
                 hit = sorted({judged[k] for k in datasets.content_keys(m) if k in judged})
                 if hit:
                     what = m.get("bundled") or m.get("procedural") or Path(m.get("file", "?")).name

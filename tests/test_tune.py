@@ -167,6 +167,9 @@ def test_a_training_mesh_is_refused_when_it_is_a_test_mesh_by_content(tmp_path):
     with pytest.raises(ConfigError) as exc:      # said beside another problem of tune: (only after its fix before)
         load_config({**base, "tune": {**CFG["tune"], "train": ["knight"], "budget": 0}})
     assert "tune.budget" in str(exc.value) and "tune.train[0]: knight is also a test mesh" in str(exc.value), exc.value
+    with pytest.raises(ConfigError) as exc:      # beside a bad training entry too (a review: only after its fix)
+        load_config({**base, "tune": {**CFG["tune"], "train": ["woody", "nosuchmesh", "knight"]}})
+    assert "tune.train[1]: unknown mesh" in str(exc.value) and "tune.train[2]: knight is also a test mesh" in str(exc.value)
 
 
 def test_a_setting_within_the_metrics_tolerance_of_the_default_is_not_chosen():
