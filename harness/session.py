@@ -554,14 +554,28 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         raise
     bar = None
     if not quiet:
-        n_todo = len(cases) + (len(cfg.tune.cases) if cfg.tune is not None else 0)
+        n_train = 0
+        if cfg.tune is not None:                  # training cases not yet done (a resume keeps tune/'s ok rows)
+            ids = {c.case_id for c in cfg.tune.cases}
+            kept = set()
+            if resume:
+                tf = RunFolder(out_dir / "tune")
+                for t in {c.task for c in cfg.tune.cases}:
+                    try:
+                        kept |= {r["case_id"] for r in tf.read_rows(t) if r.get("status") == "ok"} & ids
+                    except Exception:  # noqa: BLE001 - a damaged training CSV: the tuning step says so
+                        pass
+            n_train = len(ids - kept)
+        n_todo = len(cases) + n_train
+        own_ids = {c.case_id for c in cfg.cases}
         if resume:
-            print(f"shootout: resuming {out_dir}: {len(done)} finished case(s) kept, {n_todo} to run",
+            print(f"shootout: resuming {out_dir}: {len(done)} finished case(s) kept, {n_todo} to run"
+                  + (" (and the tuned cases the choice makes)" if cfg.tune is not None else ""),
                   file=sys.stderr, flush=True)
         print(f"shootout: {meta['n_cases']} case(s), {n_todo} to run on {meta['workers']} worker(s)"
               + (f" (a large run: {n_todo:,} cases; --timeout bounds each one)" if n_todo > 1000 else ""),
               file=sys.stderr, flush=True)
-        bar = _progress(len(cfg.cases), len(done))
+        bar = _progress(len(cfg.cases), len(done & own_ids))
     counts: dict[str, int] = {}
     overhead: list[tuple[float, float, float]] = []
     t0 = time.perf_counter()
@@ -678,8 +692,8 @@ def _tune(cfg: Config, ex, out_dir: Path, meta: dict, threads: int, resume: bool
         tfolder.reset()
     todo = [dataclasses.replace(c, threads=threads) for c in cfg.tune.cases if c.case_id not in done]
     if not quiet:
-        print(f"shootout: tuning: {len(cfg.tune.cases)} training case(s) on {len(cfg.tune.train)} mesh(es)",
-              file=sys.stderr, flush=True)
+        print(f"shootout: tuning: {len(todo)} of {len(cfg.tune.cases)} training case(s) to run on "
+              f"{len(cfg.tune.train)} mesh(es)", file=sys.stderr, flush=True)
     for case, row, _ in ex.run(todo):
         tfolder.append(case.task, row)
     choice = choose(cfg.tune, tfolder.frames())

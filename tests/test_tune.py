@@ -215,3 +215,17 @@ def test_a_choice_that_changes_on_resume_is_said_and_kept(tmp_path, capsys):
     rec = json.loads((tmp_path / "run.json").read_text())["tune"]
     assert rec["changed_on_resume"][0]["before"] == {"step": 123.0} and rec["changed_on_resume"][0]["after"] == chosen
     assert rec["methods"]["scratch.implicit"]["chosen"] == chosen
+
+
+def test_a_resumed_tuned_run_counts_what_it_runs(tmp_path, capsys):
+    """A review: a resume of a finished tuned run said "16 finished case(s) kept, 48 to run",
+    "16 of 8 case(s) already done" and "tuning: 48 training case(s)" while nothing ran."""
+    import harness
+    cfg = {**CFG, "meshes": ["bunny"], "tune": {**CFG["tune"], "train": ["knight"], "budget": 3}}
+    harness.run(cfg, out=tmp_path, quiet=False, workers=1)
+    first = capsys.readouterr().err
+    assert "tuning: 3 of 3 training case(s) to run" in first, first
+    harness.run(cfg, out=tmp_path, quiet=False, workers=1, resume=True)
+    err = capsys.readouterr().err
+    assert "0 to run" in err and "tuning: 0 of 3 training case(s) to run" in err, err
+    assert "2 of 2 case(s) already done" in err or "already done" not in err, err
