@@ -200,7 +200,7 @@ def _tune_html(meta, frames) -> str:
                 per_case = _paired(every, is_tuned, metric, ch, (meta.get("tasks") or {}).get(ch.get("task")) or {})
         picked = ch.get("chosen") if isinstance(ch.get("chosen"), dict) else {}
         chosen = label_text("", picked, sorted(picked)).strip() or "as configured"    # as the labels write it
-        dtrain = "invalid or failed" if ch.get("default_train_score") is None else _fmt(ch["default_train_score"], 4)
+        dtrain = "no score: failed, invalid or not measured" if ch.get("default_train_score") is None else _fmt(ch["default_train_score"], 4)
         body.append(f"<tr><td>{_esc(m)}</td><td>{_esc(chosen)}</td><td class='num'>{_esc(ch.get('candidates'))}</td>"
                     f"<td class='num'>{_esc(dtrain)}</td><td class='num'>{_fmt(ch.get('train_score'), 4)}</td>"
                     f"<td class='num'>{_esc(test_default)}</td><td class='num'>{_esc(test_tuned)}</td>"
