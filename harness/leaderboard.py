@@ -275,7 +275,7 @@ def tie_groups(score: np.ndarray, rel: float, abs_: float, se: np.ndarray | None
     g, head, e_head = -1, None, 0.0
     for i in order:
         v = score[i]
-        if head is None or not (v == head or (np.isfinite(head) and
+        if head is None or not (v == head or (np.isfinite(head) and np.isfinite(v) and
                                               v - head <= max(rel * abs(head), abs_, math.hypot(err[i], e_head)))):
             g, head, e_head = g + 1, v, err[i]
         gid[i] = g

@@ -537,6 +537,8 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
     meta["sessions"] = prev_sessions          # kept if this session's driver is killed
     if resume:
         meta["resumed_at"] = now_iso()
+        if cfg.tune is not None and isinstance((prev_meta or {}).get("tune"), dict):
+            meta["tune"] = prev_meta["tune"]      # the earlier choice stands until this session's tuning chooses
     if executor == "dask":       # the cluster's worker threads, not --workers
         meta.update(ex.describe())
     try:
@@ -595,6 +597,9 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
             folder.write_plan(plan(list(cfg.cases) + list(extra_cases)))
             if bar is not None:
                 bar.total = meta["n_cases"]
+                kept_tuned = len(extra_cases) - len(todo)
+                if kept_tuned:            # tuned test cases a resume kept: done, as the config's own kept ones
+                    bar.update(kept_tuned)
         for case, row, extras in ex.run(cases, want_meshes=cfg.save_meshes):
             for fname, (V, F, q, what) in (extras.get("meshes") or {}).items():   # meshes first, then the row
                 if not (out_dir / "meshes" / fname).exists() or fname.startswith(case.case_id):
@@ -705,9 +710,12 @@ def _tune(cfg: Config, ex, out_dir: Path, meta: dict, threads: int, resume: bool
     meta["tune"] = {"metric": cfg.tune.metric, "train_meshes": [spec_key(t) for t in cfg.tune.train],
                     "budget": cfg.tune.budget, "seed": cfg.tune.seed, "methods": choice}
     prev = previous if isinstance(previous, dict) else {}
-    changed = [c for c in prev.get("changed_on_resume") or [] if isinstance(c, dict)]
+    earlier = prev.get("changed_on_resume")
+    changed = [c for c in earlier if isinstance(c, dict)] if isinstance(earlier, list) else []
+    chosen_before = prev.get("methods") if isinstance(prev.get("methods"), dict) else {}
     for m, ch in choice.items():
-        before = ((prev.get("methods") or {}).get(m) or {}).get("chosen") if isinstance(prev.get("methods"), dict) else None
+        entry = chosen_before.get(m)
+        before = entry.get("chosen") if isinstance(entry, dict) and isinstance(entry.get("chosen"), dict) else None
         if before is not None and before != ch["chosen"]:
             changed.append({"method": m, "before": before, "after": ch["chosen"], "session": meta.get("session_id")})
             print(f"shootout: tuning: {m}: the choice changed on resume, {before or 'as configured'} -> "

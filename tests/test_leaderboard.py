@@ -529,6 +529,7 @@ def test_a_sampled_metric_ties_within_three_standard_errors_and_seeds_are_said()
     ranks, _, _ = L.cell_ranks(spec, df, "surface_dist_mean", "lower", spec.get("axis_params") or ())
     by_mesh = {c.split(L.CELL_SEP)[0]: r for c, r in ranks.iterrows()}       # the leaderboard's ranks tie alike
     assert list(by_mesh["wide"]) == [1.5, 1.5] and list(by_mesh["narrow"]) == [1.0, 2.0]
+    assert L.tie_groups(np.array([1, 2, np.inf]), .01, 0, np.array([np.inf, .1, np.inf])).tolist() == [0, 0, 1]
     rule = rules_from_specs({"simplification": spec})["simplification"]["surface_dist_mean"]
     a, b = rows[0], rows[1]
     assert judge("surface_dist_mean", 1.0, 1.015, a, b, rule=rule) == "same"            # 1.5% < 3 x 0.71%

@@ -215,6 +215,25 @@ def test_a_choice_that_changes_on_resume_is_said_and_kept(tmp_path, capsys):
     rec = json.loads((tmp_path / "run.json").read_text())["tune"]
     assert rec["changed_on_resume"][0]["before"] == {"step": 123.0} and rec["changed_on_resume"][0]["after"] == chosen
     assert rec["methods"]["scratch.implicit"]["chosen"] == chosen
+    # a resume interrupted before it chose (a review) keeps the earlier choice and the record
+    from harness import tune as tune_mod
+
+    def stop(*a, **k):
+        raise KeyboardInterrupt
+    real = tune_mod.choose
+    tune_mod.choose = stop
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            harness.run(cfg, out=tmp_path, quiet=True, workers=1, resume=True)
+    finally:
+        tune_mod.choose = real
+    kept = json.loads((tmp_path / "run.json").read_text())
+    assert kept["status"] == "interrupted" and kept["tune"]["changed_on_resume"] == rec["changed_on_resume"]
+    kept["tune"]["methods"] = "damaged"                 # a hand-edited record: no crash, nothing to compare
+    kept["tune"]["changed_on_resume"] = 5
+    (tmp_path / "run.json").write_text(json.dumps(kept))
+    harness.run(cfg, out=tmp_path, quiet=True, workers=1, resume=True)
+    assert json.loads((tmp_path / "run.json").read_text())["status"] == "finished"
 
 
 def test_a_resumed_tuned_run_counts_what_it_runs(tmp_path, capsys):
@@ -229,3 +248,10 @@ def test_a_resumed_tuned_run_counts_what_it_runs(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "0 to run" in err and "tuning: 0 of 3 training case(s) to run" in err, err
     assert "2 of 2 case(s) already done" in err or "already done" not in err, err
+    rows = pd.read_csv(tmp_path / "smoothing.csv")        # one of the config's own cases to run again
+    drop = rows[(rows["method"] == "scratch.taubin")].index[:1]
+    rows.drop(drop).to_csv(tmp_path / "smoothing.csv", index=False)
+    harness.run(cfg, out=tmp_path, quiet=False, workers=1, resume=True)
+    err = capsys.readouterr().err
+    n = json.loads((tmp_path / "run.json").read_text())["n_cases"]
+    assert f"shootout: {n}/{n} cases" in err, err          # the kept tuned cases count as done (a review)
