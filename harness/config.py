@@ -313,16 +313,21 @@ def _validate(raw: dict, label: str, base_dir: Path, found=()) -> Config:
         else:
             train = []
         if train:                                 # searched on the meshes it is judged on: not a fair test
-            judged = {}
-            for j, m in enumerate(meshes):
+            listed = raw.get("meshes")
+            tested = dict(enumerate(meshes))
+            if isinstance(listed, list) and len(listed) != len(meshes):    # bad entries: number the good ones as given
+                tested = {j: alone[0] for j, e in enumerate(listed) if (alone := _check_meshes([e], base_dir, [], "meshes"))}
+            judged: dict = {}
+            for j, m in tested.items():
                 for key in datasets.content_keys(m):
-                    judged.setdefault(key, j)
+                    judged.setdefault(key, []).append(j)
             for i, m in train:
-                hit = sorted({judged[k] for k in datasets.content_keys(m) if k in judged})
+                hit = sorted({j for k in datasets.content_keys(m) for j in judged.get(k, ())
+                              if not k.startswith("faces:") or datasets.same_surface(m, tested[j])})
                 if hit:
                     what = m.get("bundled") or m.get("procedural") or Path(m.get("file", "?")).name
                     P.append(f"tune.train[{i}]: {what} is also a test mesh (meshes[{hit[0]}]: the same file, the "
-                             "same vertices and faces saved otherwise, the same pair's noisy or clean file, or the "
+                             "same faces and vertices saved otherwise, the same pair's noisy or clean file, or the "
                              "same procedural mesh); tuning on the "
                              "meshes a method is judged on favours the tuned setting: train on other meshes")
 

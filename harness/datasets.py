@@ -77,54 +77,77 @@ def resolve_bundled(name: str) -> str | None:
     return None
 
 
+def _spec_files(spec: dict) -> list[Path]:
+    """The files a mesh spec reads (a bundled mesh's or pair's package files, a file mesh and its
+    clean file); none for a procedural mesh."""
+    if "procedural" in spec:
+        return []
+    if "bundled" in spec:
+        name = resolve_bundled(spec["bundled"])
+        return ([DATA_DIR / PAIRS[name][0], DATA_DIR / PAIRS[name][1]] if name in PAIRS
+                else [DATA_DIR / BUNDLED[name][0]] if name in BUNDLED else [])
+    return [Path(spec[k]) for k in ("file", "clean") if k in spec]
+
+
 def content_keys(spec: dict) -> set[str]:
-    """What a mesh spec is made of, whatever it is called: the sha1 of each file it reads (a
-    bundled mesh's or pair's package files, a file mesh and its clean file) and the surface each
-    holds (`_geometry_key`: the same vertices and faces saved otherwise), or, for a procedural
-    mesh, its kind and parameters. Two specs sharing a key share a surface (`harness.config`
-    refuses training on a test mesh by these)."""
+    """What a mesh spec is made of, whatever it is called: the sha1 of each file it reads and,
+    prefixed ``faces:``, the faces (and vertex count) each holds, or, for a procedural mesh, its
+    kind and parameters. Two specs sharing a key other than ``faces:`` share a surface; sharing a
+    ``faces:`` key, they do when `same_surface` says so (`harness.config` refuses training on a
+    test mesh by these)."""
     import hashlib
     import json
     if "procedural" in spec:
         return {json.dumps({k: v for k, v in spec.items() if k != "name"}, sort_keys=True, default=str)}
-    if "bundled" in spec:
-        name = resolve_bundled(spec["bundled"])
-        files = ([DATA_DIR / PAIRS[name][0], DATA_DIR / PAIRS[name][1]] if name in PAIRS
-                 else [DATA_DIR / BUNDLED[name][0]] if name in BUNDLED else [])
-    else:
-        files = [Path(spec[k]) for k in ("file", "clean") if k in spec]
     out = set()
-    for f in files:
+    for f in _spec_files(spec):
         try:
             out.add(hashlib.sha1(Path(f).read_bytes()).hexdigest())
-            st = Path(f).stat()
         except OSError:            # already a problem of its own (file not found)
             continue
-        key = _geometry_key(str(Path(f).resolve()), st.st_size, st.st_mtime_ns)
-        if key:
-            out.add(key)
+        got = _surface_of(f)
+        if got is not None:
+            out.add(got[0])
     return out
 
 
+SURFACE_TOL = 1e-5     # vertices this close (fraction of the bounding-box diagonal) are the same surface
+
+
+def same_surface(a: dict, b: dict) -> bool:
+    """Whether two mesh specs hold one surface in some file of each: the same faces and vertices,
+    centred and scaled to a unit bounding-box diagonal, within `SURFACE_TOL` (a re-save with six
+    significant digits, another format, a moved or scaled copy; the harness's metrics and noise
+    are scale-free, so a scaled copy is the same test). Reordered or remeshed copies differ."""
+    sa = [x for x in (_surface_of(f) for f in _spec_files(a)) if x is not None]
+    sb = [x for x in (_surface_of(f) for f in _spec_files(b)) if x is not None]
+    return any(ka == kb and float(np.abs(va - vb).max(initial=0.0)) <= SURFACE_TOL
+               for ka, va in sa for kb, vb in sb)
+
+
+def _surface_of(path) -> tuple[str, np.ndarray] | None:
+    try:
+        st = Path(path).stat()
+    except OSError:
+        return None
+    return _surface(str(Path(path).resolve()), st.st_size, st.st_mtime_ns)
+
+
 @functools.lru_cache(maxsize=64)
-def _geometry_key(path: str, size: int, mtime_ns: int) -> str | None:
-    """The surface a mesh file holds, whatever its formatting: a hash of its faces and of its
-    vertices centred and scaled to a unit bounding-box diagonal, rounded to 2^-20 (about 1e-6)
-    of it; None when the file does not read (said elsewhere). The same vertices and faces saved
-    with other number formatting or in another format, moved or scaled, share it (the harness's
-    metrics and noise are scale-free: a scaled copy is the same test)."""
+def _surface(path: str, size: int, mtime_ns: int) -> tuple[str, np.ndarray] | None:
+    """(``faces:`` key, vertices centred and scaled to a unit bounding-box diagonal) of a mesh
+    file as read (no repair), or None when it does not read (said elsewhere)."""
     import hashlib
     try:
         m = read_mesh(path, repair=False)
     except Exception:  # noqa: BLE001 - an unreadable file is a problem of its own
         return None
-    V, F = np.asarray(m.V, dtype=np.float64), np.asarray(m.F, dtype=np.int64)
+    V, F = np.asarray(m.V, dtype=np.float64), np.ascontiguousarray(m.F, dtype=np.int64)
     if not len(V):
         return None
     lo, hi = V.min(axis=0), V.max(axis=0)
     d = float(np.linalg.norm(hi - lo)) or 1.0
-    q = np.rint((V - (lo + hi) / 2) / d * 2.0 ** 20).astype(np.int64)
-    return "geometry:" + hashlib.sha1(q.tobytes() + b"|" + F.tobytes()).hexdigest()
+    return f"faces:{len(V)}:" + hashlib.sha1(F.tobytes()).hexdigest(), (V - (lo + hi) / 2) / d
 
 
 @dataclass

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -154,8 +155,8 @@ def test_a_training_mesh_is_refused_when_it_is_a_test_mesh_by_content(tmp_path):
     from harness.mesh import read_mesh, write_obj
     k = read_mesh(DATA_DIR / "decimated-knight.off", repair=False)
     (tmp_path / "resaved").mkdir()
-    with open(tmp_path / "resaved" / "knight.obj", "w") as fh:
-        fh.write("".join(f"v {x:.9f} {y:.9f} {z:.9f}\n" for x, y, z in k.V))
+    with open(tmp_path / "resaved" / "knight.obj", "w") as fh:          # six decimals, as most exporters
+        fh.write("".join(f"v {x:.6f} {y:.6f} {z:.6f}\n" for x, y, z in k.V))
         fh.write("".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in k.F))
     write_obj(tmp_path / "scaled.obj", 2.0 * k.V, k.F)
     for train, hit in (("fandisk", 1), ({"file": str(tmp_path / "resaved" / "knight.obj")}, 0),
@@ -163,13 +164,19 @@ def test_a_training_mesh_is_refused_when_it_is_a_test_mesh_by_content(tmp_path):
         with pytest.raises(ConfigError, match=rf"tune.train\[0\]: .* is also a test mesh \(meshes\[{hit}\]"):
             load_config({**base, "tune": {**CFG["tune"], "train": [train]}})
     write_obj(tmp_path / "reordered.obj", k.V, k.F[::-1])                  # not recognised (README says so)
-    load_config({**base, "tune": {**CFG["tune"], "train": ["spot", {"file": str(tmp_path / "reordered.obj")}]}})
+    noisy = k.V + 1e-3 * np.linalg.norm(np.ptp(k.V, axis=0)) * np.random.default_rng(0).standard_normal(k.V.shape)
+    write_obj(tmp_path / "noisy.obj", noisy, k.F)                          # same faces, another surface: accepted
+    load_config({**base, "tune": {**CFG["tune"], "train": ["spot", {"file": str(tmp_path / "reordered.obj")},
+                                                            {"file": str(tmp_path / "noisy.obj")}]}})
     with pytest.raises(ConfigError) as exc:      # said beside another problem of tune: (only after its fix before)
         load_config({**base, "tune": {**CFG["tune"], "train": ["knight"], "budget": 0}})
     assert "tune.budget" in str(exc.value) and "tune.train[0]: knight is also a test mesh" in str(exc.value), exc.value
     with pytest.raises(ConfigError) as exc:      # beside a bad training entry too (a review: only after its fix)
         load_config({**base, "tune": {**CFG["tune"], "train": ["woody", "nosuchmesh", "knight"]}})
     assert "tune.train[1]: unknown mesh" in str(exc.value) and "tune.train[2]: knight is also a test mesh" in str(exc.value)
+    with pytest.raises(ConfigError) as exc:      # a bad test mesh before it: the index as given (a review: meshes[0])
+        load_config({**base, "meshes": ["nosuchmesh", "knight"], "tune": {**CFG["tune"], "train": ["knight"]}})
+    assert "tune.train[0]: knight is also a test mesh (meshes[1]" in str(exc.value), exc.value
 
 
 def test_a_setting_within_the_metrics_tolerance_of_the_default_is_not_chosen():
