@@ -653,7 +653,7 @@
         var tied = tiedWith(pts, best, function (p) { return p[1]; }, function (p) { return p[4]; }, rs, key, tol, true);
         var inp = inKey ? mean(rs.map(function (r) { return r[inKey]; }).filter(isNum)) : null;
         if (isNum(inp) && best[1] > inp) anyWorse = true;
-        var front = pareto(pts, tol).map(function (p) { return esc(p[4]) + ' ' + fmt(p[1], 3) + ', ' + fmtTime(p[0]); }).join('<br>');
+        var front = pareto(pts, tol).map(function (p) { return esc(p[4]) + ' ' + fmt(p[1], 3) + ', ' + timeCell(p[0], rs, p[4]); }).join('<br>');
         var tr = el('tr', {html: '<td>' + esc(rs[0].mesh) + '</td><td>' + esc(rs[0]._noise) + '</td><td><i style="color:' +
           d.colors[best[4]] + '">●</i> ' + esc(best[4]) + tiedNote(tied) + '</td><td class="num' +
           (isNum(inp) && best[1] > inp ? ' worse" title="worse than the noisy input' : '') + '">' + fmt(best[1], 4) + '</td><td class="num">' +
