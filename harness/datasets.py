@@ -133,7 +133,7 @@ def _surface_of(path) -> tuple[str, np.ndarray] | None:
     return _surface(str(Path(path).resolve()), st.st_size, st.st_mtime_ns)
 
 
-@functools.lru_cache(maxsize=64)
+@functools.lru_cache(maxsize=8)       # a config's meshes are compared pairwise in one pass; each holds its vertices
 def _surface(path: str, size: int, mtime_ns: int) -> tuple[str, np.ndarray] | None:
     """(``faces:`` key, vertices centred and scaled to a unit bounding-box diagonal) of a mesh
     file as read (no repair), or None when it does not read (said elsewhere)."""
