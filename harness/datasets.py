@@ -115,17 +115,20 @@ SURFACE_TOL = 1e-5     # vertices this close (fraction of the bounding-box diago
 
 
 def same_surface(a: dict, b: dict) -> bool:
-    """Whether two mesh specs hold one surface in some file of each: the same faces and vertices,
-    centred and scaled to a unit bounding-box diagonal, within `SURFACE_TOL` (a re-save with six
-    significant digits, another format, a moved or scaled copy; the harness's metrics and noise
-    are scale-free, so a scaled copy is the same test). Reordered or remeshed copies differ."""
+    """Whether two mesh specs hold one surface in some file of each: the same faces over their
+    referenced vertices, and those vertices, centred and scaled to a unit bounding-box diagonal,
+    within `SURFACE_TOL` times the larger of 1 and the coordinates' size in diagonals (rounding
+    to six significant digits loses in proportion to a coordinate, not to the mesh): a re-save,
+    another format keeping the vertex order, a moved or scaled copy, one with unused vertices
+    (the harness's metrics and noise are scale-free, so a scaled copy is the same test).
+    Reordered copies (an STL, whose reader welds and renumbers vertices) and remeshed ones differ."""
     sa = [x for x in (_surface_of(f) for f in _spec_files(a)) if x is not None]
     sb = [x for x in (_surface_of(f) for f in _spec_files(b)) if x is not None]
-    return any(ka == kb and float(np.abs(va - vb).max(initial=0.0)) <= SURFACE_TOL
-               for ka, va in sa for kb, vb in sb)
+    return any(ka == kb and float(np.abs(va - vb).max(initial=0.0)) <= SURFACE_TOL * max(1.0, ra, rb)
+               for ka, va, ra in sa for kb, vb, rb in sb)
 
 
-def _surface_of(path) -> tuple[str, np.ndarray] | None:
+def _surface_of(path) -> tuple[str, np.ndarray, float] | None:
     try:
         st = Path(path).stat()
     except OSError:
@@ -134,20 +137,28 @@ def _surface_of(path) -> tuple[str, np.ndarray] | None:
 
 
 @functools.lru_cache(maxsize=8)       # a config's meshes are compared pairwise in one pass; each holds its vertices
-def _surface(path: str, size: int, mtime_ns: int) -> tuple[str, np.ndarray] | None:
-    """(``faces:`` key, vertices centred and scaled to a unit bounding-box diagonal) of a mesh
-    file as read (no repair), or None when it does not read (said elsewhere)."""
+def _surface(path: str, size: int, mtime_ns: int) -> tuple[str, np.ndarray, float] | None:
+    """(``faces:`` key, referenced vertices centred and scaled to a unit bounding-box diagonal,
+    the largest coordinate's size in diagonals) of a mesh file as read (unused vertices dropped,
+    nothing else repaired), or None when it does not read (said elsewhere)."""
     import hashlib
     try:
         m = read_mesh(path, repair=False)
     except Exception:  # noqa: BLE001 - an unreadable file is a problem of its own
         return None
-    V, F = np.asarray(m.V, dtype=np.float64), np.ascontiguousarray(m.F, dtype=np.int64)
-    if not len(V):
+    V, F = np.asarray(m.V, dtype=np.float64), np.asarray(m.F, dtype=np.int64)
+    if not len(V) or not F.size or F.min() < 0 or F.max() >= len(V):
         return None
+    used = np.zeros(len(V), dtype=bool)
+    used[F.ravel()] = True
+    new = np.cumsum(used) - 1
+    V, F = V[used], np.ascontiguousarray(new[F])
     lo, hi = V.min(axis=0), V.max(axis=0)
     d = float(np.linalg.norm(hi - lo)) or 1.0
-    return f"faces:{len(V)}:" + hashlib.sha1(F.tobytes()).hexdigest(), (V - (lo + hi) / 2) / d
+    if not np.isfinite(d):
+        return None
+    return (f"faces:{len(V)}:" + hashlib.sha1(F.tobytes()).hexdigest(), (V - (lo + hi) / 2) / d,
+            float(np.abs(V).max()) / d)
 
 
 @dataclass

@@ -159,8 +159,13 @@ def test_a_training_mesh_is_refused_when_it_is_a_test_mesh_by_content(tmp_path):
         fh.write("".join(f"v {x:.6f} {y:.6f} {z:.6f}\n" for x, y, z in k.V))
         fh.write("".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in k.F))
     write_obj(tmp_path / "scaled.obj", 2.0 * k.V, k.F)
+    far = k.V + 10 * np.linalg.norm(np.ptp(k.V, axis=0))                   # ten diagonals away, six significant digits
+    with open(tmp_path / "far.obj", "w") as fh:                              # and one vertex no face uses (a review)
+        fh.write("".join(f"v {x:.6g} {y:.6g} {z:.6g}\n" for x, y, z in np.r_[far, far[:1]]))
+        fh.write("".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in k.F))
     for train, hit in (("fandisk", 1), ({"file": str(tmp_path / "resaved" / "knight.obj")}, 0),
-                       ({"file": str(tmp_path / "scaled.obj")}, 0)):        # scaled: the metrics are scale-free
+                       ({"file": str(tmp_path / "scaled.obj")}, 0),         # scaled: the metrics are scale-free
+                       ({"file": str(tmp_path / "far.obj")}, 0)):
         with pytest.raises(ConfigError, match=rf"tune.train\[0\]: .* is also a test mesh \(meshes\[{hit}\]"):
             load_config({**base, "tune": {**CFG["tune"], "train": [train]}})
     write_obj(tmp_path / "reordered.obj", k.V, k.F[::-1])                  # not recognised (README says so)
