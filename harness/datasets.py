@@ -17,9 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .core.geometry import face_cross
+from .core.geometry import compact, face_cross
 from .errors import InvalidMeshError
-from .mesh import Mesh, read_mesh, validate
+from .mesh import Mesh, file_sha1, read_mesh, validate
 
 DATA_DIR = Path(__file__).parent / "data" / "meshes"
 
@@ -95,14 +95,13 @@ def content_keys(spec: dict) -> set[str]:
     kind and parameters. Two specs sharing a key other than ``faces:`` share a surface; sharing a
     ``faces:`` key, they do when `same_surface` says so (`harness.config` refuses training on a
     test mesh by these)."""
-    import hashlib
     import json
     if "procedural" in spec:
         return {json.dumps({k: v for k, v in spec.items() if k != "name"}, sort_keys=True, default=str)}
     out = set()
     for f in _spec_files(spec):
         try:
-            out.add(hashlib.sha1(Path(f).read_bytes()).hexdigest())
+            out.add(file_sha1(f))
         except OSError:            # already a problem of its own (file not found)
             continue
         got = _surface_of(f)
@@ -146,13 +145,10 @@ def _surface(path: str, size: int, mtime_ns: int) -> tuple[str, np.ndarray, floa
         m = read_mesh(path, repair=False)
     except Exception:  # noqa: BLE001 - an unreadable file is a problem of its own
         return None
-    V, F = np.asarray(m.V, dtype=np.float64), np.asarray(m.F, dtype=np.int64)
-    if not len(V) or not F.size or F.min() < 0 or F.max() >= len(V):
+    F = np.asarray(m.F, dtype=np.int64)
+    if not len(m.V) or not F.size or F.min() < 0 or F.max() >= len(m.V):
         return None
-    used = np.zeros(len(V), dtype=bool)
-    used[F.ravel()] = True
-    new = np.cumsum(used) - 1
-    V, F = V[used], np.ascontiguousarray(new[F])
+    V, F = compact(m.V, F)
     lo, hi = V.min(axis=0), V.max(axis=0)
     d = float(np.linalg.norm(hi - lo)) or 1.0
     if not np.isfinite(d):
