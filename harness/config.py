@@ -300,28 +300,15 @@ def _validate(raw: dict, label: str, base_dir: Path, found=()) -> Config:
             return seen[-1]
         tune = check_tune(raw["tune"], base_dir, P, tasks, check_train)
         given = raw["tune"].get("train") if isinstance(raw["tune"], dict) else None
-        if tune is not None:
-            train = list(enumerate(tune.train))
-        elif seen and isinstance(given, list) and len(seen[0]) == len(given):
-            train = list(enumerate(seen[0]))
-        elif isinstance(given, list):             # some entries are bad: check the others alone (their problems are listed)
-            train = []
-            for i, entry in enumerate(given):
-                alone = _check_meshes([entry], base_dir, [], "tune.train")
-                if alone:
-                    train.append((i, alone[0]))
-        else:
-            train = []
+        train = (dict(enumerate(tune.train)) if tune is not None
+                 else _numbered(given, seen[0] if seen else [], base_dir, "tune.train"))
         if train:                                 # searched on the meshes it is judged on: not a fair test
-            listed = raw.get("meshes")
-            tested = dict(enumerate(meshes))
-            if isinstance(listed, list) and len(listed) != len(meshes):    # bad entries: number the good ones as given
-                tested = {j: alone[0] for j, e in enumerate(listed) if (alone := _check_meshes([e], base_dir, [], "meshes"))}
+            tested = _numbered(raw.get("meshes"), meshes, base_dir, "meshes")
             judged: dict = {}
             for j, m in tested.items():
                 for key in datasets.content_keys(m):
                     judged.setdefault(key, []).append(j)
-            for i, m in train:
+            for i, m in train.items():
                 hit = sorted({j for k in datasets.content_keys(m) for j in judged.get(k, ())
                               if not k.startswith("faces:") or datasets.same_surface(m, tested[j])})
                 if hit:
@@ -408,6 +395,17 @@ def expand_cases(meshes: list, noises, tasks: dict, seed: int, repeats: int, plu
                                           params, repeats, plugins, hs, budget, hausdorff_eps=eps))
     seen = set()
     return [c for c in cases if not (c.case_id in seen or seen.add(c.case_id))]
+
+
+def _numbered(listed, valid: list, base_dir: Path, key: str) -> dict:
+    """``{index as listed: spec}`` of a mesh list's valid entries: ``valid`` (`_check_meshes`'s
+    result) when every entry was, else each entry checked alone (their problems are listed
+    already), so a message names an entry by its place in the config."""
+    if not isinstance(listed, list):
+        return {}
+    if len(valid) == len(listed):
+        return dict(enumerate(valid))
+    return {i: alone[0] for i, e in enumerate(listed) if (alone := _check_meshes([e], base_dir, [], key))}
 
 
 def _check_meshes(meshes, base_dir: Path, P: list, key: str = "meshes") -> list[dict]:
