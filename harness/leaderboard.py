@@ -196,14 +196,24 @@ def cell_values(spec: dict, df: pd.DataFrame, metric: str, axis_params=(), cells
     d = _cells(spec, df, axis_params) if cells is None else cells
     keys = [d["_cell"], d["_variant"]]
     g = _value(d, metric).groupby(keys)
-    seed = (d["seed"] if "seed" in d else pd.Series(0, index=d.index)).astype(str)
+    seed = _seed_text(d)
     own = seed.groupby(keys).nunique()               # a variant with no row on a seed of its cell (a case that
-    cell_seeds = seed.groupby(d["_cell"]).nunique()  # never ran) is blank there too, not a mean over fewer seeds
+    cell_seeds = _cell_seeds(d)                      # never ran) is blank there too, not a mean over fewer seeds
     all_seeds = own.to_numpy() == cell_seeds.reindex(own.index.get_level_values(0)).to_numpy()
     every_seed = (g.count() == g.size()) & all_seeds  # no mean over the seeds that happen to have a value
     vals = g.mean().where(every_seed).unstack("_variant")
     inval = d["_invalid"].groupby(keys).any().unstack("_variant").reindex_like(vals).fillna(False).astype(bool)
     return vals, inval
+
+
+def _seed_text(d: pd.DataFrame) -> pd.Series:
+    """Each row's noise seed as text ("0" where the frame has no seed column)."""
+    return (d["seed"] if "seed" in d else pd.Series(0, index=d.index)).astype(str)
+
+
+def _cell_seeds(d: pd.DataFrame) -> pd.Series:
+    """How many noise seeds each cell's rows have (`_cells` frame), by cell label."""
+    return _seed_text(d).groupby(d["_cell"]).nunique()
 
 
 def seed_values(spec: dict, df: pd.DataFrame, metric: str, axis_params=(), cells=None) -> pd.DataFrame:
@@ -248,8 +258,7 @@ def _mean_se(spec: dict, df: pd.DataFrame, metric: str, axis_params=(), cells=No
     d = (_cells(spec, df, axis_params) if cells is None else cells).copy()
     d["_se2"] = pd.to_numeric(d[col], errors="coerce") ** 2
     mean_sq, _ = cell_values(spec, d, "_se2", axis_params, d)
-    seeds = (d["seed"].astype(str) if "seed" in d else pd.Series("0", index=d.index)).groupby(d["_cell"]).nunique()
-    n = seeds.reindex(mean_sq.index).to_numpy(dtype=np.float64)[:, None]
+    n = _cell_seeds(d).reindex(mean_sq.index).to_numpy(dtype=np.float64)[:, None]
     return float(m.get("se_z", 3.0)) * np.sqrt(mean_sq / n)
 
 
@@ -339,9 +348,7 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
         spec = specs.get(task) or {}
         axis = spec.get("axis_params") or ()
         cells = _cells(spec, df, axis) if len(df) else None       # once per task, for every metric
-        n_seeds = ({} if cells is None else                        # the noise draws each cell's rows have
-                   (cells["seed"].astype(str) if "seed" in cells else pd.Series("0", index=cells.index))
-                   .groupby(cells["_cell"]).nunique().to_dict())
+        n_seeds = {} if cells is None else _cell_seeds(cells).to_dict()      # the noise draws each cell's rows have
         for m in spec.get("metrics", []):
             if not m.get("rank") or m.get("better") not in ("lower", "higher") or m["name"] not in df or not len(df):
                 continue
