@@ -172,6 +172,7 @@ def default_labels(paths: list) -> list[str]:
                 break
     return out
 
+
 def eval_files(clean, results, out, noisy=None, task: str | None = None, labels=None,
                hausdorff_samples: int = 20000, target_faces: int | None = None,
                target_ratio: float | None = None, hausdorff_eps: float = 1e-3) -> dict:
@@ -183,7 +184,6 @@ def eval_files(clean, results, out, noisy=None, task: str | None = None, labels=
     P = [p.replace("--target_faces", "--target-faces").replace("--target_ratio", "--target-ratio") for p in P]
     if labels and len(labels) != len(results):
         P.append(f"--label: {len(labels)} label(s) for {len(results)} result file(s)")
-
     if task == "smoothing" and (target_faces is not None or target_ratio is not None):
         P.append("--target-faces, --target-ratio: a smoothing result has no target (drop them, or --task simplification)")
     entries = [{"file": r, "clean": Path(clean), "noisy": Path(noisy) if noisy else None, "task": task,

@@ -263,13 +263,9 @@ def _results_config(source):
     return (raw, base) if isinstance(raw, dict) and "results" in raw and "tasks" not in raw else None
 
 
-def _inside(path: Path, folder: Path) -> bool:
+def _inside(path, folder) -> bool:
     """Whether ``path`` lies in ``folder`` (both made absolute, links not followed)."""
-    try:
-        Path(os.path.abspath(path)).relative_to(os.path.abspath(folder))
-        return True
-    except ValueError:
-        return False
+    return Path(os.path.abspath(path)).is_relative_to(Path(os.path.abspath(folder)))
 
 
 class DiskFull(ShootoutError):
@@ -385,7 +381,7 @@ def _no_room(exc: OSError, out_dir, then: str = "the run is marked interrupted a
            errno.EDQUOT: "the disk quota is used up"}.get(exc.errno, "the disk is full")
     where = Path(exc.filename) if isinstance(exc.filename, (str, bytes, os.PathLike)) and exc.filename else None
     note = ""
-    if where is not None and not Path(os.path.abspath(where)).is_relative_to(Path(os.path.abspath(out_dir))):
+    if where is not None and not _inside(where, out_dir):
         note = (f" (not in the run folder {out_dir}: the cases' temporary files go to {tempfile.gettempdir()}, "
                 "set by TMPDIR)")
     return f"{where or out_dir}: {why} ({exc.strerror}){note}; {then}"
@@ -556,19 +552,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         raise
     bar = None
     if not quiet:
-        n_train = 0
-        if cfg.tune is not None:                  # training cases not yet done (a resume keeps tune/'s ok rows)
-            ids = {c.case_id for c in cfg.tune.cases}
-            kept = set()
-            if resume:
-                tf = RunFolder(out_dir / "tune")
-                for t in {c.task for c in cfg.tune.cases}:
-                    try:
-                        kept |= {r["case_id"] for r in tf.read_rows(t) if r.get("status") == "ok"} & ids
-                    except Exception:  # noqa: BLE001 - a damaged training CSV: the tuning step says so
-                        pass
-            n_train = len(ids - kept)
-        n_todo = len(cases) + n_train
+        n_todo = len(cases) + _training_left(cfg, out_dir, resume)
         own_ids = {c.case_id for c in cfg.cases}
         if resume:
             print(f"shootout: resuming {out_dir}: {len(done)} finished case(s) kept, {n_todo} to run"
@@ -623,8 +607,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         folder.remove_temporaries()
         if exc.errno in NO_ROOM:
             raise DiskFull(_no_room(exc, out_dir)) from None
-        inside = exc.filename is not None and _inside(Path(str(exc.filename)), out_dir)
-        if not inside:                      # not a file of the run folder (a socket, a fork): as it came
+        if exc.filename is None or not _inside(str(exc.filename), out_dir):   # not a run file (a socket, a fork)
             raise
         raise RunInterrupted(f"{exc.filename}: {exc.strerror or exc}: the run could not write its "
                              "files (was the run folder changed while it ran?); the rows written so far are kept: "
@@ -682,6 +665,23 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
             pass
         raise
     return Frames(folder.frames(), not_written)
+
+
+def _training_left(cfg: Config, out_dir: Path, resume: bool) -> int:
+    """How many training cases of ``tune:`` will run: all, or on ``--resume`` those without an
+    ok row in ``tune/`` (what `_tune` keeps); 0 without ``tune:``."""
+    if cfg.tune is None:
+        return 0
+    ids = {c.case_id for c in cfg.tune.cases}
+    kept: set = set()
+    if resume:
+        tf = RunFolder(out_dir / "tune")
+        for t in {c.task for c in cfg.tune.cases}:
+            try:
+                kept |= {r["case_id"] for r in tf.read_rows(t) if r.get("status") == "ok"} & ids
+            except Exception:  # noqa: BLE001 - a damaged training CSV: the tuning step says so
+                pass
+    return len(ids - kept)
 
 
 def _tune(cfg: Config, ex, out_dir: Path, meta: dict, threads: int, resume: bool, quiet: bool,
