@@ -16,7 +16,8 @@ seed) of the run's noise models; its score is the mean metric over those cases, 
 with a failed or invalid case (diverged, ended worse than its noisy input, non-manifold or
 topology-changing output) scores infinitely bad. The best score wins (ties: the earlier
 candidate, the defaults first), but it replaces the setting as configured only when better than
-it beyond the metric's compare tolerance (``max(rel * |default|, abs)``): a difference the
+it beyond the metric's compare tolerance (``max(rel * |default|, abs)``, and for a sampled metric
+at least ``SE_Z`` times the two means' combined standard error, `mean_se`): a difference the
 rankings call a tie chooses nothing. The tuned setting then runs on the test meshes as extra cases;
 ``run.json`` records per method the chosen parameters, the training scores of the defaults and of
 the chosen setting, the number of candidates and the tuned case ids, and the report shows default
@@ -31,6 +32,8 @@ from collections import Counter
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from .tasks.base import SE_Z
 
 TUNE_KEYS = {"metric", "train", "budget", "seed", "params"}
 
@@ -205,6 +208,16 @@ def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | 
     return TuneSpec(metric=metric, train=train, budget=budget, seed=seed, params=out_params, configured=configured)
 
 
+def mean_se(rows, se: str) -> float:
+    """The standard error of the mean of a sampled metric over ``rows`` from each row's own
+    (column ``se``): ``sqrt(sum se_i^2) / n``, the rows' draws being independent; 0 for a metric
+    that is not sampled or rows that state none, infinite when one row's is (the default then stays)."""
+    if not se or se not in rows or rows.empty:
+        return 0.0
+    e = np.nan_to_num(rows[se].astype(float).to_numpy(), nan=0.0, posinf=np.inf)   # unknown: no choice
+    return float(math.sqrt(float(np.sum(e * e))) / len(e))
+
+
 def choose(tune: TuneSpec, frames: dict) -> dict:
     """Per method: the chosen overrides and the training scores (see the module docstring)."""
     from . import tasks
@@ -213,12 +226,14 @@ def choose(tune: TuneSpec, frames: dict) -> dict:
     for m in tune.params:
         task = tune.configured[m][0]
         df = frames.get(task)
-        better = tasks.get(task).metric(tune.metric).better
+        mt = tasks.get(task).metric(tune.metric)
+        better = mt.better
         sign = -1.0 if better == "higher" else 1.0
-        scores = []
+        scores, errs = [], []
         for cand in tune.candidates(m):
             if df is None:
                 scores.append(math.inf)
+                errs.append(0.0)
                 continue
             rows = df[df["method"] == m]
             ps = [json.loads(p) for p in rows["params"]]
@@ -228,10 +243,11 @@ def choose(tune: TuneSpec, frames: dict) -> dict:
             bad = (validity(tasks.get(task).spec(), sel) != "").any() or sel.empty
             val = sel[tune.metric].astype(float).mean() if not sel.empty else math.nan
             scores.append(math.inf if bad or not math.isfinite(val) else sign * val)
+            errs.append(mean_se(sel, mt.se))
         best = int(np.argmin(scores)) if scores else 0
         if best and math.isfinite(scores[0]):     # as configured stays unless beaten beyond the tolerance
-            mt = tasks.get(task).metric(tune.metric)
-            if not scores[0] - scores[best] > max(mt.rel * abs(scores[0]), mt.abs):
+            tol = max(mt.rel * abs(scores[0]), mt.abs, SE_Z * math.hypot(errs[0], errs[best]))
+            if not scores[0] - scores[best] > tol:
                 best = 0
         cands = tune.candidates(m)
         out[m] = {"task": task, "chosen": cands[best], "candidates": len(cands),

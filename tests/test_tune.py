@@ -267,3 +267,42 @@ def test_a_resumed_tuned_run_counts_what_it_runs(tmp_path, capsys):
     err = capsys.readouterr().err
     n = json.loads((tmp_path / "run.json").read_text())["n_cases"]
     assert f"shootout: {n}/{n} cases" in err, err          # the kept tuned cases count as done (a review)
+
+
+def test_a_sampled_metric_chooses_and_pairs_only_beyond_its_standard_errors():
+    """A review: the choice and the per-case table used only ``max(rel * |a|, abs)``, so sampling
+    noise of ``surface_dist_mean`` (20,000 points a side by default) could choose a setting and
+    count it better. Both now also need ``SE_Z`` combined standard errors; without them, as before."""
+    import methods
+    from harness import tasks
+    from harness.report.html import _paired
+    from harness.tune import choose, mean_se
+    cfg = load_config({"name": "t", "meshes": ["bunny"], "noise": [{"model": "none"}],
+                       "tasks": {"simplification": {"methods": ["scratch.qem"], "params": {"target_ratio": [0.5]}}},
+                       "tune": {"metric": "surface_dist_mean", "train": ["spot"],
+                                "params": {"scratch.qem": {"boundary_weight": [10.0]}}}})
+    tune = cfg.tune
+    cands = tune.candidates("scratch.qem")
+    assert len(cands) == 2 and cands[0] == {}
+
+    def frame(values, se):
+        rows = [{"method": "scratch.qem", "params": json.dumps(methods.get("scratch.qem").with_defaults(c)),
+                 "status": "ok", "surface_dist_mean": v, "surface_dist_mean_se": se}
+                for c, v in zip(cands, values)]
+        return {"simplification": pd.DataFrame(rows)}
+    # 2% better: beyond the 1% tolerance, within 3 standard errors of 0.005 each (3 x 0.0071)
+    assert choose(tune, frame([1.0, 0.98], 0.005))["scratch.qem"]["chosen"] == {}
+    assert choose(tune, frame([1.0, 0.98], 0.001))["scratch.qem"]["chosen"] == cands[1]
+    assert choose(tune, frame([1.0, 0.98], np.nan))["scratch.qem"]["chosen"] == cands[1]      # none stated
+    assert choose(tune, frame([1.0, 0.98], np.inf))["scratch.qem"]["chosen"] == {}            # unknown
+    assert mean_se(pd.DataFrame({"e": [3.0, 4.0]}), "e") == 2.5 and mean_se(pd.DataFrame({"e": [1.0]}), "") == 0.0
+    spec = tasks.get("simplification").spec()
+    ch = {"better": "lower", "chosen": cands[1]}
+
+    def paired(se):
+        every = pd.DataFrame([{"mesh": "bunny", "noise_model": "none", "noise_level": 0, "seed": 0, "status": "ok",
+                               "params": json.dumps(methods.get("scratch.qem").with_defaults(c)),
+                               "surface_dist_mean": v, "surface_dist_mean_se": se}
+                              for c, v in zip(cands, [1.0, 0.98])])
+        return _paired(every, pd.Series([False, True]), "surface_dist_mean", ch, spec)
+    assert paired(0.005) == "0 / 1 / 0 of 1" and paired(0.001) == "1 / 0 / 0 of 1"
