@@ -554,3 +554,39 @@ def test_the_report_ties_a_sampled_metric_within_three_standard_errors_as_winner
             cdp.close()
         assert len(best) == 1 and "libigl.qslim" in best[0] and ("(tied: scratch.qem)" in best[0]) == tied, best
         assert re.search(r"s \[[0-9.]+ [µm]?s–[0-9.]+ [µm]?s\]", best[0]), best       # times carry their spread
+
+
+def test_the_pareto_front_tells_times_apart_only_beyond_their_noise(tiny_run, tmp_path):
+    """A review: the front ordered methods by bare median times, so a method 2% slower within
+    overlapping quartiles and as accurate left the front. A point now leaves it only for one
+    faster beyond the timing noise (as the fastest's ties) and not less accurate, or not slower
+    and more accurate beyond the metric's tolerance."""
+    import csv
+    import shutil
+
+    from harness.report.html import build_report
+    run = tmp_path / "run"
+    shutil.copytree(tiny_run, run)
+    sm = run / "smoothing.csv"
+    rows = list(csv.DictReader(sm.open()))
+    cell = [r for r in rows if r["mesh"] == "knight" and r["noise_level"] and float(r["noise_level"]) == 0.2]
+    tmpl = cell[0]
+    rows = [r for r in rows if r not in cell]
+    # (method, median, q1, q3, dist_mean)
+    pts = [("a.fast", 0.50, 0.45, 0.55, 0.70),      # fastest: on the front
+           ("b.ref", 1.00, 0.95, 1.05, 0.50),       # more accurate than a: on
+           ("c.twin", 1.02, 0.97, 1.07, 0.501),     # b's time within noise, b's accuracy within 1%: on (was off)
+           ("d.worse", 1.01, 0.96, 1.06, 0.60),     # b's time within noise, less accurate: off
+           ("e.slow", 3.00, 2.90, 3.10, 0.30),      # slower beyond noise, more accurate: on
+           ("f.slower", 3.50, 3.40, 3.60, 0.302)]   # slower than e beyond noise, as accurate: off
+    for i, (m, t, q1, q3, y) in enumerate(pts):
+        rows.append(dict(tmpl, method=m, params="{}", case_id=tmpl["case_id"][:-2] + f"p{i}", seed="0",
+                         time_s=repr(t), time_q1_s=repr(q1), time_q3_s=repr(q3), dist_mean=repr(y),
+                         input_dist_mean="1.0", status="ok", diverged="False"))
+    _write_rows(sm, rows)
+    build_report(run)
+    s = check_report_in_browser(run / "report.html", interact=False)
+    assert s["console_errors"] == [] and s["exceptions"] == [] and s["jserrors"] == 0
+    (row,) = [r for r in s["bestRows"] if r.startswith("knightgaussian_normal 0.2") and "b.ref" in r]
+    names = re.findall(r"([a-f]\.[a-z]+) 0\.\d+, ", row)           # the front's entries: "name value, time"
+    assert names == ["a.fast", "b.ref", "c.twin", "e.slow"], row

@@ -276,16 +276,23 @@
     plotsRendered++;
     return svg;
   }
-  // pts [[x,y,...]]: minimal x and y; returns the front sorted by x. With tol ([rel, abs], `tolOf`),
-  // a point joins the front only when it is more accurate than every faster point beyond the tolerance.
-  function pareto(pts, tol) {
+  // pts [[time, value, tip, n, variant]] of one panel (rows rs, metric key, lower is better): the
+  // points no other point dominates, sorted by time. q dominates p when q is faster beyond the timing
+  // noise (`timeTiedWith` tells them apart, as the fastest's ties) and not less accurate beyond the
+  // metric's tolerance, or not slower beyond the noise and more accurate beyond the tolerance (as the
+  // winners' ties: `ties` of the means and beaten on every seed). Points that tie both ways stay both.
+  function pareto(pts, tol, rs, key) {
     var s = pts.filter(function (p) { return isNum(p[0]) && isNum(p[1]); })
       .slice().sort(function (a, b) { return a[0] - b[0] || a[1] - b[1]; });
-    var out = [], best = Infinity;
-    s.forEach(function (p) {
-      if (p[1] < best && !(tol && isFinite(best) && ties(p[1], best, tol))) { out.push(p); best = p[1]; }
+    var faster = function (q, p) { return q[0] < p[0] && !timeTiedWith(rs, q[4], p[4]); };
+    var better = function (q, p) {
+      return q[1] < p[1] && !ties(p[1], q[1], tol) && beatenOnEverySeed(rs, q[4], p[4], key, tol, true);
+    };
+    return s.filter(function (p) {
+      return !s.some(function (q) {
+        return q !== p && ((faster(q, p) && !better(p, q)) || (!faster(p, q) && better(q, p)));
+      });
     });
-    return out;
   }
   // the compare tolerance the task declares for a metric (as the leaderboard and winners.csv use it):
   // a value within max(rel * |best|, abs) of the best ties with it
@@ -653,7 +660,7 @@
         var tied = tiedWith(pts, best, function (p) { return p[1]; }, function (p) { return p[4]; }, rs, key, tol, true);
         var inp = inKey ? mean(rs.map(function (r) { return r[inKey]; }).filter(isNum)) : null;
         if (isNum(inp) && best[1] > inp) anyWorse = true;
-        var front = pareto(pts, tol).map(function (p) { return esc(p[4]) + ' ' + fmt(p[1], 3) + ', ' + timeCell(p[0], rs, p[4]); }).join('<br>');
+        var front = pareto(pts, tol, rs, key).map(function (p) { return esc(p[4]) + ' ' + fmt(p[1], 3) + ', ' + timeCell(p[0], rs, p[4]); }).join('<br>');
         var tr = el('tr', {html: '<td>' + esc(rs[0].mesh) + '</td><td>' + esc(rs[0]._noise) + '</td><td><i style="color:' +
           d.colors[best[4]] + '">●</i> ' + esc(best[4]) + tiedNote(tied) + '</td><td class="num' +
           (isNum(inp) && best[1] > inp ? ' worse" title="worse than the noisy input' : '') + '">' + fmt(best[1], 4) + '</td><td class="num">' +
@@ -669,12 +676,13 @@
       // accuracy vs time
       var panels = panelGroup(plots, 'Accuracy vs time, per mesh and noise level',
         'x: median time of the method call (log); y: ' + esc(key) + ' (mean over seeds). Black-ringed points and the dashed ' +
-        'staircase are the Pareto front: no other method in the panel is both faster and more accurate (beyond the ' +
-        'metric\'s tolerance, as in the winner tables). ' + (showInvalid ? '' : 'Invalid results are not plotted. ') +
+        'staircase are the Pareto front: no other method in the panel is faster beyond the timing noise and not less ' +
+        'accurate, or not slower and more accurate beyond the metric\'s tolerance (as the winner tables tie them; ' +
+        'times are told apart as the fastest\'s ties are). ' + (showInvalid ? '' : 'Invalid results are not plotted. ') +
         (inKey ? 'The grey dashed line is the noisy input: points above it made the mesh worse.' : ''),
         mkLeg(inKey ? ['noisy input', 'Pareto front'] : ['Pareto front']));
       groupBy(vis.filter(validOrShown), panelsKey).forEach(function (rs, title) {
-        var pts = aggregate(rs, key), front = pareto(pts, tol);
+        var pts = aggregate(rs, key), front = pareto(pts, tol, rs, key);
         var onFront = new Set(front);
         var series = [];
         groupBy(pts, function (p) { return p[4]; }).forEach(function (ps, v) {
