@@ -72,8 +72,8 @@ class _Lines:
         now = time.perf_counter()
         if now - self.last >= self.every or self.n == self.total:
             self.last = now
-            print(f"shootout: {self.n}/{self.total} cases, {now - self.t0:.0f} s (last: {self.what})",
-                  file=sys.stderr, flush=True)
+            print(f"shootout: {self.n}/{self.total} cases, {now - self.t0:.0f} s"
+                  + (f" (last: {self.what})" if self.what else ""), file=sys.stderr, flush=True)
 
     def close(self):
         pass
@@ -440,6 +440,16 @@ def relabelled_meshes(folder, cases) -> list[str]:
             for (old, new) in sorted(seen)]
 
 
+def _earlier_tuned_ids(record) -> set:
+    """The tuned test cases an earlier session's choice (run.json ``tune``) made; none of a
+    record that does not hold them as written."""
+    methods = record.get("methods") if isinstance(record, dict) else None
+    if not isinstance(methods, dict):
+        return set()
+    return {str(c) for ch in methods.values() if isinstance(ch, dict) and isinstance(ch.get("test_case_ids"), list)
+            for c in ch["test_case_ids"]}
+
+
 def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, executor, scheduler, resume, quiet,
                 export_benchmark_json, ex):
     done: set[str] = set()
@@ -535,6 +545,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         meta["resumed_at"] = now_iso()
         if cfg.tune is not None and isinstance((prev_meta or {}).get("tune"), dict):
             meta["tune"] = prev_meta["tune"]      # the earlier choice stands until this session's tuning chooses
+            meta["n_cases"] = len(cfg.cases) + len(_earlier_tuned_ids(meta["tune"]))   # its cases too, until then
     if executor == "dask":       # the cluster's worker threads, not --workers
         meta.update(ex.describe())
     try:

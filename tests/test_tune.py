@@ -241,6 +241,10 @@ def test_a_choice_that_changes_on_resume_is_said_and_kept(tmp_path, capsys):
         tune_mod.choose = real
     kept = json.loads((tmp_path / "run.json").read_text())
     assert kept["status"] == "interrupted" and kept["tune"]["changed_on_resume"] == rec["changed_on_resume"]
+    # its case count still holds the earlier choice's tuned cases it kept (it counted the config's alone)
+    full = json.loads(json.dumps(rec))
+    assert kept["n_cases"] == len(cfg["meshes"]) * 2 + len(full["methods"]["scratch.implicit"]["test_case_ids"])
+    assert kept["resumed_ok_cases"] <= kept["n_cases"]
     kept["tune"]["methods"] = "damaged"                 # a hand-edited record: no crash, nothing to compare
     kept["tune"]["changed_on_resume"] = 5
     (tmp_path / "run.json").write_text(json.dumps(kept))
@@ -259,6 +263,7 @@ def test_a_resumed_tuned_run_counts_what_it_runs(tmp_path, capsys):
     harness.run(cfg, out=tmp_path, quiet=False, workers=1, resume=True)
     err = capsys.readouterr().err
     assert "0 to run" in err and "tuning: 0 of 3 training case(s) to run" in err, err
+    assert "(last: )" not in err, err                      # kept cases name no last case
     assert "2 of 2 case(s) already done" in err or "already done" not in err, err
     rows = pd.read_csv(tmp_path / "smoothing.csv")        # one of the config's own cases to run again
     drop = rows[(rows["method"] == "scratch.taubin")].index[:1]
