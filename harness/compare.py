@@ -490,13 +490,14 @@ def _rows(run) -> dict[str, dict]:
     folder = RunFolder(run)
     if not Path(run).is_dir():
         raise ShootoutError(f"{run}: no such run folder")
+    from . import tasks
+    unknown = folder.missing_task_kinds()
+    if unknown:               # a task kind this installation lacks (e.g. a fork's harness/tasks/area.py): its rows
+        raise ShootoutError(f"{run}: its task kind(s) {', '.join(unknown)} are not known to this installation "
+                            f"(known: {', '.join(tasks.names())}), so their rows could not be compared; compare it "
+                            "with the version that made it")
     frames = folder.frames()
     if not frames:
-        from . import tasks
-        unknown = sorted(t for t in (folder.read_run_json() or {}).get("tasks") or {} if t not in tasks.names())
-        if unknown:           # a task kind this installation lacks (e.g. a fork's harness/tasks/area.py)
-            raise ShootoutError(f"{run}: its task kind(s) {', '.join(unknown)} are not known to this installation "
-                                f"(known: {', '.join(tasks.names())}); compare it with the version that made it")
         raise ShootoutError(f"{run}: not a run folder (no task CSV such as smoothing.csv)")
     out, twice = {}, set()
     for task, df in frames.items():

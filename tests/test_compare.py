@@ -526,6 +526,15 @@ def test_a_run_of_an_unknown_task_kind_is_named_as_such(run_a, tmp_path):
     (b / "run.json").write_text(json.dumps(meta))
     with pytest.raises(harness.errors.ShootoutError, match="task kind\\(s\\) area are not known to this installation"):
         run_compare(b, run_a)
+    # beside a known kind's rows too (a review: compare left the area rows out, exit 0 on their regression)
+    c = copy(run_a, tmp_path, "c")
+    (c / "area.csv").write_text("case_id,task\nx,area\n")
+    meta = json.loads((c / "run.json").read_text())
+    meta["tasks"] = {**meta["tasks"], "area": {"name": "area"}}
+    (c / "run.json").write_text(json.dumps(meta))
+    for a, z in ((c, run_a), (run_a, c)):
+        with pytest.raises(harness.errors.ShootoutError, match="area are not known to this installation.*could not be compared"):
+            run_compare(a, z)
 
 
 def test_report_load_run_and_a_fresh_run_with_a_task_kind_not_installed(run_a, tmp_path, capsys):
