@@ -19,8 +19,9 @@ refused:
   by more than ``max(1 % of |a - 1|, 1e-4)``;
 * flags regress when a good value turns bad: ``SYM LOC LIN POS psd operator_symmetric manifold``
   true -> false, ``diverged topology_changed`` false -> true; ``loc_violations`` may not grow;
-* ``out_faces`` regresses when its miss of ``target_faces`` grows by more than
-  ``1 % of the target + 2 faces`` (the task's `target_tolerance`, which decides ``over_target``);
+* a count with a target (``out_faces``, ``Metric.target``: ``target_faces``) regresses when its
+  miss of the target grows by more than ``1 % of the target + 2`` (`harness.tasks.base.target_tolerance`,
+  which also decides simplification's ``over_target``);
 * a value that becomes blank (not measurable any more) regresses; one that appears improves;
 * time is decided on the stored samples (``times``): it regresses when B is slower with
   statistical significance *and* by a minimum effect: the one-sided Mann-Whitney U test of
@@ -84,7 +85,7 @@ from pathlib import Path
 
 from .errors import ShootoutError
 from .leaderboard import params_text
-from .tasks.simplification import target_tolerance
+from .tasks.base import target_tolerance
 from .results import RunFolder
 from .schema import fmt
 from .schema import number as _num
@@ -103,6 +104,7 @@ class Rule:
     abs: float = 0.0
     se: str = ""         # a sampled metric's standard-error column (`harness.tasks.base.Metric`)
     se_z: float = 3.0
+    target: str = ""     # kind target: the column of the count asked for (`Metric.target`)
 
 
 COMMON_RULES = {"n_vertices": Rule("input"), "n_faces": Rule("input"), "peak_rss_mb": Rule("info")}
@@ -114,7 +116,7 @@ def rules_from_specs(specs: dict) -> dict[str, dict[str, Rule]]:
     for task, spec in (specs or {}).items():
         try:
             out[task] = {m["name"]: Rule(m.get("better", "info"), float(m.get("rel", 0.01)), float(m.get("abs", 0.0)),
-                                         str(m.get("se") or ""), float(m.get("se_z", 3.0)))
+                                         str(m.get("se") or ""), float(m.get("se_z", 3.0)), str(m.get("target") or ""))
                          for m in spec.get("metrics", [])}
         except (AttributeError, KeyError, TypeError, ValueError):
             continue
@@ -180,7 +182,7 @@ def judge(metric: str, a, b, row_a=None, row_b=None, rule: Rule | None = None) -
     if rule.kind == "count":
         return "same" if x == y else ("regression" if y > x else "improvement")
     if rule.kind == "target":
-        t = _num((row_b or {}).get("target_faces"))
+        t = _num((row_b or {}).get(rule.target)) if rule.target else None
         if t is None:
             return "same" if x == y else "changed"
         miss_a, miss_b = abs(x - t), abs(y - t)
@@ -691,9 +693,13 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
         for m in rules_a[t].keys() & rules_b[t].keys():
             if not rules_a[t][m].se and rules_b[t][m].se:
                 rules[t][m] = replace(rules_a[t][m], se=rules_b[t][m].se, se_z=rules_b[t][m].se_z)
+    for t, rs in rules.items():                 # a target column neither run names (older run.json): the kind's
+        for m, r in rs.items():
+            if r.kind == "target" and not r.target:
+                rs[m] = replace(r, target=(rules_b.get(t, {}).get(m) or r).target or rule_for(m, t).target)
     other_rules = sorted(f"{t}.{m}" for t in rules_a.keys() & rules_b.keys()
                          for m in rules_a[t].keys() & rules_b[t].keys()
-                         if replace(rules_a[t][m], se="", se_z=3.0) != replace(rules_b[t][m], se="", se_z=3.0))
+                         if replace(rules_a[t][m], se="", se_z=3.0, target="") != replace(rules_b[t][m], se="", se_z=3.0, target=""))
     ca, cb = ((m.get("machine") or {}).get("cpu_count") for m in (meta_a, meta_b))
     threads = tuple((m.get("timing") or {}).get("threads_per_case") if isinstance(m.get("timing"), dict) else None
                     for m in (meta_a, meta_b))

@@ -132,7 +132,8 @@ def test_page_data_matches_the_csvs(run_dir):
 
 def test_property_matrix_and_uniform_note(run_dir):
     df = load_csv(run_dir / "laplacian.csv")
-    mat = {e["variant"]: e["props"] for e in rh.property_matrix(df)}
+    from harness.report.laplacian import property_matrix
+    mat = {e["variant"]: e["props"] for e in property_matrix(df)}
     cot, uni = mat["scratch.cotan"], mat["scratch.uniform"]
     # LIN is measured only on the exactly planar input (plane_nondelaunay, noise none): 1 row each
     assert cot["LIN"]["measured"] == 1 and cot["LIN"]["fails"] == 0 and cot["LIN"]["worst"] < 1e-9

@@ -29,7 +29,7 @@ from ..schema import scalar as _clean
 from .common import esc as _esc
 from .common import fmt as _fmt
 from .common import natural_key, noise_label, params_of, short, variant_labels
-from .laplacian import property_matrix, property_matrix_section
+from .laplacian import property_matrix_section
 
 HERE = Path(__file__).parent
 MAX_DISPLAY_FACES = 8000    # what the views were decimated to (stated on the page)
@@ -347,9 +347,7 @@ def collect(run_dir) -> dict:
     frames = with_not_run(folder.frames(), folder.read_plan())   # cases an interrupted run never ran: "not run" rows
     specs = task_specs(meta, frames)
     tasks = {t: _frame_payload(specs[t], frames[t]) for t in specs if t in frames}
-    mat = (property_matrix(frames["laplacian"], (specs.get("laplacian") or {}).get("method_defaults"))
-           if "laplacian" in frames else [])
-    return {"meta": meta, "frames": frames, "specs": specs, "tasks": tasks, "matrix": mat,
+    return {"meta": meta, "frames": frames, "specs": specs, "tasks": tasks,
             "views": folder.read_views(), "leaderboard": _leaderboard_payload(frames, specs)}
 
 
@@ -367,7 +365,7 @@ def _leaderboard_payload(frames, specs) -> list[dict]:
 
 def _leaderboard_files_text(run_dir) -> str:
     """Where else the leaderboard is: the files of it this run folder holds (a run writes them
-    when it finishes; an interrupted run, `eval` and `shootout report` do not)."""
+    when it finishes, and `shootout report` rebuilds them; an interrupted run and `eval` do not)."""
     have = [n for n in REPORT_FILES if n.startswith("leaderboard.") and (Path(run_dir) / n).is_file()]
     if not have:
         return ("This run folder has no leaderboard files (they are written when a run finishes, and by "

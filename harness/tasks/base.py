@@ -25,6 +25,12 @@ BETTER = ("lower", "higher", "one", "true", "false", "count", "target", "info", 
 SE_Z = 3.0      # a sampled metric's values differ only beyond SE_Z combined standard errors (`Metric.se`)
 
 
+def target_tolerance(target: float) -> float:
+    """How far a ``target`` metric (a count asked for, `Metric.target`) may miss its target and
+    still reach it: 1% of the target + 2."""
+    return 0.01 * target + 2
+
+
 @dataclass(frozen=True)
 class Metric:
     """One result column.
@@ -38,6 +44,8 @@ class Metric:
     ``bool`` or ``json`` (a JSON-encoded list). ``se``: for a sampled metric, the column of its
     standard error: two values also count as the same (compare, ties of the winners) while they
     differ by at most ``SE_Z`` = 3 times their combined standard error ``sqrt(se_a^2 + se_b^2)``.
+    ``target``: for ``better="target"``, the column holding the count asked for; a result reaches
+    it within `target_tolerance`, and compare counts a miss that grows beyond that.
     """
 
     name: str
@@ -49,6 +57,7 @@ class Metric:
     kind: str = "float"
     rank: bool = False          # offered as a ranking metric in the report
     se: str = ""                # the column of its standard error (a sampled metric), or ""
+    target: str = ""            # better="target": the column of the count asked for
 
     def __post_init__(self):
         if self.better not in BETTER:
@@ -59,6 +68,8 @@ class Metric:
                "rel": self.rel, "abs": self.abs, "kind": self.kind, "rank": self.rank}
         if self.se:
             out.update(se=self.se, se_z=SE_Z)
+        if self.target:
+            out["target"] = self.target
         return out
 
 

@@ -13,7 +13,7 @@ from ..errors import MethodFailed
 from ..metrics.hausdorff import hausdorff
 from ..metrics.surface_distance import cached_surface, point_surface_distance
 from ..metrics.triangle_quality import triangle_quality, warm as _warm_metrics
-from .base import Invalid, Metric, Task, float_array
+from .base import Invalid, Metric, Task, float_array, target_tolerance
 
 
 @dataclass
@@ -42,11 +42,6 @@ def target_face_count(n_faces: int, target_ratio: float | None, target_faces: in
         return max(1, min(int(target_faces), int(n_faces)))
     return max(1, min(int(round(float(target_ratio) * n_faces)), int(n_faces)))
 
-
-def target_tolerance(target: int) -> float:
-    """Faces a result may keep above ``target`` and still count as reaching it: 1% + 2 (the
-    conformance check's tolerance)."""
-    return 0.01 * target + 2
 
 
 def prepare(params: dict, V, F) -> dict:
@@ -143,7 +138,7 @@ TASK = Task(
           "bounding-box diagonal; lower is better.",
     metrics=(
         Metric("target_faces", "info", "faces asked for (blank for a result scored by eval without a target)", kind="int"),
-        Metric("out_faces", "target", "faces returned", kind="int"),
+        Metric("out_faces", "target", "faces returned", kind="int", target="target_faces"),
         Metric("over_target", "false", "kept more faces than target_faces + 1% + 2 (its errors are not comparable: "
                "an invalid result; blank without a target)", kind="bool"),
         Metric("hausdorff", "lower", "symmetric Hausdorff distance to the input surface, certified by branch and "
