@@ -703,7 +703,30 @@ def load_csv(path) -> pd.DataFrame:
         df["error"] = df["error"].fillna("")
     _check_numbers(Path(path), df)
     _check_identity(Path(path), df)
+    _check_flags(Path(path), df)
     return df
+
+
+IDENTITY_COLUMNS = ("case_id", "mesh", "noise_model", "noise_level", "seed", "method", "params", "status")
+
+
+def _check_flags(path: Path, df: pd.DataFrame) -> None:
+    """`ShootoutError` naming the first cell of a task's true/false column that holds something
+    else than ``true``, ``false`` or nothing (the column would be read as text, and ``"false"``
+    taken for true)."""
+    try:
+        spec = tasks.get(path.stem)
+    except (KeyError, ValueError):
+        return
+    for c in (m.name for m in spec.metrics if m.kind == "bool"):
+        if c not in df:
+            continue
+        vals = df[c]
+        bad = vals.notna() & ~vals.map(lambda v: isinstance(v, (bool, np.bool_)))
+        if bad.any():
+            i = int(np.flatnonzero(bad.to_numpy())[0])
+            raise ShootoutError(f"{path}: damaged CSV: column {c} holds {str(vals.iloc[i])[:40]!r} on line {i + 2}, "
+                                "expected true or false")
 
 
 def _check_identity(path: Path, df: pd.DataFrame) -> None:
@@ -718,6 +741,9 @@ def _check_identity(path: Path, df: pd.DataFrame) -> None:
     checks = (("params", lambda v: isinstance(v, str) and not_object(v), "a JSON object ({} when a method has none)"),
               ("method", lambda v: not isinstance(v, str) or not v.strip(), "a method's name"),
               ("status", lambda v: v not in STATUSES, f"one of {', '.join(STATUSES)}"))
+    missing = [c for c in IDENTITY_COLUMNS if c not in df]
+    if missing and len(df.columns):
+        raise ShootoutError(f"{path}: damaged CSV: no column(s) {', '.join(missing)}, which every row of a run has")
     for col, bad, want in checks:
         if col not in df:
             continue

@@ -224,7 +224,8 @@ def test_out_on_a_file_or_a_read_only_place_and_a_huge_face_index(tmp_path, tiny
     assert r.returncode == 2 and "noisy.obj" in r.stderr and "Traceback" not in r.stderr
 
 
-@pytest.mark.parametrize("damage", ["ragged", "quote", "binary", "empty", "torn", "text_in_a_number", "params"])
+@pytest.mark.parametrize("damage", ["ragged", "quote", "binary", "empty", "torn", "text_in_a_number", "params",
+                                    "flag", "no_identity"])
 def test_damaged_csvs_are_a_message_not_a_traceback_or_a_false_regression(tmp_path, damage):
     cfg = write_cfg(tmp_path / "c.yaml", SMALL)
     a, b = tmp_path / "a", tmp_path / "b"
@@ -266,6 +267,17 @@ def test_damaged_csvs_are_a_message_not_a_traceback_or_a_false_regression(tmp_pa
         buf = io.StringIO()
         csv.writer(buf, lineterminator="\n").writerows(rows)
         p.write_text(buf.getvalue())
+    elif damage == "flag":                           # a review: "1" made the column text, "false" then read as true
+        import csv
+        import io
+        rows = list(csv.reader(io.StringIO(text)))
+        rows[1][rows[0].index("diverged")] = "1"
+        buf = io.StringIO()
+        csv.writer(buf, lineterminator="\n").writerows(rows)
+        p.write_text(buf.getvalue())
+    elif damage == "no_identity":                    # a review: a traceback in the report and compare
+        df = pd.read_csv(p, dtype=str, keep_default_na=False)
+        df.drop(columns=["case_id", "status"]).to_csv(p, index=False)
     else:                                             # a torn last line: half of a real row
         last = text.splitlines()[-1]
         p.write_text(text + last[: len(last) // 2])
@@ -281,6 +293,10 @@ def test_damaged_csvs_are_a_message_not_a_traceback_or_a_false_regression(tmp_pa
         assert r.returncode == 2 and "column ev_rms holds 'notanumber' on line 2" in r.stderr, r.stderr
     if damage == "params":                            # a traceback of json, leaderboard or the page's data
         assert r.returncode == 2 and "column params holds '[1,2' on line 2" in r.stderr, r.stderr
+    if damage == "flag":
+        assert r.returncode == 2 and "column diverged holds '1' on line 2, expected true or false" in r.stderr, r.stderr
+    if damage == "no_identity":
+        assert r.returncode == 2 and "no column(s) case_id, status" in r.stderr, r.stderr
 
 
 def test_files_follow_the_umask(tmp_path):
