@@ -279,3 +279,69 @@ def test_a_run_without_ground_truth_still_gets_a_3d_view(tmp_path):
     assert any(w.startswith("a spectrum case") for w in whys) and any(w.startswith("a curvature case") for w in whys)
     views = [json.loads((tmp_path / "views" / v["file"]).read_text()) for v in index]
     assert all("error" not in v for v in views), [v.get("error") for v in views]
+
+
+def test_a_skipped_eigenvalue_is_counted_and_invalid_not_a_better_score():
+    """A review: libigl.eigsh on a sphere of radius 1e-6 (k = 20) returned 3 of the 5 copies of
+    an eigenvalue and then the next one, with perfect residuals: its mean error came out lower
+    than the true 20 smallest's and it was named best. ``k_missed`` counts, by Sylvester's
+    inertia of the method's own W and M, what lies below its largest value and was not
+    returned; such a row is invalid. Here a solver that skips one pair is made from a complete
+    result, and the reviewer's case is checked against a dense count."""
+    import scipy.linalg as sla
+
+    from harness import tasks
+    from harness.leaderboard import validity
+    from harness.tasks.spectrum import missed_below
+    src = datasets.load({"procedural": "sphere", "subdivisions": 3, "radius": 1e-6})
+    V, F = src.clean.V, src.clean.F
+    full = methods.get("scratch.spectrum")(V, F, k=21)
+    assert missed_below(full.W, full.M, full.values[:20]) == 0          # a multiplet cut at k is whole below
+    skip = np.r_[0:7, 8:21]                                              # the 8th pair left out
+    assert missed_below(full.W, full.M, full.values[skip]) == 1
+    dense = sla.eigh(-full.W.toarray(), full.M.toarray(), eigvals_only=True)
+    got = methods.get("libigl.eigsh")(V, F, k=20)
+    s = got.values[-1] * (1 - 1e-6)
+    assert missed_below(got.W, got.M, got.values) == int((dense < s).sum() - (got.values < s).sum())
+    from harness.config import load_config
+    from harness.runner import prepare_input
+    cfg = load_config({"meshes": [{"procedural": "sphere", "subdivisions": 3, "radius": 1e-6}],
+                       "tasks": {"spectrum": {"methods": ["scratch.spectrum"], "params": {"k": 20}}}})
+    inp, _ = prepare_input(cfg.cases[0])
+    task = tasks.get("spectrum")
+    bad = type(full)(values=full.values[skip], vectors=full.vectors[:, skip], W=full.W, M=full.M)
+    row = {**task.measure(inp, bad, {"k": 20}), "status": "ok"}
+    good = {**task.measure(inp, type(full)(full.values[:20], full.vectors[:, :20], full.W, full.M), {"k": 20}),
+            "status": "ok"}
+    assert row["k_missed"] == 1 and good["k_missed"] == 0
+    assert row["eig_rel_error_mean"] != good["eig_rel_error_mean"]
+    why = validity(task.spec(), pd.DataFrame([row, good])).tolist()
+    assert "skipped eigenvalues" in why[0] and why[1] == "", why
+
+
+def test_every_method_is_scored_on_the_same_k_and_the_contract_is_checked():
+    """A review: with k >= n a dense solver returned n pairs and the others n - 1, so one cell
+    scored them over different eigenvalues (0.325 against 0.319 for the same values); values in
+    descending order or a W in the positive sign were ok rows with wrong scores."""
+    from harness.errors import MethodFailed
+    from harness.tasks.spectrum import _check, measure
+    from harness.config import load_config
+    from harness.runner import prepare_input
+    cfg = load_config({"meshes": [{"procedural": "sphere", "subdivisions": 1}],
+                       "tasks": {"spectrum": {"methods": ["scratch.spectrum"], "params": {"k": 50}}}})
+    inp, _ = prepare_input(cfg.cases[0])
+    n = len(inp.V)
+    rows = {}
+    for solver in ("dense", "shift_invert"):
+        r = _check(methods.get("scratch.spectrum")(inp.V, inp.F, k=50, solver=solver), inp.V, inp.F)
+        rows[solver] = measure(inp, r, {"k": 50})
+    assert rows["dense"]["k_returned"] == n and rows["shift_invert"]["k_returned"] == n - 1
+    for col in ("eig_rel_error_mean", "eig_rel_error_max", "eig_max"):
+        assert rows["dense"][col] == pytest.approx(rows["shift_invert"][col], rel=1e-9), col
+    r = methods.get("scratch.spectrum")(inp.V, inp.F, k=6)
+    with pytest.raises(MethodFailed, match="out of ascending order"):
+        _check(type(r)(r.values[::-1].copy(), r.vectors[:, ::-1], r.W, r.M), inp.V, inp.F)
+    with pytest.raises(MethodFailed, match="positive diagonal"):
+        _check(type(r)(r.values.copy(), r.vectors, -r.W, r.M), inp.V, inp.F)
+    swapped = _check(type(r)(r.values[[0, 2, 1, 3, 4, 5]], r.vectors[:, [0, 2, 1, 3, 4, 5]], r.W, r.M), inp.V, inp.F)
+    assert np.array_equal(swapped.values, np.sort(r.values))        # a multiplet's members in another order: sorted

@@ -41,7 +41,7 @@ import scipy.sparse as sp
 from ..core.params import Param
 from ..errors import MethodFailed
 from ..metrics.hks import heat_kernel_signature, hks_times, sphere_hks
-from .base import Metric, Task, float_array
+from .base import Invalid, Metric, Task, float_array
 
 PARAMS = {"k": Param("k", 20, "int", low=1, high=2000, doc="number of smallest eigenpairs")}
 
@@ -57,10 +57,20 @@ class SpectrumResult:
 
 
 def _check(result: SpectrumResult, V, F):
+    """Finite values in ascending order (to rounding: a multiplet's members may come in any
+    order, then sorted with their vectors), vectors of shape (n, k), W in libigl's sign."""
     n = V.shape[0]
     result.values = float_array("", "values", result.values, (-1,))
     if not np.isfinite(result.values).all():
         raise MethodFailed("returned non-finite eigenvalues")
+    lam = result.values
+    if lam.size > 1 and (np.diff(lam) < -1e-9 * np.abs(lam).max()).any():
+        i = int(np.flatnonzero(np.diff(lam) < -1e-9 * np.abs(lam).max())[0])
+        raise MethodFailed(f"returned eigenvalues out of ascending order ({lam[i]:.6g} before {lam[i + 1]:.6g})")
+    order = np.argsort(lam, kind="stable")
+    result.values = lam[order]
+    if result.vectors is not None and np.ndim(result.vectors) == 2 and np.shape(result.vectors)[1] == lam.size:
+        result.vectors = np.asarray(result.vectors)[:, order]
     if result.vectors is not None:
         result.vectors = float_array("", "vectors", result.vectors, (n, len(result.values)))
     for what in ("W", "M"):
@@ -70,6 +80,11 @@ def _check(result: SpectrumResult, V, F):
             if A.shape != (n, n):
                 raise MethodFailed(f"returned {what} of shape {A.shape}, expected ({n}, {n})")
             setattr(result, what, A.astype(np.float64))
+    if result.W is not None:
+        d = result.W.diagonal()
+        if d.size and (d > 1e-12 * np.abs(d).max()).any():
+            raise MethodFailed("returned W with a positive diagonal: W is in libigl's sign (negative "
+                               "semi-definite, -W x = lambda M x), not the positive one")
     return result
 
 
@@ -101,19 +116,40 @@ def complete_groups(k: int) -> int:
     return int(np.floor(np.sqrt(k) + 1e-9)) ** 2 if k > 0 else 0
 
 
+def missed_below(W, M, lam: np.ndarray) -> int | None:
+    """How many eigenvalues of ``-W x = lambda M x`` lie below the largest returned one (less
+    ``1e-6`` of it, so that a multiplet cut at k counts whole) but were not returned: by
+    Sylvester's law of inertia, the negative pivots of ``P (-W - s M) P^T = L D L^T`` count the
+    eigenvalues below ``s``. None when the factorization has a zero pivot or there is no upper
+    eigenvalue to count below."""
+    from ..metrics.laplacian_properties import _ldlt
+    if lam.size < 2 or not lam[-1] > 0:
+        return None
+    s = float(lam[-1]) * (1.0 - 1e-6)
+    f = _ldlt(sp.csc_matrix(-W - s * M))
+    if f is None:
+        return None
+    below = int(np.count_nonzero(f[1] < 0))
+    return max(0, below - int(np.count_nonzero(lam < s)))
+
+
 def measure(inp, result, params) -> dict:
     lam = result.values
     want = min(int(params.get("k") or len(lam)), len(inp.V) - 1)
     if len(lam) < want:          # scored on its easier low eigenvalues it would rank ahead: an error row
         raise MethodFailed(f"returned {len(lam)} eigenpairs of the k = {want} asked")
-    row = {"k_returned": int(len(lam)), "eig0": float(lam[0]) if len(lam) else None,
-           "eig_max": float(lam[-1]) if len(lam) else None}
+    row = {"k_returned": int(len(lam))}
+    lam = lam[:want]             # every method scored on the same k pairs (a dense solver may return n)
+    row.update(eig0=float(lam[0]) if len(lam) else None, eig_max=float(lam[-1]) if len(lam) else None)
     ref = analytic(inp.shape, len(lam))
     noisy = not np.array_equal(inp.V, inp.clean.V)
     if ref is not None and not noisy and len(lam) > 1:
         rel = np.abs(lam[1:] - ref[1:]) / ref[1:]
         row.update(eig_rel_error_max=float(rel.max()), eig_rel_error_mean=float(rel.mean()))
     X, W, M = result.vectors, result.W, result.M
+    X = None if X is None else X[:, :want]
+    if W is not None and M is not None:
+        row["k_missed"] = missed_below(W, M, lam)
     sphere = bool(inp.shape) and inp.shape.get("procedural") in ("sphere", "sphere_random")
     n_hks = complete_groups(len(lam))
     if X is not None and sphere and not noisy and n_hks >= 4 and M is not None:
@@ -203,7 +239,10 @@ TASK = Task(
         Metric("eig0", "info", "smallest eigenvalue, 1/length^2 (0 up to rounding on a connected mesh, open ones "
                "too: the constants are in the kernel under the natural Neumann condition; one 0 per component)"),
         Metric("eig_max", "info", "largest of the k eigenvalues, 1/length^2 (input units: it scales as 1/s^2 with the mesh)"),
-        Metric("k_returned", "info", "eigenpairs returned", kind="int"),
+        Metric("k_returned", "info", "eigenpairs returned (the first k are scored)", kind="int"),
+        Metric("k_missed", "count", "eigenvalues of the method's own W and M below the largest returned one (less "
+               "1e-6 of it) that it did not return, by Sylvester's inertia of -W - s M: the pairs are not the k "
+               "smallest (blank without W and M)", kind="int"),
         Metric("residual_max", "lower", "max_i ||W x_i + lambda_i M x_i||_(M^-1) / (||x_i||_M max(|lambda_i|, "
                "first non-zero |lambda|)), scale-free", **_E),
         Metric("orthogonality_error", "lower", "max |X^T M X - I| (M-normalised columns)", **_E),
@@ -212,4 +251,5 @@ TASK = Task(
     ),
     params=PARAMS, measure=measure, check_result=_check, view=view, view_metric="eig_rel_error_mean", order=60,
     axis_params=frozenset({"k"}),         # methods are ranked against each other at the same k
+    invalid_when=(Invalid("k_missed", ">", "skipped eigenvalues: not the k smallest", value=0),),
     checks=(("zero_first", _zero_first),))
