@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from . import tasks
+from . import yaml_input
 from .config import eps_problem, name_problem, samples_problem
 from .errors import ShootoutError, problems_error
 from .mesh import Mesh, file_sha1, missing_file_problem, read_mesh, validate
@@ -47,13 +48,18 @@ def evaluate(V, F, V_clean, F_clean, task: str = "smoothing", V_noisy=None, haus
     F)`` is compared to the input surface: ``V_noisy`` with the clean faces when given, else the
     clean mesh; ``target_faces``, or ``target_ratio`` of the repaired clean mesh's faces, is the
     face count it was asked for: without either, ``target_faces`` and ``over_target`` are blank,
-    not judged). ``V_noisy``: the input the result was made from (smoothing: gives the
-    ``input_*`` columns; blank without it), finite, in either vertex order. ``F``: integer
-    indices. Lengths are fractions of the clean mesh's bounding-box diagonal, as in a run.
+    not judged; a smoothing result has no target). ``V_noisy``: the input the result was made
+    from (smoothing: gives the ``input_*`` columns; blank without it), finite, in either vertex
+    order. ``V``, ``V_clean``, ``V_noisy``: ``(n, 3)`` arrays of real numbers; ``F``,
+    ``F_clean``: ``(m, 3)`` arrays of integer indices (floats only with integer values). Numbers
+    may be numpy scalars. Lengths are fractions of the clean mesh's bounding-box diagonal, as in a run.
     ``hausdorff_samples``, ``hausdorff_eps``: a config's settings of those names. `ShootoutError`
     listing every problem on input that breaks these preconditions (``what`` names the result in
     its messages).
     """
+    hausdorff_samples, hausdorff_eps, target_faces, target_ratio = (
+        x.item() if isinstance(x, np.generic) else x
+        for x in (hausdorff_samples, hausdorff_eps, target_faces, target_ratio))     # numpy scalars as Python's
     P = []
     if task not in ("smoothing", "simplification"):
         P.append(f"task: eval scores smoothing and simplification results, not {task!r}")
@@ -62,29 +68,38 @@ def evaluate(V, F, V_clean, F_clean, task: str = "smoothing", V_noisy=None, haus
     if eps_problem(hausdorff_eps):
         P.append(f"hausdorff_eps: {eps_problem(hausdorff_eps)}")
     P += target_problems(target_faces, target_ratio)
+    given = [k for k, v in (("target_faces", target_faces), ("target_ratio", target_ratio)) if v is not None]
+    if task == "smoothing" and given:
+        P.append(f"{', '.join(given)}: a smoothing result has no target (drop it, or task='simplification')")
+    arrays = {}
+    for name, x, kind in (("V", V, "coords"), ("F", F, "faces"), ("V_clean", V_clean, "coords"),
+                          ("F_clean", F_clean, "faces"), ("V_noisy", V_noisy, "coords")):
+        if x is None and name in ("F", "V_noisy"):
+            continue
+        a, why = _array(x, kind)
+        if why:
+            P.append(f"{name}: {why}")
+        arrays[name] = a
     if task == "simplification" and F is None:
         P.append("F: a simplification result needs its faces")
     if P:
-        raise ShootoutError("; ".join(P))
-    n_raw, F_raw = len(np.asarray(V_clean)), np.asarray(F_clean)
+        raise problems_error(P)
+    V, F, V_clean, F_clean, V_noisy = (arrays.get(k) for k in ("V", "F", "V_clean", "F_clean", "V_noisy"))
+    n_raw, F_raw = len(V_clean), F_clean
     clean = validate(V_clean, F_clean, name="clean")
     V_in = clean.V
     if V_noisy is not None:
-        V_in = np.asarray(V_noisy, dtype=np.float64)
-        if V_in.ndim != 2 or V_in.shape[1:] != (3,) or len(V_in) not in (clean.n_vertices, n_raw):
-            raise ShootoutError(f"the noisy input has shape {V_in.shape}, the clean mesh {len(clean.V)} vertices"
+        V_in = V_noisy
+        if len(V_in) not in (clean.n_vertices, n_raw):
+            raise ShootoutError(f"V_noisy: {len(V_in)} vertices, the clean mesh {len(clean.V)}"
                                 + (f" ({n_raw} before its repairs)" if n_raw != clean.n_vertices else ""))
         if len(V_in) != clean.n_vertices:
             V_in = V_in[clean.vertex_map]
         if not np.isfinite(V_in).all():
-            raise ShootoutError(f"the noisy input has {int((~np.isfinite(V_in).all(axis=1)).sum())} vertices with "
+            raise ShootoutError(f"V_noisy: {int((~np.isfinite(V_in).all(axis=1)).sum())} vertices with "
                                 "NaN or inf coordinates")
-    if F is not None:
-        Fa = np.asarray(F)
-        if Fa.dtype.kind not in "iu" and not (Fa.dtype.kind == "f" and np.array_equal(Fa, np.round(Fa))):
-            raise ShootoutError(f"F: expected integer vertex indices, got dtype {Fa.dtype}")
     if task == "smoothing":
-        V = in_clean_order(np.asarray(V, dtype=np.float64), F, clean, n_raw, F_raw, what)
+        V = in_clean_order(V, F, clean, n_raw, F_raw, what)
         F = None
     inp = CaseInput(clean, V_in, clean.F, clean.diagonal(), {"hausdorff_samples": hausdorff_samples,
                                                               "hausdorff_eps": hausdorff_eps})
@@ -99,6 +114,28 @@ def evaluate(V, F, V_clean, F_clean, task: str = "smoothing", V_noisy=None, haus
         for k in [k for k in row if k.startswith("input_")]:
             row[k] = None
     return row
+
+
+def _array(x, kind: str):
+    """``(array, None)`` for an ``(n, 3)`` array of real coordinates (``kind`` ``coords``, as
+    float64) or of integer vertex indices (``faces``: integers, or floats with integer values, as
+    int64); else ``(None, what is wrong)``."""
+    what = "an (n, 3) array of vertex coordinates" if kind == "coords" else "an (m, 3) array of vertex indices"
+    if x is None or isinstance(x, (str, bytes)):
+        return None, f"expected {what}, got {yaml_input.short(x, 60)}"
+    try:
+        a = np.asarray(x)
+    except Exception as exc:  # noqa: BLE001 - e.g. rows of different lengths
+        return None, f"expected {what}, got a {type(x).__name__} numpy cannot read as one ({exc})"[:300]
+    if a.dtype.kind == "c":
+        return None, f"expected real numbers, got complex values (dtype {a.dtype})"
+    if a.dtype.kind not in "iuf" or a.ndim != 2 or a.shape[1] != 3:
+        return None, f"expected {what}, got {'shape ' + str(a.shape) if a.dtype.kind in 'iuf' else 'dtype ' + str(a.dtype)}"
+    if kind == "coords":
+        return a.astype(np.float64), None
+    if a.dtype.kind == "f" and not np.array_equal(a, np.round(a)):
+        return None, f"expected integer vertex indices, got dtype {a.dtype} with non-integer values"
+    return a.astype(np.int64), None
 
 
 def target_problems(target_faces, target_ratio, at: str = "") -> list[str]:
