@@ -176,10 +176,28 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
         timeout=None, quiet=True, export_benchmark_json=None):
     """Run a config (a `Config`, a path, YAML text or a dict) end to end; returns
     ``{task: DataFrame}`` of the rows in the run folder (a `Frames`: its ``not_written`` lists
-    what the end of the run could not write, e.g. the report). Bad arguments are a `ShootoutError`
-    before anything is written."""
-    check_run_args(workers, timeout, executor, scheduler)
-    raw = _results_config(config_or_path)
+    what the end of the run could not write, e.g. the report). ``out``: a non-empty folder path,
+    or None for ``results/<name>``. A ``results:`` config (scoring files made elsewhere) runs no
+    case: it takes ``out`` and ``quiet`` only, as ``shootout run`` takes no other flag for it. Bad
+    arguments are one `ShootoutError` listing each, before anything is written."""
+    P = run_args_problems(workers, timeout, executor, scheduler)
+    if out is not None and not isinstance(out, (str, os.PathLike)):
+        P.append(f"out: expected a folder path, got {type(out).__name__} {out!r}")
+    elif isinstance(out, str) and not out.strip():       # Path("") would be the current folder
+        P.append("out: an empty path; give the run folder, or out=None for results/<name>")
+    why = _config_problem(config_or_path)
+    if why:
+        P.append(why)
+    raw = None if why else _results_config(config_or_path)
+    if raw is not None:
+        given = [k for k, on in (("resume", resume), ("timeout", timeout is not None), ("executor", executor != "local"),
+                                 ("scheduler", bool(scheduler)), ("workers", workers is not None),
+                                 ("export_benchmark_json", bool(export_benchmark_json))) if on]
+        if given:                        # scoring files runs no case: these would be silently ignored
+            P.append(f"{', '.join(given)}: a results: config scores files made elsewhere and runs no case; "
+                     "drop these arguments")
+    if P:
+        raise problems_error(list(dict.fromkeys(P)))
     if raw is not None:                  # a results: config scores files made elsewhere (shootout eval)
         from .scoring import eval_entries, results_config
         given = str(config_or_path) if isinstance(config_or_path, (str, Path)) else ""
@@ -242,6 +260,31 @@ def _fixed_cost(row: dict, extras: dict) -> tuple[float, float, float] | None:
     except (TypeError, ValueError):
         return None
     return max(0.0, wall - method), method, float(extras.get("measure_s") or 0.0)
+
+
+def _config_problem(source) -> str | None:
+    """What is wrong with `run`'s config argument as a kind of thing (a `Config`, a dict, YAML
+    text, or the path of a config file), or None; what is wrong inside a config is `load_config`'s."""
+    if isinstance(source, (Config, dict)):
+        return None
+    expected = "expected a Config, a dict, YAML text or the path of a config file (.yaml, .yml, .json)"
+    if not isinstance(source, (str, os.PathLike)):
+        from .yaml_input import short
+        return f"config_or_path: {expected}, got {'None' if source is None else type(source).__name__ + ' ' + short(source, 60)}"
+    text = os.fspath(source)
+    if not isinstance(text, str) or "\n" in text or Path(text).is_file():
+        return None
+    if Path(text).is_dir():
+        return f"config_or_path: {text} is a folder; {expected}"
+    if isinstance(source, str) and Path(text).suffix not in (".yaml", ".yml", ".json"):   # those: "not found"
+        from . import yaml_input
+        try:
+            raw = yaml_input.load(text)
+        except Exception:  # noqa: BLE001 - load_config reports what is wrong with the text
+            return None
+        if not isinstance(raw, dict):
+            return f"config_or_path: {text!r} names no file and is not YAML text of a mapping; {expected}"[:400]
+    return None
 
 
 def _results_config(source):

@@ -1,0 +1,78 @@
+"""`harness.run`'s arguments: refused as ``shootout run`` refuses the same flags, in one
+ShootoutError naming each, with nothing written."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+import harness
+from harness.errors import ShootoutError
+
+TETRA = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+RUN = {"name": "r9", "meshes": ["knight"], "time_budget": 0, "tasks": {"laplacian": {"methods": ["scratch.uniform"]}}}
+
+
+@pytest.fixture()
+def results_cfg(tmp_path):
+    (tmp_path / "tet.obj").write_text(TETRA)
+    return {"name": "rc", "hausdorff_samples": 100,
+            "results": [{"file": str(tmp_path / "tet.obj"), "clean": str(tmp_path / "tet.obj")}]}
+
+
+@pytest.mark.parametrize("kwargs, names", [
+    ({"export_benchmark_json": "bench.json", "resume": True, "workers": 3},
+     "resume, workers, export_benchmark_json"),
+    ({"executor": "dask", "scheduler": "tcp://127.0.0.1:1"}, "executor, scheduler"),
+    ({"timeout": 5}, "timeout"),
+])
+def test_a_results_config_refuses_the_arguments_the_cli_refuses(results_cfg, tmp_path, kwargs, names):
+    """They were silently ignored (no JSON written) where ``shootout run`` exits 2."""
+    kwargs = {k: str(tmp_path / v) if k == "export_benchmark_json" else v for k, v in kwargs.items()}
+    with pytest.raises(ShootoutError) as exc:
+        harness.run(results_cfg, out=tmp_path / "o", **kwargs)
+    msg = str(exc.value)
+    assert f"{names}: a results: config scores files made elsewhere and runs no case; drop these" in msg, msg
+    assert not (tmp_path / "o").exists() and not (tmp_path / "bench.json").exists()
+    frames = harness.run(results_cfg, out=tmp_path / "o", quiet=True)     # out and quiet are taken
+    assert list(frames["smoothing"]["status"]) == ["ok"]
+
+
+def test_a_results_config_lists_its_refused_arguments_with_the_other_bad_ones(results_cfg, tmp_path):
+    with pytest.raises(ShootoutError) as exc:
+        harness.run(results_cfg, out=tmp_path / "o", resume=True, workers=0)
+    msg = str(exc.value)
+    assert msg.startswith("2 problems:") and "expected an integer >= 1, got 0" in msg and "resume, workers:" in msg
+
+
+def test_an_empty_out_is_refused(tmp_path, monkeypatch):
+    """``out=""`` wrote results/<name> in the current folder where ``--out ''`` exits 2."""
+    monkeypatch.chdir(tmp_path)
+    for out in ("", "  "):
+        with pytest.raises(ShootoutError, match="out: an empty path"):
+            harness.run(RUN, out=out)
+    with pytest.raises(ShootoutError, match="out: expected a folder path, got int 5"):
+        harness.run(RUN, out=5)
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("given, needle", [
+    (None, "config_or_path: expected a Config, a dict, YAML text or the path of a config file (.yaml, .yml, "
+           ".json), got None"),
+    (5, "config_or_path: expected a Config, a dict, YAML text or the path of a config file (.yaml, .yml, "
+        ".json), got int 5"),
+    ("FOLDER", "is a folder; expected a Config"),
+    (Path("FOLDER"), "is a folder; expected a Config"),
+    ("no/such/config", "'no/such/config' names no file and is not YAML text of a mapping"),
+])
+def test_a_config_argument_of_the_wrong_kind_says_what_was_given(tmp_path, monkeypatch, given, needle):
+    """``run(None)`` and ``run("<a folder>")`` said 'expected a mapping, got str' (the text "None",
+    the folder's path read as YAML)."""
+    monkeypatch.chdir(tmp_path)
+    if given in ("FOLDER", Path("FOLDER")):
+        (tmp_path / "FOLDER").mkdir()
+        given = type(given)(tmp_path / "FOLDER")
+    with pytest.raises(ShootoutError) as exc:
+        harness.run(given)
+    assert needle in str(exc.value), str(exc.value)
+    assert sorted(p.name for p in tmp_path.iterdir()) == (["FOLDER"] if (tmp_path / "FOLDER").exists() else [])
