@@ -259,7 +259,7 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
         raise problems_error(list(dict.fromkeys(P)))
     auto = default_labels([e["file"] for e in entries])
     entries = [e if e.get("label") else {**e, "label": auto[i]} for i, e in enumerate(entries)]
-    rows: list[tuple[dict, bool]] = []          # each file's row, and whether its task was given
+    rows: list[tuple[dict, bool]] = []          # each file's row, and whether its task is known (given or read)
     cleans: dict = {}
     seen_ids: set = set()
     for i, e in enumerate(entries):
@@ -276,14 +276,16 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
             except ShootoutError as exc:         # a reference that cannot be read costs its results' rows
                 cleans[key] = exc
         got = cleans[key]
-        base = {"case_id": None, "task": e.get("task") or "smoothing",
+        targeted = any(e.get(k) is not None for k in ("target_faces", "target_ratio"))
+        known = bool(e.get("task")) or targeted   # else known once the file is read: its counts decide
+        base = {"case_id": None, "task": e.get("task") or ("simplification" if targeted else "smoothing"),
                 "noise_model": "given" if noisy else "none", "noise_level": None, "seed": None,
                 "method": e.get("label") or rp.stem, "library": "external", "params": json.dumps({"file": str(rp)})}
         if isinstance(got, Exception):
             what = "the clean mesh" if not noisy else "the clean and noisy pair"
             rows.append(({**base, "mesh": clean.stem, "status": "error",
                           "error": f"{what} ({clean}{f', {noisy}' if noisy else ''}): {got}"[:2000]},
-                         bool(e.get("task"))))
+                         known))
             continue
         cmesh, V_in, raw = got
         n_raw, m_raw = len(raw.V), len(raw.F)
@@ -296,8 +298,8 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
                 notes.append(f"result read with repairs: {'; '.join(r.repairs)}")
             same_faces = len(r.F) in (cmesh.n_faces, m_raw)
             detected = "smoothing" if len(r.V) in (cmesh.n_vertices, n_raw) and same_faces else "simplification"
-            targeted = any(e.get(k) is not None for k in ("target_faces", "target_ratio"))
             t = row["task"] = e.get("task") or ("simplification" if targeted else detected)
+            known = True                         # a failure from here on stays under this task (and case id)
             if t == "smoothing" and not same_faces:
                 raise ShootoutError(f"{rp.name}: {len(r.F)} faces, but the clean mesh has {cmesh.n_faces}: a "
                                     "smoothing result keeps the clean mesh's faces (use --task simplification to "
@@ -311,11 +313,11 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
         except Exception as exc:  # noqa: BLE001 - any failure scoring one file is that file's error row
             row.update(status="error", error=(f"{type(exc).__name__}: {exc}" if not isinstance(exc, ShootoutError)
                                               else str(exc))[:2000])
-        rows.append((row, bool(e.get("task"))))
+        rows.append((row, known))
     scored = {r["task"] for r, _ in rows if r["status"] == "ok"}
     if len(scored) == 1:              # a file that could not be read goes beside the others it was scored with
-        for r, asked in rows:
-            if r["status"] != "ok" and not asked:
+        for r, known in rows:
+            if r["status"] != "ok" and not known:
                 r["task"] = next(iter(scored))
     for e, (r, _) in zip(entries, rows):
         r["case_id"] = _eval_id(e, r["task"], seen_ids)
