@@ -6,7 +6,8 @@ def run(config_or_path, **overrides):
     """Run a config (path, YAML text or dict); return ``{task: pandas.DataFrame}``.
 
     ``overrides`` are the CLI options by name (``out``, ``workers``, ``executor``,
-    ``scheduler``, ``resume``, ``timeout``, ``quiet``).
+    ``scheduler``, ``resume``, ``timeout``, ``quiet``, ``export_benchmark_json``), refused where
+    the CLI refuses them (see `harness.session.run`).
     """
     from .session import run as _run
     return _run(config_or_path, **overrides)

@@ -130,7 +130,8 @@ def _array(x, kind: str):
     if a.dtype.kind == "c":
         return None, f"expected real numbers, got complex values (dtype {a.dtype})"
     if a.dtype.kind not in "iuf" or a.ndim != 2 or a.shape[1] != 3:
-        return None, f"expected {what}, got {'shape ' + str(a.shape) if a.dtype.kind in 'iuf' else 'dtype ' + str(a.dtype)}"
+        got = f"shape {a.shape}" if a.dtype.kind in "iuf" else f"dtype {a.dtype}"
+        return None, f"expected {what}, got {got}"
     if kind == "coords":
         return a.astype(np.float64), None
     if a.dtype.kind == "f" and not np.array_equal(a, np.round(a)):

@@ -270,7 +270,8 @@ def _config_problem(source) -> str | None:
     expected = "expected a Config, a dict, YAML text or the path of a config file (.yaml, .yml, .json)"
     if not isinstance(source, (str, os.PathLike)):
         from .yaml_input import short
-        return f"config_or_path: {expected}, got {'None' if source is None else type(source).__name__ + ' ' + short(source, 60)}"
+        got = "None" if source is None else f"{type(source).__name__} {short(source, 60)}"
+        return f"config_or_path: {expected}, got {got}"
     text = os.fspath(source)
     if not isinstance(text, str) or "\n" in text or Path(text).is_file():
         return None
