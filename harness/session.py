@@ -165,13 +165,6 @@ def run_args_problems(workers, timeout, executor, scheduler) -> list[str]:
     return P
 
 
-def check_run_args(workers, timeout, executor, scheduler) -> None:
-    """The run's settings: `ShootoutError` (exit 2) listing every one that is wrong."""
-    P = run_args_problems(workers, timeout, executor, scheduler)
-    if P:
-        raise problems_error(P)
-
-
 def run(config_or_path, out=None, workers=None, executor="local", scheduler=None, resume=False,
         timeout=None, quiet=True, export_benchmark_json=None):
     """Run a config (a `Config`, a path, YAML text or a dict) end to end; returns

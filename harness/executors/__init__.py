@@ -27,7 +27,7 @@ EXECUTORS = ("local", "serial", "dask")
 
 
 def make_executor(kind: str, workers: int, timeout: float | None, scheduler=None) -> Executor:
-    """Executor by name, one of `EXECUTORS` (`harness.session.check_run_args` refuses others)."""
+    """Executor by name, one of `EXECUTORS` (`harness.session.run_args_problems` refuses others)."""
     if kind == "serial":
         from .local import SerialExecutor
         return SerialExecutor()
