@@ -105,21 +105,37 @@ class Rule:
     se: str = ""         # a sampled metric's standard-error column (`harness.tasks.base.Metric`)
     se_z: float = 3.0
     target: str = ""     # kind target: the column of the count asked for (`Metric.target`)
+    upper: str = ""      # a certified bracket's upper end (`Metric.upper`)
 
 
 COMMON_RULES = {"n_vertices": Rule("input"), "n_faces": Rule("input"), "peak_rss_mb": Rule("info")}
 
 
+def _rule(m: dict) -> Rule | None:
+    """The compare rule a metric's declaration (run.json) gives, or None for one that is not a
+    declaration this version could have written (an unknown direction, a tolerance that is not a
+    finite number >= 0): the installed kind's rule is used instead."""
+    from .tasks.base import BETTER
+    try:
+        r = Rule(m.get("better", "info"), float(m.get("rel", 0.01)), float(m.get("abs", 0.0)),
+                 str(m.get("se") or ""), float(m.get("se_z", 3.0)), str(m.get("target") or ""),
+                 str(m.get("upper") or ""))
+    except (AttributeError, TypeError, ValueError):
+        return None
+    ok = r.kind in BETTER and all(math.isfinite(x) and x >= 0 for x in (r.rel, r.abs, r.se_z))
+    return r if ok else None
+
+
 def rules_from_specs(specs: dict) -> dict[str, dict[str, Rule]]:
-    """``{task: {metric: Rule}}`` from task declarations (run.json's ``tasks``)."""
+    """``{task: {metric: Rule}}`` from task declarations (run.json's ``tasks``); a declaration
+    that is not one (`_rule`) is left out, and the installed kind's rule applies."""
     out = {}
     for task, spec in (specs or {}).items():
-        try:
-            out[task] = {m["name"]: Rule(m.get("better", "info"), float(m.get("rel", 0.01)), float(m.get("abs", 0.0)),
-                                         str(m.get("se") or ""), float(m.get("se_z", 3.0)), str(m.get("target") or ""))
-                         for m in spec.get("metrics", [])}
-        except (AttributeError, KeyError, TypeError, ValueError):
+        metrics = spec.get("metrics") if isinstance(spec, dict) else None
+        if not isinstance(metrics, list):
             continue
+        rules = {m["name"]: _rule(m) for m in metrics if isinstance(m, dict) and isinstance(m.get("name"), str)}
+        out[task] = {k: r for k, r in rules.items() if r is not None}
     return out
 
 
@@ -201,12 +217,24 @@ def judge(metric: str, a, b, row_a=None, row_b=None, rule: Rule | None = None) -
         sa, sb = _num((row_a or {}).get(rule.se)), _num((row_b or {}).get(rule.se))
         if sa is not None and sb is not None and math.isfinite(sa) and math.isfinite(sb):
             tol = max(tol, rule.se_z * math.hypot(sa, sb))
+    if rule.upper and rule.kind == "lower":     # certified brackets [x, x_up], [y, y_up]: apart, or the same
+        xu, yu = _upper(x, (row_a or {}).get(rule.upper)), _upper(y, (row_b or {}).get(rule.upper))
+        if y - xu > tol:
+            return "regression"
+        return "improvement" if x - yu > tol else "same"
     worse = (y - x) if rule.kind in ("lower", "one") else (x - y)
     if worse > tol:
         return "regression"
     if worse < -tol:
         return "improvement"
     return "same"
+
+
+def _upper(lo: float, up) -> float:
+    """A bracket's upper end: the row's ``up`` where it is a finite number at or above ``lo``,
+    else ``lo`` (no bracket)."""
+    u = _num(up)
+    return u if u is not None and math.isfinite(u) and u >= lo else lo
 
 
 ALPHA = 0.01
@@ -534,7 +562,7 @@ def _label(r: dict) -> str:
 
 def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FACTOR, rules=None,
                  absolute_time: bool = False, load_rule: bool = True, cores: int | None = None,
-                 threads: tuple | None = None) -> dict:
+                 threads: tuple | None = None, settings_differ: bool = False) -> dict:
     """Every change between two runs' rows: ``{"changes": [...], "only_a": [...], "only_b": [...], ...}``.
 
     ``rules``: ``{task: {metric: Rule}}`` from the runs' task declarations (default: the known tasks).
@@ -544,7 +572,8 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
     A's and B's threads per case). A drift of
     ``time_factor`` or more (or its inverse) on machines that were not oversubscribed
     (`whole_run_change`) is itself a change of the whole run: every case slowed alike, which no case's verdict relative to the
-    drift can see.
+    drift can see. ``settings_differ``: the runs measured with other settings (`_measurement`), so
+    a value one of them left blank was not measured there: changed, not a regression.
     """
     changes, input_changes = [], []
     unmatched: set = set()
@@ -589,7 +618,10 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
                 continue
             if verdict == "changed" and rule.kind == "info":
                 verdict = "info"              # e.g. peak_rss_mb: counted, not listed
-            entry = {**base, "metric": metric, "a": a, "b": b, "verdict": verdict}
+            note = ""
+            if settings_differ and verdict in ("regression", "improvement") and _blank(a) != _blank(b):
+                verdict, note = "changed", "not measured by one run's settings"
+            entry = {**base, "metric": metric, "a": a, "b": b, "verdict": verdict, **({"note": note} if note else {})}
             (input_changes if rule.kind == "input" else changes).append(entry)
     whole = (whole_run_change(rows_a, rows_b, drift, time_factor, cores, threads) if time_factor and not absolute_time
              else None)
@@ -693,18 +725,25 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
         for m in rules_a[t].keys() & rules_b[t].keys():
             if not rules_a[t][m].se and rules_b[t][m].se:
                 rules[t][m] = replace(rules_a[t][m], se=rules_b[t][m].se, se_z=rules_b[t][m].se_z)
-    for t, rs in rules.items():                 # a target column neither run names (older run.json): the kind's
+    for t, rs in rules.items():       # a target or bracket column A does not name (older run.json): B's, or the kind's
         for m, r in rs.items():
+            b, known = rules_b.get(t, {}).get(m) or r, rule_for(m, t)
             if r.kind == "target" and not r.target:
-                rs[m] = replace(r, target=(rules_b.get(t, {}).get(m) or r).target or rule_for(m, t).target)
+                rs[m] = r = replace(r, target=b.target or known.target)
+            if r.kind == "lower" and not r.upper and (b.upper or known.upper) and known.kind == "lower":
+                rs[m] = replace(r, upper=b.upper or known.upper)
     other_rules = sorted(f"{t}.{m}" for t in rules_a.keys() & rules_b.keys()
                          for m in rules_a[t].keys() & rules_b[t].keys()
-                         if replace(rules_a[t][m], se="", se_z=3.0, target="") != replace(rules_b[t][m], se="", se_z=3.0, target=""))
+                         if replace(rules_a[t][m], se="", se_z=3.0, target="", upper="")
+                         != replace(rules_b[t][m], se="", se_z=3.0, target="", upper=""))
     ca, cb = ((m.get("machine") or {}).get("cpu_count") for m in (meta_a, meta_b))
     threads = tuple((m.get("timing") or {}).get("threads_per_case") if isinstance(m.get("timing"), dict) else None
                     for m in (meta_a, meta_b))
     threads = tuple(t if isinstance(t, int) and not isinstance(t, bool) and t > 0 else None for t in threads)
-    res = compare_rows(ra, rb, time_factor, rules, absolute_time, cores=ca if ca == cb else None, threads=threads)
+    ma_, mb_ = _measurement(meta_a), _measurement(meta_b)
+    differ = [f"{k} A {ma_[k]}, B {mb_[k]}" for k in ma_ if k in mb_ and ma_[k] != mb_[k]]
+    res = compare_rows(ra, rb, time_factor, rules, absolute_time, cores=ca if ca == cb else None, threads=threads,
+                       settings_differ=bool(differ))
     changes = _sorted(res["changes"])
     regress = [c for c in changes if c["verdict"] == "regression"]
     shown = [c for c in changes if c["verdict"] not in ("within tolerance", "info", "inconclusive")]
@@ -726,11 +765,11 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
         print(f"note: not compared, a column only one run's CSV has (another version wrote it?): {cols}"
               + (f" and {len(res['unmatched_columns']) - 8} more" if len(res["unmatched_columns"]) > 8 else ""),
               file=out)
-    ma_, mb_ = _measurement(meta_a), _measurement(meta_b)
-    differ = [f"{k} A {ma_[k]}, B {mb_[k]}" for k in ma_ if k in mb_ and ma_[k] != mb_[k]]
     if differ:
         print(f"note: the runs measured with other settings ({'; '.join(differ)}): sampled metrics "
-              "(surface_dist_mean) differ by their sampling too, within their standard errors", file=out)
+              "(surface_dist_mean) differ by their sampling too, within their standard errors; certified brackets "
+              "(hausdorff to hausdorff_upper) count only where they lie apart; a value one run did not measure "
+              "is a change, not a regression", file=out)
     if other_rules:
         print(f"note: B declares other rules (direction or tolerance) for {len(other_rules)} metric(s), e.g. "
               f"{', '.join(other_rules[:5])}: A's (the baseline's) are used", file=out)

@@ -436,11 +436,34 @@ class RunFolder:
             os.close(fd)
 
     def frames(self) -> dict[str, pd.DataFrame]:
-        """One DataFrame per task CSV present."""
+        """One DataFrame per task CSV present; `ShootoutError` for a CSV that lacks a metric column
+        its run declares (run.json ``tasks``), or a case id in two rows (a run writes one row per
+        case): an edited or merged file every reader would misstate."""
         out = {}
+        meta = self.read_run_json() or {}
+        declared = meta.get("tasks") if isinstance(meta.get("tasks"), dict) else {}
+        seen: dict[str, str] = {}
         for task in tasks.names():
-            if self.csv_path(task).exists():
-                out[task] = load_csv(self.csv_path(task))
+            path = self.csv_path(task)
+            if not path.exists():
+                continue
+            df = load_csv(path)
+            spec = declared.get(task) if isinstance(declared.get(task), dict) else {}
+            names = [m.get("name") for m in spec.get("metrics") or [] if isinstance(m, dict)] \
+                if isinstance(spec.get("metrics"), list) else []
+            lost = [n for n in names if isinstance(n, str) and n not in df and len(df.columns)]
+            if lost:
+                raise ShootoutError(f"{path}: damaged CSV: no column(s) {', '.join(lost[:5])}"
+                                    + (f" and {len(lost) - 5} more" if len(lost) > 5 else "")
+                                    + ", which its run (run.json) declares")
+            if "case_id" in df:
+                for cid in df["case_id"].astype(str):
+                    if cid in seen:
+                        raise ShootoutError(f"{path}: case id {cid} appears in more than one row (also in "
+                                            f"{seen[cid]}): a run folder holds one row per case (an edited or "
+                                            "merged file?); which one to show is not decidable")
+                    seen[cid] = path.name
+            out[task] = df
         return out
 
     def write_plan(self, rows: list[dict]) -> None:

@@ -129,6 +129,14 @@ def test_a_column_only_one_run_has_is_a_note_not_a_regression(run_a, tmp_path):
                            lineterminator="\n")
         w.writeheader()
         w.writerows(rows)
+    # a review: a column B's own run declares but its CSV lacks is a damaged file (exit 2), not a note
+    with pytest.raises(harness.errors.ShootoutError, match="smoothing.csv: damaged CSV: no column.s. ev_mean, "
+                                                           "which its run .run.json. declares"):
+        run_compare(run_a, b, time_factor=None)
+    meta = json.loads((b / "run.json").read_text())          # another version: it declares no ev_mean
+    spec = meta["tasks"]["smoothing"]
+    spec["metrics"] = [m for m in spec["metrics"] if m["name"] != "ev_mean"]
+    (b / "run.json").write_text(json.dumps(meta))
     for x, y, where in ((run_a, b, "only in A"), (b, run_a, "only in B")):
         code, out = run_compare(x, y, time_factor=None)
         assert code == 0 and "REGRESSION" not in out, out
@@ -140,7 +148,8 @@ def test_changes_within_tolerance_and_improvements_exit_0(run_a, tmp_path):
 
     def fn(rows):
         rows[0]["dist_mean"] = str(float(rows[0]["dist_mean"]) * 1.005)   # 0.5 % worse: within the 1 % tolerance
-        rows[1]["hausdorff"] = str(float(rows[1]["hausdorff"]) * 0.5)      # better
+        rows[1]["hausdorff"] = str(float(rows[1]["hausdorff"]) * 0.5)      # better: the whole bracket
+        rows[1]["hausdorff_upper"] = str(float(rows[1]["hausdorff_upper"]) * 0.5)
     edit(b / "smoothing.csv", fn)
     code, out = run_compare(run_a, b)
     assert code == 0, out
@@ -823,3 +832,64 @@ def test_an_older_baseline_without_standard_errors_still_reads_them(tmp_path, ca
     assert compare_runs(tmp_path / "a", tmp_path / "b", time_factor=None) == 0
     out = capsys.readouterr().out
     assert "REGRESSION" not in out and "other rules" not in out, out
+
+
+def test_runs_measured_with_other_settings_are_not_false_regressions(run_a, tmp_path):
+    """A review: a run with hausdorff_eps 0.3 (bracket [0.009477, 0.012224]) against one with the
+    default (0.009646, inside it) was a REGRESSION of hausdorff, exit 1; with hausdorff_samples 0
+    the blank surface_dist_mean was one too. Certified brackets now count only where they lie
+    apart, and a value one run's settings did not measure is a change."""
+    from harness.compare import RULES
+    rule = RULES["hausdorff"]
+    assert rule.upper == "hausdorff_upper"
+    a = {"hausdorff": 0.009477, "hausdorff_upper": 0.012224}
+    b = {"hausdorff": 0.009646, "hausdorff_upper": 0.009655}
+    assert judge("hausdorff", a["hausdorff"], b["hausdorff"], a, b, rule=rule) == "same"
+    assert judge("hausdorff", b["hausdorff"], a["hausdorff"], b, a, rule=rule) == "same"
+    far = {"hausdorff": 0.0125, "hausdorff_upper": 0.0126}                 # above A's whole bracket
+    assert judge("hausdorff", a["hausdorff"], far["hausdorff"], a, far, rule=rule) == "regression"
+    assert judge("hausdorff", far["hausdorff"], b["hausdorff"], far, b, rule=rule) == "improvement"
+    assert judge("hausdorff", 0.01, 0.0102, {}, {}, rule=rule) == "regression"     # no bracket stored: as before
+    c = copy(run_a, tmp_path, "c")
+    meta = json.loads((c / "run.json").read_text())
+    meta["measurement"] = {**meta["measurement"], "hausdorff_samples": 0}
+    (c / "run.json").write_text(json.dumps(meta))
+    edit(c / "simplification.csv", lambda rows: [r.update(surface_dist_mean="", surface_dist_mean_se="")
+                                                 for r in rows])
+    code, out = run_compare(run_a, c, time_factor=None)
+    assert code == 0 and "REGRESSION" not in out and "not measured by one run's settings" in out, out
+    meta["measurement"] = json.loads((run_a / "run.json").read_text())["measurement"]
+    (c / "run.json").write_text(json.dumps(meta))                          # the same settings: a lost value
+    code, out = run_compare(run_a, c, time_factor=None)
+    assert code == 1 and "surface_dist_mean" in out, out
+
+
+def test_a_baselines_recorded_rules_that_no_version_writes_are_not_used(run_a, tmp_path):
+    """A review: a 10x worse dist_mean passed (exit 0) when A's run.json declared rel NaN, abs
+    Infinity, better "bogus" (taken as higher is better: an "improvement") for it. Such a
+    declaration is left out and the installed kind's rule applies."""
+    b = copy(run_a, tmp_path)
+    edit(b / "smoothing.csv", lambda rows: [r.update(dist_mean=str(float(r["dist_mean"]) * 10)) for r in rows])
+    for bad in ({"rel": float("nan")}, {"abs": float("inf")}, {"better": "bogus"}, {"rel": -1}):
+        a = copy(run_a, tmp_path, "a" + str(abs(hash(str(bad))) % 1000))
+        meta = json.loads((a / "run.json").read_text())
+        for m in meta["tasks"]["smoothing"]["metrics"]:
+            if m["name"] == "dist_mean":
+                m.update(bad)
+        (a / "run.json").write_text(json.dumps(meta))
+        code, out = run_compare(a, b, time_factor=None)
+        assert code == 1 and "REGRESSION" in out and "dist_mean" in out, (bad, out)
+
+
+def test_the_report_refuses_a_case_id_in_two_rows(run_a, tmp_path):
+    """A review: a duplicated row weighted its seed 2/3 in the winners (dist_mean 16.7% off) and
+    the status table counted 7 cases of 6. Every reader now refuses the folder (exit 2), as compare did."""
+    b = copy(run_a, tmp_path)
+    lines = (b / "smoothing.csv").read_text().splitlines(keepends=True)
+    (b / "smoothing.csv").write_text("".join(lines + lines[1:2]))
+    cid = lines[1].split(",")[0]
+    r = subprocess.run([sys.executable, "-m", "harness.cli", "report", str(b)], capture_output=True, text=True,
+                       cwd=Path(__file__).resolve().parents[1], timeout=300)
+    assert r.returncode == 2 and f"case id {cid} appears in more than one row" in r.stderr, r.stderr
+    with pytest.raises(harness.errors.ShootoutError, match="appears in more than one row"):
+        harness.load_run(b)

@@ -45,7 +45,10 @@ class Metric:
     standard error: two values also count as the same (compare, ties of the winners) while they
     differ by at most ``SE_Z`` = 3 times their combined standard error ``sqrt(se_a^2 + se_b^2)``.
     ``target``: for ``better="target"``, the column holding the count asked for; a result reaches
-    it within `target_tolerance`, and compare counts a miss that grows beyond that.
+    it within `target_tolerance`, and compare counts a miss that grows beyond that. ``upper``: for
+    a certified bound (``better="lower"``), the column of the upper end of its bracket (the value
+    is the lower end, what was found): compare counts a change only when the two brackets lie
+    apart beyond the tolerance, so runs measured to other precisions agree where they overlap.
     """
 
     name: str
@@ -58,6 +61,7 @@ class Metric:
     rank: bool = False          # offered as a ranking metric in the report
     se: str = ""                # the column of its standard error (a sampled metric), or ""
     target: str = ""            # better="target": the column of the count asked for
+    upper: str = ""             # a certified bracket's upper end (the value is its lower end)
 
     def __post_init__(self):
         if self.better not in BETTER:
@@ -70,6 +74,8 @@ class Metric:
             out.update(se=self.se, se_z=SE_Z)
         if self.target:
             out["target"] = self.target
+        if self.upper:
+            out["upper"] = self.upper
         return out
 
 

@@ -142,7 +142,7 @@ TASK = Task(
         Metric("over_target", "false", "kept more faces than target_faces + 1% + 2 (its errors are not comparable: "
                "an invalid result; blank without a target)", kind="bool"),
         Metric("hausdorff", "lower", "symmetric Hausdorff distance to the input surface, certified by branch and "
-               "bound: the largest distance found, the true value at most hausdorff_upper", rank=True, **_LEN),
+               "bound: the largest distance found, the true value at most hausdorff_upper", rank=True, upper="hausdorff_upper", **_LEN),
         Metric("hausdorff_gap", "info", "relative gap (upper - lower) / lower of the Hausdorff bracket, 0 when upper - "
                "lower <= 1e-12 of the diagonal; certified: <= hausdorff_eps (default 1e-3), or the whole bracket within "
                "lower + hausdorff_eps lower + 1e-12 of the diagonal (a distance near rounding level may then show a "

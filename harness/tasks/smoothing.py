@@ -157,7 +157,7 @@ TASK = Task(
         Metric("ev_sun", "lower", "area-weighted RMS vertex-to-clean-surface distance (Sun et al. 2007)",
                rank=True, **_LEN),
         Metric("hausdorff", "lower", "symmetric Hausdorff distance between the result and the clean surface, "
-               "certified by branch and bound within hausdorff_gap", **_LEN),
+               "certified by branch and bound within hausdorff_gap", upper="hausdorff_upper", **_LEN),
         Metric("hausdorff_gap", "info", "relative gap of the Hausdorff bracket (<= hausdorff_eps, default 1e-3, unless a budget ran out)",
                rel=1.0, abs=1e-3),
         Metric("hausdorff_upper", "info", "certified upper bound of the Hausdorff distance", **_LEN),
