@@ -543,7 +543,8 @@ def test_a_hand_edited_run_json_of_wrong_types_is_read_without_a_traceback(tmp_p
     assert "unknown at the start, 0.50 at the end" in _timing_text({"load_average": [None, 0.5]})
     edits = [(("machine",), "x"), (("tasks",), []), (("versions",), "x"), (("workers",), "x"),
              (("load_average",), 5), (("timing",), ["x"]), (("solver", "versions"), 5), (("solver", "last_used"), "x"),
-             (("sessions", 0), 5), (("sessions", 0, "wall_s"), "12.5"), (("load_average", 0), "x")]
+             (("sessions", 0), 5), (("sessions", 0, "wall_s"), "12.5"), (("load_average", 0), "x"),
+             (("tasks", "smoothing", "metrics"), 5), (("tasks", "smoothing"), "x")]   # a review: `shootout report`
     d = tmp_path / "d"
     shutil.copytree(base, d)
     for path, bad in edits:
@@ -558,6 +559,8 @@ def test_a_hand_edited_run_json_of_wrong_types_is_read_without_a_traceback(tmp_p
             compare_runs(base, d, out=io.StringIO())
         except harness.errors.ShootoutError:
             pass
+        from harness.cli import main as cli_main
+        assert cli_main(["report", str(d)]) in (0, 2), path          # its rankings too (a TypeError, exit 1)
     m = copy.deepcopy(meta0)
     m["sessions"] = [{**m["sessions"][0], "wall_s": "12.5"}, 5]
     (d / "run.json").write_text(json.dumps(m))

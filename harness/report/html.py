@@ -38,8 +38,11 @@ MAX_DISPLAY_FACES = 8000    # what the views were decimated to (stated on the pa
 # ----------------------------------------------------------------------------- helpers
 
 def task_specs(meta: dict, frames) -> dict:
-    """Task declarations: those recorded in run.json, then known tasks with a CSV in the folder."""
-    specs = {k: v for k, v in (meta.get("tasks") or {}).items() if isinstance(v, dict)}
+    """Task declarations: those recorded in run.json (a hand-edited one whose ``metrics`` is not a
+    list of declarations gives way to the installed kind's), then known tasks with a CSV in the folder."""
+    recorded = meta.get("tasks") if isinstance(meta.get("tasks"), dict) else {}
+    specs = {k: v for k, v in recorded.items() if isinstance(v, dict) and isinstance(v.get("metrics"), list)
+             and all(isinstance(m, dict) and isinstance(m.get("name"), str) for m in v["metrics"])}
     for name, task in _tasks.all_tasks().items():
         if name not in specs and name in frames:
             specs[name] = task.spec()
