@@ -15,7 +15,9 @@ in ``invalid_cells``; so does a variant whose method failed (error or timeout) o
 the cell, which is not ranked on the seeds it survived. Cells where a variant has no value for
 some seed otherwise (not run, unavailable, the metric not measured) are left out of the test
 and counted in ``missing_cells``; a variant with no value in any cell (e.g. its library is not
-installed) is left out of the ranking altogether instead of emptying it. With N complete cells
+installed) is left out of the ranking altogether instead of emptying it, and a cell whose every
+row is ok without a value (the metric does not apply there: a spectrum without an analytic
+reference) is no cell of that metric. With N complete cells
 and k variants:
 
 - Friedman: ``chi2_F = 12 N / (k (k+1)) [sum_j R_j^2 - k (k+1)^2 / 4] / C``, R_j the mean ranks,
@@ -318,6 +320,10 @@ def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_para
     missing = vals.isna() & ~inval
     ran = ~missing.all(axis=0)             # a variant with no value anywhere (unavailable) is left out
     vals, inval, missing = vals.loc[:, ran], inval.loc[:, ran], missing.loc[:, ran]
+    # a cell whose every row is ok and none has a value: the metric does not apply there (no reference)
+    all_ok = (cells["status"] == "ok").groupby(cells["_cell"]).all().reindex(missing.index).fillna(False)
+    applies = ~(missing.all(axis=1) & all_ok.astype(bool))
+    vals, inval, missing = vals.loc[applies], inval.loc[applies], missing.loc[applies]
     complete = vals[~missing.any(axis=1)]
     inv = inval.loc[complete.index]
     sign = -1.0 if better == "higher" else 1.0

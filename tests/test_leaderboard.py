@@ -535,3 +535,23 @@ def test_a_sampled_metric_ties_within_three_standard_errors_and_seeds_are_said()
     assert judge("surface_dist_mean", 1.0, 1.015, a, b, rule=rule) == "same"            # 1.5% < 3 x 0.71%
     a, b = rows[2], rows[3]
     assert judge("surface_dist_mean", 1.0, 1.015, a, b, rule=rule) == "regression"      # SE 0.01%: a change
+
+
+def test_a_cell_where_the_metric_does_not_apply_is_no_missing_cell():
+    """A review: the spectrum leaderboard listed every method as "missing 6" for the cells of a
+    mesh without an analytic spectrum, which reads as failures. A cell where no method has a
+    value is no cell of that metric; a cell where one method lacks it still counts as missing."""
+    import pandas as pd
+
+    from harness import tasks
+    from harness.leaderboard import leaderboard
+    rows = []
+    for mesh, errs in (("sphere", (0.01, 0.02)), ("bunny", (None, None)), ("torus", (0.03, None))):
+        for m, e in zip(("a.eig", "b.eig"), errs):
+            rows.append({"case_id": f"{m}{mesh}", "task": "spectrum", "mesh": mesh, "noise_model": "none",
+                         "noise_level": 0.0, "seed": 0, "method": m, "params": json.dumps({"k": 10}), "status": "ok",
+                         "eig_rel_error_mean": e, "eig_rel_error_max": e})
+    lb = leaderboard({"spectrum": pd.DataFrame(rows)}, {"spectrum": tasks.get("spectrum").spec()})
+    lb = lb[lb.metric == "eig_rel_error_mean"].set_index("method")
+    assert lb.loc["a.eig", "missing_cells"] == 0 and lb.loc["b.eig", "missing_cells"] == 1, lb
+    assert (lb["cells"] == 1).all(), lb
