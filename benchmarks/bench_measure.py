@@ -181,4 +181,10 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    try:
+        raise SystemExit(main())
+    except AssertionError as exc:       # the two measurements disagree: their ratio compares nothing
+        import traceback
+        where = traceback.extract_tb(exc.__traceback__)[-1]
+        print(f"MISMATCH: line {where.lineno}: {where.line} {exc}")
+        raise SystemExit(1) from None

@@ -42,7 +42,10 @@ def main(argv=None) -> int:
     for label, (V, F) in (("armadillo", (datasets.load("armadillo").clean.V, datasets.load("armadillo").clean.F)),
                           (f"icosphere {a.subdivisions}", datasets.icosphere(a.subdivisions))):
         n = len(V)
-        assert abs(ours(V, F).W - user(F, n)).max() == 0
+        diff = abs(ours(V, F).W - user(F, n)).max()
+        if diff != 0:                   # a ratio of two different matrices compares nothing
+            print(f"MISMATCH: {label}: scratch.uniform and the igl adjacency pipeline differ by {diff:.1e}")
+            return 1
         r = []
         for _ in range(a.pairs):
             t = time.perf_counter(); ours(V, F); ta = time.perf_counter() - t
