@@ -519,19 +519,33 @@ def _check_meshes(meshes, base_dir: Path, P: list, key: str = "meshes") -> list[
     return out
 
 
+def _same_mesh_key(spec: dict) -> dict:
+    """What makes two mesh entries one mesh: `_identity`, where a bundled mesh (not a pair) is the
+    file it reads, so that the same bytes given as a ``file:`` are the same mesh too."""
+    if set(spec) <= {"bundled", "name"}:
+        files = datasets._spec_files(spec)
+        if len(files) == 1:
+            try:
+                return {"file_sha1": file_sha1(files[0])}
+            except OSError:
+                pass
+    return _identity(spec)
+
+
 def _same_mesh_problems(specs: list[dict], where: list[str]) -> list[str]:
     """One mesh listed twice (same spec, or files with the same bytes: its cases would run once,
     whatever its names), and a ``name:`` that another, different mesh also goes by (the ``mesh``
     column and the noise seed come from it; it would be changed silently to tell them apart)."""
     P, again = [], {}
-    ids = [json.dumps(_identity(s), sort_keys=True, default=str) for s in specs]
+    ids = [json.dumps(_same_mesh_key(s), sort_keys=True, default=str) for s in specs]
     for i, ident in enumerate(ids):
         again.setdefault(ident, []).append(i)
     for ident, at in again.items():
         if len(at) > 1:
             more = f" and {len(at) - 4} more" if len(at) > 4 else ""
             P.append(f"{', '.join(where[i] for i in at[1:4])}{more}: the same mesh as {where[at[0]]} (the same "
-                     f"{'file bytes' if 'file' in specs[at[0]] else 'spec'}): list it once")
+                     f"{'spec' if len({json.dumps(_identity(specs[i]), sort_keys=True, default=str) for i in at}) == 1 else 'file bytes'}"
+                     "): list it once")
     base, final = [datasets.spec_key(s) for s in specs], _unique_labels(specs)
     for i, s in enumerate(specs):
         if "name" not in s or final[i] == s["name"]:

@@ -292,6 +292,8 @@ def test_config_grid_expansion():
      "meshes[0].name: 'ball' is also the label of meshes[1], another mesh"),
     ({"meshes": [{"file": str(KNIGHT), "name": "sphere"}, "sphere"]},
      "meshes[0].name: 'sphere' is also the label of meshes[1], another mesh"),
+    # a review: a bundled mesh given again as its file (or a copy of it) ran twice
+    ({"meshes": ["knight", {"file": str(KNIGHT)}]}, "meshes[1]: the same mesh as meshes[0] (the same file bytes)"),
 ])
 def test_config_errors_name_key_path(patch, needle):
     probs = _problems({**GOOD, **patch})
