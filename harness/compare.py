@@ -75,6 +75,7 @@ are informational. Exit code: 1 if anything regressed, else 0.
 """
 from __future__ import annotations
 
+import functools
 import html
 import json
 import math
@@ -254,6 +255,18 @@ def time_samples(row: dict, column: str = "times") -> list[float] | None:
     return None
 
 
+@functools.lru_cache(maxsize=1024)
+def _bootstrap_medians(a: tuple, b: tuple):
+    """The medians of ``BOOTSTRAP`` seeded resamples of each sample list (the same resamples
+    every time: one computation serves the raw and the drift-relative verdicts and the note)."""
+    import numpy as np
+    A, B = np.asarray(a), np.asarray(b)
+    rng = np.random.default_rng(0)
+    ra_ = np.median(A[rng.integers(0, A.size, (BOOTSTRAP, A.size))], axis=1)
+    rb_ = np.median(B[rng.integers(0, B.size, (BOOTSTRAP, B.size))], axis=1)
+    return ra_, rb_
+
+
 def time_effect(ra: dict, rb: dict, drift: float = 1.0) -> dict | None:
     """Median ratio B/A with a seeded 95% bootstrap interval and one-sided Mann-Whitney p-values
     (``p_slower``: B slower than A; ``p_faster``), or None without samples on both sides.
@@ -265,11 +278,9 @@ def time_effect(ra: dict, rb: dict, drift: float = 1.0) -> dict | None:
     from scipy.stats import mannwhitneyu
     A, B = np.asarray(a), np.asarray(b) / drift
     ma, mb = float(np.median(A)), float(np.median(B))
-    rng = np.random.default_rng(0)
-    ra_ = np.median(A[rng.integers(0, A.size, (BOOTSTRAP, A.size))], axis=1)
-    rb_ = np.median(B[rng.integers(0, B.size, (BOOTSTRAP, B.size))], axis=1)
+    ra_, rb_ = _bootstrap_medians(tuple(a), tuple(b))     # B's scale by the drift (a median is scale-equivariant)
     with np.errstate(divide="ignore", invalid="ignore"):
-        ratios = rb_ / ra_
+        ratios = (rb_ / drift) / ra_
     lo, hi = (float(x) for x in np.nanpercentile(ratios, [2.5, 97.5]))
     if A.size > 1 or B.size > 1:
         p_slower = float(mannwhitneyu(B, A, alternative="greater").pvalue)
