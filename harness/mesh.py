@@ -69,7 +69,22 @@ class Mesh:
     def input_notes(self) -> list[str]:
         """What a row on this mesh should say of it, beside its repairs: `orientation_note` and
         `degenerate_note` (computed once per mesh; the driver computes them before forking)."""
-        return [n for n in (self.orientation_note, self.degenerate_note) if n]
+        return [n for n in (self.orientation_note, self.degenerate_note, self.seam_note) if n]
+
+    @functools.cached_property
+    def seam_note(self) -> str:
+        """'' unless two vertices that faces use sit at exactly the same position (an unwelded
+        seam, duplicated vertices): every operator treats them as separate, so the surface is cut
+        there (a Laplacian's spectrum, a smoothing, a geodesic see a boundary)."""
+        used = np.flatnonzero(np.bincount(self.F.ravel(), minlength=len(self.V))) if len(self.F) else []
+        if len(used) < 2:
+            return ""
+        P = self.V[used]
+        order = np.lexsort(P.T[::-1])
+        same = (P[order[1:]] == P[order[:-1]]).all(axis=1)
+        n = int(np.count_nonzero(same))
+        return (f"{n} vertex(es) at exactly the position of another (an unwelded seam or duplicated vertices): "
+                "methods treat them as separate, so the surface is cut there" if n else "")
 
     @functools.cached_property
     def degenerate_note(self) -> str:
