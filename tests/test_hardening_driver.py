@@ -60,6 +60,20 @@ def test_forks_orphans_and_process_group_signals_cost_one_row_each(tmp_path):
     assert orphans and not any(_alive(pid) for pid in orphans), "a process of a case outlived it"
 
 
+def test_a_method_that_signals_its_parent_costs_nothing(tmp_path):
+    """An adversarial review: ``os.kill(os.getppid(), SIGTERM)`` in a method stopped the whole run
+    as a Ctrl-C would, at every --resume, and SIGUSR1 killed the driver outright. The case now
+    runs below a guard process that ignores such signals: the run finishes, the case is ok."""
+    cfg = _cfg(tmp_path, ["hostile.kill_parent", "scratch.explicit"])
+    r = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(tmp_path / "o"),
+                        "--quiet", "--workers", "2"], cwd=ROOT, env=_env(tmp_path), capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 0, r.stderr
+    df = pd.read_csv(tmp_path / "o" / "smoothing.csv").set_index("method")
+    assert (df["status"] == "ok").all(), df[["status", "error"]]
+    assert json.loads((tmp_path / "o" / "run.json").read_text())["status"] == "finished"
+
+
 def test_a_flood_of_output_with_stdout_piped_to_head(tmp_path):
     cfg = _cfg(tmp_path, ["hostile.chatty", "scratch.explicit"])
     cmd = (f"{sys.executable} -m harness.cli run {cfg} --out {tmp_path / 'o'} --workers 1 | head -c 10; "

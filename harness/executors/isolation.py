@@ -16,6 +16,9 @@ What a method may do, and what it costs:
   command's driver is one while it runs its cases (`become_subreaper`) and kills every child
   of its own that is neither a running case nor one it had before (`reap_strays`);
 - signal its process group (``os.killpg(0, ...)``): reaches only its own case;
+- signal its parent (``os.kill(os.getppid(), ...)``): the case runs in a child of the process
+  the driver forked, a guard (`_guard`) that ignores the signals of `_GUARDED`, waits for the
+  case and ends as it did; the driver never receives them;
 - print: the case's stdout goes to /dev/null and its stderr to a temporary file (in the session's
   private directory, `harness.input_store.session`) whose last lines are quoted in the row of a
   case that died; the driver keeps that file under ``STDERR_MAX`` bytes while the case runs
@@ -203,7 +206,13 @@ def _child(conn, case, want_meshes, own_reader_fd=None, want_view=False, stderr_
     input_store.drop_lock()
     close_inherited_locks()              # the run folder's lock stays the driver's alone
     _isolate(stderr_path)
-    _die_with_driver(conn, own_reader_fd)
+    if own_reader_fd is not None:
+        os.close(own_reader_fd)
+    guard = os.fork() if hasattr(os, "fork") else 0    # the case runs below a guard: its parent is never the driver
+    if guard:
+        conn.close()
+        _guard(guard)
+    _die_with_driver(conn, None)
     pid = os.getpid()
     become_subreaper()                    # descendants that leave the process group come back here
     try:
@@ -220,6 +229,40 @@ def _child(conn, case, want_meshes, own_reader_fd=None, want_view=False, stderr_
             os._exit(0)
         reap_strays()
         conn.close()
+
+
+# signals whose default ends a process and that a method may send its parent (os.getppid()):
+# the guard ignores them, so they cost the case nothing and never reach the driver
+_GUARDED = tuple(getattr(signal, n) for n in ("SIGHUP", "SIGINT", "SIGQUIT", "SIGTERM", "SIGUSR1", "SIGUSR2",
+                                              "SIGALRM", "SIGPIPE", "SIGVTALRM", "SIGPROF") if hasattr(signal, n))
+
+
+def _guard(pid: int) -> None:
+    """The case process as the driver sees it: the parent of the process that runs the case
+    (``pid``). It ignores the signals of `_GUARDED` (a method signalling its parent reaches
+    this process, not the driver), is a child subreaper (what the case leaves, even outside
+    its group, comes back here and is killed), waits for the case, then ends as the case did:
+    the same exit code, or killed by the same signal. Never returns."""
+    for sig in _GUARDED:
+        with contextlib.suppress(OSError, ValueError):
+            signal.signal(sig, signal.SIG_IGN)
+    become_subreaper()
+    while True:
+        try:
+            status = os.waitpid(pid, 0)[1]
+            break
+        except ChildProcessError:
+            status = 0
+            break
+        except InterruptedError:
+            continue
+    reap_strays()
+    if os.WIFSIGNALED(status):
+        sig = os.WTERMSIG(status)
+        with contextlib.suppress(OSError, ValueError):
+            signal.signal(sig, signal.SIG_DFL)
+        os.kill(os.getpid(), sig)
+    os._exit(os.waitstatus_to_exitcode(status) if os.WIFEXITED(status) else 1)
 
 
 def _tail(path: str | None, n: int = 3) -> str:

@@ -44,6 +44,16 @@ def killpg(V, F):
     return SmoothingResult(V=V.copy())
 
 
+@register("hostile.kill_parent", task="smoothing", library="hostile")
+def kill_parent(V, F):
+    """Signals its parent process (SIGTERM, SIGINT, SIGUSR1, SIGHUP), as a library that takes
+    itself for a pool worker might, then returns its input."""
+    for sig in (signal.SIGTERM, signal.SIGINT, signal.SIGUSR1, signal.SIGHUP):
+        os.kill(os.getppid(), sig)
+    time.sleep(0.2)
+    return SmoothingResult(V=V.copy())
+
+
 @register("hostile.chatty", task="smoothing", library="hostile")
 def chatty(V, F):
     """Prints 50 MB to stdout and a line to stderr."""
