@@ -12,7 +12,10 @@ refused:
   ``sym_error``, ``lin_error``, ``neg_weights``, ``obtuse_fraction``, ``max_angle``) regress when
   ``b > a + max(rel * |a|, abs)``: worse by more than ``rel`` (1 %) relative *and* more than a
   small absolute amount (lengths are fractions of the bounding-box diagonal, so ``1e-6`` is
-  far below anything visible; angles ``0.01`` degrees);
+  far below anything visible; angles ``0.01`` degrees); a sampled one (``Rule.se``:
+  ``surface_dist_mean``) also only beyond ``se_z`` combined standard errors, and a certified
+  bracket (``Rule.upper``: ``hausdorff`` to ``hausdorff_upper``) only when the two brackets lie
+  apart by more than that;
 * quality metrics (higher is better: ``min_angle``, ``radius_ratio_mean``, ``min_eig``) regress
   when ``b < a - max(rel * |a|, abs)``;
 * ratios that should be 1 (``volume_ratio``, ``area_ratio``) regress when ``|b - 1|`` grows
@@ -23,6 +26,8 @@ refused:
   miss of the target grows by more than ``1 % of the target + 2`` (`harness.tasks.base.target_tolerance`,
   which also decides simplification's ``over_target``);
 * a value that becomes blank (not measurable any more) regresses; one that appears improves;
+  except a sampled metric's when the runs drew another number of points (``hausdorff_samples``,
+  0 measuring none): changed;
 * time is decided on the stored samples (``times``): it regresses when B is slower with
   statistical significance *and* by a minimum effect: the one-sided Mann-Whitney U test of
   B's samples against A's gives p < ``ALPHA`` (0.01), the lower end of the 95% bootstrap
@@ -573,7 +578,7 @@ def _label(r: dict) -> str:
 
 def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FACTOR, rules=None,
                  absolute_time: bool = False, load_rule: bool = True, cores: int | None = None,
-                 threads: tuple | None = None, settings_differ: bool = False) -> dict:
+                 threads: tuple | None = None, samples_differ: bool = False) -> dict:
     """Every change between two runs' rows: ``{"changes": [...], "only_a": [...], "only_b": [...], ...}``.
 
     ``rules``: ``{task: {metric: Rule}}`` from the runs' task declarations (default: the known tasks).
@@ -583,8 +588,9 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
     A's and B's threads per case). A drift of
     ``time_factor`` or more (or its inverse) on machines that were not oversubscribed
     (`whole_run_change`) is itself a change of the whole run: every case slowed alike, which no case's verdict relative to the
-    drift can see. ``settings_differ``: the runs measured with other settings (`_measurement`), so
-    a value one of them left blank was not measured there: changed, not a regression.
+    drift can see. ``samples_differ``: the runs drew another number of points (`_measurement`'s
+    ``hausdorff_samples``; 0 measures no sampled metric), so a sampled metric's value (``Rule.se``)
+    one of them left blank was not measured there: changed, not a regression.
     """
     changes, input_changes = [], []
     unmatched: set = set()
@@ -630,7 +636,7 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
             if verdict == "changed" and rule.kind == "info":
                 verdict = "info"              # e.g. peak_rss_mb: counted, not listed
             note = ""
-            if settings_differ and verdict in ("regression", "improvement") and _blank(a) != _blank(b):
+            if samples_differ and rule.se and verdict in ("regression", "improvement") and _blank(a) != _blank(b):
                 verdict, note = "changed", "not measured by one run's settings"
             entry = {**base, "metric": metric, "a": a, "b": b, "verdict": verdict, **({"note": note} if note else {})}
             (input_changes if rule.kind == "input" else changes).append(entry)
@@ -754,7 +760,7 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
     ma_, mb_ = _measurement(meta_a), _measurement(meta_b)
     differ = [f"{k} A {ma_[k]}, B {mb_[k]}" for k in ma_ if k in mb_ and ma_[k] != mb_[k]]
     res = compare_rows(ra, rb, time_factor, rules, absolute_time, cores=ca if ca == cb else None, threads=threads,
-                       settings_differ=bool(differ))
+                       samples_differ=ma_.get("hausdorff_samples") != mb_.get("hausdorff_samples"))
     changes = _sorted(res["changes"])
     regress = [c for c in changes if c["verdict"] == "regression"]
     shown = [c for c in changes if c["verdict"] not in ("within tolerance", "info", "inconclusive")]
@@ -779,8 +785,8 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
     if differ:
         print(f"note: the runs measured with other settings ({'; '.join(differ)}): sampled metrics "
               "(surface_dist_mean) differ by their sampling too, within their standard errors; certified brackets "
-              "(hausdorff to hausdorff_upper) count only where they lie apart; a value one run did not measure "
-              "is a change, not a regression", file=out)
+              "(hausdorff to hausdorff_upper) count only where they lie apart; a sampled value one run did not "
+              "measure (hausdorff_samples 0) is a change, not a regression", file=out)
     if other_rules:
         print(f"note: B declares other rules (direction or tolerance) for {len(other_rules)} metric(s), e.g. "
               f"{', '.join(other_rules[:5])}: A's (the baseline's) are used", file=out)

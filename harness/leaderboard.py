@@ -15,8 +15,8 @@ in ``invalid_cells``; so does a variant whose method failed (error or timeout) o
 the cell, which is not ranked on the seeds it survived. Cells where a variant has no value for
 some seed otherwise (not run, unavailable, the metric not measured) are left out of the test
 and counted in ``missing_cells``; a variant with no value in any cell (e.g. its library is not
-installed) is left out of the ranking altogether instead of emptying it, and a cell whose every
-row is ok without a value (the metric does not apply there: a spectrum without an analytic
+installed) is left out of the ranking altogether instead of emptying it, and a cell where every
+row of the ranked variants is ok without a value (the metric does not apply there: a spectrum without an analytic
 reference) is no cell of that metric. With N complete cells
 and k variants:
 
@@ -321,7 +321,8 @@ def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_para
     ran = ~missing.all(axis=0)             # a variant with no value anywhere (unavailable) is left out
     vals, inval, missing = vals.loc[:, ran], inval.loc[:, ran], missing.loc[:, ran]
     # a cell whose every row is ok and none has a value: the metric does not apply there (no reference)
-    all_ok = (cells["status"] == "ok").groupby(cells["_cell"]).all().reindex(missing.index).fillna(False)
+    kept = cells[cells["_variant"].isin(set(vals.columns))]     # the ranked variants' rows (not the unavailable)
+    all_ok = (kept["status"] == "ok").groupby(kept["_cell"]).all().reindex(missing.index).fillna(False)
     applies = ~(missing.all(axis=1) & all_ok.astype(bool))
     vals, inval, missing = vals.loc[applies], inval.loc[applies], missing.loc[applies]
     complete = vals[~missing.any(axis=1)]

@@ -266,9 +266,17 @@ def _config_problem(source) -> str | None:
         got = "None" if source is None else f"{type(source).__name__} {short(source, 60)}"
         return f"config_or_path: {expected}, got {got}"
     text = os.fspath(source)
-    if not isinstance(text, str) or "\n" in text or Path(text).is_file():
+    if not isinstance(text, str) or "\n" in text:
         return None
-    if Path(text).is_dir():
+    if not text.strip():
+        return f"config_or_path: an empty string; {expected}"
+    try:                                   # one-line YAML or JSON text may be no possible file name at all
+        is_file, is_dir = Path(text).is_file(), Path(text).is_dir()
+    except (OSError, ValueError):
+        is_file = is_dir = False
+    if is_file:
+        return None
+    if is_dir:
         return f"config_or_path: {text} is a folder; {expected}"
     if isinstance(source, str) and Path(text).suffix not in (".yaml", ".yml", ".json"):   # those: "not found"
         from . import yaml_input

@@ -76,3 +76,19 @@ def test_a_config_argument_of_the_wrong_kind_says_what_was_given(tmp_path, monke
         harness.run(given)
     assert needle in str(exc.value), str(exc.value)
     assert sorted(p.name for p in tmp_path.iterdir()) == (["FOLDER"] if (tmp_path / "FOLDER").exists() else [])
+
+
+def test_one_line_config_text_longer_than_a_file_name_runs(tmp_path):
+    """A review: a JSON config given as one line of text (YAML text, per the README) longer than
+    255 characters raised OSError (File name too long) from the argument check; an empty string
+    was called a folder."""
+    import json
+    cfg = {**RUN, "name": "jsontext", "noise": [{"model": "gaussian_normal", "levels": [0.2]}],
+           "tasks": {"smoothing": {"methods": [{"name": "scratch.taubin", "params": {"iterations": 3}}]},
+                     "laplacian": {"methods": ["scratch.uniform"]}}}
+    text = json.dumps(cfg)
+    assert len(text) > 255 and "\n" not in text
+    out = harness.run(text, out=tmp_path / "o", quiet=True, workers=1)
+    assert len(out["smoothing"]) == 1 and len(out["laplacian"]) == 1
+    with pytest.raises(ShootoutError, match="config_or_path: an empty string"):
+        harness.run("", out=tmp_path / "e")

@@ -862,6 +862,13 @@ def test_runs_measured_with_other_settings_are_not_false_regressions(run_a, tmp_
     (c / "run.json").write_text(json.dumps(meta))                          # the same settings: a lost value
     code, out = run_compare(run_a, c, time_factor=None)
     assert code == 1 and "surface_dist_mean" in out, out
+    d = copy(run_a, tmp_path, "d")                  # another eps blanks nothing: a lost column still regresses
+    meta = json.loads((d / "run.json").read_text())
+    meta["measurement"] = {**meta["measurement"], "hausdorff_eps": 0.3}
+    (d / "run.json").write_text(json.dumps(meta))
+    edit(d / "smoothing.csv", lambda rows: [r.update(min_angle="") for r in rows])
+    code, out = run_compare(run_a, d, time_factor=None)
+    assert code == 1 and "REGRESSION" in out and "min_angle" in out, out
 
 
 def test_a_baselines_recorded_rules_that_no_version_writes_are_not_used(run_a, tmp_path):
@@ -870,8 +877,8 @@ def test_a_baselines_recorded_rules_that_no_version_writes_are_not_used(run_a, t
     declaration is left out and the installed kind's rule applies."""
     b = copy(run_a, tmp_path)
     edit(b / "smoothing.csv", lambda rows: [r.update(dist_mean=str(float(r["dist_mean"]) * 10)) for r in rows])
-    for bad in ({"rel": float("nan")}, {"abs": float("inf")}, {"better": "bogus"}, {"rel": -1}):
-        a = copy(run_a, tmp_path, "a" + str(abs(hash(str(bad))) % 1000))
+    for i, bad in enumerate(({"rel": float("nan")}, {"abs": float("inf")}, {"better": "bogus"}, {"rel": -1})):
+        a = copy(run_a, tmp_path, f"a{i}")
         meta = json.loads((a / "run.json").read_text())
         for m in meta["tasks"]["smoothing"]["metrics"]:
             if m["name"] == "dist_mean":

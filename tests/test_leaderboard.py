@@ -555,3 +555,9 @@ def test_a_cell_where_the_metric_does_not_apply_is_no_missing_cell():
     lb = lb[lb.metric == "eig_rel_error_mean"].set_index("method")
     assert lb.loc["a.eig", "missing_cells"] == 0 and lb.loc["b.eig", "missing_cells"] == 1, lb
     assert (lb["cells"] == 1).all(), lb
+    # a method unavailable everywhere (a review: its rows kept the rule from applying)
+    rows += [{**r, "case_id": "c" + r["case_id"], "method": "c.eig", "status": "unavailable",
+              "eig_rel_error_mean": None, "eig_rel_error_max": None} for r in rows if r["method"] == "a.eig"]
+    lb = leaderboard({"spectrum": pd.DataFrame(rows)}, {"spectrum": tasks.get("spectrum").spec()})
+    lb = lb[lb.metric == "eig_rel_error_mean"].set_index("method")
+    assert "c.eig" not in lb.index and lb.loc["a.eig", "missing_cells"] == 0, lb

@@ -364,3 +364,21 @@ def test_an_unwelded_seam_is_said_in_every_row(tmp_path):
               out=tmp_path / "run", quiet=True, workers=1)
     row = out["spectrum"].iloc[0]
     assert row["status"] == "ok" and "1 vertex(es) at exactly the position of another (an unwelded seam" in row["error"]
+
+
+def test_a_disconnected_meshs_zero_eigenvalues_are_neither_skipped_nor_out_of_order():
+    """A review: on three disjoint spheres with k <= 3 every returned value is a zero eigenvalue,
+    so the inertia count below the largest (rounding noise, 1e-15) counted noise: correct spectra
+    had k_missed 1 and were invalid; and zeros returned in another rounding order were an error."""
+    from harness.tasks.spectrum import _check, missed_below
+    V, F = datasets.icosphere(2)
+    V3 = np.vstack([V + [3.0 * i, 0, 0] for i in range(3)])
+    F3 = np.vstack([F + i * len(V) for i in range(3)])
+    for k in (2, 3):
+        r = methods.get("scratch.spectrum")(V3, F3, k=k)
+        assert np.abs(r.values).max() < 1e-10 and missed_below(r.W, r.M, r.values) is None, (k, r.values)
+        swapped = type(r)(r.values[::-1].copy(), r.vectors[:, ::-1], r.W, r.M)
+        assert np.array_equal(_check(swapped, V3, F3).values, np.sort(r.values))
+    r = methods.get("scratch.spectrum")(V3, F3, k=6)           # three zeros, then a non-zero multiplet
+    assert missed_below(r.W, r.M, r.values) == 0
+    assert missed_below(r.W, r.M, r.values[[0, 1, 3, 4, 5]]) == 1     # a zero left out is counted

@@ -64,8 +64,12 @@ def _check(result: SpectrumResult, V, F):
     if not np.isfinite(result.values).all():
         raise MethodFailed("returned non-finite eigenvalues")
     lam = result.values
-    if lam.size > 1 and (np.diff(lam) < -1e-9 * np.abs(lam).max()).any():
-        i = int(np.flatnonzero(np.diff(lam) < -1e-9 * np.abs(lam).max())[0])
+    diag = float(np.linalg.norm(np.ptp(V, axis=0))) if len(V) else 0.0
+    # rounding: relative to the largest value, or to 1/diagonal^2 (the scale of the first non-zero
+    # eigenvalue) where every value returned is a zero eigenvalue of a disconnected mesh
+    tol = 1e-9 * max(float(np.abs(lam).max(initial=0.0)), 1.0 / diag ** 2 if diag > 0 else 0.0)
+    if lam.size > 1 and (np.diff(lam) < -tol).any():
+        i = int(np.flatnonzero(np.diff(lam) < -tol)[0])
         raise MethodFailed(f"returned eigenvalues out of ascending order ({lam[i]:.6g} before {lam[i + 1]:.6g})")
     order = np.argsort(lam, kind="stable")
     result.values = lam[order]
@@ -120,10 +124,14 @@ def missed_below(W, M, lam: np.ndarray) -> int | None:
     """How many eigenvalues of ``-W x = lambda M x`` lie below the largest returned one (less
     ``1e-6`` of it, so that a multiplet cut at k counts whole) but were not returned: by
     Sylvester's law of inertia, the negative pivots of ``P (-W - s M) P^T = L D L^T`` count the
-    eigenvalues below ``s``. None when the factorization has a zero pivot or there is no upper
-    eigenvalue to count below."""
+    eigenvalues below ``s``. None when the factorization has a zero pivot, or when the largest
+    returned value is a zero eigenvalue (at most ``1e-8`` of ``max |W_ii / M_ii|``, as the
+    residual's zero: a disconnected mesh's k smallest can all be zeros, in rounding order)."""
     from ..metrics.laplacian_properties import _ldlt
-    if lam.size < 2 or not lam[-1] > 0:
+    md = M.diagonal()
+    w_over_m = np.divide(np.abs(W.diagonal()), md, out=np.zeros_like(md), where=md > 0)
+    scale = float(w_over_m.max()) if w_over_m.size else 0.0
+    if lam.size < 2 or not lam[-1] > 1e-8 * scale:   # only zero eigenvalues (one per component): nothing to count
         return None
     s = float(lam[-1]) * (1.0 - 1e-6)
     f = _ldlt(sp.csc_matrix(-W - s * M))
