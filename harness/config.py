@@ -537,14 +537,21 @@ def _same_mesh_problems(specs: list[dict], where: list[str]) -> list[str]:
     whatever its names), and a ``name:`` that another, different mesh also goes by (the ``mesh``
     column and the noise seed come from it; it would be changed silently to tell them apart)."""
     P, again = [], {}
-    ids = [json.dumps(_same_mesh_key(s), sort_keys=True, default=str) for s in specs]
+    memo: dict[str, str] = {}                  # a long list repeats a few specs: each is keyed once
+
+    def key(s: dict) -> str:
+        raw = json.dumps(s, sort_keys=True, default=str)
+        if raw not in memo:
+            memo[raw] = json.dumps(_same_mesh_key(s), sort_keys=True, default=str)
+        return memo[raw]
+    ids = [key(s) for s in specs]
     for i, ident in enumerate(ids):
         again.setdefault(ident, []).append(i)
     for ident, at in again.items():
         if len(at) > 1:
             more = f" and {len(at) - 4} more" if len(at) > 4 else ""
             P.append(f"{', '.join(where[i] for i in at[1:4])}{more}: the same mesh as {where[at[0]]} (the same "
-                     f"{'spec' if len({json.dumps(_identity(specs[i]), sort_keys=True, default=str) for i in at}) == 1 else 'file bytes'}"
+                     f"{'spec' if len({json.dumps(_identity(specs[i]), sort_keys=True, default=str) for i in at[:4]}) == 1 else 'file bytes'}"
                      "): list it once")
     base, final = [datasets.spec_key(s) for s in specs], _unique_labels(specs)
     for i, s in enumerate(specs):

@@ -173,8 +173,13 @@ def test_the_mesh_loader_dies_with_a_killed_driver_and_holds_no_lock(tmp_path):
                          cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
         driver, kids, t0 = psutil.Process(p.pid), [], time.time()
+        def same_program(k):                      # a child that ended meanwhile (a zombie) is none
+            try:
+                return k.exe() == driver.exe()
+            except psutil.Error:
+                return False
         while not kids and time.time() - t0 < 60 and p.poll() is None:
-            kids = [k for k in driver.children() if k.exe() == driver.exe()]
+            kids = [k for k in driver.children() if same_program(k)]
             time.sleep(0.05)
         assert kids, "no loader started"
         os.kill(p.pid, signal.SIGKILL)
