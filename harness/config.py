@@ -182,6 +182,14 @@ def eps_problem(eps) -> str | None:
     return f"expected a relative gap in [1e-9, 1], got {yaml_input.short(eps)}"
 
 
+def _is_file(p: Path) -> bool:
+    """``p.is_file()``, False for a path the system cannot even look up (too long, say)."""
+    try:
+        return p.is_file()
+    except (OSError, ValueError):
+        return False
+
+
 def load_config(source, base_dir: Path | None = None, label: str = "<config>") -> Config:
     """Parse and validate a config given as a path, YAML text or dict; ``label`` names a dict or
     text in messages (a path names itself)."""
@@ -190,7 +198,7 @@ def load_config(source, base_dir: Path | None = None, label: str = "<config>") -
         raw = source
     elif isinstance(source, Path):
         label = str(source)
-        if not source.is_file():
+        if not _is_file(source):
             raise ConfigError(label, [f"config file not found (or not a file): {source}"])
         base_dir = base_dir or source.parent
         try:
@@ -201,7 +209,7 @@ def load_config(source, base_dir: Path | None = None, label: str = "<config>") -
         p = Path(str(source))
         if "\n" not in str(source) and p.suffix in (".yaml", ".yml", ".json"):
             label = str(p)
-            if not p.is_file():
+            if not _is_file(p):
                 raise ConfigError(label, [f"config file not found: {p}"])
             base_dir = base_dir or p.parent
             try:

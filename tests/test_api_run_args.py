@@ -92,3 +92,9 @@ def test_one_line_config_text_longer_than_a_file_name_runs(tmp_path):
     assert len(out["smoothing"]) == 1 and len(out["laplacian"]) == 1
     with pytest.raises(ShootoutError, match="config_or_path: an empty string"):
         harness.run("", out=tmp_path / "e")
+    from harness.config import load_config
+    from harness.errors import ConfigError
+    with pytest.raises(ConfigError, match="config file not found"):      # a path too long to look up (OSError before)
+        load_config("/tmp/" + "x" * 300 + ".yaml")
+    with pytest.raises(ConfigError, match="config file not found"):
+        load_config(Path("/tmp/" + "x" * 300 + ".yaml"))

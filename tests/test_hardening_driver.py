@@ -60,7 +60,7 @@ def test_forks_orphans_and_process_group_signals_cost_one_row_each(tmp_path):
     assert orphans and not any(_alive(pid) for pid in orphans), "a process of a case outlived it"
 
 
-def test_a_method_that_signals_its_parent_costs_nothing(tmp_path):
+def test_a_method_that_signals_its_parent_costs_nothing(tmp_path, monkeypatch):
     """An adversarial review: ``os.kill(os.getppid(), SIGTERM)`` in a method stopped the whole run
     as a Ctrl-C would, at every --resume, and SIGUSR1 killed the driver outright. The case now
     runs below a guard process that ignores such signals: the run finishes, the case is ok."""
@@ -72,6 +72,53 @@ def test_a_method_that_signals_its_parent_costs_nothing(tmp_path):
     df = pd.read_csv(tmp_path / "o" / "smoothing.csv").set_index("method")
     assert (df["status"] == "ok").all(), df[["status", "error"]]
     assert json.loads((tmp_path / "o" / "run.json").read_text())["status"] == "finished"
+    # a review: SIGKILL to the guard (or a signal it does not take) left the case a child of the
+    # driver, whose next os.kill(getppid()) ended the run; and a case that left its group by
+    # setsid outlived its timeout from Python. The case now dies with its guard.
+    cfg = _cfg(tmp_path, ["hostile.kill_parent_hard", "scratch.explicit"])
+    r = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(tmp_path / "h"),
+                        "--quiet", "--workers", "1"], cwd=ROOT, env=_env(tmp_path), capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 0, r.stderr
+    df = pd.read_csv(tmp_path / "h" / "smoothing.csv").set_index("method")
+    assert df.loc["scratch.explicit", "status"] == "ok"
+    assert df.loc["hostile.kill_parent_hard", "status"] == "error" and "SIGKILL" in df.loc["hostile.kill_parent_hard", "error"]
+    assert len(list(tmp_path.glob("hard-*.ppid"))) == 1            # one call: it died with its guard
+    import harness
+    import tests.plugins.hostile as hostile
+    monkeypatch.setattr(hostile, "MARK", str(tmp_path))     # in this process: the module read it at import
+    t0 = time.time()
+    out = harness.run(json.loads(_cfg(tmp_path, ["hostile.setsid_sleep"]).read_text()), out=tmp_path / "s",
+                      quiet=True, workers=1, timeout=3)
+    assert out["smoothing"].iloc[0]["status"] == "timeout" and time.time() - t0 < 60
+    time.sleep(0.5)
+    (pid,) = [int(p.read_text()) for p in tmp_path.glob("setsid-*.pid")]
+    assert not _alive(pid), "the case outlived its timeout in a session of its own"
+
+
+def test_the_driver_stops_a_guarded_case_and_a_method_does_not(tmp_path, monkeypatch):
+    """The guard takes SIGTERM from the driver (multiprocessing's terminate of a daemonic child at
+    exit), ending the case with it, while a method's own signals to it are dropped."""
+    import sys as _sys
+    _sys.path.insert(0, str(ROOT))
+    from harness.config import load_config
+    from harness.executors.isolation import _Job
+    cfg = load_config(json.loads(_cfg(tmp_path, ["hostile.setsid_sleep"]).read_text()))
+    import tests.plugins.hostile as hostile
+    monkeypatch.setattr(hostile, "MARK", str(tmp_path))     # in this process: the module read it at import
+    job = _Job(cfg.cases[0], False)
+    try:
+        t0 = time.time()
+        while not list(tmp_path.glob("setsid-*.pid")) and time.time() - t0 < 30:
+            time.sleep(0.05)
+        (pid,) = [int(p.read_text()) for p in tmp_path.glob("setsid-*.pid")]
+        job.proc.terminate()
+        job.proc.join(10)
+        assert job.proc.exitcode == -15, job.proc.exitcode
+        time.sleep(0.3)
+        assert not _alive(pid)
+    finally:
+        job.abort()
 
 
 def test_a_flood_of_output_with_stdout_piped_to_head(tmp_path):

@@ -374,11 +374,20 @@ def test_a_disconnected_meshs_zero_eigenvalues_are_neither_skipped_nor_out_of_or
     V, F = datasets.icosphere(2)
     V3 = np.vstack([V + [3.0 * i, 0, 0] for i in range(3)])
     F3 = np.vstack([F + i * len(V) for i in range(3)])
+    zero = 1e-8 / float(np.linalg.norm(np.ptp(V3, axis=0))) ** 2          # as `measure` passes it
     for k in (2, 3):
         r = methods.get("scratch.spectrum")(V3, F3, k=k)
-        assert np.abs(r.values).max() < 1e-10 and missed_below(r.W, r.M, r.values) is None, (k, r.values)
+        assert np.abs(r.values).max() < 1e-10 and missed_below(r.W, r.M, r.values, zero) is None, (k, r.values)
         swapped = type(r)(r.values[::-1].copy(), r.vectors[:, ::-1], r.W, r.M)
         assert np.array_equal(_check(swapped, V3, F3).values, np.sort(r.values))
     r = methods.get("scratch.spectrum")(V3, F3, k=6)           # three zeros, then a non-zero multiplet
-    assert missed_below(r.W, r.M, r.values) == 0
-    assert missed_below(r.W, r.M, r.values[[0, 1, 3, 4, 5]]) == 1     # a zero left out is counted
+    assert missed_below(r.W, r.M, r.values, zero) == 0
+    assert missed_below(r.W, r.M, r.values[[0, 1, 3, 4, 5]], zero) == 1     # a zero left out is counted
+    # a needle triangle (a vertex 1e-8 off an edge: max |W_ii / M_ii| near 1e18) leaves the count on
+    V, F = datasets.icosphere(3)
+    a, b, c = F[0]
+    Vn = np.vstack([V, 0.5 * V[a] + (0.5 - 1e-8) * V[b] + 1e-8 * V[c]])
+    Fn = np.vstack([F[1:], [[a, b, len(V)], [b, c, len(V)], [c, a, len(V)]]])
+    r = methods.get("scratch.spectrum")(Vn, Fn, k=10)
+    zero = 1e-8 / float(np.linalg.norm(np.ptp(Vn, axis=0))) ** 2
+    assert missed_below(r.W, r.M, np.delete(r.values, 4), zero) == 1

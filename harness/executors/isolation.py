@@ -17,8 +17,9 @@ What a method may do, and what it costs:
   of its own that is neither a running case nor one it had before (`reap_strays`);
 - signal its process group (``os.killpg(0, ...)``): reaches only its own case;
 - signal its parent (``os.kill(os.getppid(), ...)``): the case runs in a child of the process
-  the driver forked, a guard (`_guard`) that ignores the signals of `_GUARDED`, waits for the
-  case and ends as it did; the driver never receives them;
+  the driver forked, a guard (`_guard`) that takes the signals of `_GUARDED` from the driver
+  alone, waits for the case and ends as it did; the case dies with it (`_die_with_guard`), so
+  it never becomes the driver's child, whatever ends the guard;
 - print: the case's stdout goes to /dev/null and its stderr to a temporary file (in the session's
   private directory, `harness.input_store.session`) whose last lines are quoted in the row of a
   case that died; the driver keeps that file under ``STDERR_MAX`` bytes while the case runs
@@ -208,10 +209,16 @@ def _child(conn, case, want_meshes, own_reader_fd=None, want_view=False, stderr_
     _isolate(stderr_path)
     if own_reader_fd is not None:
         os.close(own_reader_fd)
-    guard = os.fork() if hasattr(os, "fork") else 0    # the case runs below a guard: its parent is never the driver
-    if guard:
-        conn.close()
-        _guard(guard)
+    guard = 0
+    if hasattr(os, "fork") and hasattr(signal, "sigwaitinfo"):   # the case runs below a guard, never the driver
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, _GUARD_WAITS)  # held from the fork on: the guard waits for them
+        parent = os.getpid()
+        guard = os.fork()
+        if guard:
+            conn.close()
+            _guard(guard)
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+        _die_with_guard(parent)
     _die_with_driver(conn, None)
     pid = os.getpid()
     become_subreaper()                    # descendants that leave the process group come back here
@@ -232,37 +239,71 @@ def _child(conn, case, want_meshes, own_reader_fd=None, want_view=False, stderr_
 
 
 # signals whose default ends a process and that a method may send its parent (os.getppid()):
-# the guard ignores them, so they cost the case nothing and never reach the driver
+# the guard takes them only from the driver, so a method's cost the case nothing and never reach it
 _GUARDED = tuple(getattr(signal, n) for n in ("SIGHUP", "SIGINT", "SIGQUIT", "SIGTERM", "SIGUSR1", "SIGUSR2",
-                                              "SIGALRM", "SIGPIPE", "SIGVTALRM", "SIGPROF") if hasattr(signal, n))
+                                              "SIGALRM", "SIGPIPE", "SIGVTALRM", "SIGPROF", "SIGIO", "SIGXCPU",
+                                              "SIGXFSZ") if hasattr(signal, n))
+_GUARD_WAITS = set(_GUARDED) | ({signal.SIGCHLD} if hasattr(signal, "SIGCHLD") else set())
+
+
+def _die_with_guard(guard: int) -> None:
+    """In the case process: killed (SIGKILL) the moment its guard ends, whatever ends it, so the
+    case never becomes a child of the driver (a subreaper) and cannot outlive a guard the
+    driver killed, even from a session of its own."""
+    try:
+        import ctypes
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)      # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        return
+    if os.getppid() != guard:             # it ended before the line above
+        os._exit(70)
 
 
 def _guard(pid: int) -> None:
     """The case process as the driver sees it: the parent of the process that runs the case
-    (``pid``). It ignores the signals of `_GUARDED` (a method signalling its parent reaches
-    this process, not the driver), is a child subreaper (what the case leaves, even outside
-    its group, comes back here and is killed), waits for the case, then ends as the case did:
-    the same exit code, or killed by the same signal. Never returns."""
-    for sig in _GUARDED:
-        with contextlib.suppress(OSError, ValueError):
-            signal.signal(sig, signal.SIG_IGN)
+    (``pid``), which dies with it (`_die_with_guard`). It takes the signals of `_GUARDED` from
+    the driver alone (stopped by it, it kills the case and ends by that signal); from anyone
+    else, the case's own processes included (a method signalling its parent), they are
+    dropped. It is a child subreaper (what the case leaves, even outside its group, comes back
+    here and is killed), waits for the case, then ends as the case did: the same exit code, or
+    killed by the same signal (without a core file of its own). Never returns."""
+    driver = os.getppid()
     become_subreaper()
-    while True:
+    status = None
+    while status is None:
         try:
-            status = os.waitpid(pid, 0)[1]
-            break
+            done, st = os.waitpid(pid, os.WNOHANG)
         except ChildProcessError:
-            status = 0
+            done, st = pid, 0
+        if done:
+            status = st
             break
-        except InterruptedError:
-            continue
+        info = signal.sigwaitinfo(_GUARD_WAITS)
+        if info.si_signo in _GUARDED and info.si_pid == driver:
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+            reap_strays()
+            _end_as(info.si_signo)
     reap_strays()
     if os.WIFSIGNALED(status):
-        sig = os.WTERMSIG(status)
-        with contextlib.suppress(OSError, ValueError):
-            signal.signal(sig, signal.SIG_DFL)
-        os.kill(os.getpid(), sig)
+        _end_as(os.WTERMSIG(status))
     os._exit(os.waitstatus_to_exitcode(status) if os.WIFEXITED(status) else 1)
+
+
+def _end_as(sig: int) -> None:
+    """End this process by ``sig`` (its default action, unblocked), without writing a core file
+    (a crashed case wrote its own)."""
+    try:
+        import resource
+        resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
+    except (ImportError, OSError, ValueError):
+        pass
+    with contextlib.suppress(OSError, ValueError):
+        signal.signal(sig, signal.SIG_DFL)
+    with contextlib.suppress(OSError, ValueError):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {sig})
+    os.kill(os.getpid(), sig)
+    os._exit(128 + sig)
 
 
 def _tail(path: str | None, n: int = 3) -> str:

@@ -120,18 +120,16 @@ def complete_groups(k: int) -> int:
     return int(np.floor(np.sqrt(k) + 1e-9)) ** 2 if k > 0 else 0
 
 
-def missed_below(W, M, lam: np.ndarray) -> int | None:
+def missed_below(W, M, lam: np.ndarray, zero: float = 0.0) -> int | None:
     """How many eigenvalues of ``-W x = lambda M x`` lie below the largest returned one (less
     ``1e-6`` of it, so that a multiplet cut at k counts whole) but were not returned: by
     Sylvester's law of inertia, the negative pivots of ``P (-W - s M) P^T = L D L^T`` count the
     eigenvalues below ``s``. None when the factorization has a zero pivot, or when the largest
-    returned value is a zero eigenvalue (at most ``1e-8`` of ``max |W_ii / M_ii|``, as the
-    residual's zero: a disconnected mesh's k smallest can all be zeros, in rounding order)."""
+    returned value is at most ``zero`` (1/length^2; `measure` passes ``1e-8 / diagonal^2``, far
+    below any non-zero eigenvalue of a mesh of that size): a disconnected mesh's k smallest can
+    all be zero eigenvalues, in rounding order, with nothing to count below."""
     from ..metrics.laplacian_properties import _ldlt
-    md = M.diagonal()
-    w_over_m = np.divide(np.abs(W.diagonal()), md, out=np.zeros_like(md), where=md > 0)
-    scale = float(w_over_m.max()) if w_over_m.size else 0.0
-    if lam.size < 2 or not lam[-1] > 1e-8 * scale:   # only zero eigenvalues (one per component): nothing to count
+    if lam.size < 2 or not lam[-1] > zero:   # only zero eigenvalues (one per component): nothing to count
         return None
     s = float(lam[-1]) * (1.0 - 1e-6)
     f = _ldlt(sp.csc_matrix(-W - s * M))
@@ -157,7 +155,8 @@ def measure(inp, result, params) -> dict:
     X, W, M = result.vectors, result.W, result.M
     X = None if X is None else X[:, :want]
     if W is not None and M is not None:
-        row["k_missed"] = missed_below(W, M, lam)
+        diag = float(np.linalg.norm(np.ptp(inp.V, axis=0)))
+        row["k_missed"] = missed_below(W, M, lam, 1e-8 / diag ** 2 if diag > 0 else 0.0)
     sphere = bool(inp.shape) and inp.shape.get("procedural") in ("sphere", "sphere_random")
     n_hks = complete_groups(len(lam))
     if X is not None and sphere and not noisy and n_hks >= 4 and M is not None:

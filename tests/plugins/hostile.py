@@ -54,6 +54,29 @@ def kill_parent(V, F):
     return SmoothingResult(V=V.copy())
 
 
+@register("hostile.kill_parent_hard", task="smoothing", library="hostile")
+def kill_parent_hard(V, F):
+    """SIGKILLs its parent at every call (a case calls it twice: the cold call and a sample)."""
+    with open(os.path.join(MARK, f"hard-{os.getpid()}-{time.monotonic_ns()}.ppid"), "w") as fh:
+        fh.write(str(os.getppid()))
+    os.kill(os.getppid(), signal.SIGKILL)
+    time.sleep(0.5)
+    return SmoothingResult(V=V.copy())
+
+
+@register("hostile.setsid_sleep", task="smoothing", library="hostile")
+def setsid_sleep(V, F):
+    """Leaves its process group (setsid) and sleeps: a timeout must still end it."""
+    with open(os.path.join(MARK, f"setsid-{os.getpid()}.pid"), "w") as fh:
+        fh.write(str(os.getpid()))
+    try:
+        os.setsid()
+    except OSError:
+        pass
+    time.sleep(120)
+    return SmoothingResult(V=V.copy())
+
+
 @register("hostile.chatty", task="smoothing", library="hostile")
 def chatty(V, F):
     """Prints 50 MB to stdout and a line to stderr."""

@@ -9,11 +9,12 @@ from methods import register
 
 @register("worker_killer.parent", task="smoothing", library="worker_killer")
 def parent(V, F):
-    """Returns nothing: SIGKILLs the process that started its case first (on a daemonic worker,
-    where the case runs behind a guard process, the guard's parent)."""
+    """Returns nothing: SIGKILLs the worker that started its case first. The case runs behind a
+    guard process: on a daemonic worker a ``python -m harness.executors.dask`` subprocess, else a
+    fork of the worker (the same command line); the worker is the guard's parent."""
     import psutil
-    pid = os.getppid()
-    if "harness.executors.dask" in psutil.Process(pid).cmdline():
-        pid = psutil.Process(pid).ppid()
+    guard = psutil.Process(os.getppid())
+    pid = guard.ppid() if ("harness.executors.dask" in guard.cmdline()
+                           or guard.cmdline() == psutil.Process(guard.ppid()).cmdline()) else guard.pid
     os.kill(pid, signal.SIGKILL)
     return V
