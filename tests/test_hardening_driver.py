@@ -94,6 +94,14 @@ def test_a_method_that_signals_its_parent_costs_nothing(tmp_path, monkeypatch):
     time.sleep(0.5)
     (pid,) = [int(p.read_text()) for p in tmp_path.glob("setsid-*.pid")]
     assert not _alive(pid), "the case outlived its timeout in a session of its own"
+    # a review: from Python (no subreaper above), a grandchild that left the case's session outlived
+    # the timeout under init; the guard, stopped by SIGTERM first, now reaps it
+    out = harness.run(json.loads(_cfg(tmp_path, ["hostile.escape_hang"]).read_text()), out=tmp_path / "x",
+                      quiet=True, workers=1, timeout=3)
+    assert out["smoothing"].iloc[0]["status"] == "timeout"
+    time.sleep(0.5)
+    pids = [int(p.read_text()) for p in tmp_path.glob("escaped-*.pid")]
+    assert pids and not any(_alive(p) for p in pids), "an escaped grandchild outlived its case's timeout"
 
 
 def test_the_driver_stops_a_guarded_case_and_a_method_does_not(tmp_path, monkeypatch):
@@ -119,6 +127,27 @@ def test_the_driver_stops_a_guarded_case_and_a_method_does_not(tmp_path, monkeyp
         assert not _alive(pid)
     finally:
         job.abort()
+
+
+def test_an_exit_with_a_case_running_in_a_thread_does_not_wait_for_it(tmp_path):
+    """A review: a process leaving with a case still running in a thread (a Dask worker's task
+    thread) waited for the case, since multiprocessing's exit hook SIGTERMs daemonic children
+    and joins them, and a method that keeps signalling its parent made that SIGTERM merge with
+    its own, which the guard drops. Running cases are killed before that hook runs."""
+    script = tmp_path / "exit.py"
+    script.write_text(
+        "import threading, time\n"
+        "from harness.config import load_config\n"
+        "from harness.executors.isolation import run_isolated\n"
+        "cfg = load_config({'plugins': ['tests.plugins.hostile'], 'meshes': ['knight'], 'time_budget': 0,\n"
+        "                   'tasks': {'smoothing': {'methods': ['hostile.spam_parent']}}})\n"
+        "threading.Thread(target=run_isolated, args=(cfg.cases[0],), daemon=True).start()\n"
+        "time.sleep(2)\n")
+    t0 = time.time()
+    r = subprocess.run([sys.executable, str(script)], cwd=ROOT, env=_env(tmp_path), capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert time.time() - t0 < 15, "the exit waited for the case (30 s)"
 
 
 def test_a_flood_of_output_with_stdout_piped_to_head(tmp_path):

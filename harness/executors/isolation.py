@@ -210,7 +210,7 @@ def _child(conn, case, want_meshes, own_reader_fd=None, want_view=False, stderr_
     if own_reader_fd is not None:
         os.close(own_reader_fd)
     guard = 0
-    if hasattr(os, "fork") and hasattr(signal, "sigwaitinfo"):   # the case runs below a guard, never the driver
+    if hasattr(os, "fork") and hasattr(signal, "pthread_sigmask"):   # the case runs below a guard, never the driver
         old = signal.pthread_sigmask(signal.SIG_BLOCK, _GUARD_WAITS)  # held from the fork on: the guard waits for them
         parent = os.getpid()
         guard = os.fork()
@@ -238,11 +238,11 @@ def _child(conn, case, want_meshes, own_reader_fd=None, want_view=False, stderr_
         conn.close()
 
 
-# signals whose default ends a process and that a method may send its parent (os.getppid()):
+# every signal whose default ends a process (a method may send any to its parent, os.getppid()):
 # the guard takes them only from the driver, so a method's cost the case nothing and never reach it
-_GUARDED = tuple(getattr(signal, n) for n in ("SIGHUP", "SIGINT", "SIGQUIT", "SIGTERM", "SIGUSR1", "SIGUSR2",
-                                              "SIGALRM", "SIGPIPE", "SIGVTALRM", "SIGPROF", "SIGIO", "SIGXCPU",
-                                              "SIGXFSZ") if hasattr(signal, n))
+_NOT_ENDING = {getattr(signal, n) for n in ("SIGKILL", "SIGSTOP", "SIGCHLD", "SIGCONT", "SIGTSTP", "SIGTTIN",
+                                            "SIGTTOU", "SIGWINCH", "SIGURG") if hasattr(signal, n)}
+_GUARDED = tuple(sorted(set(signal.valid_signals()) - _NOT_ENDING)) if hasattr(signal, "valid_signals") else ()
 _GUARD_WAITS = set(_GUARDED) | ({signal.SIGCHLD} if hasattr(signal, "SIGCHLD") else set())
 
 
@@ -268,8 +268,31 @@ def _guard(pid: int) -> None:
     here and is killed), waits for the case, then ends as the case did: the same exit code, or
     killed by the same signal (without a core file of its own). Never returns."""
     driver = os.getppid()
+    try:
+        import resource
+        resource.setrlimit(resource.RLIMIT_CORE, (0, 0))     # a core file is the case's, never this one's
+    except (ImportError, OSError, ValueError):
+        pass
+    try:                                                     # dies with the driver, even a SIGKILLed one
+        import ctypes
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)   # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+    if os.getppid() != driver:
+        os.kill(pid, signal.SIGKILL)
+        os._exit(70)
     become_subreaper()
+    if not hasattr(signal, "sigwaitinfo"):   # (macOS) no sender to check: the guarded signals are ignored
+        for sig in _GUARDED:
+            with contextlib.suppress(OSError, ValueError):
+                signal.signal(sig, signal.SIG_IGN)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, _GUARD_WAITS)
     status = None
+    while status is None and not hasattr(signal, "sigwaitinfo"):
+        try:
+            status = os.waitpid(pid, 0)[1]
+        except ChildProcessError:
+            status = 0
     while status is None:
         try:
             done, st = os.waitpid(pid, os.WNOHANG)
@@ -422,9 +445,19 @@ class _Job:
             row["error"] += f"; last stderr: {tail}"
         return row, {}
 
-    def kill_timeout(self, timeout: float):
-        self.proc.kill()
+    def _stop(self) -> None:
+        """Stop the case: SIGTERM to its guard, which kills the case and reaps whatever the case
+        left, even outside its group (no subreaper above may be there to do it: `harness.run`);
+        SIGKILL if it has not ended within 2 s."""
+        with contextlib.suppress(OSError):
+            self.proc.terminate()
+        self.proc.join(2)
+        if self.proc.is_alive():
+            self.proc.kill()
         self.proc.join()
+
+    def kill_timeout(self, timeout: float):
+        self._stop()
         self.conn.close()
         self._cleanup()
         row = base_row(self.case)
@@ -433,8 +466,7 @@ class _Job:
 
     def abort(self) -> None:
         """Kill the case (driver interrupted)."""
-        self.proc.kill()
-        self.proc.join()
+        self._stop()
         self._cleanup()
 
 
@@ -446,6 +478,23 @@ def cancelled_row(case: Case) -> dict:
 
 
 _RUNNING: set = set()              # pids of the case processes `run_isolated` has running, any thread
+
+
+def _kill_running_at_exit() -> None:
+    """At interpreter exit, before multiprocessing's own hook (registered earlier, so run later)
+    sends SIGTERM to its daemonic children and joins them: kill the running cases' guards and
+    groups outright, so a case whose method keeps signalling its parent (which can merge with
+    that SIGTERM) does not hold the exit until it ends."""
+    for pid in list(_RUNNING):
+        with contextlib.suppress(OSError):
+            os.killpg(pid, signal.SIGKILL)
+        with contextlib.suppress(OSError):
+            os.kill(pid, signal.SIGKILL)
+
+
+import atexit  # noqa: E402
+import multiprocessing.util  # noqa: E402,F401 - registers its exit hook now, so that this one, later, runs first
+atexit.register(_kill_running_at_exit)
 _RUNNING_LOCK = threading.Lock()    # held while one starts (until registered) and while orphans are reaped
 _REAP = {"on": False}
 

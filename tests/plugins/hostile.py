@@ -48,7 +48,8 @@ def killpg(V, F):
 def kill_parent(V, F):
     """Signals its parent process (SIGTERM, SIGINT, SIGUSR1, SIGHUP), as a library that takes
     itself for a pool worker might, then returns its input."""
-    for sig in (signal.SIGTERM, signal.SIGINT, signal.SIGUSR1, signal.SIGHUP):
+    for sig in (signal.SIGTERM, signal.SIGINT, signal.SIGUSR1, signal.SIGHUP, signal.SIGSYS, signal.SIGPWR,
+                signal.SIGRTMIN + 2, signal.SIGIO):
         os.kill(os.getppid(), sig)
     time.sleep(0.2)
     return SmoothingResult(V=V.copy())
@@ -73,6 +74,29 @@ def setsid_sleep(V, F):
         os.setsid()
     except OSError:
         pass
+    time.sleep(120)
+    return SmoothingResult(V=V.copy())
+
+
+@register("hostile.spam_parent", task="smoothing", library="hostile")
+def spam_parent(V, F):
+    """Sends SIGTERM to its parent in a loop for 30 s."""
+    t_end = time.monotonic() + 30
+    while time.monotonic() < t_end:
+        os.kill(os.getppid(), signal.SIGTERM)
+    return SmoothingResult(V=V.copy())
+
+
+@register("hostile.escape_hang", task="smoothing", library="hostile")
+def escape_hang(V, F):
+    """Leaves a grandchild in a session of its own (setsid and a double fork), then hangs."""
+    if os.fork() == 0:
+        os.setsid()
+        if os.fork() == 0:
+            with open(os.path.join(MARK, f"escaped-{os.getpid()}.pid"), "w") as fh:
+                fh.write(str(os.getpid()))
+            time.sleep(120)
+        os._exit(0)
     time.sleep(120)
     return SmoothingResult(V=V.copy())
 
