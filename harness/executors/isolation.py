@@ -264,9 +264,11 @@ def _guard(pid: int) -> None:
     (``pid``), which dies with it (`_die_with_guard`). It takes the signals of `_GUARDED` from
     the driver alone (stopped by it, it kills the case and ends by that signal); from anyone
     else, the case's own processes included (a method signalling its parent), they are
-    dropped. It is a child subreaper (what the case leaves, even outside its group, comes back
-    here and is killed), waits for the case, then ends as the case did: the same exit code, or
-    killed by the same signal (without a core file of its own). Never returns."""
+    dropped. It dies with the driver (``PR_SET_PDEATHSIG``), and the case with it. It is a child
+    subreaper (what the case leaves, even outside its group, comes back here and is killed),
+    waits for the case, then ends as the case did: the same exit code, or killed by the same
+    signal (without a core file of its own). Where ``sigwaitinfo`` is missing (macOS) the sender
+    cannot be told: the guarded signals are ignored. Never returns."""
     driver = os.getppid()
     try:
         import resource
