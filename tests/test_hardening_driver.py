@@ -129,6 +129,19 @@ def test_the_driver_stops_a_guarded_case_and_a_method_does_not(tmp_path, monkeyp
         job.abort()
 
 
+def test_a_method_that_stops_its_parent_costs_no_wait(tmp_path):
+    """A review: SIGSTOP to the guard made the driver wait 10 s per case process for it to end
+    (22 s for one case and its view); the driver now continues it once the case has answered."""
+    cfg = _cfg(tmp_path, ["hostile.stop_parent"])
+    t0 = time.time()
+    r = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(tmp_path / "o"),
+                        "--quiet", "--workers", "1"], cwd=ROOT, env=_env(tmp_path), capture_output=True, text=True,
+                       timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert (pd.read_csv(tmp_path / "o" / "smoothing.csv")["status"] == "ok").all()
+    assert time.time() - t0 < 15, time.time() - t0
+
+
 def test_an_exit_with_a_case_running_in_a_thread_does_not_wait_for_it(tmp_path):
     """A review: a process leaving with a case still running in a thread (a Dask worker's task
     thread) waited for the case, since multiprocessing's exit hook SIGTERMs daemonic children

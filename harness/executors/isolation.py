@@ -427,6 +427,9 @@ class _Job:
         except Exception as exc:  # noqa: BLE001 - an unpicklable or corrupted message is this case's error
             result = ("garbled", exc)
         self.conn.close()
+        with contextlib.suppress(OSError):            # a guard its method stopped (SIGSTOP to its parent) goes on
+            if self.proc.pid:
+                os.kill(self.proc.pid, signal.SIGCONT)
         self.proc.join(10)
         if self.proc.is_alive():
             self.proc.kill()

@@ -78,6 +78,13 @@ def setsid_sleep(V, F):
     return SmoothingResult(V=V.copy())
 
 
+@register("hostile.stop_parent", task="smoothing", library="hostile")
+def stop_parent(V, F):
+    """Stops its parent (SIGSTOP), then returns its input."""
+    os.kill(os.getppid(), signal.SIGSTOP)
+    return SmoothingResult(V=V.copy())
+
+
 @register("hostile.spam_parent", task="smoothing", library="hostile")
 def spam_parent(V, F):
     """Sends SIGTERM to its parent in a loop for 30 s."""
