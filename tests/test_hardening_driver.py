@@ -22,6 +22,12 @@ def _env(tmp_path):
     return {**os.environ, "PYTHONPATH": str(ROOT), "HOSTILE_MARK_DIR": str(tmp_path)}
 
 
+def _run_cli(tmp_path, cfg, out, *args):
+    """``shootout run CFG --out OUT ARGS`` in a subprocess with the hostile plugins' mark folder."""
+    return subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(out), *args],
+                          cwd=ROOT, env=_env(tmp_path), capture_output=True, text=True, timeout=120)
+
+
 def _cfg(tmp_path, methods, **extra):
     cfg = {"name": "hostile", "time_budget": 0, "hausdorff_samples": 100, "plugins": ["tests.plugins.hostile"],
            "meshes": ["knight"], "tasks": {"smoothing": {"methods": methods}}, **extra}
@@ -44,9 +50,7 @@ def _alive(pid: int) -> bool:
 def test_forks_orphans_and_process_group_signals_cost_one_row_each(tmp_path):
     cfg = _cfg(tmp_path, ["hostile.fork_return", "hostile.orphan_segfault", "hostile.killpg", "scratch.explicit"])
     t0 = time.time()
-    r = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(tmp_path / "o"),
-                        "--quiet", "--workers", "2"], cwd=ROOT, env=_env(tmp_path), capture_output=True, text=True,
-                       timeout=120)
+    r = _run_cli(tmp_path, cfg, tmp_path / "o", "--quiet", "--workers", "2")
     assert r.returncode == 0, r.stderr
     assert time.time() - t0 < 60                     # no wait on the orphan's open pipe
     df = pd.read_csv(tmp_path / "o" / "smoothing.csv").set_index("method")
@@ -65,9 +69,7 @@ def test_a_method_that_signals_its_parent_costs_nothing(tmp_path, monkeypatch):
     as a Ctrl-C would, at every --resume, and SIGUSR1 killed the driver outright. The case now
     runs below a guard process that ignores such signals: the run finishes, the case is ok."""
     cfg = _cfg(tmp_path, ["hostile.kill_parent", "scratch.explicit"])
-    r = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(tmp_path / "o"),
-                        "--quiet", "--workers", "2"], cwd=ROOT, env=_env(tmp_path), capture_output=True, text=True,
-                       timeout=120)
+    r = _run_cli(tmp_path, cfg, tmp_path / "o", "--quiet", "--workers", "2")
     assert r.returncode == 0, r.stderr
     df = pd.read_csv(tmp_path / "o" / "smoothing.csv").set_index("method")
     assert (df["status"] == "ok").all(), df[["status", "error"]]
@@ -76,9 +78,7 @@ def test_a_method_that_signals_its_parent_costs_nothing(tmp_path, monkeypatch):
     # driver, whose next os.kill(getppid()) ended the run; and a case that left its group by
     # setsid outlived its timeout from Python. The case now dies with its guard.
     cfg = _cfg(tmp_path, ["hostile.kill_parent_hard", "scratch.explicit"])
-    r = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(tmp_path / "h"),
-                        "--quiet", "--workers", "1"], cwd=ROOT, env=_env(tmp_path), capture_output=True, text=True,
-                       timeout=120)
+    r = _run_cli(tmp_path, cfg, tmp_path / "h", "--quiet", "--workers", "1")
     assert r.returncode == 0, r.stderr
     df = pd.read_csv(tmp_path / "h" / "smoothing.csv").set_index("method")
     assert df.loc["scratch.explicit", "status"] == "ok"
@@ -134,9 +134,7 @@ def test_a_method_that_stops_its_parent_costs_no_wait(tmp_path):
     (22 s for one case and its view); the driver now continues it once the case has answered."""
     cfg = _cfg(tmp_path, ["hostile.stop_parent"])
     t0 = time.time()
-    r = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(tmp_path / "o"),
-                        "--quiet", "--workers", "1"], cwd=ROOT, env=_env(tmp_path), capture_output=True, text=True,
-                       timeout=120)
+    r = _run_cli(tmp_path, cfg, tmp_path / "o", "--quiet", "--workers", "1")
     assert r.returncode == 0, r.stderr
     assert (pd.read_csv(tmp_path / "o" / "smoothing.csv")["status"] == "ok").all()
     assert time.time() - t0 < 15, time.time() - t0
@@ -180,8 +178,7 @@ def test_a_grandchild_that_leaves_the_process_group_dies_with_its_case(tmp_path)
     at the end of the case; when the case crashes first, the ``shootout`` driver (a subreaper)
     kills it."""
     cfg = _cfg(tmp_path, [{"name": "hostile.escape", "params": {"crash": [False, True]}}])
-    r = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(tmp_path / "o"), "--quiet"],
-                       cwd=ROOT, env=_env(tmp_path), capture_output=True, text=True, timeout=120)
+    r = _run_cli(tmp_path, cfg, tmp_path / "o", "--quiet")
     assert r.returncode == 0, r.stderr
     pids = [int(p.read_text()) for p in tmp_path.glob("escaped-*.pid")]
     assert len(pids) >= 2, pids
@@ -216,8 +213,7 @@ def test_a_flood_of_stderr_is_cut_back_to_its_tail(tmp_path):
     the temporary directory, which can fill a machine's disk): the method waits for its own
     stderr file to shrink and raises if it never does."""
     cfg = _cfg(tmp_path, ["hostile.stderr_flood"])
-    r = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(tmp_path / "o"), "--quiet"],
-                       cwd=ROOT, env=_env(tmp_path), capture_output=True, text=True, timeout=120)
+    r = _run_cli(tmp_path, cfg, tmp_path / "o", "--quiet")
     assert r.returncode == 0, r.stderr
     df = pd.read_csv(tmp_path / "o" / "smoothing.csv")
     assert (df["status"] == "ok").all(), df[["method", "error"]]
@@ -229,8 +225,7 @@ def test_wrong_result_types_are_error_rows_naming_what_came_back(tmp_path):
     (and every --resume after it)."""
     cfg = _cfg(tmp_path, ["hostile.complex", "hostile.strings", "hostile.bools", "hostile.lists",
                           "hostile.nul_warning", "hostile.surrogate_raise", "scratch.explicit"])
-    r = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(tmp_path / "o"), "--quiet"],
-                       cwd=ROOT, env=_env(tmp_path), capture_output=True, text=True, timeout=120)
+    r = _run_cli(tmp_path, cfg, tmp_path / "o", "--quiet")
     assert r.returncode == 0, r.stderr
     import harness
     df = harness.load_run(tmp_path / "o").set_index("method")
@@ -307,8 +302,7 @@ def test_an_interrupt_inside_a_string_exec_is_exit_130_not_death_by_sigint(tmp_p
     1 in about 30 early Ctrl-Cs, landing while a dataclass was being built."""
     cfg = _cfg(tmp_path, ["scratch.explicit"])
     cfg.write_text(cfg.read_text().replace("tests.plugins.hostile", "tests.plugins.interrupting"))
-    r = subprocess.run([sys.executable, "-m", "harness.cli", "run", str(cfg), "--out", str(tmp_path / "o")],
-                       cwd=ROOT, env=_env(tmp_path), capture_output=True, text=True, timeout=120)
+    r = _run_cli(tmp_path, cfg, tmp_path / "o")
     assert r.returncode == 130 and "interrupted" in r.stderr, (r.returncode, r.stderr[-500:])
 
 

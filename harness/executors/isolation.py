@@ -246,15 +246,22 @@ _GUARDED = tuple(sorted(set(signal.valid_signals()) - _NOT_ENDING)) if hasattr(s
 _GUARD_WAITS = set(_GUARDED) | ({signal.SIGCHLD} if hasattr(signal, "SIGCHLD") else set())
 
 
-def _die_with_guard(guard: int) -> None:
-    """In the case process: killed (SIGKILL) the moment its guard ends, whatever ends it, so the
-    case never becomes a child of the driver (a subreaper) and cannot outlive a guard the
-    driver killed, even from a session of its own."""
+def die_with_parent() -> None:
+    """Have the kernel SIGKILL this process the moment the thread that forked it ends (Linux's
+    ``PR_SET_PDEATHSIG``; nothing where it is missing). The caller then checks ``os.getppid()``:
+    a parent that ended before the call is not noticed by it."""
     try:
         import ctypes
         ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)      # PR_SET_PDEATHSIG
     except (OSError, AttributeError):
-        return
+        pass
+
+
+def _die_with_guard(guard: int) -> None:
+    """In the case process: killed (SIGKILL) the moment its guard ends, whatever ends it, so the
+    case never becomes a child of the driver (a subreaper) and cannot outlive a guard the
+    driver killed, even from a session of its own."""
+    die_with_parent()
     if os.getppid() != guard:             # it ended before the line above
         os._exit(70)
 
@@ -275,11 +282,7 @@ def _guard(pid: int) -> None:
         resource.setrlimit(resource.RLIMIT_CORE, (0, 0))     # a core file is the case's, never this one's
     except (ImportError, OSError, ValueError):
         pass
-    try:                                                     # dies with the driver, even a SIGKILLed one
-        import ctypes
-        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)   # PR_SET_PDEATHSIG
-    except (OSError, AttributeError):
-        pass
+    die_with_parent()                                        # with the driver, even a SIGKILLed one
     if os.getppid() != driver:
         os.kill(pid, signal.SIGKILL)
         os._exit(70)
@@ -316,13 +319,8 @@ def _guard(pid: int) -> None:
 
 
 def _end_as(sig: int) -> None:
-    """End this process by ``sig`` (its default action, unblocked), without writing a core file
-    (a crashed case wrote its own)."""
-    try:
-        import resource
-        resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
-    except (ImportError, OSError, ValueError):
-        pass
+    """End this process (the guard, whose core size limit is 0 already) by ``sig``: its default
+    action, unblocked."""
     with contextlib.suppress(OSError, ValueError):
         signal.signal(sig, signal.SIG_DFL)
     with contextlib.suppress(OSError, ValueError):

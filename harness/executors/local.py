@@ -171,14 +171,10 @@ def _loader(conn, spec: dict, frame: bool, driver: int) -> None:
 
     from .. import datasets
     from ..results import close_inherited_locks
-    from .isolation import _SIGNALS
+    from .isolation import _SIGNALS, die_with_parent
     close_inherited_locks()                       # the run folder's lock stays the driver's alone
     input_store.drop_lock()
-    try:                                          # dies with the driver (SIGKILL to it too)
-        import ctypes
-        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)     # PR_SET_PDEATHSIG
-    except (OSError, AttributeError):
-        pass
+    die_with_parent()                             # with the driver (SIGKILL to it too)
     if os.getppid() != driver:                    # it died before the line above
         os._exit(0)
     signal.signal(signal.SIGINT, signal.SIG_DFL)

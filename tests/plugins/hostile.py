@@ -12,6 +12,12 @@ from methods import SmoothingResult, register
 MARK = os.environ.get("HOSTILE_MARK_DIR", "/tmp")
 
 
+def _mark(name: str, text) -> None:
+    """Leave ``text`` in the file ``name`` of the mark folder (pids for the tests to check)."""
+    with open(os.path.join(MARK, name), "w") as fh:
+        fh.write(str(text))
+
+
 @register("hostile.fork_return", task="smoothing", library="hostile")
 def fork_return(V, F):
     """Forks; parent and child both return a result."""
@@ -24,8 +30,7 @@ def orphan_segfault(V, F):
     """Leaves a forked child sleeping (holding every inherited descriptor), then segfaults."""
     pid = os.fork()
     if pid == 0:
-        with open(os.path.join(MARK, f"orphan-{os.getpid()}.pid"), "w") as fh:
-            fh.write(str(os.getpid()))
+        _mark(f"orphan-{os.getpid()}.pid", str(os.getpid()))
         time.sleep(120)
         os._exit(0)
     time.sleep(0.2)
@@ -58,8 +63,7 @@ def kill_parent(V, F):
 @register("hostile.kill_parent_hard", task="smoothing", library="hostile")
 def kill_parent_hard(V, F):
     """SIGKILLs its parent at every call (a case calls it twice: the cold call and a sample)."""
-    with open(os.path.join(MARK, f"hard-{os.getpid()}-{time.monotonic_ns()}.ppid"), "w") as fh:
-        fh.write(str(os.getppid()))
+    _mark(f"hard-{os.getpid()}-{time.monotonic_ns()}.ppid", str(os.getppid()))
     os.kill(os.getppid(), signal.SIGKILL)
     time.sleep(0.5)
     return SmoothingResult(V=V.copy())
@@ -68,8 +72,7 @@ def kill_parent_hard(V, F):
 @register("hostile.setsid_sleep", task="smoothing", library="hostile")
 def setsid_sleep(V, F):
     """Leaves its process group (setsid) and sleeps: a timeout must still end it."""
-    with open(os.path.join(MARK, f"setsid-{os.getpid()}.pid"), "w") as fh:
-        fh.write(str(os.getpid()))
+    _mark(f"setsid-{os.getpid()}.pid", str(os.getpid()))
     try:
         os.setsid()
     except OSError:
@@ -100,8 +103,7 @@ def escape_hang(V, F):
     if os.fork() == 0:
         os.setsid()
         if os.fork() == 0:
-            with open(os.path.join(MARK, f"escaped-{os.getpid()}.pid"), "w") as fh:
-                fh.write(str(os.getpid()))
+            _mark(f"escaped-{os.getpid()}.pid", str(os.getpid()))
             time.sleep(120)
         os._exit(0)
     time.sleep(120)
@@ -172,8 +174,7 @@ def escape(V, F, *, crash=False, hang=False):
     if os.fork() == 0:
         os.setsid()
         if os.fork() == 0:
-            with open(os.path.join(MARK, f"escaped-{os.getpid()}.pid"), "w") as fh:
-                fh.write(str(os.getpid()))
+            _mark(f"escaped-{os.getpid()}.pid", str(os.getpid()))
             os.write(w, b"x")                        # the pid file is written: the method may go on
             time.sleep(60)
             os._exit(0)
