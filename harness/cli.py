@@ -175,7 +175,11 @@ def _cmd_methods(a) -> int:
     methods = import_methods()
     if str(Path.cwd()) not in sys.path:              # a plugin beside the caller, as for a config
         sys.path.append(str(Path.cwd()))
+    from .plugins import import_problems
+    ended = import_problems(a.plugin)              # tried in a child first
     for mod in a.plugin:
+        if mod in ended:
+            raise ShootoutError(f"--plugin {mod}: cannot import it ({ended[mod]})")
         try:
             methods.load_plugins([mod])
         except (Exception, SystemExit) as exc:        # a user's module: its failure is a message

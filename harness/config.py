@@ -285,7 +285,13 @@ def _validate(raw: dict, label: str, base_dir: Path, found=()) -> Config:
     for d in (str(base_dir), str(Path.cwd())):   # a plugin package beside the config, or here
         if d not in sys.path:
             sys.path.append(d)
+    from .plugins import import_problems
+    ended = import_problems(plugins if not early_problems else [])   # tried in a child first
     for i, mod in enumerate(plugins if not early_problems else []):
+        if mod in ended:
+            plugin_failed = True
+            P.append(f"plugins[{i}]: cannot import {yaml_input.short(mod)} ({ended[mod]})")
+            continue
         try:
             methods.load_plugins([mod])
         except (Exception, SystemExit) as exc:       # any failure of a user's module is a config problem

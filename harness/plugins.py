@@ -1,6 +1,8 @@
-"""Importing the method registry, with a clear message when a user's own module shadows it."""
+"""Importing the method registry, with a clear message when a user's own module shadows it, and
+trying a user's plugin modules in a child process before they are imported here."""
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -34,3 +36,107 @@ def import_methods():
     if not hasattr(methods, "register") or not hasattr(methods, "__path__"):
         raise ShootoutError(_shadow_message(methods))
     return methods
+
+
+def import_problems(modules) -> dict:
+    """``{module: why}`` for each of ``modules`` whose import, tried first in a forked child of
+    this process (one after the other, each in the state the earlier ones left), raised, called
+    ``sys.exit`` or ended the process (``os._exit``, a signal, a crash in compiled code): such a
+    module is never imported here, so it cannot end the caller with a misleading exit status.
+    Modules already imported here, and every module where ``fork`` is missing, are not tried.
+    The child writes to /dev/null, runs in a process group of its own that is killed once it is
+    done (with whatever the imports started) and dies with this process."""
+    todo = [m for m in dict.fromkeys(modules) if m not in sys.modules]
+    if not todo or not hasattr(os, "fork"):
+        return {}
+    from .executors.parent import die_with_parent
+    from .yaml_input import short
+    import_methods().load_plugins([])            # the registry the imports add to, inherited
+    found: dict = {}
+    while todo:
+        tried = _try_in_child(todo, die_with_parent, short)
+        for mod, why in tried.items():
+            if why is not None:
+                found[mod] = why
+        todo = todo[len(tried):]
+    return found
+
+
+def _try_in_child(todo: list, die_with_parent, short) -> dict:
+    """``{module: why or None}`` for the modules of ``todo`` tried in one child, in order, up to
+    and including the one that ended it."""
+    import importlib
+    import json
+    import select
+    import signal
+    parent = os.getpid()
+    r, w = os.pipe()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    pid = os.fork()
+    if pid == 0:                                  # the child: never returns
+        try:
+            os.close(r)
+            os.setpgid(0, 0)
+            die_with_parent()
+            if os.getppid() != parent:
+                os._exit(0)
+            null = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(null, 1)
+            os.dup2(null, 2)
+            for mod in todo:
+                os.write(w, (json.dumps([mod]) + "\n").encode())
+                try:
+                    importlib.import_module(mod)
+                    why = None
+                except SystemExit as exc:
+                    why = f"it called sys.exit({short(exc.code)}) on import"
+                except BaseException as exc:  # noqa: BLE001 - a user's module: its failure is the answer
+                    why = f"{type(exc).__name__}: {str(exc)[:500]}"
+                os.write(w, (json.dumps([mod, why]) + "\n").encode())
+        finally:
+            os._exit(0)
+    os.close(w)
+    buf, status = b"", None
+    try:
+        while status is None:
+            if select.select([r], [], [], 0.1)[0]:
+                chunk = os.read(r, 65536)
+                buf += chunk
+                if chunk:
+                    continue
+            done, st = os.waitpid(pid, os.WNOHANG)
+            if done:
+                status = st
+        while select.select([r], [], [], 0)[0] and (chunk := os.read(r, 65536)):
+            buf += chunk                          # what it wrote before it ended
+    finally:
+        os.close(r)
+        try:
+            os.killpg(pid, signal.SIGKILL)       # what its imports started
+        except (ProcessLookupError, PermissionError):
+            pass
+        if status is None:
+            try:
+                os.waitpid(pid, 0)
+            except ChildProcessError:
+                pass
+    tried: dict = {}
+    for line in buf.decode(errors="replace").splitlines():
+        rec = json.loads(line)
+        tried[rec[0]] = rec[1] if len(rec) > 1 else _ended(status)
+    return tried
+
+
+def _ended(status) -> str:
+    """How a child that did not finish an import ended, from its wait status."""
+    if status is not None and os.WIFSIGNALED(status):
+        import signal
+        sig = os.WTERMSIG(status)
+        try:
+            name = signal.Signals(sig).name
+        except ValueError:
+            name = str(sig)
+        return f"importing it killed the process ({name})"
+    code = os.WEXITSTATUS(status) if status is not None else None
+    return f"importing it ended the process (exit status {code})"

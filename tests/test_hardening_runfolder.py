@@ -358,7 +358,8 @@ def test_grids_too_large_duplicate_keys_and_exiting_plugins_are_config_errors(tm
     """Each is exit 2 with the problem named and nothing written, quickly and in little memory:
     a 27M-setting parameter grid (it was built in memory before the case limit was checked), a
     tune grid over the case limit, duplicate keys (the last silently won: a whole task lost), a
-    plugin that calls sys.exit at import (exit 0 with nothing run). A 10^12-setting tune product
+    plugin that calls sys.exit at import (exit 0 with nothing run), or os._exit(0) (the driver
+    itself ended with exit 0), or crashes it (SIGSEGV: no message). A 10^12-setting tune product
     is sampled, never built."""
     big = {**SMALL, "tasks": {"smoothing": {"methods": [{"name": "scratch.explicit", "params": {
         "iterations": list(range(1, 301)), "step": [0.1 + i * 1e-3 for i in range(300)],
@@ -366,9 +367,15 @@ def test_grids_too_large_duplicate_keys_and_exiting_plugins_are_config_errors(tm
     text = ("name: dup\nmeshes: [knight]\ntasks:\n  laplacian: {methods: [scratch.cotan]}\n"
             "tasks:\n  smoothing: {methods: [scratch.taubin]}\nrepeats: 1\nrepeats: 2\n")
     (tmp_path / "exitplug.py").write_text("import sys\nsys.exit(0)\n")
+    (tmp_path / "osexitplug.py").write_text("import os\nos._exit(0)\n")
+    (tmp_path / "segvplug.py").write_text("import os, signal\nos.kill(os.getpid(), signal.SIGSEGV)\n")
     cases = {"big": (json.dumps(big), "27,000,000 settings"),
              "dup": (text, "duplicate key 'tasks' at line 5 (first at line 3); duplicate key 'repeats'"),
-             "plug": (json.dumps({**SMALL, "plugins": ["exitplug"]}), "called sys.exit(0) on import")}
+             "plug": (json.dumps({**SMALL, "plugins": ["exitplug"]}), "called sys.exit(0) on import"),
+             "osexit": (json.dumps({**SMALL, "plugins": ["osexitplug"]}),
+                        "plugins[0]: cannot import 'osexitplug' (importing it ended the process (exit status 0))"),
+             "segv": (json.dumps({**SMALL, "plugins": ["segvplug"]}),
+                      "plugins[0]: cannot import 'segvplug' (importing it killed the process (SIGSEGV))")}
     for name, (body, needle) in cases.items():
         (tmp_path / f"{name}.yaml").write_text(body)
         r = cli(["run", tmp_path / f"{name}.yaml", "--out", tmp_path / name], cwd=tmp_path,
@@ -713,3 +720,28 @@ def test_an_empty_out_is_refused_not_taken_for_the_default(tmp_path, capsys, mon
     assert main(["eval", bunny, "--clean", bunny, "--out", " "]) == 2
     assert "--out: an empty path" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c.yaml"]
+
+
+def test_plugin_import_is_tried_in_a_child_that_takes_what_it_started(tmp_path, monkeypatch):
+    """`harness.plugins.import_problems`: modules are tried in order, each failure named (one that
+    ends the child does not hide the ones after it), a clean module is not reported, and what an
+    import started (here a `sleep` it spawned) is killed with the child's process group."""
+    import subprocess
+
+    from harness.plugins import import_problems
+    mark = tmp_path / "pid"
+    (tmp_path / "probe_spawn.py").write_text(
+        "import subprocess\np = subprocess.Popen(['sleep', '300'])\n"
+        f"open({str(mark)!r}, 'w').write(str(p.pid))\n")
+    (tmp_path / "probe_exit.py").write_text("import os\nos._exit(3)\n")
+    (tmp_path / "probe_raise.py").write_text("raise ValueError('nope')\n")
+    (tmp_path / "probe_ok.py").write_text("X = 1\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    found = import_problems(["probe_spawn", "probe_exit", "probe_raise", "probe_ok"])
+    assert found == {"probe_exit": "importing it ended the process (exit status 3)",
+                     "probe_raise": "ValueError: nope"}, found
+    pid = int(mark.read_text())
+    gone = subprocess.run(["ps", "-o", "stat=", "-p", str(pid)], capture_output=True, text=True).stdout.strip()
+    assert gone in ("", "Z"), gone                       # killed (a zombie until init reaps it)
+    import sys
+    assert "probe_spawn" not in sys.modules and "probe_ok" not in sys.modules   # tried, not imported here

@@ -44,6 +44,7 @@ from .. import input_store
 from ..config import Case
 from ..results import close_inherited_locks
 from ..runner import base_row, run_case
+from .parent import die_with_parent
 
 
 STDERR_MAX = 16 << 20          # a case's stderr file is cut back to its tail past this size
@@ -244,17 +245,6 @@ _NOT_ENDING = {getattr(signal, n) for n in ("SIGKILL", "SIGSTOP", "SIGCHLD", "SI
                                             "SIGTTOU", "SIGWINCH", "SIGURG") if hasattr(signal, n)}
 _GUARDED = tuple(sorted(set(signal.valid_signals()) - _NOT_ENDING)) if hasattr(signal, "valid_signals") else ()
 _GUARD_WAITS = set(_GUARDED) | ({signal.SIGCHLD} if hasattr(signal, "SIGCHLD") else set())
-
-
-def die_with_parent() -> None:
-    """Have the kernel SIGKILL this process the moment the thread that forked it ends (Linux's
-    ``PR_SET_PDEATHSIG``; nothing where it is missing). The caller then checks ``os.getppid()``:
-    a parent that ended before the call is not noticed by it."""
-    try:
-        import ctypes
-        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)      # PR_SET_PDEATHSIG
-    except (OSError, AttributeError):
-        pass
 
 
 def _die_with_guard(guard: int) -> None:
