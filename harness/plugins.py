@@ -89,6 +89,8 @@ def _try_in_child(todo: list, die_with_parent, short) -> dict:
                 try:
                     importlib.import_module(mod)
                     why = None
+                except KeyboardInterrupt:      # an interrupt, not the module's failure: the import here says so
+                    why = None
                 except SystemExit as exc:
                     why = f"it called sys.exit({short(exc.code)}) on import"
                 except BaseException as exc:  # noqa: BLE001 - a user's module: its failure is the answer
