@@ -10,9 +10,8 @@ added to a pair).
 """
 from __future__ import annotations
 
-import dataclasses
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -244,11 +243,17 @@ def _load_cached(frozen) -> Source:
 def _pair(key: str, noisy_path: Path, clean_path: Path, level, noisy_sha1=None, clean_sha1=None) -> Source:
     noisy = read_mesh(noisy_path, repair=False, sha1=noisy_sha1)
     raw = read_mesh(clean_path, repair=False, sha1=clean_sha1)
-    clean = validate(raw.V, raw.F, name=key)
-    if clean.repairs and noisy.n_vertices == clean.n_vertices and np.array_equal(noisy.F, clean.F):
+    if ".stl" in (noisy_path.suffix.lower(), clean_path.suffix.lower()):
+        raise InvalidMeshError(f"{key}: an STL file cannot be half of a noisy/clean pair: STL stores every "
+                               "triangle's corners apart and each file is welded by its own coordinates, so "
+                               "the two halves' vertices cannot be matched; give both as OBJ, OFF or PLY")
+    validated = validate(raw.V, raw.F, name=key)
+    said = [*raw.repairs, *(f"noisy file: {r}" for r in noisy.repairs)]    # the readers' own (polygons split)
+    clean = replace(validated, repairs=[*said, *validated.repairs])
+    if validated.repairs and noisy.n_vertices == clean.n_vertices and np.array_equal(noisy.F, clean.F):
         return Source(key, clean, noisy_V=noisy.V, pair_level=level)       # the clean mesh's repaired layout
-    also = (f" (or the clean mesh's {clean.n_vertices} after its repairs: {'; '.join(clean.repairs)})"
-            if clean.repairs else "")
+    also = (f" (or the clean mesh's {clean.n_vertices} after its repairs: {'; '.join(validated.repairs)})"
+            if validated.repairs else "")
     if noisy.n_vertices != raw.n_vertices:
         raise InvalidMeshError(f"{key}: noisy ({noisy.n_vertices}) and clean ({raw.n_vertices}{also}) "
                                "vertex counts differ; a pair needs the same vertices in the same order")

@@ -226,9 +226,11 @@ def _read_off(text: str):
     if nv < 0 or nf < 0:
         raise InvalidMeshError(f"OFF header gives {nv} vertices and {nf} faces: a count cannot be negative")
     if len(tokens_lines) != start + nv + nf and tokens_lines[0][0] == "OFF":
-        stream = _off_stream([x for t in tokens_lines[start:] for x in t], nv, nf)
-        if stream is not None:               # a plain OFF laid out freely: whitespace separates tokens
-            return stream
+        body = [x for t in tokens_lines[start:] for x in t]
+        for skip in (3, 2):                  # data on the counts line, after an edge count or without one
+            stream = _off_stream(head[skip:] + body if len(head) > skip else body, nv, nf)
+            if stream is not None:           # a plain OFF laid out freely: whitespace separates tokens
+                return stream
     if len(tokens_lines) < start + nv + nf:
         raise InvalidMeshError(f"truncated OFF: header promises {nv} vertices and {nf} faces, "
                                f"file has {len(tokens_lines) - start} data lines")
@@ -372,6 +374,8 @@ def _read_ply(data: bytes):
                     off += np.dtype(_PLY_TYPES[p[0]]).itemsize
             if name == "face":
                 polys.append(row)
+        if off > len(body):                          # the fields stepped over were cut off too
+            raise InvalidMeshError(f"truncated PLY: its {name} element needs {off} bytes of the body's {len(body)}")
     rest = body[off:].rstrip(b"\r\n\t \x00\x1a")       # a trailing newline or padding is not data
     if rest:
         raise InvalidMeshError(f"PLY holds {len(body) - off} byte(s) past the elements its header declares")
@@ -545,18 +549,9 @@ def validate(V, F, name: str = "", repair: bool = True, finite: bool = True) -> 
     if F.shape[1] != 3:
         raise InvalidMeshError(f"{label}faces must be triangles, got {F.shape[1]} corners")
     F = F.astype(np.int64)
-    if finite and not np.isfinite(V).all():
-        bad = ~np.isfinite(V).all(axis=1)
-        raise InvalidMeshError(f"{label}{int(bad.sum())} vertices with NaN or inf coordinates "
-                               f"(first: {np.flatnonzero(bad)[:5].tolist()})")
     if F.min() < 0 or F.max() >= len(V):
         raise InvalidMeshError(f"{label}face indices out of range [0, {len(V)}): "
                                f"min {int(F.min())}, max {int(F.max())}")
-    big, span = float(np.abs(V).max()), float((V.max(axis=0) - V.min(axis=0)).max())
-    if finite and (big > COORD_LIMIT or 0 < span < 1 / COORD_LIMIT):
-        raise InvalidMeshError(f"{label}coordinates up to {big:.3g} over a span of {span:.3g}: beyond "
-                               f"{COORD_LIMIT:g} (or a span below {1 / COORD_LIMIT:g}) the fourth powers of lengths "
-                               "that areas and angles use overflow (or underflow) double precision; rescale the mesh")
     notes = []
     vmap = np.arange(len(V))
     if repair:
@@ -579,6 +574,19 @@ def validate(V, F, name: str = "", repair: bool = True, finite: bool = True) -> 
             remap = np.full(len(V), -1, np.int64)
             remap[vmap] = np.arange(len(vmap))
             V, F = V[vmap], remap[F]
+    if finite:                             # over the vertices the faces use: a dropped one changes nothing
+        idx = vmap if repair else np.flatnonzero(referenced(F, len(V)))
+        Vu = V if repair else V[idx]
+        if not np.isfinite(Vu).all():
+            bad = ~np.isfinite(Vu).all(axis=1)
+            raise InvalidMeshError(f"{label}{int(bad.sum())} vertices with NaN or inf coordinates "
+                                   f"(first: {idx[np.flatnonzero(bad)[:5]].tolist()})")
+        big, span = float(np.abs(Vu).max()), float((Vu.max(axis=0) - Vu.min(axis=0)).max())
+        if big > COORD_LIMIT or 0 < span < 1 / COORD_LIMIT:
+            raise InvalidMeshError(f"{label}coordinates up to {big:.3g} over a span of {span:.3g}: beyond "
+                                   f"{COORD_LIMIT:g} (or a span below {1 / COORD_LIMIT:g}) the fourth powers of "
+                                   "lengths that areas and angles use overflow (or underflow) double precision; "
+                                   "rescale the mesh")
     if not any(face_cross(V, f).any() for f in (F[:64], *(F[i:i + 65536] for i in range(0, len(F), 65536)))):
         raise InvalidMeshError(f"{label}every face has zero area (the surface is degenerate: its vertices "
                                "lie on a line or coincide)")

@@ -541,3 +541,75 @@ def _general(M, text):
         return M._read_obj(text)
     finally:
         M._read_obj_fast = fast
+
+
+def test_size_and_finiteness_are_judged_on_the_vertices_the_faces_use():
+    """A 1e-90 surface with one unused vertex at (1, 1, 1) was measured with that vertex (span 1:
+    accepted, its noise rounded to nothing while the row said 0.1); a sound mesh whose only
+    extreme vertex (1e70, or NaN) is unused was refused for it. The unused vertex is the repair."""
+    from harness.errors import InvalidMeshError
+    from harness.mesh import validate
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    far = np.array([[1.0, 1.0, 1.0]])
+    with pytest.raises(InvalidMeshError, match="span of 1e-90"):
+        validate(np.vstack([V * 1e-90, far]), F)
+    for extra in (far * 1e70, far * np.nan):
+        m = validate(np.vstack([V, extra]), F)
+        assert m.repairs == ["removed 1 unreferenced vertex/vertices"] and len(m.V) == 4
+    with pytest.raises(InvalidMeshError, match=r"1 vertices with NaN or inf coordinates \(first: \[4\]\)"):
+        validate(np.vstack([far, V[:3], [[np.nan, 0, 0]]]), np.array([[1, 3, 2], [1, 2, 4], [1, 4, 3], [2, 3, 4]]))
+
+
+def test_a_pair_keeps_its_readers_notes_and_an_stl_pair_is_refused_saying_why(tmp_path):
+    """The clean half's reader repairs (polygons split) were dropped when the pair was validated,
+    so a pair's rows said nothing of them; two STL halves (welded each by its own coordinates)
+    were refused as 'faces differ'."""
+    from harness import datasets
+    from harness.errors import InvalidMeshError
+    cube = ("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+            "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n")
+    (tmp_path / "c.obj").write_text(cube)
+    (tmp_path / "n.obj").write_text(cube.replace("v 1 1 1", "v 1.05 1 1"))
+    src = datasets.cached({"file": str(tmp_path / "n.obj"), "clean": str(tmp_path / "c.obj")})
+    assert src.clean.repairs == ["fan-triangulated 6 polygon(s) with more than 3 corners",
+                                 "noisy file: fan-triangulated 6 polygon(s) with more than 3 corners"]
+    assert src.noisy_V[6, 0] == 1.05
+    tri = "solid s\n" + "".join(f"facet normal 0 0 1\nouter loop\nvertex {a}\nvertex {b}\nvertex {c}\nendloop\nendfacet\n"
+                                for a, b, c in [("0 0 0", "1 0 0", "0 1 0"), ("0 0 0", "0 1 0", "0 0 1"),
+                                                ("0 0 0", "0 0 1", "1 0 0"), ("1 0 0", "0 0 1", "0 1 0")]) + "endsolid s\n"
+    (tmp_path / "c.stl").write_text(tri)
+    (tmp_path / "n.stl").write_text(tri.replace("1 0 0", "1.01 0 0"))
+    with pytest.raises(InvalidMeshError, match="an STL file cannot be half of a noisy/clean pair"):
+        datasets.cached({"file": str(tmp_path / "n.stl"), "clean": str(tmp_path / "c.stl")})
+
+
+def test_a_binary_ply_cut_inside_a_field_the_reader_skips_is_refused(tmp_path):
+    """The general face loop stepped past a texture-coordinate list without checking the file's
+    length: a PLY cut there was read whole, though a header promising more than the file holds is
+    an error."""
+    from harness.errors import InvalidMeshError
+    V = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
+    F = [(0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3)]
+    head = ("ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+            "property float z\nelement face 4\nproperty list uchar int vertex_indices\n"
+            "property list uchar float texcoord\nend_header\n").encode()
+    body = b"".join(struct.pack("<3f", *v) for v in V)
+    body += b"".join(struct.pack("<B3i", 3, *f) + struct.pack("<B6f", 6, *range(6)) for f in F)
+    (tmp_path / "whole.ply").write_bytes(head + body)
+    assert read_mesh(tmp_path / "whole.ply").F.tolist() == [list(f) for f in F]
+    (tmp_path / "cut.ply").write_bytes(head + body[:-12])
+    with pytest.raises(InvalidMeshError, match="truncated PLY"):
+        read_mesh(tmp_path / "cut.ply")
+
+
+@pytest.mark.parametrize("counts", ["4 4 0", "4 4"])
+def test_an_off_token_stream_may_start_on_its_counts_line(tmp_path, counts):
+    """A plain OFF laid out freely is a token stream; its data may begin on the counts line, after
+    the edge count or without it (it was 'truncated OFF: file has 0 data lines')."""
+    body = "0 0 0 1 0 0 0 1 0 0 0 1 3 0 2 1 3 0 1 3 3 0 3 2 3 1 2 3"
+    for text in (f"OFF {counts} {body}\n", f"OFF\n{counts} {body}\n"):
+        (tmp_path / "s.off").write_text(text)
+        m = read_mesh(tmp_path / "s.off")
+        assert m.V.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], text
+        assert m.F.tolist() == [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]], text
