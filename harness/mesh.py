@@ -400,6 +400,10 @@ def _read_stl(data: bytes):
         raise InvalidMeshError("unreadable STL: not ASCII, and its size does not match a binary STL's "
                                "triangle count (truncated?)")
     if "endsolid" not in text:
+        n = int(np.frombuffer(data, "<u4", 1, 80)[0]) if len(data) >= 84 else -1
+        if 84 + 50 * n < len(data) and "facet" not in text:
+            raise InvalidMeshError(f"binary STL of {n} triangle(s) with {len(data) - 84 - 50 * n} byte(s) past "
+                                   "them (its header begins with 'solid', as an ASCII STL's)")
         raise InvalidMeshError("truncated ASCII STL (no 'endsolid')")
     lines = [ln.split() for ln in text.splitlines()]
     verts = [t[1:4] for t in lines if t and t[0] == "vertex"]

@@ -613,3 +613,15 @@ def test_an_off_token_stream_may_start_on_its_counts_line(tmp_path, counts):
         m = read_mesh(tmp_path / "s.off")
         assert m.V.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], text
         assert m.F.tolist() == [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]], text
+
+
+def test_a_binary_stl_with_bytes_past_its_triangles_says_so(tmp_path):
+    """Its header began with 'solid', so the padded file was called a truncated ASCII STL."""
+    from harness.errors import InvalidMeshError
+    tri = struct.pack("<12fH", 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0)
+    data = b"solid made by a tool".ljust(80, b" ") + struct.pack("<I", 1) + tri
+    (tmp_path / "ok.stl").write_bytes(data)
+    assert read_mesh(tmp_path / "ok.stl", repair=False).F.shape == (1, 3)
+    (tmp_path / "pad.stl").write_bytes(data + b"\0" * 4)
+    with pytest.raises(InvalidMeshError, match=r"binary STL of 1 triangle\(s\) with 4 byte\(s\) past them"):
+        read_mesh(tmp_path / "pad.stl")
