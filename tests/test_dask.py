@@ -260,6 +260,15 @@ def test_daemonic_worker_fallback_isolates_too(tmp_path):
     assert "cancelled" in row["error"] and time.monotonic() - t0 < 10, row
 
 
+def test_a_daemonic_workers_timeout_counts_the_case_not_the_interpreter_start():
+    """The fresh interpreter's start-up and imports (about 0.7 s here) counted against --timeout,
+    which a forking worker's case never pays: a case of about 1.05 s timed out at 1.6 s."""
+    cfg = load_config({"plugins": ["tests.plugins.crashy"], "meshes": ["knight"], "repeats": 1, "time_budget": 0,
+                       "tasks": {"laplacian": {"methods": [{"name": "crashy.slow", "params": {"seconds": 0.5}}]}}})
+    row = run_in_subprocess(cfg.cases[0], timeout=1.6)[0]
+    assert row["status"] == "ok", row["error"]
+
+
 def _run_killing_a_busy_worker(ex, cases, before_kill):
     """The rows of ``ex.run(cases)`` while another thread SIGKILLs the first worker process that
     has a task, after ``before_kill(pid)``."""

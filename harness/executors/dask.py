@@ -676,7 +676,10 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
     so it dies with this process. It runs the case behind a guard (`_subprocess_main`) that
     kills every process the case left, even in a session of its own. Crash -> ``error`` row
     naming the signal; past ``timeout`` -> stopped (SIGTERM to the guard, SIGKILL 10 s later),
-    ``timeout`` row; ``stop()`` true (polled twice a second) -> stopped.
+    ``timeout`` row; ``stop()`` true (polled twice a second) -> stopped. The timeout counts from
+    the moment the child can fork its case (its interpreter started, the harness and the
+    registry imported: what a forking worker's case inherits), which it writes on a pipe; its
+    start-up may take `STARTUP_S` beyond ``timeout``.
     """
     fd, out_path = tempfile.mkstemp(prefix="shootout-case-", suffix=".pkl")
     os.close(fd)
@@ -685,9 +688,16 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
         paths = [p for p in sys.path if p and os.path.isdir(p)]
         env["PYTHONPATH"] = os.pathsep.join(dict.fromkeys(paths + env.get("PYTHONPATH", "").split(os.pathsep)))
         safe = ["-P"] if sys.version_info >= (3, 11) else []   # the worker's sys.path only, not the cwd first
-        proc = subprocess.Popen([sys.executable, *safe, "-m", "harness.executors.dask", out_path],
-                                stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,
-                                stderr=subprocess.PIPE, env=env, start_new_session=True)   # killpg(0) hits it alone
+        ready_r, ready_w = os.pipe()     # the child's clock reading once it can fork the case
+        try:
+            proc = subprocess.Popen([sys.executable, *safe, "-m", "harness.executors.dask", out_path, str(ready_w)],
+                                    stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, pass_fds=(ready_w,),
+                                    stderr=subprocess.PIPE, env=env, start_new_session=True)   # killpg(0) hits it alone
+        except BaseException:
+            os.close(ready_r)
+            raise
+        finally:
+            os.close(ready_w)
         err_chunks: list[bytes] = []
 
         def keep_tail():                 # a flood of output keeps only its last 64 KiB in memory
@@ -702,9 +712,14 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
             proc.stdin.flush()
         except BrokenPipeError:
             pass
+        started = None
         try:
-            deadline = None if timeout is None else time.monotonic() + timeout
+            deadline = None if timeout is None else time.monotonic() + timeout + STARTUP_S
             while True:
+                if started is None:
+                    started = _ready_at(ready_r)
+                    if started is not None and timeout is not None:
+                        deadline = started + timeout     # the case's own time, as a forked case's
                 left = None if deadline is None else deadline - time.monotonic()
                 timed_out = left is not None and left <= 0
                 if timed_out or (stop is not None and stop()):
@@ -717,7 +732,8 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
                     if not timed_out:
                         return cancelled_row(case), {}
                     row = base_row(case)
-                    row.update(status="timeout", error=f"killed after {timeout:g} s (timeout)")
+                    row.update(status="timeout", error=f"killed after {timeout:g} s (timeout)" if started is not None
+                               else f"killed: its Python process had not started the case after {timeout + STARTUP_S:g} s")
                     return row, {}
                 try:
                     proc.wait(0.5 if left is None else min(0.5, left))
@@ -725,6 +741,7 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
                 except subprocess.TimeoutExpired:
                     continue
         finally:
+            os.close(ready_r)
             try:
                 os.killpg(proc.pid, 9)   # what the case left running in its session dies with it
             except OSError:
@@ -751,7 +768,23 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
         os.unlink(out_path)
 
 
-def _subprocess_main(out_path: str) -> int:
+STARTUP_S = 60.0     # a case subprocess's start-up (interpreter, imports) allowed beyond ``timeout``
+
+
+def _ready_at(fd: int) -> float | None:
+    """The `time.monotonic` reading (a system-wide clock) a case subprocess wrote on ``fd`` once it
+    could fork its case, or None while it has not (never blocks)."""
+    import select
+    if not select.select([fd], [], [], 0)[0]:
+        return None
+    data = os.read(fd, 64)
+    try:
+        return float(data)
+    except ValueError:               # it ended before writing: the wait loop sees it end
+        return time.monotonic()
+
+
+def _subprocess_main(out_path: str, ready_fd: int | None = None) -> int:
     """The case process of `run_in_subprocess`, behind a guard: this process becomes a child
     subreaper and forks the case; when the case ends (returns, crashes or is stopped by SIGTERM
     from the worker), the guard kills every process it left, in its process group or out of it
@@ -761,7 +794,14 @@ def _subprocess_main(out_path: str) -> int:
     from ..provenance import code_hash, package_versions
     from ..runner import run_case
     from .isolation import become_subreaper, reap_strays
+    from .. import tasks
+    from ..plugins import import_methods
+    import_methods().load_plugins([])                 # what a forking worker's case inherits
+    tasks.get(case.task)
     become_subreaper()
+    if ready_fd is not None:                          # the case's timeout starts here
+        os.write(ready_fd, repr(time.monotonic()).encode())
+        os.close(ready_fd)
     pid = os.fork()
     if pid == 0:
         try:
@@ -809,4 +849,4 @@ def _subprocess_main(out_path: str) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(_subprocess_main(sys.argv[1]))
+    sys.exit(_subprocess_main(sys.argv[1], int(sys.argv[2]) if len(sys.argv) > 2 else None))
