@@ -38,17 +38,21 @@ def import_methods():
     return methods
 
 
+FAILED: dict = {}     # module -> why, for every module `import_problems` found failing in this process
+
+
 def import_problems(modules) -> dict:
     """``{module: why}`` for each of ``modules`` whose import, tried first in a forked child of
     this process (one after the other, each in the state the earlier ones left), raised, called
     ``sys.exit`` or ended the process (``os._exit``, a signal, a crash in compiled code): such a
-    module is never imported here, so it cannot end the caller with a misleading exit status.
-    Modules already imported here, and every module where ``fork`` is missing, are not tried.
+    module is never imported here, so it cannot end the caller with a misleading exit status
+    (each finding is kept in `FAILED`, which a forked case reads). Modules already imported here, and every module where ``fork`` is missing, are not tried.
     The child writes to /dev/null, runs in a process group of its own that is killed once it is
     done (with whatever the imports started) and dies with this process."""
-    todo = [m for m in dict.fromkeys(modules) if m not in sys.modules]
+    known = {m: FAILED[m] for m in modules if m in FAILED}
+    todo = [m for m in dict.fromkeys(modules) if m not in sys.modules and m not in FAILED]
     if not todo or not hasattr(os, "fork"):
-        return {}
+        return known
     from .executors.parent import die_with_parent
     from .yaml_input import short
     import_methods().load_plugins([])            # the registry the imports add to, inherited
@@ -59,7 +63,8 @@ def import_problems(modules) -> dict:
             if why is not None:
                 found[mod] = why
         todo = todo[len(tried):]
-    return found
+    FAILED.update(found)
+    return {**known, **found}
 
 
 def _try_in_child(todo: list, die_with_parent, short) -> dict:

@@ -344,9 +344,12 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
     env = contextlib.ExitStack()          # the thread variables, restored for an in-process (serial) caller
     t_case = time.perf_counter()
     try:
-        from .plugins import import_methods
+        from .plugins import FAILED, import_methods
         methods = import_methods()
         for mod in case.plugins:           # the config checked them in the driver; a worker may lack them
+            if mod in FAILED:              # found by this process's parent (a Dask worker's warm-up)
+                raise ShootoutError(f"plugin {mod!r} cannot be imported in the case's process on "
+                                    f"{socket.gethostname()} ({FAILED[mod]})")
             try:
                 methods.load_plugins([mod])
             except ModuleNotFoundError as exc:

@@ -269,6 +269,25 @@ def test_a_daemonic_workers_timeout_counts_the_case_not_the_interpreter_start():
     assert row["status"] == "ok", row["error"]
 
 
+def test_a_plugin_that_ends_a_forking_workers_process_on_import_costs_its_rows(cluster):
+    """The worker's warm-up imported the plugin in the worker process itself: os._exit(0) there
+    ended the worker (a clean exit, so the nanny gave up and the cluster kept no workers)."""
+    cfg = load_config({"name": "t", "time_budget": 0, "meshes": ["knight"], "plugins": ["tests.plugins.dask_exiter"],
+                       "tasks": {"smoothing": {"methods": ["dask_exiter.identity", "scratch.taubin"]}}})
+    ex = DaskExecutor(timeout=60, scheduler=cluster.scheduler_address)
+    try:
+        before = sorted(ex.client.run(os.getpid).values())
+        rows = {row["method"]: row for _, row, _ in ex.run(cfg.cases)}
+        after = sorted(ex.client.run(os.getpid).values())
+    finally:
+        ex.close()
+    for row in rows.values():
+        assert row["status"] == "error", row
+        assert ("plugin 'tests.plugins.dask_exiter' cannot be imported in the case's process on "
+                in row["error"] and "(importing it ended the process (exit status 0))" in row["error"]), row
+    assert after == before                         # the same two workers, alive
+
+
 def _run_killing_a_busy_worker(ex, cases, before_kill):
     """The rows of ``ex.run(cases)`` while another thread SIGKILLs the first worker process that
     has a task, after ``before_kill(pid)``."""

@@ -651,19 +651,22 @@ def _warm(case: Case) -> None:
     """Load the registry, the case's plugins and (bundled/procedural) mesh with its noise frame in
     the worker once, so the forked children inherit them instead of re-importing per case (the
     thread limits are set in each case: a worker may fork from several threads). Best
-    effort: any failure happens again in the isolated child and becomes that case's row. Files
-    are left to the child (a C++ reader could crash on a malformed one)."""
+    effort: any failure happens again in the isolated child and becomes that case's row; a
+    plugin is tried in a child of its own first (`harness.plugins.import_problems`), so one that
+    ends its process on import is the case's error row, not a dead worker. Files are left to the
+    child (a C++ reader could crash on a malformed one)."""
     try:
-        from ..plugins import import_methods
+        from ..plugins import import_methods, import_problems
         methods = import_methods()
-        methods.load_plugins(list(case.plugins))
+        bad = import_problems(case.plugins)
+        methods.load_plugins([m for m in case.plugins if m not in bad])
         if not any(k in case.mesh for k in FILE_KEYS):
             from .. import datasets
             src = datasets.cached(case.mesh)
             src.clean.input_notes
             if src.noisy_V is None and case.adds_noise:
                 src.clean.noise_frame
-    except Exception:  # noqa: BLE001 - reported by the child, as a row
+    except (Exception, SystemExit):  # noqa: BLE001 - reported by the child, as a row
         pass
 
 
