@@ -816,13 +816,11 @@ def _checked_csv_text(path: Path) -> str:
         raise ShootoutError(f"{path}: cannot read ({exc.strerror})") from None
     if "\x00" in text:
         raise ShootoutError(f"{path}: damaged CSV (contains NUL bytes)")
-    lines = text.splitlines(keepends=True)
-    if lines and not lines[-1].endswith("\n"):
-        lines = lines[:-1]                       # a row cut short by a kill: not data
-    if not lines:
+    text = text[:text.rfind("\n") + 1]         # a row cut short by a kill: not data (only "\n" ends a
+    if not text:                                 # line: a form feed in a message does not)
         raise ShootoutError(f"{path}: empty CSV (no header)")
     try:
-        rows = list(csv.reader(io.StringIO("".join(lines)), strict=True))
+        rows = list(csv.reader(io.StringIO(text), strict=True))
     except csv.Error as exc:
         raise ShootoutError(f"{path}: damaged CSV ({exc})") from None
     n = len(rows[0])
@@ -830,7 +828,7 @@ def _checked_csv_text(path: Path) -> str:
     if bad:
         raise ShootoutError(f"{path}: damaged CSV: line(s) {', '.join(map(str, bad[:5]))} do not have the "
                             f"header's {n} fields")
-    return "".join(lines)
+    return text
 
 
 def _atomic_json(path: Path, data) -> None:

@@ -745,3 +745,14 @@ def test_plugin_import_is_tried_in_a_child_that_takes_what_it_started(tmp_path, 
     assert gone in ("", "Z"), gone                       # killed (a zombie until init reaps it)
     import sys
     assert "probe_spawn" not in sys.modules and "probe_ok" not in sys.modules   # tried, not imported here
+
+
+def test_a_torn_last_row_holding_a_form_feed_is_dropped_whole(tmp_path):
+    """Only the part after a form feed (or \\x0b, \\x1c, \\x85, \\u2028: str.splitlines breaks lines
+    there) was dropped as torn, so the rest made the folder a 'damaged CSV' for report and compare."""
+    from harness.results import _checked_csv_text
+    good = 'case_id,status,error\nabc,ok,"line one\x0cline two"\n'
+    for sep in ("\x0c", "\x0b", "\x1c", "\x85", "\u2028"):
+        p = tmp_path / "t.csv"
+        p.write_text(good + f'def,error,"warning: line one{sep}line two, and mor', encoding="utf-8")
+        assert _checked_csv_text(p) == good, repr(sep)
