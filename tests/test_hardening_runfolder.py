@@ -548,6 +548,11 @@ def test_a_hand_edited_run_json_of_wrong_types_is_read_without_a_traceback(tmp_p
     assert _sane({"load_average": [None, 0.5, "x"]})["load_average"] == [None, 0.5, None]   # positions kept
     from harness.report.html import _timing_text
     assert "unknown at the start, 0.50 at the end" in _timing_text({"load_average": [None, 0.5]})
+    resumed = {"timing": {"threads_per_case": 1}, "sessions": [     # a review: the header said 1 for every row
+        {"threads_per_case": 2, "status_counts": {"ok": 7}}, {"threads_per_case": 1, "status_counts": {"ok": 21}},
+        {"threads_per_case": 4, "status_counts": {}}]}
+    assert "1 thread(s) per case (BLAS/OpenMP pools and libigl's) in the last session, 2 in an earlier one" \
+        in _timing_text(resumed)
     edits = [(("machine",), "x"), (("tasks",), []), (("versions",), "x"), (("workers",), "x"),
              (("load_average",), 5), (("timing",), ["x"]), (("solver", "versions"), 5), (("solver", "last_used"), "x"),
              (("sessions", 0), 5), (("sessions", 0, "wall_s"), "12.5"), (("load_average", 0), "x"),
