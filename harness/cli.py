@@ -145,6 +145,7 @@ def _cmd_run(a) -> int:
     from .executors import isolation, local
     reap = a.executor == "local" and a.command_process   # this process is ours: orphans of cases die here
     local.REAP = reap and isolation.become_subreaper()
+    a.run_started = True                 # an interrupt from here on may leave rows to resume
     try:
         frames = run(cfg, out=a.out, workers=a.workers, executor=a.executor, scheduler=a.scheduler,
                      resume=a.resume, timeout=a.timeout, quiet=a.quiet,
@@ -438,6 +439,7 @@ def main(argv=None) -> int:
 
 def _main(argv) -> int:
     from .errors import interrupt_seen
+    args = None
     try:                       # a Ctrl-C while the parser loads the task kinds is an interrupt too
         args = _parser().parse_args(argv)
         args.command_process = argv is None          # the `shootout` command itself, not a call from Python
@@ -452,7 +454,8 @@ def _main(argv) -> int:
         print(f"shootout: {exc}", file=sys.stderr)
         return getattr(exc, "exit_code", 2)
     except KeyboardInterrupt:
-        print("shootout: interrupted; rows finished so far are saved (use --resume)", file=sys.stderr)
+        print("shootout: interrupted; rows finished so far are saved (use --resume)"
+              if getattr(args, "run_started", False) else "shootout: interrupted; nothing was written", file=sys.stderr)
         return 130
     except BrokenPipeError:              # stdout closed early (`| head`): stop quietly, like other tools
         try:

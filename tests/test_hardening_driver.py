@@ -303,7 +303,8 @@ def test_an_interrupt_inside_a_string_exec_is_exit_130_not_death_by_sigint(tmp_p
     cfg = _cfg(tmp_path, ["scratch.explicit"])
     cfg.write_text(cfg.read_text().replace("tests.plugins.hostile", "tests.plugins.interrupting"))
     r = _run_cli(tmp_path, cfg, tmp_path / "o")
-    assert r.returncode == 130 and "interrupted" in r.stderr, (r.returncode, r.stderr[-500:])
+    assert r.returncode == 130 and "interrupted; nothing was written" in r.stderr, (r.returncode, r.stderr[-500:])
+    assert not (tmp_path / "o").exists()        # (it said "rows finished so far are saved (use --resume)")
 
 
 @pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
