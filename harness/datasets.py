@@ -188,7 +188,7 @@ def load(spec) -> Source:
     m = src.clean
     clean = Mesh(m.V.copy(), m.F.copy(), m.name, None if m.vertex_map is None else m.vertex_map.copy(),
                  list(m.repairs))
-    return dataclasses.replace(src, clean=clean, noisy_V=None if src.noisy_V is None else src.noisy_V.copy(),
+    return replace(src, clean=clean, noisy_V=None if src.noisy_V is None else src.noisy_V.copy(),
                                shape=None if src.shape is None else dict(src.shape))
 
 

@@ -207,7 +207,6 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
     chash = config_hash(cfg)
     threads = 1 if executor == "dask" else max(1, cpus // workers)
     cases = [dataclasses.replace(c, threads=threads) for c in cfg.cases]
-    done: set[str] = set()
     problems = out_dir_problems(out_dir, resume)     # refused before the folder or its lock is made
     try:
         check_output_file(export_benchmark_json, "export_benchmark_json", run_dirs=(out_dir,), kind="json")
