@@ -272,30 +272,51 @@ def tolerance(spec: dict, metric: str) -> tuple[float, float]:
     return 0.01, 0.0
 
 
-def tie_groups(score: np.ndarray, rel: float, abs_: float, se: np.ndarray | None = None) -> np.ndarray:
+def tie_groups(score: np.ndarray, rel: float, abs_: float, se: np.ndarray | None = None,
+               top: np.ndarray | None = None) -> np.ndarray:
     """Group ids (0 = best) of ``score`` (lower is better; +inf for invalid results, which all tie
     last). Sorted ascending, a value joins the current group when it lies within
     ``max(rel * |g|, abs_)`` of the group's first (best) value g, or, with ``se`` (each value's
     standard error times ``SE_Z``, a sampled metric), within their combined ``hypot``; else it
     starts the next group: a chain of small steps cannot tie values that differ by more than the
-    tolerance."""
+    tolerance. With ``top`` (a certified bracket's upper end of each value, the value its lower
+    end: `bracket_top`), the distance is measured from g's upper end: brackets that overlap, or lie
+    within the tolerance of each other, tie, as `harness.compare` judges them."""
     score = np.asarray(score, dtype=np.float64)
     err = np.zeros(len(score)) if se is None else np.nan_to_num(np.asarray(se, dtype=np.float64), nan=0.0)
+    up = score if top is None else np.fmax(score, np.nan_to_num(np.asarray(top, dtype=np.float64), nan=-np.inf))
     order = np.argsort(score, kind="stable")
     gid = np.empty(len(score), np.int64)
-    g, head, e_head = -1, None, 0.0
+    g, head, reach, e_head = -1, None, None, 0.0
     for i in order:
         v = score[i]
         if head is None or not (v == head or (np.isfinite(head) and np.isfinite(v) and
-                                              v - head <= max(rel * abs(head), abs_, math.hypot(err[i], e_head)))):
-            g, head, e_head = g + 1, v, err[i]
+                                              v - reach <= max(rel * abs(head), abs_, math.hypot(err[i], e_head)))):
+            g, head, reach, e_head = g + 1, v, up[i], err[i]
         gid[i] = g
     return gid
 
 
-def _tied_rank_row(score: np.ndarray, rel: float, abs_: float, se: np.ndarray | None = None) -> np.ndarray:
+def bracket_top(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_params=(), cells=None,
+                per_seed: bool = False) -> pd.DataFrame | None:
+    """For a certified bound (a lower-is-better metric declaring ``upper``, e.g. ``hausdorff`` to
+    ``hausdorff_upper``): cells x variants (``per_seed``: (cell, seed) x variants) of the mean of
+    each row's bracket upper end (the row's ``upper`` where it is a number at or above the value,
+    else the value), as `cell_values` (`seed_values`) give the metric; else None."""
+    m = next((m for m in spec.get("metrics", []) if m.get("name") == metric), {})
+    col = m.get("upper")
+    if better != "lower" or not col or col not in df:
+        return None
+    d = (_cells(spec, df, axis_params) if cells is None else cells).copy()
+    lo, up = pd.to_numeric(d[metric], errors="coerce"), pd.to_numeric(d[col], errors="coerce")
+    d["_top"] = up.where(up >= lo, lo)
+    return seed_values(spec, d, "_top", axis_params, d) if per_seed else cell_values(spec, d, "_top", axis_params, d)[0]
+
+
+def _tied_rank_row(score: np.ndarray, rel: float, abs_: float, se: np.ndarray | None = None,
+                   top: np.ndarray | None = None) -> np.ndarray:
     """Ranks 1..k of one cell's scores, tied within the tolerance (`tie_groups`), average rank per tie."""
-    gid = tie_groups(score, rel, abs_, se)
+    gid = tie_groups(score, rel, abs_, se, top)
     ranks = np.empty(len(score))
     start = 0
     for g in range(int(gid.max()) + 1 if len(gid) else 0):
@@ -332,7 +353,9 @@ def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_para
     rel, abs_ = tolerance(spec, metric)
     err = _mean_se(spec, df, metric, axis_params, cells)        # a sampled metric: SE_Z x its cell means' errors
     err = None if err is None else err.reindex(index=score.index, columns=score.columns).to_numpy()
-    ranks = pd.DataFrame([_tied_rank_row(r, rel, abs_, None if err is None else err[i])
+    top = bracket_top(spec, df, metric, better, axis_params, cells)           # a certified bound's upper ends
+    top = None if top is None else top.reindex(index=score.index, columns=score.columns).to_numpy()
+    ranks = pd.DataFrame([_tied_rank_row(r, rel, abs_, None if err is None else err[i], None if top is None else top[i])
                           for i, r in enumerate(score.to_numpy())], index=score.index, columns=score.columns)
     return ranks, missing.sum().to_dict(), inv.sum().to_dict()
 
@@ -364,6 +387,8 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
             se_col = m.get("se")                  # a sampled metric: its standard error per seed
             per_seed_se = (seed_values(spec, df, se_col, axis, cells) if se_col and se_col in df else None)
             se_z = float(m.get("se_z", 3.0))
+            tops = bracket_top(spec, df, m["name"], m["better"], axis, cells)       # a certified bound's upper ends
+            seed_tops = bracket_top(spec, df, m["name"], m["better"], axis, cells, per_seed=True)
             rel, abs_ = tolerance(spec, m["name"])
             given = f"input_{m['name']}"
             inputs = (cell_values(spec, df, given, axis, cells)[0].mean(axis=1) if given in df
@@ -386,11 +411,15 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
                 order = ok.sort_values(ascending=m["better"] == "lower", kind="stable")
                 sign = -1.0 if m["better"] == "higher" else 1.0
                 S = per_seed.loc[cell] if cell in per_seed.index.get_level_values(0) else None
-                if S is not None and per_seed_se is not None and cell in per_seed_se.index.get_level_values(0):
-                    S = (S, se_z * per_seed_se.loc[cell])
-                tie = _tied_with_first(order, S, sign, rel, abs_)
+                E = (se_z * per_seed_se.loc[cell] if S is not None and per_seed_se is not None
+                     and cell in per_seed_se.index.get_level_values(0) else None)
+                T = (seed_tops.loc[cell] if S is not None and seed_tops is not None
+                     and cell in seed_tops.index.get_level_values(0) else None)
+                S = None if S is None else (S, E, T)
+                top = None if tops is None else tops.loc[cell]
+                tie = _tied_with_first(order, S, sign, rel, abs_, top)
                 rest = order[[v for v in order.index[1:] if v not in tie]]
-                second = _tied_with_first(rest, S, sign, rel, abs_) if len(rest) else []
+                second = _tied_with_first(rest, S, sign, rel, abs_, top) if len(rest) else []
                 rows.append({"task": task, "metric": m["name"], "better": m["better"], "mesh": mesh,
                              "noise_model": noise, "noise_level": level, "setting": "" if setting == "{}" else setting,
                              "best": order.index[0], "value": float(order.iloc[0]),
@@ -403,27 +432,31 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=WINNER_COLUMNS)
 
 
-def _tied_with_first(order: pd.Series, S, sign: float, rel: float, abs_: float) -> list:
+def _tied_with_first(order: pd.Series, S, sign: float, rel: float, abs_: float, top: pd.Series | None = None) -> list:
     """The variants of ``order`` (sorted, best first) tied with its first: within the tolerance
-    of its mean (`tie_groups`) or, with several seeds (``S``), not beaten on every seed."""
-    gid = tie_groups(sign * order.to_numpy(), rel, abs_)
+    of its mean (`tie_groups`; ``top``: the variants' bracket upper ends, `bracket_top`) or,
+    with several seeds (``S``), not beaten on every seed."""
+    gid = tie_groups(sign * order.to_numpy(), rel, abs_, None,
+                     None if top is None else top.reindex(order.index).to_numpy(dtype=np.float64))
     return [v for v, g in zip(order.index[1:], gid[1:])
             if g == 0 or not _beaten_on_every_seed(S, order.index[0], v, sign, rel, abs_)]
 
 
 def _beaten_on_every_seed(S, best, other, sign: float, rel: float, abs_: float) -> bool:
     """Whether ``best`` is better than ``other`` beyond the tolerance on every seed both have
-    (``S``: seeds x variants, or, for a sampled metric, that and ``SE_Z`` times its standard
-    errors, which widen the tolerance to ``SE_Z sqrt(se_a^2 + se_b^2)`` where larger); True
-    without a shared seed (the means decide)."""
-    S, E = S if isinstance(S, tuple) else (S, None)
+    (``S``: seeds x variants, or ``(values, E, T)`` with, for a sampled metric, ``E`` ``SE_Z``
+    times its standard errors, which widen the tolerance to ``SE_Z sqrt(se_a^2 + se_b^2)`` where
+    larger, and, for a certified bound, ``T`` the brackets' upper ends: ``other``'s lower end
+    must lie beyond ``best``'s upper end); True without a shared seed (the means decide)."""
+    S, E, T = S if isinstance(S, tuple) else (S, None, None)
     if S is None or best not in S or other not in S:
         return True
     a, b = S[best], S[other]
     both = a.notna() & b.notna()
     if not both.any():
         return True
-    gap = sign * (b[both] - a[both])
+    reach = a if T is None or best not in T else np.fmax(a, T[best].reindex(a.index))
+    gap = sign * (b[both] - reach[both])
     tol = np.maximum(rel * a[both].abs(), abs_)
     if E is not None and best in E and other in E:
         ea, eb = E[best].reindex(a.index)[both], E[other].reindex(a.index)[both]

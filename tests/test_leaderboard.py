@@ -561,3 +561,30 @@ def test_a_cell_where_the_metric_does_not_apply_is_no_missing_cell():
     lb = leaderboard({"spectrum": pd.DataFrame(rows)}, {"spectrum": tasks.get("spectrum").spec()})
     lb = lb[lb.metric == "eig_rel_error_mean"].set_index("method")
     assert "c.eig" not in lb.index and lb.loc["a.eig", "missing_cells"] == 0, lb
+
+
+def test_an_uncertified_hausdorff_ties_where_its_bracket_reaches_and_certified_ones_do_not():
+    """An outside review: winners and leaderboard ranked `hausdorff` by its lower end alone, so a
+    search that ran out of budget (or a loose hausdorff_eps) won on its most optimistic value.
+    Brackets that overlap now tie, as compare judges them; certified brackets apart still rank."""
+    from harness import tasks
+    spec = tasks.get("simplification").spec()
+    assert [m for m in spec["metrics"] if m["name"] == "hausdorff"][0]["upper"] == "hausdorff_upper"
+    cells = {"open": (("a.qem", 0.0070, 0.0100), ("b.qem", 0.0080, 0.00801)),      # a's bracket reaches b
+             "apart": (("a.qem", 0.0070, 0.00701), ("b.qem", 0.0080, 0.00801)),   # both certified, 14% apart
+             "noupper": (("a.qem", 0.0070, None), ("b.qem", 0.0080, None))}       # an older CSV: no bracket
+    rows = [{"mesh": mesh, "noise_model": "none", "noise_level": 0.0, "seed": k, "method": m,
+             "params": json.dumps({"target_ratio": 0.5}), "status": "ok", "hausdorff": lo, "hausdorff_upper": up,
+             "target_faces": 10, "out_faces": 10}
+            for mesh, pair in cells.items() for m, lo, up in pair for k in (0, 1)]
+    df = pd.DataFrame(rows)
+    w = L.winners({"simplification": df}, {"simplification": spec})
+    w = w[w.metric == "hausdorff"].set_index("mesh")
+    assert (w["best"] == "a.qem").all()
+    assert w.loc["open", "tied_with_best"] == "b.qem", w.loc["open"]
+    assert w.loc["apart", "tied_with_best"] == "" and w.loc["apart", "runner_up"] == "b.qem"
+    assert w.loc["noupper", "tied_with_best"] == ""
+    ranks, _, _ = L.cell_ranks(spec, df, "hausdorff", "lower", spec.get("axis_params") or ())
+    by_mesh = {c.split(L.CELL_SEP)[0]: list(r) for c, r in ranks.iterrows()}
+    assert by_mesh == {"open": [1.5, 1.5], "apart": [1.0, 2.0], "noupper": [1.0, 2.0]}, by_mesh
+    assert L.tie_groups(np.array([1.0, 1.2, 1.5]), .01, 0, None, np.array([1.3, 1.2, 1.5])).tolist() == [0, 0, 1]

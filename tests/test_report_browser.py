@@ -512,9 +512,11 @@ def test_no_critical_difference_is_drawn_where_the_friedman_test_does_not_reject
     assert any("does not reject" in t for t in s["cdLabels"]) and not any(t.startswith("CD = ") for t in s["cdLabels"])
 
 
-def test_the_report_ties_a_sampled_metric_within_three_standard_errors_as_winners_csv(tmp_path):
+def test_the_report_ties_a_sampled_metric_and_a_certified_bracket_as_winners_csv(tmp_path):
     """surface_dist_mean is sampled: two methods 1.5% apart with 0.5% standard errors tie in the
-    report's table as in winners.csv; with 0.01% standard errors they do not."""
+    report's table as in winners.csv; with 0.01% standard errors they do not. hausdorff is a
+    certified bracket: an uncertified best whose bracket reaches the other's value ties with it
+    (it won on its lower end alone, a review found); certified brackets 14% apart do not."""
     import csv
 
     import pandas as pd
@@ -529,15 +531,8 @@ def test_the_report_ties_a_sampled_metric_within_three_standard_errors_as_winner
     path = tmp_path / "simplification.csv"
     rows = list(csv.DictReader(path.open()))
     assert len(rows) == 2 and all(r["status"] == "ok" for r in rows)
-    for se, tied in ((0.005, True), (0.0001, False)):
-        for r in rows:
-            v = 0.01 if r["method"] == "libigl.qslim" else 0.01015
-            r.update(surface_dist_mean=repr(v), surface_dist_mean_se=repr(se * v))
-        _write_rows(path, rows)
-        assert main(["report", str(tmp_path)]) == 0
-        win = pd.read_csv(tmp_path / "winners.csv", keep_default_na=False)
-        win = win[win.metric == "surface_dist_mean"].iloc[0]
-        assert win.best == "libigl.qslim" and win.invalid_excluded == 0 and (win.tied_with_best == "scratch.qem") == tied, win
+
+    def best_rows(metric):
         cdp = CDP(tmp_path)
         try:
             cdp.open((tmp_path / "report.html").resolve().as_uri())
@@ -545,14 +540,32 @@ def test_the_report_ties_a_sampled_metric_within_three_standard_errors_as_winner
             while cdp.eval("document.body && document.body.dataset.ready") != "1":
                 assert time.monotonic() < deadline, "the report never set data-ready"
                 cdp.pump(0.2)
-            best = cdp.eval("""(() => {
+            return cdp.eval("""(() => {
                 const s = document.querySelector('#plots-simplification select');
-                s.value = 'surface_dist_mean'; s.dispatchEvent(new Event('change'));
+                s.value = '%s'; s.dispatchEvent(new Event('change'));
                 return [...document.querySelectorAll('#plots-simplification table.best tr')].slice(1)
-                    .map(r => r.textContent); })()""")
+                    .map(r => r.textContent); })()""" % metric)
         finally:
             cdp.close()
-        assert len(best) == 1 and "libigl.qslim" in best[0] and ("(tied: scratch.qem)" in best[0]) == tied, best
+
+    cases = [("surface_dist_mean", {"libigl.qslim": 0.01, "scratch.qem": 0.01015}, se, tied)
+             for se, tied in ((0.005, True), (0.0001, False))]
+    cases += [("hausdorff", {"libigl.qslim": (0.0070, up), "scratch.qem": (0.0080, 0.00801)}, None, tied)
+              for up, tied in ((0.0100, True), (0.00701, False))]
+    for metric, values, se, tied in cases:
+        for r in rows:
+            v = values[r["method"]]
+            if metric == "hausdorff":
+                r.update(hausdorff=repr(v[0]), hausdorff_upper=repr(v[1]))
+            else:
+                r.update(surface_dist_mean=repr(v), surface_dist_mean_se=repr(se * v))
+        _write_rows(path, rows)
+        assert main(["report", str(tmp_path)]) == 0
+        win = pd.read_csv(tmp_path / "winners.csv", keep_default_na=False)
+        win = win[win.metric == metric].iloc[0]
+        assert win.best == "libigl.qslim" and win.invalid_excluded == 0 and (win.tied_with_best == "scratch.qem") == tied, win
+        best = best_rows(metric)
+        assert len(best) == 1 and "libigl.qslim" in best[0] and ("(tied: scratch.qem)" in best[0]) == tied, (metric, best)
         assert re.search(r"s \[[0-9.]+ [µm]?s–[0-9.]+ [µm]?s\]", best[0]), best       # times carry their spread
 
 

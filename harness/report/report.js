@@ -286,7 +286,8 @@
       .slice().sort(function (a, b) { return a[0] - b[0] || a[1] - b[1]; });
     var faster = function (q, p) { return q[0] < p[0] && !timeTiedWith(rs, q[4], p[4]); };
     var better = function (q, p) {
-      return q[1] < p[1] && !ties(p[1], q[1], tol) && beatenOnEverySeed(rs, q[4], p[4], key, tol, true);
+      return q[1] < p[1] && !ties(p[1], q[1], tol, bracketTop(rs, q[4], key, tol, true)) &&
+        beatenOnEverySeed(rs, q[4], p[4], key, tol, true);
     };
     return s.filter(function (p) {
       return !s.some(function (q) {
@@ -297,19 +298,37 @@
   // the compare tolerance the task declares for a metric (as the leaderboard and winners.csv use it):
   // a value within max(rel * |best|, abs) of the best ties with it
   // ([2], [3]: a sampled metric's standard-error column and how many combined standard errors tie on a seed)
+  // ([4]: a certified bound's bracket upper-end column, e.g. hausdorff_upper for hausdorff)
   function tolOf(spec, key) {
     var m = ((spec || {}).metrics || []).filter(function (x) { return x.name === key; })[0];
     return [m && isNum(m.rel) ? m.rel : 0.01, m && isNum(m.abs) ? m.abs : 0, (m && m.se) || '',
-      m && isNum(m.se_z) ? m.se_z : 3];
+      m && isNum(m.se_z) ? m.se_z : 3, (m && m.better === 'lower' && m.upper) || ''];
   }
-  function ties(a, best, tol) { return Math.abs(a - best) <= Math.max(tol[0] * Math.abs(best), tol[1]); }
+  // a ties with best; with reach (best's bracket upper end, `bracketTop`), when a lies within the
+  // tolerance of it: brackets that overlap tie, as compare and winners.csv judge them
+  function ties(a, best, tol, reach) {
+    var t = Math.max(tol[0] * Math.abs(best), tol[1]);
+    return Math.abs(a - best) <= t || (isNum(reach) && a - reach <= t);
+  }
+  // a row's bracket upper end: its tol[4] column where that is a number at or above the value, else the value
+  function rowTop(r, key, tol) {
+    var u = tol[4] ? r[tol[4]] : null;
+    return isNum(u) && u >= r[key] ? u : r[key];
+  }
+  // the mean upper end of variant v's brackets over rows (a lower-is-better certified bound), else undefined
+  function bracketTop(rows, v, key, tol, lower) {
+    if (!lower || !tol[4]) return undefined;
+    var xs = rows.filter(function (r) { return r._variant === v && isNum(r[key]); }).map(function (r) { return rowTop(r, key, tol); });
+    return xs.length ? mean(xs) : undefined;
+  }
   // with several seeds, a variant ties with the best unless the best is better beyond the tolerance on
   // every seed both have (as winners.csv); rows: the cell's rows, one per variant and seed
   // (a sampled metric: the tolerance on a seed is at least se_z times the two values' combined standard error)
+  // (a certified bound: v's lower end must lie beyond best's bracket upper end on the seed)
   function beatenOnEverySeed(rows, best, v, key, tol, lower) {
     var a = new Map(), b = new Map(), n = 0, all = true, se = tol[2];
-    var add = function (m, s, x, e) {                  // mean per seed, of the value and of its standard error
-      var c = m.get(s) || [0, 0, 0, 0]; c[0] += x; c[1]++;
+    var add = function (m, s, x, e, up) {              // mean per seed, of the value, its standard error and upper end
+      var c = m.get(s) || [0, 0, 0, 0, 0]; c[0] += x; c[1]++; c[4] += up;
       if (isNum(e)) { c[2] += e; c[3]++; }
       m.set(s, c);
     };
@@ -317,13 +336,14 @@
       if (!isNum(r[key])) return;
       var s = r.seed === undefined || r.seed === null ? '' : String(r.seed);
       var e = se ? r[se] : null;
-      if (r._variant === best) add(a, s, r[key], e); else if (r._variant === v) add(b, s, r[key], e);
+      if (r._variant === best) add(a, s, r[key], e, rowTop(r, key, tol));
+      else if (r._variant === v) add(b, s, r[key], e, r[key]);
     });
     a.forEach(function (ca, s) {
       if (!b.has(s)) return;
       n++;
       var va = ca[0] / ca[1], cb = b.get(s), vb = cb[0] / cb[1];
-      var gap = lower ? vb - va : va - vb;
+      var gap = lower ? vb - (tol[4] ? ca[4] / ca[1] : va) : va - vb;
       var t = Math.max(tol[0] * Math.abs(va), tol[1]);
       if (se && ca[3] && cb[3]) t = Math.max(t, tol[3] * Math.hypot(ca[2] / ca[3], cb[2] / cb[3]));
       if (!(gap > t)) all = false;
@@ -385,7 +405,7 @@
   // the names of items tied with best: within the tolerance of its mean, or not beaten on every seed
   function tiedWith(items, best, valueOf, nameOf, rows, key, tol, lower) {
     return items.filter(function (x) {
-      return x !== best && (ties(valueOf(x), valueOf(best), tol) ||
+      return x !== best && (ties(valueOf(x), valueOf(best), tol, bracketTop(rows, nameOf(best), key, tol, lower)) ||
         !beatenOnEverySeed(rows, nameOf(best), nameOf(x), key, tol, lower));
     }).map(nameOf);
   }
