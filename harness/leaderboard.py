@@ -297,6 +297,13 @@ def tie_groups(score: np.ndarray, rel: float, abs_: float, se: np.ndarray | None
     return gid
 
 
+def row_tops(df: pd.DataFrame, metric: str, upper: str) -> pd.Series:
+    """Each row's bracket upper end: its ``upper`` column where that is a number at or above the
+    value (the lower end), else the value."""
+    lo, up = pd.to_numeric(df[metric], errors="coerce"), pd.to_numeric(df[upper], errors="coerce")
+    return up.where(up >= lo, lo)
+
+
 def bracket_top(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_params=(), cells=None,
                 per_seed: bool = False) -> pd.DataFrame | None:
     """For a certified bound (a lower-is-better metric declaring ``upper``, e.g. ``hausdorff`` to
@@ -308,8 +315,7 @@ def bracket_top(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_par
     if better != "lower" or not col or col not in df:
         return None
     d = (_cells(spec, df, axis_params) if cells is None else cells).copy()
-    lo, up = pd.to_numeric(d[metric], errors="coerce"), pd.to_numeric(d[col], errors="coerce")
-    d["_top"] = up.where(up >= lo, lo)
+    d["_top"] = row_tops(d, metric, col)
     return seed_values(spec, d, "_top", axis_params, d) if per_seed else cell_values(spec, d, "_top", axis_params, d)[0]
 
 

@@ -17,8 +17,9 @@ with a failed or invalid case (diverged, ended worse than its noisy input, non-m
 topology-changing output) scores infinitely bad. The best score wins (ties: the earlier
 candidate, the defaults first), but it replaces the setting as configured only when better than
 it beyond the metric's compare tolerance (``max(rel * |default|, abs)``, and for a sampled metric
-at least ``SE_Z`` times the two means' combined standard error, `mean_se`): a difference the
-rankings call a tie chooses nothing. The tuned setting then runs on the test meshes as extra cases;
+at least ``SE_Z`` times the two means' combined standard error, `mean_se`; for a certified
+bound, ``hausdorff``, measured from the upper end of the candidate's bracket: brackets that
+overlap are a tie): a difference the rankings call a tie chooses nothing. The tuned setting then runs on the test meshes as extra cases;
 ``run.json`` records per method the chosen parameters, the training scores of the defaults and of
 the chosen setting, the number of candidates and the tuned case ids, and the report shows default
 vs tuned side by side. Training rows are kept in ``tune/`` inside the run folder.
@@ -221,7 +222,7 @@ def mean_se(rows, se: str) -> float:
 def choose(tune: TuneSpec, frames: dict) -> dict:
     """Per method: the chosen overrides and the training scores (see the module docstring)."""
     from . import tasks
-    from .leaderboard import validity
+    from .leaderboard import row_tops, validity
     out = {}
     for m in tune.params:
         task = tune.configured[m][0]
@@ -229,11 +230,13 @@ def choose(tune: TuneSpec, frames: dict) -> dict:
         mt = tasks.get(task).metric(tune.metric)
         better = mt.better
         sign = -1.0 if better == "higher" else 1.0
-        scores, errs = [], []
+        bracket = better == "lower" and mt.upper and df is not None and mt.upper in df   # a certified bound
+        scores, errs, tops = [], [], []
         for cand in tune.candidates(m):
             if df is None:
                 scores.append(math.inf)
                 errs.append(0.0)
+                tops.append(math.inf)
                 continue
             rows = df[df["method"] == m]
             ps = [json.loads(p) for p in rows["params"]]
@@ -244,10 +247,12 @@ def choose(tune: TuneSpec, frames: dict) -> dict:
             val = sel[tune.metric].astype(float).mean() if not sel.empty else math.nan
             scores.append(math.inf if bad or not math.isfinite(val) else sign * val)
             errs.append(mean_se(sel, mt.se))
+            tops.append(float(row_tops(sel, tune.metric, mt.upper).mean()) if bracket and not sel.empty else scores[-1])
         best = int(np.argmin(scores)) if scores else 0
         if best and math.isfinite(scores[0]):     # as configured stays unless beaten beyond the tolerance
             tol = max(mt.rel * abs(scores[0]), mt.abs, SE_Z * math.hypot(errs[0], errs[best]))
-            if not scores[0] - scores[best] > tol:
+            reach = max(scores[best], tops[best]) if math.isfinite(tops[best]) else scores[best]
+            if not scores[0] - reach > tol:       # a certified bound: beaten by its bracket's upper end
                 best = 0
         cands = tune.candidates(m)
         out[m] = {"task": task, "chosen": cands[best], "candidates": len(cands),

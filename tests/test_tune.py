@@ -311,3 +311,32 @@ def test_a_sampled_metric_chooses_and_pairs_only_beyond_its_standard_errors():
                               for c, v in zip(cands, [1.0, 0.98])])
         return _paired(every, pd.Series([False, True]), "surface_dist_mean", ch, spec)
     assert paired(0.005) == "0 / 1 / 0 of 1" and paired(0.001) == "1 / 0 / 0 of 1"
+
+
+def test_a_certified_bound_chooses_and_pairs_only_where_the_brackets_lie_apart():
+    """An outside review: rankings used `hausdorff`'s lower end alone. The tuning choice and the
+    tuned/as-configured table now measure a candidate from its bracket's upper end (`hausdorff_upper`),
+    as compare and the winners do: overlapping brackets choose nothing and pair as ties."""
+    import methods
+    from harness import tasks
+    from harness.report.html import _paired
+    from harness.tune import choose
+    cfg = load_config({"name": "t", "meshes": ["bunny"], "noise": [{"model": "none"}],
+                       "tasks": {"simplification": {"methods": ["scratch.qem"], "params": {"target_ratio": [0.5]}}},
+                       "tune": {"metric": "hausdorff", "train": ["spot"],
+                                "params": {"scratch.qem": {"boundary_weight": [10.0]}}}})
+    tune = cfg.tune
+    cands = tune.candidates("scratch.qem")
+
+    def rows(lo, up):
+        return [{"mesh": "bunny", "noise_model": "none", "noise_level": 0, "seed": 0, "method": "scratch.qem",
+                 "params": json.dumps(methods.get("scratch.qem").with_defaults(c)), "status": "ok",
+                 "hausdorff": a, "hausdorff_upper": b} for c, a, b in zip(cands, lo, up)]
+    overlap = rows([1.0, 0.9], [1.001, 1.2])          # the candidate's bracket [0.9, 1.2] reaches the default's
+    apart = rows([1.0, 0.9], [1.001, 0.901])
+    assert choose(tune, {"simplification": pd.DataFrame(overlap)})["scratch.qem"]["chosen"] == {}
+    assert choose(tune, {"simplification": pd.DataFrame(apart)})["scratch.qem"]["chosen"] == cands[1]
+    spec = tasks.get("simplification").spec()
+    ch = {"better": "lower", "chosen": cands[1]}
+    assert _paired(pd.DataFrame(overlap), pd.Series([False, True]), "hausdorff", ch, spec) == "0 / 1 / 0 of 1"
+    assert _paired(pd.DataFrame(apart), pd.Series([False, True]), "hausdorff", ch, spec) == "1 / 0 / 0 of 1"

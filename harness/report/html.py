@@ -147,20 +147,15 @@ def _test_mean(rows, metric: str) -> str:
 
 def _paired(every, is_tuned, metric: str, ch: dict, spec: dict) -> str:
     """Tuned against as configured case by case: pairs of ok rows with the same mesh, noise,
-    level, seed and other parameters; how many the tuned setting is better, tied, worse in beyond
-    the metric's compare tolerance ``max(rel * |as configured|, abs)``, and for a sampled metric
-    beyond ``se_z`` times the pair's combined standard error, of how many pairs."""
+    level, seed and other parameters; in how many the tuned setting is better, tied, worse as
+    `harness.compare.judge` tells the pair apart (beyond the metric's compare tolerance
+    ``max(rel * |as configured|, abs)``, for a sampled metric beyond ``se_z`` times the pair's
+    combined standard error, for a certified bracket only where the two brackets lie apart), of
+    how many pairs."""
     import pandas as pd
 
-    from ..leaderboard import tolerance
-    rel, abs_ = tolerance(spec, metric)
-    m_spec = next((m for m in spec.get("metrics", []) if m.get("name") == metric), {})
-    se_col, se_z = m_spec.get("se") or "", float(m_spec.get("se_z") or 0.0)
-
-    def se(r) -> float:
-        v = pd.to_numeric(r.get(se_col), errors="coerce") if se_col else math.nan
-        return 0.0 if v is None or math.isnan(v) else float(v)
-    sign = -1.0 if ch.get("better") == "higher" else 1.0
+    from ..compare import judge, rules_from_specs
+    rule = rules_from_specs({"t": spec}).get("t", {}).get(metric)
     tuned_keys = set(ch.get("chosen") or {})
 
     def key(r):
@@ -171,15 +166,15 @@ def _paired(every, is_tuned, metric: str, ch: dict, spec: dict) -> str:
         return (str(r.get("mesh")), str(r.get("noise_model")), str(r.get("noise_level")), str(r.get("seed")),
                 json.dumps(p, sort_keys=True))
     ok = every[(every["status"] == "ok") & pd.to_numeric(every[metric], errors="coerce").notna()]
-    base = {key(r): (float(r[metric]), se(r)) for _, r in ok[~is_tuned[ok.index]].iterrows()}
+    base = {key(r): r.to_dict() for _, r in ok[~is_tuned[ok.index]].iterrows()}
     counts = [0, 0, 0]
     for _, r in ok[is_tuned[ok.index]].iterrows():
-        a, se_a = base.get(key(r), (None, 0.0))
+        a = base.get(key(r))
         if a is None:
             continue
-        gap = sign * (a - float(r[metric]))              # > 0: tuned better
-        tol = max(rel * abs(a), abs_, se_z * math.hypot(se_a, se(r)))
-        counts[0 if gap > tol else 2 if -gap > tol else 1] += 1
+        b = r.to_dict()
+        verdict = judge(metric, float(a[metric]), float(b[metric]), a, b, rule=rule)
+        counts[0 if verdict == "improvement" else 2 if verdict == "regression" else 1] += 1
     n = sum(counts)
     total = int(is_tuned.sum())
     return f"{counts[0]} / {counts[1]} / {counts[2]} of {n}" + ("" if n == total else f" ({total} tuned cases)")
