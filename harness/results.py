@@ -699,7 +699,8 @@ def with_not_run(frames: dict, plan: list | None) -> dict:
         level = r["noise_level"] if r["noise_level"] is not None or r["noise_model"] != "given" \
             else pair_level.get(r["mesh"])
         extra.setdefault(r["task"], []).append({**r, "noise_level": level, "status": NOT_RUN,
-                                                "error": "not run: the run stopped before this case"})
+                                                "error": "not run: its task's CSV has no row for this case (the run stopped "
+                                                         "before it, or the row was removed)"})
     out = dict(frames)
     for task, rows in extra.items():
         add = pd.DataFrame(rows)
