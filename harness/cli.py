@@ -431,7 +431,10 @@ def main(argv=None) -> int:
         sys.stdout.flush()               # a pipe is block-buffered: its break shows here, not at exit
         sys.stderr.flush()
         sys.stdout, sys.stderr = streams
-        if saved is not None:                   # an embedding process gets its handlers back
+        if saved is not None and argv is None:  # the command ends with its code: a late signal changes nothing
+            signal.signal(signal.SIGTERM, signal.SIG_IGN)
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+        elif saved is not None:                 # an embedding process gets its handlers back
             signal.signal(signal.SIGTERM, saved[0])
             signal.signal(signal.SIGINT, saved[1])
         errors._INTERRUPTED = False
