@@ -46,9 +46,10 @@ def import_problems(modules) -> dict:
     this process (one after the other, each in the state the earlier ones left), raised, called
     ``sys.exit`` or ended the process (``os._exit``, a signal, a crash in compiled code): such a
     module is never imported here, so it cannot end the caller with a misleading exit status
-    (each finding is kept in `FAILED`, which a forked case reads). Modules already imported here, and every module where ``fork`` is missing, are not tried.
-    The child writes to /dev/null, runs in a process group of its own that is killed once it is
-    done (with whatever the imports started) and dies with this process."""
+    (each finding is kept in `FAILED`, which a forked case reads). Modules already imported
+    here, and every module where ``fork`` is missing, are not tried. The child writes to
+    /dev/null, runs in a process group of its own that is killed once it is done (with whatever
+    the imports started) and dies with this process."""
     known = {m: FAILED[m] for m in modules if m in FAILED}
     todo = [m for m in dict.fromkeys(modules) if m not in sys.modules and m not in FAILED]
     if not todo or not hasattr(os, "fork"):
@@ -104,34 +105,37 @@ def _try_in_child(todo: list, die_with_parent, short) -> dict:
         finally:
             os._exit(0)
     os.close(w)
-    buf, status = b"", None
+    buf, status, eof = b"", None, False
     try:
-        while status is None:
-            if select.select([r], [], [], 0.1)[0]:
+        while True:                               # until it ends (left a zombie: its group id stays its own)
+            if not eof and select.select([r], [], [], 0.1)[0]:
                 chunk = os.read(r, 65536)
                 buf += chunk
                 if chunk:
                     continue
-            done, st = os.waitpid(pid, os.WNOHANG)
-            if done:
-                status = st
+                eof = True                        # every writer gone: it is ending, wait for it
+            if os.waitid(os.P_PID, pid, os.WEXITED | os.WNOWAIT | (0 if eof else os.WNOHANG)) is not None:
+                break
         while select.select([r], [], [], 0)[0] and (chunk := os.read(r, 65536)):
             buf += chunk                          # what it wrote before it ended
     finally:
         os.close(r)
         try:
-            os.killpg(pid, signal.SIGKILL)       # what its imports started
+            os.killpg(pid, signal.SIGKILL)       # what its imports started (and it, when interrupted)
         except (ProcessLookupError, PermissionError):
             pass
-        if status is None:
-            try:
-                os.waitpid(pid, 0)
-            except ChildProcessError:
-                pass
+        status = os.waitpid(pid, 0)[1]
     tried: dict = {}
-    for line in buf.decode(errors="replace").splitlines():
-        rec = json.loads(line)
-        tried[rec[0]] = rec[1] if len(rec) > 1 else _ended(status)
+    for line in buf.decode(errors="replace").split("\n"):
+        try:
+            rec = json.loads(line)
+            mod, why = rec[0], rec[1] if len(rec) > 1 else _ended(status)
+        except (ValueError, TypeError, IndexError, KeyError):
+            continue                              # not one of its records (empty, or bytes of the plugin's own)
+        if mod in todo:
+            tried[mod] = why
+    if not tried:                                 # it ended before its first import: no endless retry
+        tried[todo[0]] = f"the process trying it ended before importing it ({_ended(status)})"
     return tried
 
 
