@@ -19,10 +19,10 @@ candidate, the defaults first), but it replaces the setting as configured only w
 it beyond the metric's compare tolerance (``max(rel * |default|, abs)``, and for a sampled metric
 at least ``SE_Z`` times the two means' combined standard error, `mean_se`; for a certified
 bound, ``hausdorff``, measured from the upper end of the candidate's bracket: brackets that
-overlap are a tie): a difference the rankings call a tie chooses nothing. The tuned setting then runs on the test meshes as extra cases;
-``run.json`` records per method the chosen parameters, the training scores of the defaults and of
-the chosen setting, the number of candidates and the tuned case ids, and the report shows default
-vs tuned side by side. Training rows are kept in ``tune/`` inside the run folder.
+overlap are a tie): a difference the rankings call a tie chooses nothing. The tuned setting
+then runs on the test meshes as extra cases; ``run.json`` records per method the chosen
+parameters, the training scores of the defaults and of the chosen setting, the number of
+candidates and the tuned case ids, and the report shows default vs tuned side by side. Training rows are kept in ``tune/`` inside the run folder.
 """
 from __future__ import annotations
 

@@ -13,10 +13,7 @@ task declarations recorded in ``run.json`` (or, for older runs, `harness.tasks`)
 """
 from __future__ import annotations
 
-import html
 import json
-import math
-import re
 from collections import Counter, defaultdict
 from datetime import datetime, timezone
 from pathlib import Path
