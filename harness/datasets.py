@@ -189,7 +189,7 @@ def load(spec) -> Source:
     clean = Mesh(m.V.copy(), m.F.copy(), m.name, None if m.vertex_map is None else m.vertex_map.copy(),
                  list(m.repairs))
     return replace(src, clean=clean, noisy_V=None if src.noisy_V is None else src.noisy_V.copy(),
-                               shape=None if src.shape is None else dict(src.shape))
+                   shape=None if src.shape is None else dict(src.shape))
 
 
 def cached(spec) -> Source:
