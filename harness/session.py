@@ -679,7 +679,8 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         session = {"id": session_id, "started": session_started, "finished": now_iso(), "wall_s": wall,
                    "command": " ".join(sys.argv), "status": meta["status"], "resumed_ok_cases": len(done),
                    "executor": meta.get("executor"), "scheduler": meta.get("scheduler"), "workers": meta.get("workers"),
-                   "threads_per_case": threads, "timeout_s": timeout, "status_counts": counts, "load_average": [load0, meta["load_average"][-1]], **own}
+                   "threads_per_case": threads, "timeout_s": timeout, "status_counts": counts,
+                   "load_average": [load0, meta["load_average"][-1]], **own}
         if overhead:
             fixed = [f for f, _, _ in overhead]
             spent = sum(m for _, m, _ in overhead)
