@@ -285,7 +285,7 @@ def _validate(raw: dict, label: str, base_dir: Path, found=()) -> Config:
     for d in (str(base_dir), str(Path.cwd())):   # a plugin package beside the config, or here
         if d not in sys.path:
             sys.path.append(d)
-    from .plugins import import_problems
+    from .plugins import import_failure, import_problems
     ended = import_problems(plugins if not early_problems else [])   # tried in a child first
     for i, mod in enumerate(plugins if not early_problems else []):
         if mod in ended:
@@ -296,9 +296,7 @@ def _validate(raw: dict, label: str, base_dir: Path, found=()) -> Config:
             methods.load_plugins([mod])
         except (Exception, SystemExit) as exc:       # any failure of a user's module is a config problem
             plugin_failed = True
-            why = (f"it called sys.exit({yaml_input.short(exc.code)}) on import" if isinstance(exc, SystemExit)
-                   else f"{type(exc).__name__}: {exc}")
-            P.append(f"plugins[{i}]: cannot import {yaml_input.short(mod)} ({why})")
+            P.append(f"plugins[{i}]: cannot import {yaml_input.short(mod)} ({import_failure(exc)})")
     methods.load_plugins([])
 
     task_noise: dict = {}

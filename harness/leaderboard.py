@@ -298,10 +298,10 @@ def tie_groups(score: np.ndarray, rel: float, abs_: float, se: np.ndarray | None
 
 
 def row_tops(df: pd.DataFrame, metric: str, upper: str) -> pd.Series:
-    """Each row's bracket upper end: its ``upper`` column where that is a number at or above the
-    value (the lower end), else the value."""
+    """Each row's bracket upper end: its ``upper`` column where that is a finite number at or
+    above the value (the lower end), else the value (as `harness.compare` reads a row's bracket)."""
     lo, up = pd.to_numeric(df[metric], errors="coerce"), pd.to_numeric(df[upper], errors="coerce")
-    return up.where(up >= lo, lo)
+    return up.where((up >= lo) & np.isfinite(up), lo)
 
 
 def bracket_top(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_params=(), cells=None,

@@ -226,11 +226,15 @@ def _read_off(text: str):
     if nv < 0 or nf < 0:
         raise InvalidMeshError(f"OFF header gives {nv} vertices and {nf} faces: a count cannot be negative")
     if len(tokens_lines) != start + nv + nf and tokens_lines[0][0] == "OFF":
-        body = [x for t in tokens_lines[start:] for x in t]
-        for skip in (3, 2):                  # data on the counts line, after an edge count or without one
-            stream = _off_stream(head[skip:] + body if len(head) > skip else body, nv, nf)
-            if stream is not None:           # a plain OFF laid out freely: whitespace separates tokens
-                return stream
+        body = [x for t in tokens_lines[start:] for x in t]     # a plain OFF laid out freely
+        fits = [r for r in (_off_stream(head[3:] + body, nv, nf),   # data on the counts line after an edge count
+                            _off_stream(head[2:] + body, nv, nf) if len(head) > 2 else None)   # or without one
+                if r is not None]
+        if len(fits) == 2:
+            raise InvalidMeshError("ambiguous OFF: data follows the counts on their line, and it reads whole both "
+                                   "with and without an edge count; put the data on lines of their own")
+        if fits:
+            return fits[0]
     if len(tokens_lines) < start + nv + nf:
         raise InvalidMeshError(f"truncated OFF: header promises {nv} vertices and {nf} faces, "
                                f"file has {len(tokens_lines) - start} data lines")
@@ -389,21 +393,20 @@ def _read_stl(data: bytes):
     and hold three ``vertex`` lines per ``facet``, so a truncated file is an error, not a
     smaller mesh. Returns one vertex per corner; the caller welds them.
     """
-    if len(data) >= 84:
-        n = int(np.frombuffer(data, "<u4", 1, 80)[0])
-        if len(data) == 84 + 50 * n:
-            rec = np.dtype([("normal", "<f4", 3), ("v", "<f4", (3, 3)), ("attr", "<u2")])
-            tri = np.frombuffer(data, rec, n, 84)["v"].astype(np.float64)
-            return tri.reshape(-1, 3), np.arange(3 * n, dtype=np.int64).reshape(-1, 3)
+    n = int(np.frombuffer(data, "<u4", 1, 80)[0]) if len(data) >= 84 else -1
+    if n >= 0 and len(data) == 84 + 50 * n:
+        rec = np.dtype([("normal", "<f4", 3), ("v", "<f4", (3, 3)), ("attr", "<u2")])
+        tri = np.frombuffer(data, rec, n, 84)["v"].astype(np.float64)
+        return tri.reshape(-1, 3), np.arange(3 * n, dtype=np.int64).reshape(-1, 3)
     text = (data[3:] if data.startswith(b"\xef\xbb\xbf") else data).decode("ascii", "replace")   # a BOM: ASCII only
+    past = (f"binary STL of {n} triangle(s) with {len(data) - 84 - 50 * n} byte(s) past them"
+            if n >= 0 and len(data) > 84 + 50 * n else "")
     if not text.lstrip().startswith("solid"):
-        raise InvalidMeshError("unreadable STL: not ASCII, and its size does not match a binary STL's "
-                               "triangle count (truncated?)")
+        raise InvalidMeshError(past or "unreadable STL: not ASCII, and its size does not match a binary STL's "
+                                       "triangle count (truncated?)")
     if "endsolid" not in text:
-        n = int(np.frombuffer(data, "<u4", 1, 80)[0]) if len(data) >= 84 else -1
-        if 84 + 50 * n < len(data) and "facet" not in text:
-            raise InvalidMeshError(f"binary STL of {n} triangle(s) with {len(data) - 84 - 50 * n} byte(s) past "
-                                   "them (its header begins with 'solid', as an ASCII STL's)")
+        if past and not re.search(r"^\s*facet\b", text, re.M):
+            raise InvalidMeshError(past + " (its header begins with 'solid', as an ASCII STL's)")
         raise InvalidMeshError("truncated ASCII STL (no 'endsolid')")
     lines = [ln.split() for ln in text.splitlines()]
     verts = [t[1:4] for t in lines if t and t[0] == "vertex"]

@@ -38,85 +38,109 @@ def import_methods():
     return methods
 
 
-FAILED: dict = {}     # module -> why, for every module `import_problems` found failing in this process
+ENDED: dict = {}      # module -> why, for a module whose import ended the trial process (latest trial here)
+PIPE_LOST = 86        # the trial process's exit code when its record pipe went away (closed by a plugin)
+
+
+def import_failure(exc: BaseException) -> str:
+    """How an import failed, in a config message: ``it called sys.exit(3) on import`` or
+    ``ValueError: ...`` (its text cut at 500 characters; a text that cannot be made is said)."""
+    from .yaml_input import short
+    if isinstance(exc, SystemExit):
+        return f"it called sys.exit({short(exc.code)}) on import"
+    try:
+        text = str(exc)[:500]
+    except Exception:  # noqa: BLE001 - a user's exception whose text fails
+        text = "(its message could not be made)"
+    return f"{type(exc).__name__}: {text}"
 
 
 def import_problems(modules) -> dict:
-    """``{module: why}`` for each of ``modules`` whose import, tried first in a forked child of
-    this process (one after the other, each in the state the earlier ones left), raised, called
-    ``sys.exit`` or ended the process (``os._exit``, a signal, a crash in compiled code): such a
-    module is never imported here, so it cannot end the caller with a misleading exit status
-    (each finding is kept in `FAILED`, which a forked case reads). Modules already imported
-    here, and every module where ``fork`` is missing, are not tried. The child writes to
-    /dev/null, runs in a process group of its own that is killed once it is done (with whatever
-    the imports started) and dies with this process."""
-    known = {m: FAILED[m] for m in modules if m in FAILED}
-    todo = [m for m in dict.fromkeys(modules) if m not in sys.modules and m not in FAILED]
-    if not todo or not hasattr(os, "fork"):
-        return known
-    from .executors.parent import die_with_parent
-    from .yaml_input import short
-    import_methods().load_plugins([])            # the registry the imports add to, inherited
+    """``{module: why}`` for each of ``modules`` whose import, tried first in another process
+    (one after the other, each in the state the earlier ones left), raised, called ``sys.exit``
+    or ended that process (``os._exit``, a signal, a crash in compiled code): such a module is not
+    imported here, so it cannot end the caller with a misleading exit status. The trial process
+    is a fork of this one when no other Python thread runs here (a fork copies no import lock
+    another thread holds), else a fresh interpreter with this ``sys.path``
+    (`harness.executors.procs.python_child`); it writes to /dev/null, runs in a process group of
+    its own that is killed once it is done (with whatever the imports started) and dies with this
+    process. Modules already imported here are not tried; each trial is new (a module fixed since
+    is tried again). `ENDED` keeps the modules whose import ended the trial process, for a case
+    forked from here."""
+    import threading
+    todo = [m for m in dict.fromkeys(modules) if m not in sys.modules]
+    for m in todo:
+        ENDED.pop(m, None)
+    if not todo:
+        return {}
+    forking = hasattr(os, "fork") and threading.active_count() == 1
+    if forking:
+        import_methods().load_plugins([])        # the registry the imports add to, inherited
     found: dict = {}
     while todo:
-        tried = _try_in_child(todo, die_with_parent, short)
-        for mod, why in tried.items():
+        tried = _trial(todo, forking)
+        for mod, (why, ended) in tried.items():
             if why is not None:
                 found[mod] = why
+            if ended:
+                ENDED[mod] = why
         todo = todo[len(tried):]
-    FAILED.update(found)
-    return {**known, **found}
+    return found
 
 
-def _try_in_child(todo: list, die_with_parent, short) -> dict:
-    """``{module: why or None}`` for the modules of ``todo`` tried in one child, in order, up to
-    and including the one that ended it."""
-    import importlib
+def _trial(todo: list, forking: bool) -> dict:
+    """``{module: (why or None, ended)}`` for the modules of ``todo`` tried in one process, in
+    order, up to and including the one that ended it (``ended``); a module after a lost pipe
+    (`PIPE_LOST`) counts as tried without a finding."""
     import json
     import select
     import signal
-    parent = os.getpid()
+    import subprocess
     r, w = os.pipe()
     sys.stdout.flush()
     sys.stderr.flush()
-    pid = os.fork()
-    if pid == 0:                                  # the child: never returns
-        try:
+    if forking:
+        parent = os.getpid()
+        pid = os.fork()
+        if pid == 0:                              # the child: never returns
+            try:
+                os.close(r)
+                os.setpgid(0, 0)
+                from .executors.procs import die_with_parent
+                die_with_parent()
+                if os.getppid() != parent:
+                    os._exit(0)
+                _trial_main(w, todo)
+            finally:
+                os._exit(PIPE_LOST)
+    else:
+        from .executors.procs import python_child
+        argv, env = python_child("harness.plugins", str(w), *todo)
+        try:                                      # a session of its own: its group is its pid
+            pid = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                   stderr=subprocess.DEVNULL, pass_fds=(w,), env=env, start_new_session=True).pid
+        except BaseException:
             os.close(r)
-            os.setpgid(0, 0)
-            die_with_parent()
-            if os.getppid() != parent:
-                os._exit(0)
-            null = os.open(os.devnull, os.O_WRONLY)
-            os.dup2(null, 1)
-            os.dup2(null, 2)
-            for mod in todo:
-                os.write(w, (json.dumps([mod]) + "\n").encode())
-                try:
-                    importlib.import_module(mod)
-                    why = None
-                except KeyboardInterrupt:      # an interrupt, not the module's failure: the import here says so
-                    why = None
-                except SystemExit as exc:
-                    why = f"it called sys.exit({short(exc.code)}) on import"
-                except BaseException as exc:  # noqa: BLE001 - a user's module: its failure is the answer
-                    why = f"{type(exc).__name__}: {str(exc)[:500]}"
-                os.write(w, (json.dumps([mod, why]) + "\n").encode())
-        finally:
-            os._exit(0)
+            os.close(w)
+            raise
     os.close(w)
     buf, status, eof = b"", None, False
+    poll = select.poll()
+    poll.register(r, select.POLLIN | select.POLLHUP | select.POLLERR)
     try:
-        while True:                               # until it ends (left a zombie: its group id stays its own)
-            if not eof and select.select([r], [], [], 0.1)[0]:
+        while True:                               # until it ends (a zombie: its group id stays its own)
+            if not eof and poll.poll(100):
                 chunk = os.read(r, 65536)
                 buf += chunk
                 if chunk:
                     continue
                 eof = True                        # every writer gone: it is ending, wait for it
-            if os.waitid(os.P_PID, pid, os.WEXITED | os.WNOWAIT | (0 if eof else os.WNOHANG)) is not None:
+            try:
+                if os.waitid(os.P_PID, pid, os.WEXITED | os.WNOWAIT | (0 if eof else os.WNOHANG)) is not None:
+                    break
+            except ChildProcessError:             # reaped already (this process ignores SIGCHLD)
                 break
-        while select.select([r], [], [], 0)[0] and (chunk := os.read(r, 65536)):
+        while poll.poll(0) and (chunk := os.read(r, 65536)):
             buf += chunk                          # what it wrote before it ended
     finally:
         os.close(r)
@@ -124,30 +148,67 @@ def _try_in_child(todo: list, die_with_parent, short) -> dict:
             os.killpg(pid, signal.SIGKILL)       # what its imports started (and it, when interrupted)
         except (ProcessLookupError, PermissionError):
             pass
-        status = os.waitpid(pid, 0)[1]
+        try:
+            status = os.waitpid(pid, 0)[1]
+        except ChildProcessError:
+            status = None
+    lost = status is not None and os.WIFEXITED(status) and os.WEXITSTATUS(status) == PIPE_LOST
     tried: dict = {}
     for line in buf.decode(errors="replace").split("\n"):
         try:
             rec = json.loads(line)
-            mod, why = rec[0], rec[1] if len(rec) > 1 else _ended(status)
+            mod = rec[0]
+            got = (rec[1], False) if len(rec) > 1 else (None, False) if lost else (_ended(status), True)
         except (ValueError, TypeError, IndexError, KeyError):
             continue                              # not one of its records (empty, or bytes of the plugin's own)
         if mod in todo:
-            tried[mod] = why
+            tried[mod] = got
+    if lost:                                      # its pipe was closed under it: the rest untried, no finding
+        tried.update({m: (None, False) for m in todo[len(tried):]})
     if not tried:                                 # it ended before its first import: no endless retry
-        tried[todo[0]] = f"the process trying it ended before importing it ({_ended(status)})"
+        tried[todo[0]] = (f"the process trying it ended before importing it ({_ended(status)})", True)
     return tried
 
 
-def _ended(status) -> str:
-    """How a child that did not finish an import ended, from its wait status."""
-    if status is not None and os.WIFSIGNALED(status):
-        import signal
-        sig = os.WTERMSIG(status)
+def _trial_main(w: int, todo: list) -> None:
+    """The trial process: output to /dev/null, then each module of ``todo`` imported in turn, a
+    JSON record on ``w`` before (``[module]``) and after (``[module, why or null]``) each; a
+    KeyboardInterrupt is no failure of the module (its import in the caller says so). Exits with
+    `PIPE_LOST` when ``w`` cannot be written."""
+    import importlib
+    import json
+    null = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(null, 1)
+    os.dup2(null, 2)
+
+    def say(rec) -> None:
         try:
-            name = signal.Signals(sig).name
-        except ValueError:
-            name = str(sig)
-        return f"importing it killed the process ({name})"
+            os.write(w, (json.dumps(rec) + "\n").encode())
+        except OSError:
+            os._exit(PIPE_LOST)
+    for mod in todo:
+        say([mod])
+        try:
+            importlib.import_module(mod)
+            why = None
+        except KeyboardInterrupt:
+            why = None
+        except BaseException as exc:  # noqa: BLE001 - a user's module: its failure is the answer
+            why = import_failure(exc)
+        say([mod, why])
+    os._exit(0)
+
+
+def _ended(status) -> str:
+    """How a trial process that did not finish an import ended, from its wait status."""
+    from .executors.procs import signal_name
+    if status is not None and os.WIFSIGNALED(status):
+        return f"importing it killed the process ({signal_name(-os.WTERMSIG(status))})"
     code = os.WEXITSTATUS(status) if status is not None else None
     return f"importing it ended the process (exit status {code})"
+
+
+if __name__ == "__main__":              # the fresh-interpreter trial: python -m harness.plugins FD MODULE...
+    from harness.executors.procs import die_with_parent
+    die_with_parent()
+    _trial_main(int(sys.argv[1]), sys.argv[2:])

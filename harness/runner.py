@@ -344,12 +344,12 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
     env = contextlib.ExitStack()          # the thread variables, restored for an in-process (serial) caller
     t_case = time.perf_counter()
     try:
-        from .plugins import FAILED, import_methods
+        from .plugins import ENDED, import_methods
         methods = import_methods()
         for mod in case.plugins:           # the config checked them in the driver; a worker may lack them
-            if mod in FAILED:              # found by this process's parent (a Dask worker's warm-up)
+            if mod in ENDED:               # its import ended the trial process of this one's parent (a Dask worker)
                 raise ShootoutError(f"plugin {mod!r} cannot be imported in the case's process on "
-                                    f"{socket.gethostname()} ({FAILED[mod]})")
+                                    f"{socket.gethostname()} ({ENDED[mod]})")
             try:
                 methods.load_plugins([mod])
             except ModuleNotFoundError as exc:

@@ -250,10 +250,12 @@ def choose(tune: TuneSpec, frames: dict) -> dict:
             tops.append(float(row_tops(sel, tune.metric, mt.upper).mean()) if bracket and not sel.empty else scores[-1])
         best = int(np.argmin(scores)) if scores else 0
         if best and math.isfinite(scores[0]):     # as configured stays unless beaten beyond the tolerance
-            tol = max(mt.rel * abs(scores[0]), mt.abs, SE_Z * math.hypot(errs[0], errs[best]))
-            reach = max(scores[best], tops[best]) if math.isfinite(tops[best]) else scores[best]
-            if not scores[0] - reach > tol:       # a certified bound: beaten by its bracket's upper end
-                best = 0
+            def beats(c: int) -> bool:            # a certified bound: by its bracket's upper end
+                tol = max(mt.rel * abs(scores[0]), mt.abs, SE_Z * math.hypot(errs[0], errs[c]))
+                reach = max(scores[c], tops[c]) if math.isfinite(tops[c]) else scores[c]
+                return math.isfinite(scores[c]) and scores[0] - reach > tol
+            beating = [c for c in range(1, len(scores)) if beats(c)]
+            best = min(beating, key=lambda c: scores[c]) if beating else 0
         cands = tune.candidates(m)
         out[m] = {"task": task, "chosen": cands[best], "candidates": len(cands),
                   "train_score": None if math.isinf(scores[best]) else sign * scores[best],

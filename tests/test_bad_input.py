@@ -615,6 +615,16 @@ def test_an_off_token_stream_may_start_on_its_counts_line(tmp_path, counts):
         assert m.F.tolist() == [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]], text
 
 
+def test_an_off_stream_that_reads_whole_with_and_without_an_edge_count_is_refused(tmp_path):
+    """A review fuzzed 20,000 small OFF streams: the first layout that used every token won, so a
+    file without an edge count whose first coordinate could pass for one was read with the
+    wrong geometry (2,878 misread). Both readings whole: the file is refused, never guessed."""
+    from harness.errors import InvalidMeshError
+    (tmp_path / "a.off").write_text("OFF\n4 3 0 1 1 1\n0 2 0 0 0 0 3 0 3 2 0 1 3 0 2 3 3 2 1 0\n")
+    with pytest.raises(InvalidMeshError, match="ambiguous OFF"):
+        read_mesh(tmp_path / "a.off")
+
+
 def test_a_binary_stl_with_bytes_past_its_triangles_says_so(tmp_path):
     """Its header began with 'solid', so the padded file was called a truncated ASCII STL."""
     from harness.errors import InvalidMeshError

@@ -551,7 +551,7 @@ def test_a_hand_edited_run_json_of_wrong_types_is_read_without_a_traceback(tmp_p
     resumed = {"timing": {"threads_per_case": 1}, "sessions": [     # a review: the header said 1 for every row
         {"threads_per_case": 2, "status_counts": {"ok": 7}}, {"threads_per_case": 1, "status_counts": {"ok": 21}},
         {"threads_per_case": 4, "status_counts": {}}]}
-    assert "1 thread(s) per case (BLAS/OpenMP pools and libigl's) in the last session, 2 in an earlier one" \
+    assert "1 thread(s) per case (BLAS/OpenMP pools and libigl's) in the last session, 2 in earlier ones" \
         in _timing_text(resumed)
     edits = [(("machine",), "x"), (("tasks",), []), (("versions",), "x"), (("workers",), "x"),
              (("load_average",), 5), (("timing",), ["x"]), (("solver", "versions"), 5), (("solver", "last_used"), "x"),
@@ -727,13 +727,18 @@ def test_an_empty_out_is_refused_not_taken_for_the_default(tmp_path, capsys, mon
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c.yaml"]
 
 
-def test_plugin_import_is_tried_in_a_child_that_takes_what_it_started(tmp_path, monkeypatch):
+@pytest.mark.parametrize("threaded", [False, True])
+def test_plugin_import_is_tried_in_a_child_that_takes_what_it_started(tmp_path, monkeypatch, threaded):
     """`harness.plugins.import_problems`: modules are tried in order, each failure named (one that
-    ends the child does not hide the ones after it), a clean module is not reported, and what an
-    import started (here a `sleep` it spawned) is killed with the child's process group."""
+    ends the trial process does not hide the ones after it), a clean module is not reported, and
+    what an import started (here a `sleep` it spawned) is killed with the trial's process group.
+    With another thread running (a notebook's, a Dask worker's) the trial is a fresh interpreter,
+    not a fork (a fork copies an import lock that thread may hold: the trial hung). A module fixed
+    since is tried again (a failure is not remembered for the life of the process)."""
     import subprocess
+    import threading
 
-    from harness.plugins import import_problems
+    from harness import plugins
     mark = tmp_path / "pid"
     (tmp_path / "probe_spawn.py").write_text(
         "import subprocess\np = subprocess.Popen(['sleep', '300'])\n"
@@ -742,14 +747,24 @@ def test_plugin_import_is_tried_in_a_child_that_takes_what_it_started(tmp_path, 
     (tmp_path / "probe_raise.py").write_text("raise ValueError('nope')\n")
     (tmp_path / "probe_ok.py").write_text("X = 1\n")
     monkeypatch.syspath_prepend(str(tmp_path))
-    found = import_problems(["probe_spawn", "probe_exit", "probe_raise", "probe_ok"])
-    assert found == {"probe_exit": "importing it ended the process (exit status 3)",
-                     "probe_raise": "ValueError: nope"}, found
-    pid = int(mark.read_text())
-    gone = subprocess.run(["ps", "-o", "stat=", "-p", str(pid)], capture_output=True, text=True).stdout.strip()
-    assert gone in ("", "Z"), gone                       # killed (a zombie until init reaps it)
-    import sys
-    assert "probe_spawn" not in sys.modules and "probe_ok" not in sys.modules   # tried, not imported here
+    monkeypatch.setattr(plugins, "ENDED", {})
+    stop = threading.Event()
+    other = threading.Thread(target=stop.wait, daemon=True)
+    if threaded:
+        other.start()
+    try:
+        found = plugins.import_problems(["probe_spawn", "probe_exit", "probe_raise", "probe_ok"])
+        assert found == {"probe_exit": "importing it ended the process (exit status 3)",
+                         "probe_raise": "ValueError: nope"}, found
+        assert plugins.ENDED == {"probe_exit": "importing it ended the process (exit status 3)"}
+        pid = int(mark.read_text())
+        gone = subprocess.run(["ps", "-o", "stat=", "-p", str(pid)], capture_output=True, text=True).stdout.strip()
+        assert gone in ("", "Z"), gone                       # killed (a zombie until init reaps it)
+        assert "probe_spawn" not in sys.modules and "probe_ok" not in sys.modules   # tried, not imported here
+        (tmp_path / "probe_exit.py").write_text("X = 2\n")                         # fixed
+        assert plugins.import_problems(["probe_exit"]) == {} and plugins.ENDED == {}
+    finally:
+        stop.set()
 
 
 def test_a_torn_last_row_holding_a_form_feed_is_dropped_whole(tmp_path):

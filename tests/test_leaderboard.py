@@ -588,3 +588,5 @@ def test_an_uncertified_hausdorff_ties_where_its_bracket_reaches_and_certified_o
     by_mesh = {c.split(L.CELL_SEP)[0]: list(r) for c, r in ranks.iterrows()}
     assert by_mesh == {"open": [1.5, 1.5], "apart": [1.0, 2.0], "noupper": [1.0, 2.0]}, by_mesh
     assert L.tie_groups(np.array([1.0, 1.2, 1.5]), .01, 0, None, np.array([1.3, 1.2, 1.5])).tolist() == [0, 0, 1]
+    inf = pd.DataFrame({"hausdorff": [1.0, 1.0], "hausdorff_upper": [np.inf, 0.5]})   # as compare reads them: no bracket
+    assert L.row_tops(inf, "hausdorff", "hausdorff_upper").tolist() == [1.0, 1.0]

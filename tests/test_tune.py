@@ -340,3 +340,9 @@ def test_a_certified_bound_chooses_and_pairs_only_where_the_brackets_lie_apart()
     ch = {"better": "lower", "chosen": cands[1]}
     assert _paired(pd.DataFrame(overlap), pd.Series([False, True]), "hausdorff", ch, spec) == "0 / 1 / 0 of 1"
     assert _paired(pd.DataFrame(apart), pd.Series([False, True]), "hausdorff", ch, spec) == "1 / 0 / 0 of 1"
+    three = load_config({**cfg.raw, "tune": {**cfg.raw["tune"], "params": {"scratch.qem": {"boundary_weight": [10.0, 20.0]}}}}).tune
+    c3 = three.candidates("scratch.qem")
+    rows3 = [{"method": "scratch.qem", "params": json.dumps(methods.get("scratch.qem").with_defaults(c)), "status": "ok",
+              "hausdorff": a, "hausdorff_upper": b} for c, a, b in zip(c3, [1.0, 0.5, 0.6], [1.0, 1.0, 0.6])]
+    # the lowest lower end (0.5) reaches the default; 0.6 certainly beats it: chosen (a review: nothing was)
+    assert choose(three, {"simplification": pd.DataFrame(rows3)})["scratch.qem"]["chosen"] == c3[2]

@@ -59,7 +59,8 @@ from ..config import Case
 from ..errors import InvalidMeshError, RunInterrupted, ShootoutError
 from ..provenance import usable_cpus
 from ..runner import base_row
-from .isolation import cancelled_row, signal_name
+from .isolation import cancelled_row
+from .procs import python_child, signal_name
 
 FILE_KEYS = ("file", "clean")
 CACHE_MAX_AGE_S = 7 * 24 * 3600      # a worker's cached mesh file unused this long is removed
@@ -680,21 +681,17 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
     kills every process the case left, even in a session of its own. Crash -> ``error`` row
     naming the signal; past ``timeout`` -> stopped (SIGTERM to the guard, SIGKILL 10 s later),
     ``timeout`` row; ``stop()`` true (polled twice a second) -> stopped. The timeout counts from
-    the moment the child can fork its case (its interpreter started, the harness and the
-    registry imported: what a forking worker's case inherits), which it writes on a pipe; its
-    start-up may take `STARTUP_S` beyond ``timeout``.
+    the moment the child can fork its case (its interpreter started, the harness, the registry,
+    the case's plugins and a bundled or procedural mesh loaded (`_warm`): what a forking worker's
+    case inherits), which it writes on a pipe; its start-up may take `STARTUP_S` beyond ``timeout``.
     """
     fd, out_path = tempfile.mkstemp(prefix="shootout-case-", suffix=".pkl")
     os.close(fd)
     try:
-        env = dict(os.environ)          # this process's sys.path (plugins) for the child too
-        paths = [p for p in sys.path if p and os.path.isdir(p)]
-        env["PYTHONPATH"] = os.pathsep.join(dict.fromkeys(paths + env.get("PYTHONPATH", "").split(os.pathsep)))
-        safe = ["-P"] if sys.version_info >= (3, 11) else []   # the worker's sys.path only, not the cwd first
         ready_r, ready_w = os.pipe()     # the child's clock reading once it can fork the case
+        argv, env = python_child("harness.executors.dask", out_path, str(ready_w))   # the worker's sys.path (plugins)
         try:
-            proc = subprocess.Popen([sys.executable, *safe, "-m", "harness.executors.dask", out_path, str(ready_w)],
-                                    stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, pass_fds=(ready_w,),
+            proc = subprocess.Popen(argv, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL, pass_fds=(ready_w,),
                                     stderr=subprocess.PIPE, env=env, start_new_session=True)   # killpg(0) hits it alone
         except BaseException:
             os.close(ready_r)
@@ -798,8 +795,7 @@ def _subprocess_main(out_path: str, ready_fd: int | None = None) -> int:
     from ..runner import run_case
     from .isolation import become_subreaper, reap_strays
     from .. import tasks
-    from ..plugins import import_methods
-    import_methods().load_plugins([])                 # what a forking worker's case inherits
+    _warm(case)                  # registry, plugins and bundled mesh, as a forking worker's case inherits them
     tasks.get(case.task)
     become_subreaper()
     if ready_fd is not None:                          # the case's timeout starts here

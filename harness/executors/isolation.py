@@ -44,7 +44,7 @@ from .. import input_store
 from ..config import Case
 from ..results import close_inherited_locks
 from ..runner import base_row, run_case
-from .parent import die_with_parent
+from .procs import die_with_parent, signal_name
 
 
 STDERR_MAX = 16 << 20          # a case's stderr file is cut back to its tail past this size
@@ -327,14 +327,6 @@ def _tail(path: str | None, n: int = 3) -> str:
         return " | ".join(lines[-n:])[:600]
     except (OSError, TypeError):
         return ""
-
-
-def signal_name(code: int) -> str:
-    """'SIGSEGV' for a process exit code -11 (a process killed by that signal)."""
-    try:
-        return signal.Signals(-code).name
-    except (ValueError, TypeError):
-        return f"signal {-code}"
 
 
 class _Job:

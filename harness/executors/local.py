@@ -172,7 +172,7 @@ def _loader(conn, spec: dict, frame: bool, driver: int) -> None:
     from .. import datasets
     from ..results import close_inherited_locks
     from .isolation import _SIGNALS
-    from .parent import die_with_parent
+    from .procs import die_with_parent
     close_inherited_locks()                       # the run folder's lock stays the driver's alone
     input_store.drop_lock()
     die_with_parent()                             # with the driver (SIGKILL to it too)

@@ -261,7 +261,7 @@ def _timing_text(meta) -> str:
         other = sorted({x.get("threads_per_case") for x in ran if isinstance(x.get("threads_per_case"), int)}
                        - {t["threads_per_case"]})
         parts.append(f"{t['threads_per_case']} thread(s) per case (BLAS/OpenMP pools and libigl's)"
-                     + (f" in the last session, {', '.join(map(str, other))} in an earlier one" if other else ""))
+                     + (f" in the last session, {' and '.join(map(str, other))} in earlier ones" if other else ""))
     if t.get("min_repeats") is not None or t.get("time_budget_s") is not None:
         parts.append(f"one untimed cold call, then timed samples until there are at least {t.get('min_repeats', '?')} "
                      f"and they sum to at least {_fmt(t.get('time_budget_s'))} s; median and quartiles")
