@@ -120,6 +120,7 @@ def _cmd_run(a) -> int:
             P += out_dir_problems(Path(a.out))
         if P:
             raise problems_error(list(dict.fromkeys(P)))
+        a.run_started = "scoring"         # what an interrupt leaves is not said here
         frames = run(Path(a.config), out=a.out)
         out = Path(a.out) if a.out else Path("results") / (_results_config(Path(a.config))[0].get("name") or "eval")
         print(_eval_summary(frames, out))
@@ -145,7 +146,7 @@ def _cmd_run(a) -> int:
     from .executors import isolation, local
     reap = a.executor == "local" and a.command_process   # this process is ours: orphans of cases die here
     local.REAP = reap and isolation.become_subreaper()
-    a.run_started = True                 # an interrupt from here on may leave rows to resume
+    a.run_started = "cases"              # an interrupt from here on may leave rows to resume
     try:
         frames = run(cfg, out=a.out, workers=a.workers, executor=a.executor, scheduler=a.scheduler,
                      resume=a.resume, timeout=a.timeout, quiet=a.quiet,
@@ -457,8 +458,10 @@ def _main(argv) -> int:
         print(f"shootout: {exc}", file=sys.stderr)
         return getattr(exc, "exit_code", 2)
     except KeyboardInterrupt:
-        print("shootout: interrupted; rows finished so far are saved (use --resume)"
-              if getattr(args, "run_started", False) else "shootout: interrupted; nothing was written", file=sys.stderr)
+        started = getattr(args, "run_started", None)
+        print("shootout: interrupted; rows finished so far are saved (use --resume)" if started == "cases" else
+              "shootout: interrupted; nothing was written" if getattr(args, "command", None) == "run" and not started
+              else "shootout: interrupted", file=sys.stderr)
         return 130
     except BrokenPipeError:              # stdout closed early (`| head`): stop quietly, like other tools
         try:
