@@ -177,7 +177,7 @@ def _cmd_methods(a) -> int:
     methods = import_methods()
     if str(Path.cwd()) not in sys.path:              # a plugin beside the caller, as for a config
         sys.path.append(str(Path.cwd()))
-    from .plugins import import_problems
+    from .plugins import import_failure, import_problems
     ended = import_problems(a.plugin)              # tried in a child first
     for mod in a.plugin:
         if mod in ended:
@@ -185,7 +185,7 @@ def _cmd_methods(a) -> int:
         try:
             methods.load_plugins([mod])
         except (Exception, SystemExit) as exc:        # a user's module: its failure is a message
-            raise ShootoutError(f"--plugin {mod}: cannot import it ({type(exc).__name__}: {exc})") from None
+            raise ShootoutError(f"--plugin {mod}: cannot import it ({import_failure(exc)})") from None
     if not methods.all_methods(a.task):
         print(f"no method registered{' for task ' + a.task if a.task else ''} (a plugin's methods: --plugin MODULE)",
               file=sys.stderr)
@@ -426,15 +426,19 @@ def main(argv=None) -> int:
         signal.signal(signal.SIGINT, on_interrupt)
     streams = sys.stdout, sys.stderr
     sys.stdout, sys.stderr = _PipeSafe(sys.stdout), _PipeSafe(sys.stderr)
+    code = 1
     try:
-        return _main(argv)
+        code = _main(argv)
+        return code
     finally:
         sys.stdout.flush()               # a pipe is block-buffered: its break shows here, not at exit
         sys.stderr.flush()
         sys.stdout, sys.stderr = streams
-        if saved is not None and argv is None:  # the command ends with its code: a late signal changes nothing
-            signal.signal(signal.SIGTERM, signal.SIG_IGN)
-            signal.signal(signal.SIGINT, signal.SIG_IGN)
+        if saved is not None and argv is None:  # the command's code is known: a late signal ends it with that
+            def end(*_):                        # code (the default handler made a 130 an exit by SIGTERM)
+                os._exit(code)
+            signal.signal(signal.SIGTERM, end)
+            signal.signal(signal.SIGINT, end)
         elif saved is not None:                 # an embedding process gets its handlers back
             signal.signal(signal.SIGTERM, saved[0])
             signal.signal(signal.SIGINT, saved[1])

@@ -197,21 +197,24 @@ def _read_obj(text: str):
 
 def _off_stream(toks: list, nv: int, nf: int):
     """A plain OFF body read as one token stream (3 coordinates a vertex, then ``k i_1 .. i_k``
-    a face), or None unless it uses every token exactly."""
+    a face), or None unless it uses every token exactly (each face's as integers)."""
     if len(toks) < 3 * nv:
         return None
     pos, polys = 3 * nv, []
-    for _ in range(nf):
-        if pos >= len(toks):
+    try:
+        for _ in range(nf):
+            if pos >= len(toks):
+                return None
+            k = int(toks[pos])
+            if k < 0 or pos + 1 + k > len(toks):
+                return None
+            polys.append([int(x) for x in toks[pos + 1:pos + 1 + k]])
+            pos += 1 + k
+        if pos != len(toks):
             return None
-        k = int(toks[pos])
-        if k < 0 or pos + 1 + k > len(toks):
-            return None
-        polys.append([int(x) for x in toks[pos + 1:pos + 1 + k]])
-        pos += 1 + k
-    if pos != len(toks):
+        return np.asarray(toks[:3 * nv], dtype=np.float64).reshape(-1, 3), polys
+    except ValueError:                       # a coordinate where a count or an index belongs
         return None
-    return np.asarray(toks[:3 * nv], dtype=np.float64).reshape(-1, 3), polys
 
 
 def _read_off(text: str):
@@ -228,7 +231,7 @@ def _read_off(text: str):
     if len(tokens_lines) != start + nv + nf and tokens_lines[0][0] == "OFF":
         body = [x for t in tokens_lines[start:] for x in t]     # a plain OFF laid out freely
         fits = [r for r in (_off_stream(head[3:] + body, nv, nf),   # data on the counts line after an edge count
-                            _off_stream(head[2:] + body, nv, nf) if len(head) > 2 else None)   # or without one
+                            _off_stream(head[2:] + body, nv, nf) if len(head) > 3 else None)   # or without one
                 if r is not None]
         if len(fits) == 2:
             raise InvalidMeshError("ambiguous OFF: data follows the counts on their line, and it reads whole both "

@@ -39,7 +39,7 @@ def import_methods():
 
 
 ENDED: dict = {}      # module -> why, for a module whose import ended the trial process (latest trial here)
-PIPE_LOST = 86        # the trial process's exit code when its record pipe went away (closed by a plugin)
+LOST_PIPE = 86        # the trial's exit code when it cannot write its record (an import closed the pipe)
 
 
 def import_failure(exc: BaseException) -> str:
@@ -69,8 +69,6 @@ def import_problems(modules) -> dict:
     forked from here."""
     import threading
     todo = [m for m in dict.fromkeys(modules) if m not in sys.modules]
-    for m in todo:
-        ENDED.pop(m, None)
     if not todo:
         return {}
     forking = hasattr(os, "fork") and threading.active_count() == 1
@@ -82,16 +80,18 @@ def import_problems(modules) -> dict:
         for mod, (why, ended) in tried.items():
             if why is not None:
                 found[mod] = why
-            if ended:
-                ENDED[mod] = why
+            if ended:                             # set or dropped, never cleared first: a case forked
+                ENDED[mod] = why                  # meanwhile from another thread sees one or the other
+            else:
+                ENDED.pop(mod, None)
         todo = todo[len(tried):]
     return found
 
 
 def _trial(todo: list, forking: bool) -> dict:
     """``{module: (why or None, ended)}`` for the modules of ``todo`` tried in one process, in
-    order, up to and including the one that ended it (``ended``); a module after a lost pipe
-    (`PIPE_LOST`) counts as tried without a finding."""
+    order, up to and including the one whose import ended it or took its record pipe
+    (``ended``); the caller tries the rest in a new one."""
     import json
     import select
     import signal
@@ -99,6 +99,7 @@ def _trial(todo: list, forking: bool) -> dict:
     r, w = os.pipe()
     sys.stdout.flush()
     sys.stderr.flush()
+    proc = None
     if forking:
         parent = os.getpid()
         pid = os.fork()
@@ -112,19 +113,20 @@ def _trial(todo: list, forking: bool) -> dict:
                     os._exit(0)
                 _trial_main(w, todo)
             finally:
-                os._exit(PIPE_LOST)
+                os._exit(1)
     else:
         from .executors.procs import python_child
         argv, env = python_child("harness.plugins", str(w), *todo)
         try:                                      # a session of its own: its group is its pid
-            pid = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                                   stderr=subprocess.DEVNULL, pass_fds=(w,), env=env, start_new_session=True).pid
+            proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                    stderr=subprocess.DEVNULL, pass_fds=(w,), env=env, start_new_session=True)
         except BaseException:
             os.close(r)
             os.close(w)
             raise
+        pid = proc.pid
     os.close(w)
-    buf, status, eof = b"", None, False
+    buf, code, eof = b"", None, False
     poll = select.poll()
     poll.register(r, select.POLLIN | select.POLLHUP | select.POLLERR)
     try:
@@ -149,43 +151,46 @@ def _trial(todo: list, forking: bool) -> dict:
         except (ProcessLookupError, PermissionError):
             pass
         try:
-            status = os.waitpid(pid, 0)[1]
+            code = proc.wait() if proc is not None else os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1])
         except ChildProcessError:
-            status = None
-    lost = status is not None and os.WIFEXITED(status) and os.WEXITSTATUS(status) == PIPE_LOST
+            code = None
+        if proc is not None and code is None:
+            proc.returncode = -signal.SIGKILL    # reaped by the system: nothing left to wait for
     tried: dict = {}
     for line in buf.decode(errors="replace").split("\n"):
         try:
             rec = json.loads(line)
             mod = rec[0]
-            got = (rec[1], False) if len(rec) > 1 else (None, False) if lost else (_ended(status), True)
+            got = (rec[1], False) if len(rec) > 1 else (_ended(code), True)
         except (ValueError, TypeError, IndexError, KeyError):
             continue                              # not one of its records (empty, or bytes of the plugin's own)
         if mod in todo:
             tried[mod] = got
-    if lost:                                      # its pipe was closed under it: the rest untried, no finding
-        tried.update({m: (None, False) for m in todo[len(tried):]})
     if not tried:                                 # it ended before its first import: no endless retry
-        tried[todo[0]] = (f"the process trying it ended before importing it ({_ended(status)})", True)
+        tried[todo[0]] = (f"the process trying it ended before importing it ({_ended(code)})", True)
     return tried
 
 
 def _trial_main(w: int, todo: list) -> None:
-    """The trial process: output to /dev/null, then each module of ``todo`` imported in turn, a
-    JSON record on ``w`` before (``[module]``) and after (``[module, why or null]``) each; a
-    KeyboardInterrupt is no failure of the module (its import in the caller says so). Exits with
-    `PIPE_LOST` when ``w`` cannot be written."""
+    """The trial process: output to /dev/null (where it can be opened), then each module of
+    ``todo`` imported in turn, a JSON record on ``w`` before (``[module]``) and after
+    (``[module, why or null]``) each; a KeyboardInterrupt is no failure of the module (its import
+    in the caller says so). A record it cannot write (a module closed ``w``) ends it with
+    exit code `LOST_PIPE`, the module's own last record unfinished."""
     import importlib
     import json
-    null = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(null, 1)
-    os.dup2(null, 2)
+    try:
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, 1)
+        os.dup2(null, 2)
+    except OSError:
+        pass
 
     def say(rec) -> None:
         try:
             os.write(w, (json.dumps(rec) + "\n").encode())
         except OSError:
-            os._exit(PIPE_LOST)
+            os._exit(LOST_PIPE)
     for mod in todo:
         say([mod])
         try:
@@ -199,13 +204,15 @@ def _trial_main(w: int, todo: list) -> None:
     os._exit(0)
 
 
-def _ended(status) -> str:
-    """How a trial process that did not finish an import ended, from its wait status."""
+def _ended(code) -> str:
+    """How a trial process that did not finish an import ended, from its exit code (negative:
+    the signal that killed it; None: not known, the system reaped it)."""
     from .executors.procs import signal_name
-    if status is not None and os.WIFSIGNALED(status):
-        return f"importing it killed the process ({signal_name(-os.WTERMSIG(status))})"
-    code = os.WEXITSTATUS(status) if status is not None else None
-    return f"importing it ended the process (exit status {code})"
+    if code is not None and code < 0:
+        return f"importing it killed the process ({signal_name(code)})"
+    if code == LOST_PIPE:
+        return "importing it closed the files the process had open"
+    return f"importing it ended the process (exit status {'unknown' if code is None else code})"
 
 
 if __name__ == "__main__":              # the fresh-interpreter trial: python -m harness.plugins FD MODULE...

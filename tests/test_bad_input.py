@@ -623,6 +623,11 @@ def test_an_off_stream_that_reads_whole_with_and_without_an_edge_count_is_refuse
     (tmp_path / "a.off").write_text("OFF\n4 3 0 1 1 1\n0 2 0 0 0 0 3 0 3 2 0 1 3 0 2 3 3 2 1 0\n")
     with pytest.raises(InvalidMeshError, match="ambiguous OFF"):
         read_mesh(tmp_path / "a.off")
+    # a second review: the shifted reading raised on a coordinate (1.5) where a count belongs, and
+    # half of 16,472 valid free-layout files (counts with an edge count on their own line) were refused
+    (tmp_path / "b.off").write_text("OFF\n4 3 6\n0 0 0 1 0 0\n0 1 0 0 0 1.5\n3 0 2 1\n3 0 1 3 3 0 3 2\n")
+    m = read_mesh(tmp_path / "b.off")
+    assert m.V.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.5]] and m.F.tolist() == [[0, 2, 1], [0, 1, 3], [0, 3, 2]]
 
 
 def test_a_binary_stl_with_bytes_past_its_triangles_says_so(tmp_path):

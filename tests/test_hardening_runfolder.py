@@ -745,7 +745,9 @@ def test_plugin_import_is_tried_in_a_child_that_takes_what_it_started(tmp_path, 
         f"open({str(mark)!r}, 'w').write(str(p.pid))\n")
     (tmp_path / "probe_exit.py").write_text("import os\nos._exit(3)\n")
     (tmp_path / "probe_raise.py").write_text("raise ValueError('nope')\n")
-    (tmp_path / "probe_ok.py").write_text("X = 1\n")
+    (tmp_path / "probe_ok.py").write_text(f"import sys\nopen({str(tmp_path / 'argv')!r}, 'w').write(sys.argv[0])\n")
+    (tmp_path / "probe_86.py").write_text("import os\nos._exit(86)\n")            # the code of a lost record pipe
+    (tmp_path / "probe_closer.py").write_text("import os\nos.closerange(3, 65536)\n")
     monkeypatch.syspath_prepend(str(tmp_path))
     monkeypatch.setattr(plugins, "ENDED", {})
     stop = threading.Event()
@@ -761,8 +763,13 @@ def test_plugin_import_is_tried_in_a_child_that_takes_what_it_started(tmp_path, 
         gone = subprocess.run(["ps", "-o", "stat=", "-p", str(pid)], capture_output=True, text=True).stdout.strip()
         assert gone in ("", "Z"), gone                       # killed (a zombie until init reaps it)
         assert "probe_spawn" not in sys.modules and "probe_ok" not in sys.modules   # tried, not imported here
+        assert (tmp_path / "argv").read_text().endswith("plugins.py") == threaded   # a fresh interpreter, or a fork
         (tmp_path / "probe_exit.py").write_text("X = 2\n")                         # fixed
         assert plugins.import_problems(["probe_exit"]) == {} and plugins.ENDED == {}
+        # a second review: os._exit(86) passed as a lost pipe, and a module after one that closed it went untried
+        assert plugins.import_problems(["probe_86", "probe_closer", "probe_exit", "probe_raise"]) == {
+            "probe_86": "importing it closed the files the process had open",
+            "probe_closer": "importing it closed the files the process had open", "probe_raise": "ValueError: nope"}
     finally:
         stop.set()
 
