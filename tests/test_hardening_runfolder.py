@@ -783,3 +783,22 @@ def test_a_torn_last_row_holding_a_form_feed_is_dropped_whole(tmp_path):
         p = tmp_path / "t.csv"
         p.write_text(good + f'def,error,"warning: line one{sep}line two, and mor', encoding="utf-8")
         assert _checked_csv_text(p) == good, repr(sep)
+
+
+def test_a_plugin_trial_in_a_process_that_ignores_sigchld(tmp_path, monkeypatch):
+    """A review: with SIGCHLD ignored the system reaps the trial itself, and waiting for it raised
+    ChildProcessError out of load_config. The failing module is still named."""
+    import signal
+
+    from harness import plugins
+    (tmp_path / "probe_sigchld_exit.py").write_text("import os\nos._exit(3)\n")
+    (tmp_path / "probe_sigchld_raise.py").write_text("raise ValueError('nope')\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setattr(plugins, "ENDED", {})
+    old = signal.signal(signal.SIGCHLD, signal.SIG_IGN)
+    try:
+        found = plugins.import_problems(["probe_sigchld_exit", "probe_sigchld_raise"])
+    finally:
+        signal.signal(signal.SIGCHLD, old)
+    assert found["probe_sigchld_exit"].startswith("importing it ended the process (exit status"), found
+    assert found["probe_sigchld_raise"] == "ValueError: nope"
