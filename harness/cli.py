@@ -413,6 +413,10 @@ def threading_main() -> bool:
 
 
 def main(argv=None) -> int:
+    """The ``shootout`` command: ``main()`` reads ``sys.argv`` and is the command itself (after it
+    returns, a SIGINT or SIGTERM ends the process with its exit code, so a late signal cannot turn
+    a 130 into an exit by SIGTERM); a caller from Python passes ``argv`` and gets its own signal
+    handlers back."""
     import signal
 
     from . import errors
@@ -430,6 +434,9 @@ def main(argv=None) -> int:
     try:
         code = _main(argv)
         return code
+    except SystemExit as exc:            # argparse: --help (0), a usage error (2)
+        code = exc.code if isinstance(exc.code, int) else 1
+        raise
     finally:
         sys.stdout.flush()               # a pipe is block-buffered: its break shows here, not at exit
         sys.stderr.flush()

@@ -230,14 +230,16 @@ def _read_off(text: str):
         raise InvalidMeshError(f"OFF header gives {nv} vertices and {nf} faces: a count cannot be negative")
     if len(tokens_lines) != start + nv + nf and tokens_lines[0][0] == "OFF":
         body = [x for t in tokens_lines[start:] for x in t]     # a plain OFF laid out freely
-        fits = [r for r in (_off_stream(head[3:] + body, nv, nf),   # data on the counts line after an edge count
-                            _off_stream(head[2:] + body, nv, nf) if len(head) > 3 else None)   # or without one
-                if r is not None]
-        if len(fits) == 2:
+        edges = len(head) > 2 and head[2].lstrip("+-").isdigit()   # a third token that can be an edge count
+        with_count = _off_stream(head[3:] + body, nv, nf) if edges or len(head) < 3 else None
+        # without an edge count, its first coordinate on the counts line: tried where the third token
+        # cannot be a count, or where more data follows it (three tokens alone: the OFF convention's count)
+        without = _off_stream(head[2:] + body, nv, nf) if len(head) > 2 and (not edges or len(head) > 3) else None
+        if with_count is not None and without is not None:
             raise InvalidMeshError("ambiguous OFF: data follows the counts on their line, and it reads whole both "
                                    "with and without an edge count; put the data on lines of their own")
-        if fits:
-            return fits[0]
+        if with_count is not None or without is not None:
+            return with_count if with_count is not None else without
     if len(tokens_lines) < start + nv + nf:
         raise InvalidMeshError(f"truncated OFF: header promises {nv} vertices and {nf} faces, "
                                f"file has {len(tokens_lines) - start} data lines")

@@ -111,13 +111,15 @@ def _trial(todo: list, forking: bool) -> dict:
                 die_with_parent()
                 if os.getppid() != parent:
                     os._exit(0)
+                for sig in (signal.SIGINT, signal.SIGTERM):   # not the caller's handlers (an interrupt flag)
+                    signal.signal(sig, signal.SIG_DFL)
                 _trial_main(w, todo)
             finally:
                 os._exit(1)
     else:
         from .executors.procs import python_child
-        argv, env = python_child("harness.plugins", str(w), *todo)
         try:                                      # a session of its own: its group is its pid
+            argv, env = python_child("harness.plugins", str(w), *todo)
             proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                                     stderr=subprocess.DEVNULL, pass_fds=(w,), env=env, start_new_session=True)
         except BaseException:
@@ -126,6 +128,7 @@ def _trial(todo: list, forking: bool) -> dict:
             raise
         pid = proc.pid
     os.close(w)
+    reaped = signal.getsignal(signal.SIGCHLD) == signal.SIG_IGN   # the system reaps it: no exit code to read
     buf, code, eof = b"", None, False
     poll = select.poll()
     poll.register(r, select.POLLIN | select.POLLHUP | select.POLLERR)
@@ -154,8 +157,8 @@ def _trial(todo: list, forking: bool) -> dict:
             code = proc.wait() if proc is not None else os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1])
         except ChildProcessError:
             code = None
-        if proc is not None and code is None:
-            proc.returncode = -signal.SIGKILL    # reaped by the system: nothing left to wait for
+        if reaped:                                # Popen.wait says 0 there
+            code = None
     tried: dict = {}
     for line in buf.decode(errors="replace").split("\n"):
         try:

@@ -628,6 +628,11 @@ def test_an_off_stream_that_reads_whole_with_and_without_an_edge_count_is_refuse
     (tmp_path / "b.off").write_text("OFF\n4 3 6\n0 0 0 1 0 0\n0 1 0 0 0 1.5\n3 0 2 1\n3 0 1 3 3 0 3 2\n")
     m = read_mesh(tmp_path / "b.off")
     assert m.V.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.5]] and m.F.tolist() == [[0, 2, 1], [0, 1, 3], [0, 3, 2]]
+    # a third review: one coordinate after the counts (no edge count) was skipped as the edge count
+    # even where it cannot be one (0.5): the file was then refused or, worse, read shifted
+    (tmp_path / "c.off").write_text("OFF\n4 3 0.5\n0 0 1 0 0\n0 1 0 0 0 1\n3 0 2 1 3 0 1 3 3 0 3 2\n")
+    m = read_mesh(tmp_path / "c.off")
+    assert m.V.tolist() == [[0.5, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]] and m.F.tolist() == [[0, 2, 1], [0, 1, 3], [0, 3, 2]]
 
 
 def test_a_binary_stl_with_bytes_past_its_triangles_says_so(tmp_path):

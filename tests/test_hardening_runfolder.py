@@ -802,3 +802,20 @@ def test_a_plugin_trial_in_a_process_that_ignores_sigchld(tmp_path, monkeypatch)
         signal.signal(signal.SIGCHLD, old)
     assert found["probe_sigchld_exit"].startswith("importing it ended the process (exit status"), found
     assert found["probe_sigchld_raise"] == "ValueError: nope"
+
+
+def test_a_plugin_that_sends_itself_sigterm_is_named_in_a_forked_trial(tmp_path, monkeypatch):
+    """A review: the forked trial kept the caller's SIGTERM handler (the interrupt flag), so the
+    signal became a KeyboardInterrupt, no failure; the real import then ended the run (130) and
+    every other plugin problem of the config went unsaid."""
+    import signal
+
+    from harness import plugins
+    (tmp_path / "probe_termed.py").write_text("import os, signal\nos.kill(os.getpid(), signal.SIGTERM)\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setattr(plugins, "ENDED", {})
+    old = signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt()))
+    try:
+        assert plugins.import_problems(["probe_termed"]) == {"probe_termed": "importing it killed the process (SIGTERM)"}
+    finally:
+        signal.signal(signal.SIGTERM, old)

@@ -28,11 +28,15 @@ def signal_name(code: int) -> str:
 
 def python_child(module: str, *args: str) -> tuple[list, dict]:
     """``(argv, env)`` of ``python -m module args...`` in a fresh interpreter that finds what this
-    one finds: this process's ``sys.path`` (``''`` as the working directory now; folders and
-    archives that exist) goes first on its ``PYTHONPATH`` (plugins beside a config), and ``-P``
-    (3.11+) keeps its own working directory from coming first."""
+    one finds: this process's ``sys.path`` (``''`` as the working directory now) goes first on
+    its ``PYTHONPATH`` (plugins beside a config), and ``-P`` (3.11+) keeps its own working
+    directory from coming first."""
     env = dict(os.environ)
-    paths = [p for p in (os.getcwd() if p == "" else p for p in sys.path) if os.path.exists(p)]   # zips too
+    try:
+        here = os.getcwd()
+    except OSError:                               # a working directory since removed
+        here = None
+    paths = [p for p in (here if p == "" else p for p in sys.path) if p]    # archives and paths inside them too
     env["PYTHONPATH"] = os.pathsep.join(dict.fromkeys(paths + env.get("PYTHONPATH", "").split(os.pathsep)))
     safe = ["-P"] if sys.version_info >= (3, 11) else []
     return [sys.executable, *safe, "-m", module, *args], env
