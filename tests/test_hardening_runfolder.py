@@ -754,6 +754,7 @@ def test_plugin_import_is_tried_in_a_child_that_takes_what_it_started(tmp_path, 
     other = threading.Thread(target=stop.wait, daemon=True)
     if threaded:
         other.start()
+    fresh = threading.active_count() > 1          # (earlier tests of the session may have left threads)
     try:
         found = plugins.import_problems(["probe_spawn", "probe_exit", "probe_raise", "probe_ok"])
         assert found == {"probe_exit": "importing it ended the process (exit status 3)",
@@ -763,7 +764,8 @@ def test_plugin_import_is_tried_in_a_child_that_takes_what_it_started(tmp_path, 
         gone = subprocess.run(["ps", "-o", "stat=", "-p", str(pid)], capture_output=True, text=True).stdout.strip()
         assert gone in ("", "Z"), gone                       # killed (a zombie until init reaps it)
         assert "probe_spawn" not in sys.modules and "probe_ok" not in sys.modules   # tried, not imported here
-        assert (tmp_path / "argv").read_text().endswith("plugins.py") == threaded   # a fresh interpreter, or a fork
+        assert (tmp_path / "argv").read_text().endswith("plugins.py") == fresh   # a fresh interpreter, or a fork
+        assert fresh or not threaded
         (tmp_path / "probe_exit.py").write_text("X = 2\n")                         # fixed
         assert plugins.import_problems(["probe_exit"]) == {} and plugins.ENDED == {}
         # a second review: os._exit(86) passed as a lost pipe, and a module after one that closed it went untried
