@@ -806,18 +806,16 @@ def test_a_plugin_trial_in_a_process_that_ignores_sigchld(tmp_path, monkeypatch)
     assert found["probe_sigchld_raise"] == "ValueError: nope"
 
 
-def test_a_plugin_that_sends_itself_sigterm_is_named_in_a_forked_trial(tmp_path, monkeypatch):
+def test_a_plugin_that_sends_itself_sigterm_is_named_in_a_forked_trial(tmp_path):
     """A review: the forked trial kept the caller's SIGTERM handler (the interrupt flag), so the
     signal became a KeyboardInterrupt, no failure; the real import then ended the run (130) and
-    every other plugin problem of the config went unsaid."""
-    import signal
-
-    from harness import plugins
+    every other plugin problem of the config went unsaid. (In a process of its own: this one may
+    run other threads, which make the trial a fresh interpreter.)"""
     (tmp_path / "probe_termed.py").write_text("import os, signal\nos.kill(os.getpid(), signal.SIGTERM)\n")
-    monkeypatch.syspath_prepend(str(tmp_path))
-    monkeypatch.setattr(plugins, "ENDED", {})
-    old = signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt()))
-    try:
-        assert plugins.import_problems(["probe_termed"]) == {"probe_termed": "importing it killed the process (SIGTERM)"}
-    finally:
-        signal.signal(signal.SIGTERM, old)
+    code = ("import signal, sys, threading\nsys.path.insert(0, sys.argv[1])\n"
+            "signal.signal(signal.SIGTERM, lambda *_: (_ for _ in ()).throw(KeyboardInterrupt()))\n"
+            "from harness import plugins\nassert threading.active_count() == 1\n"
+            "print(plugins.import_problems(['probe_termed']))\n")
+    r = subprocess.run([sys.executable, "-c", code, str(tmp_path)], capture_output=True, text=True, cwd=ROOT,
+                       timeout=120, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert r.stdout.strip() == "{'probe_termed': 'importing it killed the process (SIGTERM)'}", r.stdout + r.stderr
