@@ -228,28 +228,53 @@ def _read_off(text: str):
     nv, nf = int(head[0]), int(head[1])
     if nv < 0 or nf < 0:
         raise InvalidMeshError(f"OFF header gives {nv} vertices and {nf} faces: a count cannot be negative")
-    if len(tokens_lines) != start + nv + nf and tokens_lines[0][0] == "OFF":
-        body = [x for t in tokens_lines[start:] for x in t]     # a plain OFF laid out freely
-        edges = len(head) > 2 and head[2].lstrip("+-").isdigit()   # a third token that can be an edge count
-        with_count = _off_stream(head[3:] + body, nv, nf) if edges or len(head) < 3 else None
-        # without an edge count, its first coordinate on the counts line: tried where the third token
-        # cannot be a count, or where more data follows it (three tokens alone: the OFF convention's count)
-        without = _off_stream(head[2:] + body, nv, nf) if len(head) > 2 and (not edges or len(head) > 3) else None
-        if with_count is not None and without is not None:
-            raise InvalidMeshError("ambiguous OFF: data follows the counts on their line, and it reads whole both "
-                                   "with and without an edge count; put the data on lines of their own")
-        if with_count is not None or without is not None:
-            return with_count if with_count is not None else without
-    if len(tokens_lines) < start + nv + nf:
+    plain = tokens_lines[0][0] == "OFF"
+    if len(tokens_lines) != start + nv + nf and plain:
+        stream = _off_free(head, tokens_lines[start:], nv, nf)
+        if stream is not None:
+            return stream
+    try:
+        return _off_lines(tokens_lines[start:], nv, nf)
+    except (InvalidMeshError, ValueError):
+        if plain and len(tokens_lines) == start + nv + nf:   # a free layout whose line count happens to fit
+            stream = _off_free(head, tokens_lines[start:], nv, nf)
+            if stream is not None:
+                return stream
+        raise
+
+
+def _off_free(head: list, lines: list, nv: int, nf: int):
+    """A plain OFF laid out freely, read as a token stream (`_off_stream`) from the counts line's
+    ``head`` tokens and the data ``lines``, or None. A third token after the counts is an edge
+    count only where it is an integer; where it is not, or more data follows it, the reading
+    without an edge count is tried too (three tokens alone: the OFF convention's count, unless
+    the file does not read whole with it). Both readings whole: `InvalidMeshError` (ambiguous)."""
+    body = [x for t in lines for x in t]
+    edges = len(head) > 2 and head[2].lstrip("+-").isdigit()
+    with_count = _off_stream(head[3:] + body, nv, nf) if edges or len(head) < 3 else None
+    without = (_off_stream(head[2:] + body, nv, nf)
+               if len(head) > 2 and (not edges or len(head) > 3 or with_count is None) else None)
+    if with_count is not None and without is not None:
+        raise InvalidMeshError("ambiguous OFF: data follows the counts on their line, and it reads whole both "
+                               "with and without an edge count; put the data on lines of their own")
+    return with_count if with_count is not None else without
+
+
+def _off_lines(lines: list, nv: int, nf: int):
+    """An OFF body of one vertex a line (its first three tokens) and one face a line (``k i_1 .. i_k``,
+    colours after them ignored)."""
+    if len(lines) < nv + nf:
         raise InvalidMeshError(f"truncated OFF: header promises {nv} vertices and {nf} faces, "
-                               f"file has {len(tokens_lines) - start} data lines")
-    V = np.asarray([t[:3] for t in tokens_lines[start:start + nv]], dtype=np.float64).reshape(-1, 3)
-    extra = len(tokens_lines) - (start + nv + nf)
+                               f"file has {len(lines)} data lines")
+    V = np.asarray([t[:3] for t in lines[:nv]], dtype=np.float64).reshape(-1, 3)
+    extra = len(lines) - (nv + nf)
     if extra:
         raise InvalidMeshError(f"OFF header promises {nf} faces, but {extra} more data line(s) follow them")
     polys = []
-    for t in tokens_lines[start + nv:start + nv + nf]:
+    for t in lines[nv:nv + nf]:
         k = int(t[0])
+        if k < 3:                                    # refused later too: here a free layout may still read
+            raise InvalidMeshError(f"face with {k} corners")
         if len(t) < k + 1:
             raise InvalidMeshError(f"truncated OFF face line: {' '.join(t)}")
         polys.append([int(x) for x in t[1:k + 1]])

@@ -630,6 +630,10 @@ def test_an_off_stream_that_reads_whole_with_and_without_an_edge_count_is_refuse
     assert m.V.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.5]] and m.F.tolist() == [[0, 2, 1], [0, 1, 3], [0, 3, 2]]
     # a third review: one coordinate after the counts (no edge count) was skipped as the edge count
     # even where it cannot be one (0.5): the file was then refused or, worse, read shifted
+    # and a free layout whose line count happens to equal nv + nf was read line by line: faces of 0 corners
+    (tmp_path / "d.off").write_text("OFF 3 2\n2 0 1 3\n1 2 0 2\n2 3 1\n0 2 3 2\n0 1\n")
+    m = read_mesh(tmp_path / "d.off", repair=False)
+    assert m.V.tolist() == [[2, 0, 1], [3, 1, 2], [0, 2, 2]] and m.F.tolist() == [[1, 0, 2], [2, 0, 1]]
     (tmp_path / "c.off").write_text("OFF\n4 3 0.5\n0 0 1 0 0\n0 1 0 0 0 1\n3 0 2 1 3 0 1 3 3 0 3 2\n")
     m = read_mesh(tmp_path / "c.off")
     assert m.V.tolist() == [[0.5, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]] and m.F.tolist() == [[0, 2, 1], [0, 1, 3], [0, 3, 2]]
