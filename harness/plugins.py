@@ -108,8 +108,7 @@ def _trial(todo: list, forking: bool) -> dict:
                 os.close(r)
                 os.setpgid(0, 0)
                 from .executors.procs import die_with_parent
-                die_with_parent()
-                if os.getppid() != parent:
+                if not die_with_parent(parent):
                     os._exit(0)
                 for sig in (signal.SIGINT, signal.SIGTERM):   # not the caller's handlers (an interrupt flag)
                     signal.signal(sig, signal.SIG_DFL)

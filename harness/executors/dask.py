@@ -60,7 +60,7 @@ from ..errors import InvalidMeshError, RunInterrupted, ShootoutError
 from ..provenance import usable_cpus
 from ..runner import base_row
 from .isolation import cancelled_row
-from .procs import python_child, signal_name
+from .procs import end_by, python_child, signal_name
 
 FILE_KEYS = ("file", "clean")
 CACHE_MAX_AGE_S = 7 * 24 * 3600      # a worker's cached mesh file unused this long is removed
@@ -818,19 +818,11 @@ def _subprocess_main(out_path: str, ready_fd: int | None = None) -> int:
             os._exit(1)
         os._exit(0)                   # no interpreter teardown racing the guard's threads
 
-    def die_as(sig: int):             # ended by ``sig``, as the worker will read it
-        import faulthandler
-        faulthandler.disable()
-        with contextlib.suppress(OSError, ValueError):   # SIGKILL and SIGSTOP cannot be handled: no need
-            signal.signal(sig, signal.SIG_DFL)
-        os.kill(os.getpid(), sig)
-        os._exit(128 + sig)
-
     def end(sig: int):
         with contextlib.suppress(OSError):
             os.kill(pid, signal.SIGKILL)
         reap_strays()                 # the case and whatever it left (reaps the case too)
-        die_as(sig)
+        end_by(sig)                   # as the worker will read it
 
     def die_with_parent():            # stdin EOF: the worker that started us is gone
         while os.read(0, 65536):      # raw fd: no buffered-stream lock held at shutdown
@@ -843,7 +835,7 @@ def _subprocess_main(out_path: str, ready_fd: int | None = None) -> int:
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
     reap_strays()
     if os.WIFSIGNALED(status):        # the worker names the signal that ended the case
-        die_as(os.WTERMSIG(status))
+        end_by(os.WTERMSIG(status))
     os._exit(os.waitstatus_to_exitcode(status))
 
 

@@ -44,7 +44,7 @@ from .. import input_store
 from ..config import Case
 from ..results import close_inherited_locks
 from ..runner import base_row, run_case
-from .procs import die_with_parent, signal_name
+from .procs import die_with_parent, end_by, signal_name
 
 
 STDERR_MAX = 16 << 20          # a case's stderr file is cut back to its tail past this size
@@ -251,8 +251,7 @@ def _die_with_guard(guard: int) -> None:
     """In the case process: killed (SIGKILL) the moment its guard ends, whatever ends it, so the
     case never becomes a child of the driver (a subreaper) and cannot outlive a guard the
     driver killed, even from a session of its own."""
-    die_with_parent()
-    if os.getppid() != guard:             # it ended before the line above
+    if not die_with_parent(guard):        # it ended before that
         os._exit(70)
 
 
@@ -272,8 +271,7 @@ def _guard(pid: int) -> None:
         resource.setrlimit(resource.RLIMIT_CORE, (0, 0))     # a core file is the case's, never this one's
     except (ImportError, OSError, ValueError):
         pass
-    die_with_parent()                                        # with the driver, even a SIGKILLed one
-    if os.getppid() != driver:
+    if not die_with_parent(driver):                          # with the driver, even a SIGKILLed one
         os.kill(pid, signal.SIGKILL)
         os._exit(70)
     become_subreaper()
@@ -301,22 +299,11 @@ def _guard(pid: int) -> None:
             with contextlib.suppress(OSError):
                 os.kill(pid, signal.SIGKILL)
             reap_strays()
-            _end_as(info.si_signo)
+            end_by(info.si_signo)
     reap_strays()
     if os.WIFSIGNALED(status):
-        _end_as(os.WTERMSIG(status))
+        end_by(os.WTERMSIG(status))
     os._exit(os.waitstatus_to_exitcode(status) if os.WIFEXITED(status) else 1)
-
-
-def _end_as(sig: int) -> None:
-    """End this process (the guard, whose core size limit is 0 already) by ``sig``: its default
-    action, unblocked."""
-    with contextlib.suppress(OSError, ValueError):
-        signal.signal(sig, signal.SIG_DFL)
-    with contextlib.suppress(OSError, ValueError):
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, {sig})
-    os.kill(os.getpid(), sig)
-    os._exit(128 + sig)
 
 
 def _tail(path: str | None, n: int = 3) -> str:

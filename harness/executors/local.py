@@ -175,8 +175,7 @@ def _loader(conn, spec: dict, frame: bool, driver: int) -> None:
     from .procs import die_with_parent
     close_inherited_locks()                       # the run folder's lock stays the driver's alone
     input_store.drop_lock()
-    die_with_parent()                             # with the driver (SIGKILL to it too)
-    if os.getppid() != driver:                    # it died before the line above
+    if not die_with_parent(driver):               # with the driver (SIGKILL to it too); it died before that
         os._exit(0)
     signal.signal(signal.SIGINT, signal.SIG_DFL)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)

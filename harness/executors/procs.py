@@ -1,5 +1,6 @@
-"""Small facts about child processes: one that ends with its parent, the name of the signal that
-ended one, and the command and environment of a fresh interpreter that imports what this one can."""
+"""Small facts about child processes: one that ends with its parent, one that ends by a signal,
+the name of the signal that ended one, and the command and environment of a fresh interpreter
+that imports what this one can."""
 from __future__ import annotations
 
 import os
@@ -7,15 +8,32 @@ import signal
 import sys
 
 
-def die_with_parent() -> None:
+def die_with_parent(parent: int | None = None) -> bool:
     """Have the kernel SIGKILL this process the moment the thread that forked it ends (Linux's
-    ``PR_SET_PDEATHSIG``; nothing where it is missing). The caller then checks ``os.getppid()``:
-    a parent that ended before the call is not noticed by it."""
+    ``PR_SET_PDEATHSIG``; nothing where it is missing). A parent that ended before the call is
+    not noticed by it: with ``parent`` (its pid, read before the fork), whether it is still this
+    process's parent after the call (False: the caller ends now)."""
     try:
         import ctypes
         ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL, 0, 0, 0)      # PR_SET_PDEATHSIG
     except (OSError, AttributeError):
         pass
+    return parent is None or os.getppid() == parent
+
+
+def end_by(sig: int) -> None:
+    """End this process by ``sig`` (its default action, unblocked; no faulthandler report of its
+    own), as a process that waited for a child killed by ``sig`` ends for its own parent to read;
+    ``128 + sig`` as its exit code where the signal does not end it."""
+    import contextlib
+    import faulthandler
+    faulthandler.disable()
+    with contextlib.suppress(OSError, ValueError):      # SIGKILL and SIGSTOP cannot be handled: no need
+        signal.signal(sig, signal.SIG_DFL)
+    with contextlib.suppress(OSError, ValueError, AttributeError):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {sig})
+    os.kill(os.getpid(), sig)
+    os._exit(128 + sig)
 
 
 def signal_name(code: int) -> str:
