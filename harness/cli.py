@@ -173,19 +173,14 @@ def _cmd_run(a) -> int:
 
 
 def _cmd_methods(a) -> int:
-    from .plugins import import_methods
+    from .plugins import import_methods, import_plugins
     methods = import_methods()
     if str(Path.cwd()) not in sys.path:              # a plugin beside the caller, as for a config
         sys.path.append(str(Path.cwd()))
-    from .plugins import import_failure, import_problems
-    ended = import_problems(a.plugin)              # tried in a child first
-    for mod in a.plugin:
-        if mod in ended:
-            raise ShootoutError(f"--plugin {mod}: cannot import it ({ended[mod]})")
-        try:
-            methods.load_plugins([mod])
-        except (Exception, SystemExit) as exc:        # a user's module: its failure is a message
-            raise ShootoutError(f"--plugin {mod}: cannot import it ({import_failure(exc)})") from None
+    failed = import_plugins(a.plugin, first_only=True)
+    if failed:
+        mod, why = next(iter(failed.items()))
+        raise ShootoutError(f"--plugin {mod}: cannot import it ({why})")
     if not methods.all_methods(a.task):
         print(f"no method registered{' for task ' + a.task if a.task else ''} (a plugin's methods: --plugin MODULE)",
               file=sys.stderr)

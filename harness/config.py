@@ -285,18 +285,12 @@ def _validate(raw: dict, label: str, base_dir: Path, found=()) -> Config:
     for d in (str(base_dir), str(Path.cwd())):   # a plugin package beside the config, or here
         if d not in sys.path:
             sys.path.append(d)
-    from .plugins import import_failure, import_problems
-    ended = import_problems(plugins if not early_problems else [])   # tried in a child first
+    from .plugins import import_plugins
+    failed = import_plugins(plugins if not early_problems else [])   # any failure of a user's module: a problem
     for i, mod in enumerate(plugins if not early_problems else []):
-        if mod in ended:
+        if mod in failed:
             plugin_failed = True
-            P.append(f"plugins[{i}]: cannot import {yaml_input.short(mod)} ({ended[mod]})")
-            continue
-        try:
-            methods.load_plugins([mod])
-        except (Exception, SystemExit) as exc:       # any failure of a user's module is a config problem
-            plugin_failed = True
-            P.append(f"plugins[{i}]: cannot import {yaml_input.short(mod)} ({import_failure(exc)})")
+            P.append(f"plugins[{i}]: cannot import {yaml_input.short(mod)} ({failed[mod]})")
     methods.load_plugins([])
 
     task_noise: dict = {}

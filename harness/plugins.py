@@ -55,6 +55,26 @@ def import_failure(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {text}"
 
 
+def import_plugins(modules, first_only: bool = False) -> dict:
+    """Import ``modules`` into the method registry, each tried first in another process
+    (`import_problems`), and ``{module: why}`` for those that failed there or here
+    (`import_failure`), in their order; with ``first_only``, the first failure ends the imports."""
+    methods = import_methods()
+    found = import_problems(modules)
+    failed: dict = {}
+    for mod in dict.fromkeys(modules):
+        if mod not in found:
+            try:
+                methods.load_plugins([mod])
+                continue
+            except (Exception, SystemExit) as exc:   # a user's module: its failure is the answer
+                found[mod] = import_failure(exc)
+        failed[mod] = found[mod]
+        if first_only:
+            break
+    return failed
+
+
 def import_problems(modules) -> dict:
     """``{module: why}`` for each of ``modules`` whose import, tried first in another process
     (one after the other, each in the state the earlier ones left), raised, called ``sys.exit``

@@ -653,14 +653,12 @@ def _warm(case: Case) -> None:
     the worker once, so the forked children inherit them instead of re-importing per case (the
     thread limits are set in each case: a worker may fork from several threads). Best
     effort: any failure happens again in the isolated child and becomes that case's row; a
-    plugin is tried in a child of its own first (`harness.plugins.import_problems`), so one that
+    plugin is tried in a child of its own first (`harness.plugins.import_plugins`), so one that
     ends its process on import is the case's error row, not a dead worker. Files are left to the
     child (a C++ reader could crash on a malformed one)."""
     try:
-        from ..plugins import import_methods, import_problems
-        methods = import_methods()
-        bad = import_problems(case.plugins)
-        methods.load_plugins([m for m in case.plugins if m not in bad])
+        from ..plugins import import_plugins
+        import_plugins(case.plugins)
         if not any(k in case.mesh for k in FILE_KEYS):
             from .. import datasets
             src = datasets.cached(case.mesh)
