@@ -280,7 +280,7 @@ def tie_groups(score: np.ndarray, rel: float, abs_: float, se: np.ndarray | None
     standard error times ``SE_Z``, a sampled metric), within their combined ``hypot``; else it
     starts the next group: a chain of small steps cannot tie values that differ by more than the
     tolerance. With ``top`` (a certified bracket's upper end of each value, the value its lower
-    end: `bracket_top`), the distance is measured from g's upper end: brackets that overlap, or lie
+    end: `bracket_rows`), the distance is measured from g's upper end: brackets that overlap, or lie
     within the tolerance of each other, tie, as `harness.compare` judges them."""
     score = np.asarray(score, dtype=np.float64)
     err = np.zeros(len(score)) if se is None else np.nan_to_num(np.asarray(se, dtype=np.float64), nan=0.0)
@@ -304,19 +304,19 @@ def row_tops(df: pd.DataFrame, metric: str, upper: str) -> pd.Series:
     return up.where((up >= lo) & np.isfinite(up), lo)
 
 
-def bracket_top(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_params=(), cells=None,
-                per_seed: bool = False) -> pd.DataFrame | None:
+def bracket_rows(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_params=(),
+                 cells=None) -> pd.DataFrame | None:
     """For a certified bound (a lower-is-better metric declaring ``upper``, e.g. ``hausdorff`` to
-    ``hausdorff_upper``): cells x variants (``per_seed``: (cell, seed) x variants) of the mean of
-    each row's bracket upper end (the row's ``upper`` where it is a number at or above the value,
-    else the value), as `cell_values` (`seed_values`) give the metric; else None."""
+    ``hausdorff_upper``): the `_cells` frame with ``_top``, each row's bracket upper end
+    (`row_tops`), whose means `cell_values` (per seed: `seed_values`) give as they give the
+    metric's; else None."""
     m = next((m for m in spec.get("metrics", []) if m.get("name") == metric), {})
     col = m.get("upper")
     if better != "lower" or not col or col not in df:
         return None
     d = (_cells(spec, df, axis_params) if cells is None else cells).copy()
     d["_top"] = row_tops(d, metric, col)
-    return seed_values(spec, d, "_top", axis_params, d) if per_seed else cell_values(spec, d, "_top", axis_params, d)[0]
+    return d
 
 
 def _tied_rank_row(score: np.ndarray, rel: float, abs_: float, se: np.ndarray | None = None,
@@ -359,8 +359,9 @@ def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_para
     rel, abs_ = tolerance(spec, metric)
     err = _mean_se(spec, df, metric, axis_params, cells)        # a sampled metric: SE_Z x its cell means' errors
     err = None if err is None else err.reindex(index=score.index, columns=score.columns).to_numpy()
-    top = bracket_top(spec, df, metric, better, axis_params, cells)           # a certified bound's upper ends
-    top = None if top is None else top.reindex(index=score.index, columns=score.columns).to_numpy()
+    d = bracket_rows(spec, df, metric, better, axis_params, cells)             # a certified bound's upper ends
+    top = (None if d is None else
+           cell_values(spec, d, "_top", axis_params, d)[0].reindex(index=score.index, columns=score.columns).to_numpy())
     ranks = pd.DataFrame([_tied_rank_row(r, rel, abs_, None if err is None else err[i], None if top is None else top[i])
                           for i, r in enumerate(score.to_numpy())], index=score.index, columns=score.columns)
     return ranks, missing.sum().to_dict(), inv.sum().to_dict()
@@ -393,8 +394,9 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
             se_col = m.get("se")                  # a sampled metric: its standard error per seed
             per_seed_se = (seed_values(spec, df, se_col, axis, cells) if se_col and se_col in df else None)
             se_z = float(m.get("se_z", 3.0))
-            tops = bracket_top(spec, df, m["name"], m["better"], axis, cells)       # a certified bound's upper ends
-            seed_tops = bracket_top(spec, df, m["name"], m["better"], axis, cells, per_seed=True)
+            d = bracket_rows(spec, df, m["name"], m["better"], axis, cells)         # a certified bound's upper ends
+            tops = None if d is None else cell_values(spec, d, "_top", axis, d)[0]
+            seed_tops = None if d is None else seed_values(spec, d, "_top", axis, d)
             rel, abs_ = tolerance(spec, m["name"])
             given = f"input_{m['name']}"
             inputs = (cell_values(spec, df, given, axis, cells)[0].mean(axis=1) if given in df
@@ -440,7 +442,7 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
 
 def _tied_with_first(order: pd.Series, S, sign: float, rel: float, abs_: float, top: pd.Series | None = None) -> list:
     """The variants of ``order`` (sorted, best first) tied with its first: within the tolerance
-    of its mean (`tie_groups`; ``top``: the variants' bracket upper ends, `bracket_top`) or,
+    of its mean (`tie_groups`; ``top``: the variants' bracket upper ends, `bracket_rows`) or,
     with several seeds (``S``), not beaten on every seed."""
     gid = tie_groups(sign * order.to_numpy(), rel, abs_, None,
                      None if top is None else top.reindex(order.index).to_numpy(dtype=np.float64))
