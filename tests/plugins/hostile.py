@@ -13,9 +13,12 @@ MARK = os.environ.get("HOSTILE_MARK_DIR", "/tmp")
 
 
 def _mark(name: str, text) -> None:
-    """Leave ``text`` in the file ``name`` of the mark folder (pids for the tests to check)."""
-    with open(os.path.join(MARK, name), "w") as fh:
+    """Leave ``text`` in the file ``name`` of the mark folder (pids for the tests to check),
+    whole: written beside it and renamed, so a reader never sees it empty."""
+    path = os.path.join(MARK, name)
+    with open(path + ".part", "w") as fh:
         fh.write(str(text))
+    os.replace(path + ".part", path)
 
 
 @register("hostile.fork_return", task="smoothing", library="hostile")
