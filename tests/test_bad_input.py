@@ -279,9 +279,9 @@ def check_ok_row(task: str, row, closed: bool) -> list[str]:
                 flag([c])
     elif task == "smoothing":
         flag(["diverged"])
-        need(["input_ev_mean", "input_dist_mean"], 0)
+        need(["input_ev_mean", "input_dist_mean", "input_dist_mean_sym"], 0)
         need(["input_normal_error_deg"], 0, 180)
-        accuracy = ["ev_mean", "ev_rms", "dist_mean", "ev_sun", "hausdorff", "area_ratio"]
+        accuracy = ["ev_mean", "ev_rms", "dist_mean", "dist_mean_back", "dist_mean_sym", "ev_sun", "hausdorff", "area_ratio"]
         angles = ["normal_error_deg", "normal_error_rms_deg", "min_angle", "max_angle"]
         if row["diverged"] is True:                  # a blown-up result carries no accuracy numbers
             P += [f"{c}={row[c]!r} on a diverged row" for c in accuracy + angles if not _blank(row, c)]

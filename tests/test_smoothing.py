@@ -6,6 +6,7 @@ from pathlib import Path
 
 import igl
 import numpy as np
+import pandas as pd
 import pytest
 
 import methods
@@ -293,3 +294,39 @@ def test_volume_ratio_needs_a_consistently_oriented_closed_mesh():
     w = load("woody").clean
     open_ = harness.evaluate(w.V, w.F, w.V, w.F, task="smoothing", hausdorff_samples=0)
     assert open_.get("volume_ratio") is None
+
+
+def test_a_result_that_shrinks_along_the_surface_wins_nothing():
+    """`dist_mean`, `ev_sun` and `normal_error_deg` look from the result to the clean surface only:
+    explicit Laplacian smoothing run 20,000 times on woody (a flat, open mesh) shrank it to a point
+    and won all three (dist_mean 1.3e-4 against Taubin's 1.9e-3). `dist_mean_back`, the clean
+    vertices' distance to the result's surface, sees it and matches an independent
+    recomputation; a result whose two-sided mean `dist_mean_sym` is above the noisy input's is
+    invalid, and `dist_mean_sym` ranks."""
+    from harness import datasets
+    from harness import leaderboard as L
+    from harness.noise import apply_noise
+    from harness.tasks import get
+    from harness.tasks.base import CaseInput
+    from harness.tasks.smoothing import SmoothingResult
+    clean = datasets.load("woody").clean
+    diag = clean.diagonal()
+    V_in = apply_noise(clean.V, clean.F, "gaussian_normal", 0.3, seed=0)
+    task = get("smoothing")
+    inp = CaseInput(clean, V_in, clean.F, diag, {})
+    back_in = np.sqrt(igl.point_mesh_squared_distance(clean.V, V_in, clean.F)[0]).mean() / diag
+    rows = {}
+    for name, kw in (("explicit", {"iterations": 20000}), ("taubin", {"iterations": 20})):
+        out = methods.get(f"scratch.{name}")(V_in, clean.F, **kw).V
+        r = rows[name] = task.measure(inp, SmoothingResult(V=out), {})
+        back = np.sqrt(igl.point_mesh_squared_distance(clean.V, out, clean.F)[0]).mean() / diag
+        assert r["dist_mean_back"] == pytest.approx(back, rel=1e-9)
+        assert r["dist_mean_sym"] == pytest.approx((r["dist_mean"] + back) / 2, rel=1e-12)
+        assert r["input_dist_mean_sym"] == pytest.approx((r["input_dist_mean"] + back_in) / 2, rel=1e-9)
+    e, t = rows["explicit"], rows["taubin"]
+    assert e["dist_mean"] < t["dist_mean"] and e["ev_sun"] < t["ev_sun"]        # what it would have won
+    assert e["dist_mean_sym"] > 10 * e["input_dist_mean_sym"] > 10 * t["dist_mean_sym"]
+    spec = task.spec()
+    why = L.validity(spec, pd.DataFrame([dict(e, status="ok"), dict(t, status="ok")])).tolist()
+    assert why[0].startswith("worse than the noisy input both ways") and why[1] == "", why
+    assert next(m for m in spec["metrics"] if m["name"] == "dist_mean_sym")["rank"]

@@ -81,15 +81,24 @@ def _clean_terms(inp) -> dict:
     return inp.cache["clean_terms"]
 
 
+def _back(S, V, V_clean) -> float:
+    """``dist_mean_back``: mean over the clean vertices of their exact distance to the surface of
+    the same faces on positions ``V`` (``S`` the clean `Surface`, its hierarchy refitted)."""
+    return float(S.displaced(V).corresponding_distances(V_clean).mean()) if len(V_clean) else float("nan")
+
+
 def _input_metrics(inp) -> dict:
     if "input_metrics" not in inp.cache:
         V_clean, F, diag = inp.clean.V, inp.F, inp.diag
         clean = _clean_terms(inp)
         _, dbl, _, ang = _face_terms(inp.V, F, clean["centroid"], clean["normals"])
-        d = _clean_surface(inp).corresponding_distances(inp.V)
+        S = _clean_surface(inp)
+        d = S.corresponding_distances(inp.V)
+        dm = surface_distance(inp.V, F, V_clean, F, d=d, double_areas_=dbl)["dist_mean"] / diag
         inp.cache["input_metrics"] = {
             "input_ev_mean": vertex_error(inp.V, V_clean)["ev_mean"] / diag,
-            "input_dist_mean": surface_distance(inp.V, F, V_clean, F, d=d, double_areas_=dbl)["dist_mean"] / diag,
+            "input_dist_mean": dm,
+            "input_dist_mean_sym": (dm + _back(S, inp.V, V_clean) / diag) / 2,
             "input_normal_error_deg": angle_summary(ang)["normal_error_deg"]}
     return dict(inp.cache["input_metrics"])
 
@@ -116,9 +125,11 @@ def measure(inp, result, params) -> dict:
     _, dbl, vol, ang = _face_terms(V_out, F, clean["centroid"], clean["normals"])
     sd = surface_distance(V_out, F, V_clean, F, d=hd["vertex_distances_ab"], double_areas_=dbl)
     row.update({"ev_mean": ve["ev_mean"] / diag, "ev_rms": ve["ev_rms"] / diag,
-                "dist_mean": sd["dist_mean"] / diag, "ev_sun": sd["ev_sun"] / diag,
+                "dist_mean": sd["dist_mean"] / diag, "dist_mean_back": _back(S, V_out, V_clean) / diag,
+                "ev_sun": sd["ev_sun"] / diag,
                 "hausdorff": hd["hausdorff"] / diag, "hausdorff_gap": hd["hausdorff_gap"],
                 "hausdorff_upper": hd["hausdorff_upper"] / diag})
+    row["dist_mean_sym"] = (row["dist_mean"] + row["dist_mean_back"]) / 2
     row.update(angle_summary(ang))
     a0 = clean["area"]
     row["area_ratio"] = float(dbl.sum() / 2) / a0 if a0 > 0 else None
@@ -154,6 +165,11 @@ TASK = Task(
         Metric("ev_rms", "lower", "RMS distance of each vertex to its clean position", **_LEN),
         Metric("dist_mean", "lower", "mean over the result's vertices of their distance to the clean surface "
                "(vertex-to-surface; simplification's surface_dist_mean is surface-to-surface)", rank=True, **_LEN),
+        Metric("dist_mean_back", "lower", "mean over the clean mesh's vertices of their distance to the result's "
+               "surface: the direction dist_mean, ev_sun and normal_error_deg do not see (a result that shrinks or "
+               "slides along the clean surface)", **_LEN),
+        Metric("dist_mean_sym", "lower", "(dist_mean + dist_mean_back) / 2, the two-sided vertex-to-surface mean; a "
+               "result above the noisy input's is invalid", rank=True, **_LEN),
         Metric("ev_sun", "lower", "area-weighted RMS vertex-to-clean-surface distance (Sun et al. 2007)",
                rank=True, **_LEN),
         Metric("hausdorff", "lower", "symmetric Hausdorff distance between the result and the clean surface, "
@@ -174,6 +190,7 @@ TASK = Task(
         Metric("diverged", "false", "non-finite or left 100x the input's bounding box", kind="bool"),
         Metric("input_ev_mean", "input", "ev_mean of the noisy input", unit="diag"),
         Metric("input_dist_mean", "input", "dist_mean of the noisy input", unit="diag"),
+        Metric("input_dist_mean_sym", "input", "dist_mean_sym of the noisy input", unit="diag"),
         Metric("input_normal_error_deg", "input", "normal_error_deg of the noisy input", unit="deg"),
         Metric("min_angle_hist", "info", "histogram of the smallest angle per face (12 bins of 5 degrees over [0, 60])",
                kind="json"),
@@ -181,4 +198,6 @@ TASK = Task(
     measure=measure, check_result=_check, output_mesh=output_mesh, view=view, view_metric="dist_mean", order=20,
     preload=_warm_metrics, input_facts=("closed", "input_metrics", "clean_surface", "clean_terms"),
     invalid_when=(Invalid("diverged", "==", "diverged", value=True),
-                  Invalid("dist_mean", ">", "worse than the noisy input", than="input_dist_mean")))
+                  Invalid("dist_mean", ">", "worse than the noisy input", than="input_dist_mean"),
+                  Invalid("dist_mean_sym", ">", "worse than the noisy input both ways on average (lost the clean "
+                          "surface)", than="input_dist_mean_sym")))
