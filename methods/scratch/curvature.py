@@ -94,19 +94,34 @@ def _neighbourhood(F: np.ndarray, n: int, rings: int) -> tuple[np.ndarray, np.nd
 def quadric_fit(V, F, *, rings=2):
     """Principal curvatures from a local quadric fit over the ``rings``-ring (module docstring).
 
-    Vertices with fewer than 5 neighbours (too few for the fit) get the fit of their 2-ring
-    widened until it has them; isolated vertices get 0.
+    A vertex with fewer than 5 neighbours in its ``rings``-ring (too few for the fit) gets the
+    fit of the ring widened one step at a time until it has them. Precondition: every vertex in
+    a face has 5 other vertices in its connected component (a smaller component, e.g. a lone
+    tetrahedron, raises ValueError: no fit exists there). Vertices in no face get 0.
     """
     n = V.shape[0]
     N = vertex_normals(V, F)
     idx, mask = _neighbourhood(F, n, int(rings))
     few = mask.sum(1) < 5
-    if few.any():                                   # widen the ring where the fit is underdetermined
-        idx2, mask2 = _neighbourhood(F, n, int(rings) + 1)
+    r = int(rings)
+    while few.any():                                # widen the ring where the fit is underdetermined
+        r += 1
+        idx2, mask2 = _neighbourhood(F, n, r)
+        grew = mask2.sum(1) > mask.sum(1)
         w = max(idx.shape[1], idx2.shape[1])
         pad = lambda a, fill: np.pad(a, ((0, 0), (0, w - a.shape[1])), constant_values=fill)  # noqa: E731
         idx, mask, idx2, mask2 = pad(idx, 0), pad(mask, False), pad(idx2, 0), pad(mask2, False)
         idx[few], mask[few] = idx2[few], mask2[few]
+        stuck = few & ~grew
+        few = mask.sum(1) < 5
+        if (stuck & few).any():
+            used = np.zeros(n, bool)
+            used[np.asarray(F).ravel()] = True
+            lone = stuck & few & used
+            if lone.any():
+                raise ValueError(f"{int(lone.sum())} vertices lie in connected components of fewer than 6 "
+                                 "vertices: a quadric fit needs 5 neighbours")
+            few &= ~stuck                           # vertices in no face: 0 below
     # tangent frame (t1, t2, N) per vertex
     ref = np.where(np.abs(N[:, [0]]) < 0.9, np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]]))
     t1 = np.cross(N, ref)
