@@ -706,14 +706,29 @@ def to_latex(lb: pd.DataFrame) -> str:
     return "\n".join(out)
 
 
+def _no_ranking(frames: dict, specs: dict) -> str:
+    """Why a run ranks nothing: per task, its ranking metrics and whether any row has a value in one."""
+    why = []
+    for task in sorted(frames):
+        names = [m["name"] for m in specs.get(task, {}).get("metrics", [])
+                 if m.get("rank") and m.get("better") in ("lower", "higher")]
+        df = frames[task]
+        if not names:
+            why.append(f"{task} declares no ranking metric (it reports properties)")
+        else:
+            listed = ", ".join(names)
+            why.append(f"{task} has no value in {listed}" if not any(n in df and df[n].notna().any() for n in names)
+                       else f"{task}: no cell compares two or more methods on {listed}")
+    return f"No ranking: {'; '.join(why) or 'no results'}. See report.html.\n"
+
+
 def write(run_dir, frames: dict, specs: dict) -> pd.DataFrame:
     """``leaderboard.csv|md|tex`` and ``winners.csv|md|tex`` in the run folder."""
     from pathlib import Path
     lb = leaderboard(frames, specs)
     d = Path(run_dir)
     from .results import atomic_write
-    none = ("No ranking: no task of this run declares a ranking metric with results (the laplacian task reports "
-            "properties, see report.html).\n")
+    none = _no_ranking(frames, specs)
     w = winners(frames, specs)
     for name, text in (("leaderboard.csv", lb.to_csv(index=False)), ("leaderboard.md", to_markdown(lb) or none),
                        ("leaderboard.tex", to_latex(lb)), ("winners.csv", w.to_csv(index=False)),

@@ -223,6 +223,17 @@ def test_a_run_without_a_ranking_metric_says_so(tmp_path):
     write(tmp_path, {}, {})
     for name in ("leaderboard.md", "winners.md"):
         assert (tmp_path / name).read_text().startswith("No ranking:"), name
+    # the line says why for the tasks of this run (it named the Laplacian task in every run)
+    from harness import tasks
+    specs = {n: tasks.all_tasks()[n].spec() for n in ("curvature", "laplacian")}
+    row = {"mesh": "knight", "noise_model": "none", "noise_level": None, "params": "{}", "status": "ok"}
+    rows = {"curvature": pd.DataFrame([dict(row, method=m, K_rel_l2=np.nan, gauss_bonnet_error=g)
+                                       for m, g in (("a", 0.1), ("b", 1e-15))]),
+            "laplacian": pd.DataFrame([dict(row, method="a")])}
+    write(tmp_path, rows, specs)
+    text = (tmp_path / "winners.md").read_text()
+    assert text == ("No ranking: curvature has no value in K_rel_l2, H_rel_l2; laplacian declares no ranking "
+                    "metric (it reports properties). See report.html.\n"), text
 
 
 def test_winners_carry_the_inputs_own_value(tiny_run):
