@@ -24,8 +24,10 @@ bench: $(RUN_STAMP)
 	$(BIN)/shootout run configs/quick.yaml
 	@echo "report: results/quick/report.html"
 
+# two test files at a time (most tests wait on processes they start), then the timing verdicts alone
 test: $(TEST_STAMP)
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n 2 --dist loadfile -m 'not slow and not serial'
+	$(BIN)/python -m pytest -q -m 'serial and not slow'
 
 clean:
 	rm -rf $(VENV) build *.egg-info

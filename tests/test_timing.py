@@ -15,6 +15,8 @@ import pytest
 
 import harness
 
+pytestmark = pytest.mark.serial          # timing verdicts: run alone (make test runs the rest two at a time)
+
 ROOT = Path(__file__).resolve().parents[1]
 
 CFG = {"name": "timing", "hausdorff_samples": 200, "plugins": ["tests.plugins.slowdown"],
