@@ -330,3 +330,15 @@ def test_a_result_that_shrinks_along_the_surface_wins_nothing():
     why = L.validity(spec, pd.DataFrame([dict(e, status="ok"), dict(t, status="ok")])).tolist()
     assert why[0].startswith("worse than the noisy input both ways") and why[1] == "", why
     assert next(m for m in spec["metrics"] if m["name"] == "dist_mean_sym")["rank"]
+
+
+@pytest.mark.parametrize("weights", ["uniform", "cotan", "cotan_area"])
+def test_explicit_with_a_self_weight_is_the_same_at_any_scale(knight, weights):
+    """``self_weight`` was added to an area (length^2) for cotan_area: the same setting returned
+    the input unchanged on knight at scale 1e-3 and diverged at 1e3."""
+    V, F = knight
+    ref = methods.get("scratch.explicit")(V, F, weights=weights, step=0.2, iterations=5, self_weight=0.5).V
+    assert np.abs(ref - V).max() > 1e-3 * np.ptp(V, axis=0).max()          # it smooths
+    for s in (1e-3, 1e3):
+        got = methods.get("scratch.explicit")(V * s, F, weights=weights, step=0.2, iterations=5, self_weight=0.5).V
+        assert np.abs(got / s - ref).max() <= 1e-9 * np.ptp(V, axis=0).max(), s

@@ -157,7 +157,8 @@ def _finite(X: np.ndarray) -> bool:
                                       doc="number of forward-Euler steps"),
                   "self_weight": Param("self_weight", 0.0, "float", low=0.0,
                                        doc="weight of the vertex itself in the neighbour "
-                                           "average, in units of M (MeshLab's Laplacian: 0.5)"),
+                                           "average, in units of M (of lbar^2 for cotan_area; "
+                                           "MeshLab's Laplacian: 0.5)"),
                   "boundary": boundary_rule_param(),
                   "reassemble": Param("reassemble", False, "bool",
                                       doc="rebuild the operator from the current positions "
@@ -180,7 +181,9 @@ def explicit(V, F, *, weights="uniform", step=0.25, iterations=10, self_weight=0
     iterations : int
         Number of steps.
     self_weight : float
-        ``s >= 0``: the step of vertex ``i`` is scaled by ``m_i / (m_i + s)``. With
+        ``s >= 0``: the step of vertex ``i`` is scaled by ``m_i / (m_i + s u)``, ``u`` the
+        unit of ``m`` (``lbar^2`` for cotan_area, whose ``m`` is an area; 1 otherwise), so a
+        setting means the same at any scale of the mesh. With uniform or cotan weights and
         ``step = 1`` the update is ``x' = (s x + sum_j W_ij x_j) / (s + m_i)``: the vertex
         itself joins the weighted average with weight ``s``. 0 (default) is the plain
         Laplacian step; MeshLab's classic Laplacian is ``step 1, self_weight 0.5``.
@@ -212,7 +215,7 @@ def explicit(V, F, *, weights="uniform", step=0.25, iterations=10, self_weight=0
     def operator(P):
         W, m = smoothing_operator(P, F, weights)
         W, m, fixed = apply_boundary_rule(W, m, F, boundary, unit)
-        scale = h / (m + float(self_weight))
+        scale = h / (m + float(self_weight) * unit)
         if fixed is not None:
             scale = np.where(fixed, 0.0, scale)
         return (sp.diags(scale) @ W).tocsr()
