@@ -157,7 +157,10 @@ class Method:
         return (lambda: self.func(V, F, **full)), (lambda result: task.validate_result(self.name, result, V, F))
 
     def __call__(self, V, F, **params):
-        run, finish = self.bind(V, F, **params)
+        """``finish(run())`` of `bind` on copies of the arrays: a method that writes into its
+        input, or returns it, never changes or shares the caller's arrays."""
+        V, F = check_arrays(V, F)
+        run, finish = self.bind(V.copy(), F.copy(), **params)
         return finish(run())
 
 

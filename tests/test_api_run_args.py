@@ -98,3 +98,29 @@ def test_one_line_config_text_longer_than_a_file_name_runs(tmp_path):
         load_config("/tmp/" + "x" * 300 + ".yaml")
     with pytest.raises(ConfigError, match="config file not found"):
         load_config(Path("/tmp/" + "x" * 300 + ".yaml"))
+
+
+def test_a_method_called_through_the_api_never_writes_into_or_returns_the_callers_arrays(monkeypatch):
+    """`methods.get(name)(V, F)` handed a float64 C-contiguous V to the method as it was: one that
+    wrote into its input changed the caller's mesh, and one that returned it gave a result that
+    was the caller's array."""
+    import dataclasses
+
+    import numpy as np
+
+    import methods
+    from harness.tasks.smoothing import SmoothingResult
+    from methods import registry
+
+    def scribble(V, F, **kw):
+        V += 1.0
+        F[:] = F[::-1]
+        return SmoothingResult(V=V)
+    real = methods.get("scratch.explicit")                  # (loads the built-in methods)
+    monkeypatch.setitem(registry._REGISTRY, "scratch.explicit", dataclasses.replace(real, func=scribble))
+    V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]])
+    F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    V0, F0 = V.copy(), F.copy()
+    r = methods.get("scratch.explicit")(V, F)
+    assert np.array_equal(V, V0) and np.array_equal(F, F0) and not np.shares_memory(r.V, V)
+    assert np.array_equal(r.V, V0 + 1.0)
