@@ -106,8 +106,9 @@ def _cmd_run(a) -> int:
         check_output_file(a.export_benchmark_json, "--export-benchmark-json", protect=[a.config], kind="json")
     except ShootoutError as exc:
         P.append(str(exc))
-    from .session import _results_config, run
-    if _results_config(Path(a.config)) is not None:          # results: score files made elsewhere
+    from .session import _results_config, run, scored_results
+    raw = _results_config(Path(a.config))
+    if raw is not None:                                       # results: score files made elsewhere
         given = [f for f, on in (("--resume", a.resume), ("--timeout", a.timeout is not None),
                                  ("--executor", a.executor != "local"), ("--scheduler", bool(a.scheduler)),
                                  ("--workers", a.workers is not None),
@@ -116,13 +117,13 @@ def _cmd_run(a) -> int:
             P.append(f"{', '.join(given)}: {a.config} is a results: config (it scores files made elsewhere and "
                      "runs no case); drop these flags")
         if a.out:
-            from .results import out_dir_problems
             P += out_dir_problems(Path(a.out))
-        if P:
+        if P:                            # the config's own problems join the same message
+            scored_results(raw, Path(a.config), P)
             raise problems_error(list(dict.fromkeys(P)))
         a.run_started = "scoring"         # what an interrupt leaves is not said here
         frames = run(Path(a.config), out=a.out)
-        out = Path(a.out) if a.out else Path("results") / (_results_config(Path(a.config))[0].get("name") or "eval")
+        out = Path(a.out) if a.out else Path("results") / (raw[0].get("name") or "eval")
         print(_eval_summary(frames, out))
         return 0
     cfg, bad_config = None, None       # loaded even when a flag is bad: its problems join the same message

@@ -189,13 +189,12 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
         if given:                        # scoring files runs no case: these would be silently ignored
             P.append(f"{', '.join(given)}: a results: config scores files made elsewhere and runs no case; "
                      "drop these arguments")
+        scored = scored_results(raw, config_or_path, P)
     if P:
         raise problems_error(list(dict.fromkeys(P)))
     if raw is not None:                  # a results: config scores files made elsewhere (shootout eval)
-        from .scoring import eval_entries, results_config
-        given = str(config_or_path) if isinstance(config_or_path, (str, Path)) else ""
-        entries, hs = results_config(raw[0], raw[1],
-                                     given if given and "\n" not in given and Path(given).is_file() else "<config>")
+        from .scoring import eval_entries
+        entries, hs = scored
         out_dir = Path(out) if out else Path("results") / str(raw[0].get("name") or "eval")
         return eval_entries(entries, out_dir, hs, raw[0], hausdorff_eps=raw[0].get("hausdorff_eps", 1e-3))
     cfg: Config = config_or_path if isinstance(config_or_path, Config) else load_config(config_or_path)
@@ -286,6 +285,24 @@ def _config_problem(source) -> str | None:
         if not isinstance(raw, dict):
             return f"config_or_path: {text!r} names no file and is not YAML text of a mapping; {expected}"[:400]
     return None
+
+
+def scored_results(raw: tuple, source, problems: list) -> tuple | None:
+    """The entries and sample count of the ``results:`` config ``raw`` (`_results_config` of
+    ``source``; `harness.scoring.results_config`). Its problems join ``problems`` (each named
+    by the config's source) when there are already some, so one message lists them all;
+    alone, its `ConfigError` is raised."""
+    from .errors import ConfigError
+    from .scoring import results_config
+    given = str(source) if isinstance(source, (str, Path)) else ""
+    try:
+        return results_config(raw[0], raw[1], given if given and "\n" not in given and Path(given).is_file()
+                              else "<config>")
+    except ConfigError as exc:
+        if not problems:
+            raise
+        problems += [f"{exc.source}: {p}" for p in exc.problems]
+        return None
 
 
 def _results_config(source):

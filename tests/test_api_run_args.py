@@ -45,6 +45,25 @@ def test_a_results_config_lists_its_refused_arguments_with_the_other_bad_ones(re
     assert msg.startswith("2 problems:") and "expected an integer >= 1, got 0" in msg and "resume, workers:" in msg
 
 
+def test_a_results_configs_own_problems_join_the_argument_problems(results_cfg, tmp_path, capsys):
+    """Only the argument's problem was said (a review): the config's were left for the next try."""
+    import yaml
+
+    from harness.cli import main
+    bad = dict(results_cfg, extra=1, hausdorff_samples=1.5)
+    with pytest.raises(ShootoutError) as exc:
+        harness.run(bad, out=tmp_path / "o", workers=2)
+    msg = str(exc.value)
+    assert msg.startswith("3 problems:") and "workers: a results: config" in msg, msg
+    assert "extra: unknown key" in msg and "hausdorff_samples: expected an integer" in msg, msg
+    cfg = tmp_path / "bad.yaml"
+    cfg.write_text(yaml.safe_dump(bad))
+    assert main(["run", str(cfg), "--workers", "2", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "--workers: " in err and "extra: unknown key" in err and "hausdorff_samples: expected" in err, err
+    assert not (tmp_path / "o").exists()
+
+
 def test_an_empty_out_is_refused(tmp_path, monkeypatch):
     """``out=""`` wrote results/<name> in the current folder where ``--out ''`` exits 2."""
     monkeypatch.chdir(tmp_path)
