@@ -43,7 +43,9 @@ import numpy as np
 import pandas as pd
 
 COLUMNS = ["task", "metric", "better", "method", "mean_rank", "cells", "missing_cells", "invalid_cells",
-           "friedman_chi2", "friedman_p", "critical_difference", "k"]
+           "friedman_chi2", "friedman_p", "critical_difference", "k", "left_out"]
+LEFT_OUT = ("no measurement in some cells (the reference scored against itself): left out of the ranking, "
+            "their other cells are in winners.md")
 
 
 def _truthy(v):
@@ -334,12 +336,13 @@ def _tied_rank_row(score: np.ndarray, rel: float, abs_: float, se: np.ndarray | 
 
 
 def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_params=(), cells=None):
-    """(ranks DataFrame cells x variants, missing per variant, invalid per variant); values within
-    the metric's tolerance tie (`tie_groups`). A variant that is no measurement in some cell
-    (`not_measured`: the reference scored against itself) is left out, as one that never ran:
-    counted missing there, it would drop the cell for every method."""
+    """(ranks DataFrame cells x variants, missing per variant, invalid per variant, left out); values
+    within the metric's tolerance tie (`tie_groups`). A variant that is no measurement in some cell
+    (`not_measured`: the reference scored against itself) is left out, as one that never ran
+    (counted missing there, it would drop the cell for every method), and named in the sorted
+    list ``left out``."""
     if metric not in df or not len(df):
-        return pd.DataFrame(), {}, {}
+        return pd.DataFrame(), {}, {}, []
     cells = _cells(spec, df, axis_params) if cells is None else cells
     vals, inval = cell_values(spec, df, metric, axis_params, cells)
     gone = set(cells.loc[cells["_unmeasured"].astype(bool), "_variant"])
@@ -364,7 +367,7 @@ def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_para
            cell_values(spec, d, "_top", axis_params, d)[0].reindex(index=score.index, columns=score.columns).to_numpy())
     ranks = pd.DataFrame([_tied_rank_row(r, rel, abs_, None if err is None else err[i], None if top is None else top[i])
                           for i, r in enumerate(score.to_numpy())], index=score.index, columns=score.columns)
-    return ranks, missing.sum().to_dict(), inv.sum().to_dict()
+    return ranks, missing.sum().to_dict(), inv.sum().to_dict(), sorted(map(str, gone))
 
 
 WINNER_COLUMNS = ["task", "metric", "better", "mesh", "noise_model", "noise_level", "setting", "best", "value",
@@ -599,7 +602,7 @@ def leaderboard(frames: dict, specs: dict) -> pd.DataFrame:
         for m in spec.get("metrics", []):
             if not m.get("rank") or m.get("better") not in ("lower", "higher"):
                 continue
-            ranks, missing, invalid = cell_ranks(spec, df, m["name"], m["better"], axis, cells)
+            ranks, missing, invalid, gone = cell_ranks(spec, df, m["name"], m["better"], axis, cells)
             if ranks.empty:
                 continue
             chi2, p, cd = friedman_nemenyi(ranks)
@@ -607,7 +610,7 @@ def leaderboard(frames: dict, specs: dict) -> pd.DataFrame:
                 rows.append({"task": task, "metric": m["name"], "better": m["better"], "method": v,
                              "mean_rank": float(r), "cells": int(len(ranks)), "missing_cells": int(missing.get(v, 0)),
                              "invalid_cells": int(invalid.get(v, 0)), "friedman_chi2": chi2, "friedman_p": p,
-                             "critical_difference": cd, "k": int(ranks.shape[1])})
+                             "critical_difference": cd, "k": int(ranks.shape[1]), "left_out": ", ".join(gone)})
     return pd.DataFrame(rows, columns=COLUMNS)
 
 
@@ -639,6 +642,9 @@ def to_markdown(lb: pd.DataFrame) -> str:
                    f"Nemenyi critical difference (alpha 0.05) = {cd}\n\n| method | mean rank | missing | invalid |\n"
                    "|---|---:|---:|---:|")
         out += [f"| {_md(r.method)} | {r.mean_rank:.2f} | {r.missing_cells} | {r.invalid_cells} |" for r in g.itertuples()]
+        gone = getattr(r0, "left_out", "")
+        if isinstance(gone, str) and gone:
+            out.append(f"\nLeft out: {_md(gone)}: {LEFT_OUT}.")
         out.append("")
     return "\n".join(out)
 
@@ -695,6 +701,7 @@ def to_latex(lb: pd.DataFrame) -> str:
     for (task, metric), g in lb.groupby(["task", "metric"], sort=False):
         r0 = g.iloc[0]
         p = "no Friedman test" if pd.isna(r0.friedman_p) else f"Friedman $p = {_tex_num(r0.friedman_p)}$"
+        gone = getattr(r0, "left_out", "")
         cd = _cd_text(r0, "--").replace(">=", r"$\geq$")
         out += [r"\begin{table}[t]", r"\centering", FIT, r"\begin{tabular}{lrrr}", r"\toprule",
                 r"method & mean rank & missing & invalid \\", r"\midrule"]
@@ -702,7 +709,9 @@ def to_latex(lb: pd.DataFrame) -> str:
                 for r in g.itertuples()]
         out += [r"\bottomrule", r"\end{tabular}}",
                 f"\\caption{{{_tex(task)}: mean rank by \\texttt{{{_tex(metric)}}} ({r0.better} is better) over "
-                f"{int(r0.cells)} cell{'' if int(r0.cells) == 1 else 's'}; {p}, Nemenyi CD$_{{0.05}}$: {cd}.}}", r"\end{table}", ""]
+                f"{int(r0.cells)} cell{'' if int(r0.cells) == 1 else 's'}; {p}, Nemenyi CD$_{{0.05}}$: {cd}."
+                + (f" Left out: {_tex(gone)}: {_tex(LEFT_OUT)}." if isinstance(gone, str) and gone else "") + "}",
+                r"\end{table}", ""]
     return "\n".join(out)
 
 

@@ -20,7 +20,7 @@ from pathlib import Path
 
 
 from .. import tasks as _tasks
-from ..leaderboard import label_text, leaderboard, validity
+from ..leaderboard import LEFT_OUT, label_text, leaderboard, validity
 from ..results import REPORT_FILES, RunFolder, with_not_run
 from ..schema import scalar as _clean
 from .common import esc as _esc
@@ -347,7 +347,8 @@ def collect(run_dir) -> dict:
     specs = task_specs(meta, frames)
     tasks = {t: _frame_payload(specs[t], frames[t]) for t in specs if t in frames}
     return {"meta": meta, "frames": frames, "specs": specs, "tasks": tasks,
-            "views": folder.read_views(), "leaderboard": _leaderboard_payload(frames, specs)}
+            "views": folder.read_views(), "leaderboard": _leaderboard_payload(frames, specs),
+            "left_out_why": LEFT_OUT}
 
 
 def _leaderboard_payload(frames, specs) -> list[dict]:
@@ -357,6 +358,7 @@ def _leaderboard_payload(frames, specs) -> list[dict]:
         r0 = g.iloc[0]
         out.append({"task": task, "metric": metric, "better": r0.better, "cells": int(r0.cells), "k": int(r0.k),
                     "p": _clean(r0.friedman_p), "cd": _clean(r0.critical_difference),
+                    "left_out": r0.left_out if isinstance(r0.left_out, str) else "",
                     "methods": [{"method": r.method, "mean_rank": float(r.mean_rank), "missing": int(r.missing_cells),
                                  "invalid": int(r.invalid_cells)} for r in g.itertuples()]})
     return out

@@ -1090,6 +1090,7 @@
         g.methods.map(function (m) { return '<tr><td>' + esc(m.method) + '</td><td class="num">' + fmt(m.mean_rank, 3) +
           '</td><td class="num">' + m.missing + '</td><td class="num">' + m.invalid + '</td></tr>'; }).join('');
       card.appendChild(t);
+      if (g.left_out) card.appendChild(el('p', {'class': 'muted', text: 'Left out: ' + g.left_out + ': ' + (D.left_out_why || '') + '.'}));
       host.appendChild(card);
     });
   }
