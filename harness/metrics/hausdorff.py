@@ -130,7 +130,7 @@ def _in_spatial_order(P: np.ndarray, Y: Surface, order: np.ndarray | None = None
 def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_points: int = 1_000_000,
               max_seconds: float = 30.0, n_samples: int = 20000, seed: int = 0,
               surface_b: Surface | None = None, corresponding: bool = False,
-              vertex_distances: bool = False) -> dict:
+              vertex_distances: bool = False, surface_a: Surface | None = None) -> dict:
     """Certified symmetric Hausdorff distance and sampled mean surface distances.
 
     ``hausdorff``: the largest distance found (a lower bound), with ``hausdorff_upper`` the
@@ -159,6 +159,9 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
     displacement ``max_i |a_i - b_i|`` (the norm is convex), which closes most triangles
     without a query.
 
+    ``surface_a``: likewise a prebuilt `Surface` of (VA, FA) (with ``corresponding``, e.g.
+    ``surface_b.displaced(VA)``).
+
     ``vertex_distances``: also return ``"vertex_distances_ab"``, the exact distance of every
     vertex of A to B (k,) (the bracket queries them anyway; vertices in no face included).
 
@@ -174,7 +177,8 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
     if corresponding and (VA.shape != VB.shape or not np.array_equal(FA, FB)):
         raise ValueError("corresponding=True needs the same faces on the same number of vertices")
     SB = surface_b if surface_b is not None else Surface(VB, FB)
-    SA = SB.displaced(VA) if corresponding else Surface(VA, FA)      # same triangles: B's tree, refitted
+    SA = (surface_a if surface_a is not None else
+          SB.displaced(VA) if corresponding else Surface(VA, FA))      # same triangles: B's tree, refitted
     out = {}
     seed_ab = seed_ba = 0.0
     if n_samples:

@@ -18,6 +18,7 @@ class Surface:
         self._pos = None
         self._used = None
         self._samples = None
+        self._walk = None
         self.count = 0
 
     def bvh(self) -> tuple:
@@ -91,23 +92,30 @@ class Surface:
             self._nb = face_neighbours(F, len(V))
         return self._nb
 
-    def corresponding_distances(self, P: np.ndarray) -> np.ndarray:
+    def corresponding_distances(self, P: np.ndarray, walk: tuple | None = None) -> np.ndarray:
         """Exact distances (n,) to this surface of the vertices ``P`` (n, 3) of a mesh with the
         same faces on corresponding vertices (a displaced copy, e.g. a noisy or smoothed one):
-        each query starts from a face around its vertex, so it usually prunes at once."""
+        each query starts from a face around its vertex, so it usually prunes at once.
+        ``walk``: ``P``'s `walk` when known (e.g. the clean surface's, for its own vertices)."""
         from ._bvh_kernel import query_many
         P = np.ascontiguousarray(P, dtype=np.float64)
         if len(P) != len(self.V):
             raise ValueError(f"corresponding_distances needs one point per vertex ({len(self.V)}), got {len(P)}")
         if len(P) == 0 or len(self.F) == 0:
             return self.query(P)[0]
-        from ..core.geometry import face_around_vertex, morton_order
-        hints = face_around_vertex(self.F, len(P))
+        order, hints = walk if walk is not None else _walk(P, self.F)
         self.count += len(P)
-        order = morton_order(P)                   # neighbouring queries read neighbouring nodes
         d = np.empty(len(P))
-        d[order] = query_many(np.ascontiguousarray(P[order]), self.leaf_faces(hints[order]), *self.bvh())[0]
+        d[order] = query_many(np.ascontiguousarray(P[order]), self.leaf_faces(hints), *self.bvh())[0]
         return d
+
+    def walk(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(order, hints)`` of this surface's own vertices for `corresponding_distances` on a
+        displaced copy: their order along a Morton curve (neighbouring queries read neighbouring
+        nodes) and, in that order, a face around each (-1 for none); memoised."""
+        if getattr(self, "_walk", None) is None:            # older pickles lack it
+            self._walk = _walk(self.V, self.F)
+        return self._walk
 
     def query(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Distances (k,) and closest face indices (k,) of points (k, 3)."""
@@ -120,6 +128,13 @@ class Surface:
         self.count += len(P)
         d2, i, _ = self.tree.squared_distance(self.V, self.F, np.ascontiguousarray(P, dtype=np.float64))
         return np.sqrt(np.maximum(np.asarray(d2).ravel(), 0.0)), np.asarray(i, dtype=np.int64).ravel()
+
+
+def _walk(P: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """`Surface.walk` of the points ``P``, the vertices of the faces ``F``."""
+    from ..core.geometry import face_around_vertex, morton_order
+    order = morton_order(P)
+    return order, face_around_vertex(F, len(P))[order]
 
 
 def cached_surface(cache: dict, key: str, V: np.ndarray, F: np.ndarray) -> Surface:

@@ -81,10 +81,10 @@ def _clean_terms(inp) -> dict:
     return inp.cache["clean_terms"]
 
 
-def _back(S, V, V_clean) -> float:
-    """``dist_mean_back``: mean over the clean vertices of their exact distance to the surface of
-    the same faces on positions ``V`` (``S`` the clean `Surface`, its hierarchy refitted)."""
-    return float(S.displaced(V).corresponding_distances(V_clean).mean()) if len(V_clean) else float("nan")
+def _back(S, SV) -> float:
+    """``dist_mean_back``: mean over the clean vertices of their exact distance to ``SV``, the
+    surface of the same faces on other positions (``S.displaced(V)``, ``S`` the clean `Surface`)."""
+    return float(SV.corresponding_distances(S.V, S.walk()).mean()) if len(S.V) else float("nan")
 
 
 def _input_metrics(inp) -> dict:
@@ -98,7 +98,7 @@ def _input_metrics(inp) -> dict:
         inp.cache["input_metrics"] = {
             "input_ev_mean": vertex_error(inp.V, V_clean)["ev_mean"] / diag,
             "input_dist_mean": dm,
-            "input_dist_mean_sym": (dm + _back(S, inp.V, V_clean) / diag) / 2,
+            "input_dist_mean_sym": (dm + _back(S, S.displaced(inp.V)) / diag) / 2,
             "input_normal_error_deg": angle_summary(ang)["normal_error_deg"]}
     return dict(inp.cache["input_metrics"])
 
@@ -119,13 +119,14 @@ def measure(inp, result, params) -> dict:
         return row
     ve = vertex_error(V_out, V_clean)
     S = _clean_surface(inp)
+    S_out = S.displaced(V_out)
     hd = hausdorff(V_out, F, V_clean, F, eps=inp.settings.get("hausdorff_eps", 1e-3), n_samples=0, surface_b=S,
-                   corresponding=True, vertex_distances=True)
+                   corresponding=True, vertex_distances=True, surface_a=S_out)
     clean = _clean_terms(inp)
     _, dbl, vol, ang = _face_terms(V_out, F, clean["centroid"], clean["normals"])
     sd = surface_distance(V_out, F, V_clean, F, d=hd["vertex_distances_ab"], double_areas_=dbl)
     row.update({"ev_mean": ve["ev_mean"] / diag, "ev_rms": ve["ev_rms"] / diag,
-                "dist_mean": sd["dist_mean"] / diag, "dist_mean_back": _back(S, V_out, V_clean) / diag,
+                "dist_mean": sd["dist_mean"] / diag, "dist_mean_back": _back(S, S_out) / diag,
                 "ev_sun": sd["ev_sun"] / diag,
                 "hausdorff": hd["hausdorff"] / diag, "hausdorff_gap": hd["hausdorff_gap"],
                 "hausdorff_upper": hd["hausdorff_upper"] / diag})
