@@ -343,6 +343,9 @@ def test_the_reference_method_is_left_out_of_the_ranking_not_ranked_last():
     md, tex = L.to_markdown(lb.reset_index()), L.to_latex(lb.reset_index())
     assert "\nLeft out: libigl.exact_geodesic, pygeodesic.exact: no measurement in some cells" in md, md
     assert "Left out: libigl.exact\\_geodesic," in tex and "pygeodesic.exact: no measurement" in tex, tex
+    from harness.report.html import _leaderboard_payload                    # the report's card says it too
+    card = next(g for g in _leaderboard_payload({"geodesics": df}, {"geodesics": spec}) if g["metric"] == "rel_error_mean")
+    assert card["left_out"] == "libigl.exact_geodesic, pygeodesic.exact"
     w = L.winners({"geodesics": df}, {"geodesics": spec})
     w = w[w.metric == "rel_error_mean"].set_index("mesh")
     assert w.loc["knight", "best"] == "scratch.heat" and w.loc["knight", "invalid_excluded"] == 0
