@@ -603,3 +603,33 @@ def test_the_pareto_front_tells_times_apart_only_beyond_their_noise(tiny_run, tm
     (row,) = [r for r in s["bestRows"] if r.startswith("knightgaussian_normal 0.2") and "b.ref" in r]
     names = re.findall(r"([a-f]\.[a-z]+) 0\.\d+, ", row)           # the front's entries: "name value, time"
     assert names == ["a.fast", "b.ref", "c.twin", "e.slow"], row
+
+
+def test_the_leaderboard_card_names_and_explains_the_methods_left_out(tmp_path):
+    """The exact geodesic is the reference on a file mesh, so the ranking leaves it out; the card
+    named it followed by an empty explanation (the text was not in the page's data)."""
+    import harness
+    cfg = {"name": "leftout", "repeats": 1, "time_budget": 0, "noise": [{"model": "none"}],
+           "meshes": ["knight", {"procedural": "sphere", "subdivisions": 2}],
+           "tasks": {"geodesics": {"params": {"sources": 1},
+                                   "methods": ["scratch.heat", "libigl.heat", "libigl.exact_geodesic"]}}}
+    harness.run(cfg, out=tmp_path / "geo", quiet=True, workers=1)
+
+    def board(run):
+        cdp = CDP(run)
+        try:
+            cdp.open((run / "report.html").resolve().as_uri())
+            deadline = time.monotonic() + 30
+            while cdp.eval("document.body && document.body.dataset.ready") != "1":
+                assert time.monotonic() < deadline, "the report never set data-ready"
+                cdp.pump(0.2)
+            return cdp.eval("document.getElementById('leaderboard-body').textContent")
+        finally:
+            cdp.close()
+    text = board(tmp_path / "geo")
+    assert "Left out: libigl.exact_geodesic: no measurement in some cells (the reference scored against itself)" in text, text
+    # a run that ranks nothing says why, as winners.md does (it said "no task with two or more methods")
+    harness.run({"name": "norank", "repeats": 1, "time_budget": 0, "noise": [{"model": "none"}], "meshes": ["knight"],
+                 "tasks": {"curvature": {"methods": ["scratch.angle_defect", "scratch.cotan_mean"]}}},
+                out=tmp_path / "cv", quiet=True, workers=1)
+    assert "No ranking: curvature has no value in K_rel_l2, H_rel_l2." in board(tmp_path / "cv")

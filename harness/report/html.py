@@ -20,7 +20,7 @@ from pathlib import Path
 
 
 from .. import tasks as _tasks
-from ..leaderboard import LEFT_OUT, label_text, leaderboard, validity
+from ..leaderboard import LEFT_OUT, _no_ranking, label_text, leaderboard, validity
 from ..results import REPORT_FILES, RunFolder, with_not_run
 from ..schema import scalar as _clean
 from .common import esc as _esc
@@ -348,7 +348,7 @@ def collect(run_dir) -> dict:
     tasks = {t: _frame_payload(specs[t], frames[t]) for t in specs if t in frames}
     return {"meta": meta, "frames": frames, "specs": specs, "tasks": tasks,
             "views": folder.read_views(), "leaderboard": _leaderboard_payload(frames, specs),
-            "left_out_why": LEFT_OUT}
+            "no_ranking": _no_ranking(frames, specs)}
 
 
 def _leaderboard_payload(frames, specs) -> list[dict]:
@@ -358,7 +358,7 @@ def _leaderboard_payload(frames, specs) -> list[dict]:
         r0 = g.iloc[0]
         out.append({"task": task, "metric": metric, "better": r0.better, "cells": int(r0.cells), "k": int(r0.k),
                     "p": _clean(r0.friedman_p), "cd": _clean(r0.critical_difference),
-                    "left_out": r0.left_out if isinstance(r0.left_out, str) else "",
+                    "left_out": r0.left_out if isinstance(r0.left_out, str) else "", "left_out_why": LEFT_OUT,
                     "methods": [{"method": r.method, "mean_rank": float(r.mean_rank), "missing": int(r.missing_cells),
                                  "invalid": int(r.invalid_cells)} for r in g.itertuples()]})
     return out
@@ -403,7 +403,8 @@ def render(run_dir) -> str:
         views_note = f"No 3D views: {why}; `shootout views RUN_DIR` computes them (it runs the chosen methods again)."
     payload = {"name": meta.get("name") or Path(run_dir).name, "tasks": data["tasks"], "views": views,
                "views_note": views_note,
-               "max_display_faces": MAX_DISPLAY_FACES, "leaderboard": data["leaderboard"]}
+               "max_display_faces": MAX_DISPLAY_FACES, "leaderboard": data["leaderboard"],
+               "no_ranking": data["no_ranking"]}
     blob = json.dumps(payload, allow_nan=False, separators=(",", ":"), default=_clean)
     blob = blob.replace("</", "<\\/").replace("<!--", "<\\!--")
     css = (HERE / "report.css").read_text()

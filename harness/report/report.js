@@ -635,6 +635,8 @@
 
   var SMOOTH_METRICS = [
     ['dist_mean', 'mean distance to the clean surface', 'input_dist_mean'],
+    ['dist_mean_sym', 'two-sided mean: of dist_mean and dist_mean_back', 'input_dist_mean_sym'],
+    ['dist_mean_back', 'mean distance of the clean vertices to the result', null],
     ['ev_mean', 'mean vertex error (to its own clean vertex)', 'input_ev_mean'],
     ['ev_rms', 'RMS vertex error', null],
     ['ev_sun', 'E_v, Sun et al. 2007 (area-weighted RMS distance)', null],
@@ -1079,7 +1081,7 @@
       RERENDER.forEach(function (f) { f(); });
     });
     var groups = D.leaderboard || [];
-    if (!groups.length) { host.appendChild(el('p', {'class': 'muted', text: 'No ranking: no task with two or more methods and a ranking metric.'})); return; }
+    if (!groups.length) { host.appendChild(el('p', {'class': 'muted', text: (D.no_ranking || 'No ranking.').replace(' See report.html.', '')})); return; }
     groups.forEach(function (g) {
       var card = el('div', {'class': 'lb'});
       card.appendChild(el('h4', {text: g.task + ': ' + g.metric + ' (' + g.better + ' is better), ' + g.cells + (g.cells === 1 ? ' cell' : ' cells') + ', Friedman p = ' +
@@ -1090,7 +1092,7 @@
         g.methods.map(function (m) { return '<tr><td>' + esc(m.method) + '</td><td class="num">' + fmt(m.mean_rank, 3) +
           '</td><td class="num">' + m.missing + '</td><td class="num">' + m.invalid + '</td></tr>'; }).join('');
       card.appendChild(t);
-      if (g.left_out) card.appendChild(el('p', {'class': 'muted', text: 'Left out: ' + g.left_out + ': ' + (D.left_out_why || '') + '.'}));
+      if (g.left_out) card.appendChild(el('p', {'class': 'muted', text: 'Left out: ' + g.left_out + ': ' + g.left_out_why + '.'}));
       host.appendChild(card);
     });
   }
