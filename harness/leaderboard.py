@@ -389,8 +389,8 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
         axis = spec.get("axis_params") or ()
         cells = _cells(spec, df, axis) if len(df) else None       # once per task, for every metric
         n_seeds = {} if cells is None else _cell_seeds(cells).to_dict()      # the noise draws each cell's rows have
-        for m in spec.get("metrics", []):
-            if not m.get("rank") or m.get("better") not in ("lower", "higher") or m["name"] not in df or not len(df):
+        for m in ranking_metrics(spec):
+            if m["name"] not in df or not len(df):
                 continue
             vals, inval = cell_values(spec, df, m["name"], axis, cells)
             per_seed = seed_values(spec, df, m["name"], axis, cells)
@@ -599,9 +599,7 @@ def leaderboard(frames: dict, specs: dict) -> pd.DataFrame:
         spec = specs.get(task) or {}
         axis = spec.get("axis_params") or ()
         cells = _cells(spec, df, axis) if len(df) else None       # once per task, for every metric
-        for m in spec.get("metrics", []):
-            if not m.get("rank") or m.get("better") not in ("lower", "higher"):
-                continue
+        for m in ranking_metrics(spec):
             ranks, missing, invalid, gone = cell_ranks(spec, df, m["name"], m["better"], axis, cells)
             if ranks.empty:
                 continue
@@ -715,12 +713,16 @@ def to_latex(lb: pd.DataFrame) -> str:
     return "\n".join(out)
 
 
+def ranking_metrics(spec: dict) -> list[dict]:
+    """The task's ranking metrics: declared ``rank`` with a direction (lower or higher is better)."""
+    return [m for m in spec.get("metrics", []) if m.get("rank") and m.get("better") in ("lower", "higher")]
+
+
 def _no_ranking(frames: dict, specs: dict) -> str:
     """Why a run ranks nothing: per task, its ranking metrics and whether any row has a value in one."""
     why = []
     for task in sorted(frames):
-        names = [m["name"] for m in specs.get(task, {}).get("metrics", [])
-                 if m.get("rank") and m.get("better") in ("lower", "higher")]
+        names = [m["name"] for m in ranking_metrics(specs.get(task) or {})]
         df = frames[task]
         if not names:
             why.append(f"{task} declares no ranking metric (it reports properties)")
