@@ -328,7 +328,7 @@ def test_a_result_that_shrinks_along_the_surface_wins_nothing():
     assert e["dist_mean_sym"] > 10 * e["input_dist_mean_sym"] > 10 * t["dist_mean_sym"]
     spec = task.spec()
     why = L.validity(spec, pd.DataFrame([dict(e, status="ok"), dict(t, status="ok")])).tolist()
-    assert why[0].startswith("worse than the noisy input both ways") and why[1] == "", why
+    assert why[0].startswith("farther from the clean surface than the noisy input, both ways") and why[1] == "", why
     assert next(m for m in spec["metrics"] if m["name"] == "dist_mean_sym")["rank"]
 
 

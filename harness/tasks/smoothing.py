@@ -200,5 +200,5 @@ TASK = Task(
     preload=_warm_metrics, input_facts=("closed", "input_metrics", "clean_surface", "clean_terms"),
     invalid_when=(Invalid("diverged", "==", "diverged", value=True),
                   Invalid("dist_mean", ">", "worse than the noisy input", than="input_dist_mean"),
-                  Invalid("dist_mean_sym", ">", "worse than the noisy input both ways on average (lost the clean "
-                          "surface)", than="input_dist_mean_sym")))
+                  Invalid("dist_mean_sym", ">", "farther from the clean surface than the noisy input, both ways on "
+                          "average", than="input_dist_mean_sym")))
