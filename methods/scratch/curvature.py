@@ -64,27 +64,61 @@ def cotan_mean(V, F, *, area="voronoi"):
     return CurvatureResult(H=np.einsum("ij,ij->i", Hn, vertex_normals(V, F)), area=A)
 
 
-def _neighbourhood(F: np.ndarray, n: int, rings: int) -> tuple[np.ndarray, np.ndarray]:
-    """Padded k-ring neighbour indices (n, w) and validity mask, the vertex itself excluded."""
+def _adjacency(F: np.ndarray, n: int) -> sp.csr_matrix:
+    """Vertex adjacency (n, n) of the faces, entries 1."""
     A = sp.csr_matrix((np.ones(6 * len(F)), (np.r_[F[:, 0], F[:, 1], F[:, 2], F[:, 1], F[:, 2], F[:, 0]],
                                               np.r_[F[:, 1], F[:, 2], F[:, 0], F[:, 0], F[:, 1], F[:, 2]])),
                       shape=(n, n))
     A.data[:] = 1.0
-    R = A.copy()
-    for _ in range(rings - 1):
-        R = R + R @ A
-        R.data[:] = 1.0
-    R = R.tolil()
-    R.setdiag(0)
-    R = R.tocsr()
-    R.eliminate_zeros()
+    return A
+
+
+def _grow(R: sp.csr_matrix, A: sp.csr_matrix) -> sp.csr_matrix:
+    """The rows ``R`` of a k-ring reach (entries 1) grown by one ring."""
+    R = (R + R @ A).tocsr()
+    R.data[:] = 1.0
+    return R
+
+
+def _padded(R: sp.csr_matrix, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Padded neighbour indices (k, w) and validity mask of the reach rows ``R`` of the vertices
+    ``rows``, each vertex itself excluded."""
+    R = R.tocoo()
+    keep = R.col != rows[R.row]
+    R = sp.csr_matrix((np.ones(int(keep.sum())), (R.row[keep], R.col[keep])), shape=R.shape)
     counts = np.diff(R.indptr)
-    w = int(counts.max()) if n else 0
-    cols = np.arange(w)
-    mask = cols[None, :] < counts[:, None]
-    idx = np.zeros((n, w), np.int64)
+    w = int(counts.max()) if len(counts) else 0
+    mask = np.arange(w)[None, :] < counts[:, None]
+    idx = np.zeros((len(rows), w), np.int64)
     idx[mask] = R.indices
     return idx, mask
+
+
+def _fit(N: np.ndarray, D: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Principal curvatures ``(k1, k2)`` (k,) of the quadric fit (`quadric_fit`) at k vertices
+    with unit normals ``N`` (k, 3), over their neighbours' offsets ``D`` (k, w, 3) from the
+    vertex, ``mask`` (k, w) the valid ones; 0 where fewer than 5 are valid."""
+    ref = np.where(np.abs(N[:, [0]]) < 0.9, np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]]))
+    t1 = np.cross(N, ref)
+    t1 /= np.maximum(np.linalg.norm(t1, axis=1, keepdims=True), 1e-300)
+    t2 = np.cross(N, t1)
+    u = np.einsum("nwk,nk->nw", D, t1)
+    v = np.einsum("nwk,nk->nw", D, t2)
+    h = np.einsum("nwk,nk->nw", D, N)
+    X = np.stack([u * u, u * v, v * v, u, v], -1) * mask[..., None]   # (k, w, 5), padded rows zero
+    scale = np.maximum(np.sqrt((u * u + v * v) * mask).max(axis=1), 1e-300)
+    S = np.array([2.0, 2.0, 2.0, 1.0, 1.0])                          # column scaling for conditioning
+    Xs = X / (scale[:, None, None] ** S)
+    AtA = np.einsum("nwi,nwj->nij", Xs, Xs) + 1e-12 * np.eye(5)
+    Atb = np.einsum("nwi,nw->ni", Xs, h * mask)
+    coef = np.linalg.solve(AtA, Atb[..., None])[..., 0] / scale[:, None] ** S
+    a, b, c = coef[:, 0], coef[:, 1], coef[:, 2]
+    # shape operator in the (t1, t2) frame; for h = a u^2 + ... the normal curvatures are 2a, 2c
+    # towards +N, i.e. -2a, -2c in the task's sign (H > 0 on a sphere with outward normals)
+    Hm = -(a + c)
+    disc = np.sqrt(np.maximum((a - c) ** 2 + b * b, 0.0))
+    ok = mask.sum(1) >= 5
+    return np.where(ok, Hm + disc, 0.0), np.where(ok, Hm - disc, 0.0)
 
 
 @register("scratch.quadric_fit", task="curvature", library="scratch",
@@ -101,49 +135,29 @@ def quadric_fit(V, F, *, rings=2):
     """
     n = V.shape[0]
     N = vertex_normals(V, F)
-    idx, mask = _neighbourhood(F, n, int(rings))
-    few = mask.sum(1) < 5
-    r = int(rings)
-    while few.any():                                # widen the ring where the fit is underdetermined
-        r += 1
-        idx2, mask2 = _neighbourhood(F, n, r)
-        grew = mask2.sum(1) > mask.sum(1)
-        w = max(idx.shape[1], idx2.shape[1])
-        pad = lambda a, fill: np.pad(a, ((0, 0), (0, w - a.shape[1])), constant_values=fill)  # noqa: E731
-        idx, mask, idx2, mask2 = pad(idx, 0), pad(mask, False), pad(idx2, 0), pad(mask2, False)
-        idx[few], mask[few] = idx2[few], mask2[few]
-        stuck = few & ~grew
-        few = mask.sum(1) < 5
-        if (stuck & few).any():
-            used = np.zeros(n, bool)
-            used[np.asarray(F).ravel()] = True
-            lone = stuck & few & used
-            if lone.any():
-                raise ValueError(f"{int(lone.sum())} vertices lie in connected components of fewer than 6 "
+    A = _adjacency(F, n)
+    R = A.copy()
+    for _ in range(int(rings) - 1):
+        R = _grow(R, A)
+    idx, mask = _padded(R, np.arange(n))
+    k1, k2 = _fit(N, V[idx] - V[:, None, :], mask)
+    few = np.flatnonzero(mask.sum(1) < 5)
+    if few.size:                        # widen the ring of those rows alone until the fit is determined
+        used = np.zeros(n, bool)
+        used[np.asarray(F).ravel()] = True
+        few = few[used[few]]                          # vertices in no face: 0
+        Rf = R[few]
+        while few.size:
+            count = np.diff(Rf.indptr)
+            Rf = _grow(Rf, A)
+            grown = np.diff(Rf.indptr)
+            done = grown - 1 >= 5                     # (the vertex itself is in its reach)
+            stuck = ~done & (grown == count)
+            if stuck.any():
+                raise ValueError(f"{int(stuck.sum())} vertices lie in connected components of fewer than 6 "
                                  "vertices: a quadric fit needs 5 neighbours")
-            few &= ~stuck                           # vertices in no face: 0 below
-    # tangent frame (t1, t2, N) per vertex
-    ref = np.where(np.abs(N[:, [0]]) < 0.9, np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]]))
-    t1 = np.cross(N, ref)
-    t1 /= np.maximum(np.linalg.norm(t1, axis=1, keepdims=True), 1e-300)
-    t2 = np.cross(N, t1)
-    D = V[idx] - V[:, None, :]                                  # (n, w, 3)
-    u = np.einsum("nwk,nk->nw", D, t1)
-    v = np.einsum("nwk,nk->nw", D, t2)
-    h = np.einsum("nwk,nk->nw", D, N)
-    X = np.stack([u * u, u * v, v * v, u, v], -1) * mask[..., None]   # (n, w, 5), padded rows zero
-    scale = np.maximum(np.sqrt((u * u + v * v) * mask).max(axis=1), 1e-300)
-    S = np.array([2.0, 2.0, 2.0, 1.0, 1.0])                          # column scaling for conditioning
-    Xs = X / (scale[:, None, None] ** S)
-    AtA = np.einsum("nwi,nwj->nij", Xs, Xs) + 1e-12 * np.eye(5)
-    Atb = np.einsum("nwi,nw->ni", Xs, h * mask)
-    coef = np.linalg.solve(AtA, Atb[..., None])[..., 0] / scale[:, None] ** S
-    a, b, c = coef[:, 0], coef[:, 1], coef[:, 2]
-    # shape operator in the (t1, t2) frame; for h = a u^2 + ... the normal curvatures are 2a, 2c
-    # towards +N, i.e. -2a, -2c in the task's sign (H > 0 on a sphere with outward normals)
-    Hm = -(a + c)
-    disc = np.sqrt(np.maximum((a - c) ** 2 + b * b, 0.0))
-    k1, k2 = Hm + disc, Hm - disc
-    ok = mask.sum(1) >= 5
-    k1, k2 = np.where(ok, k1, 0.0), np.where(ok, k2, 0.0)
+            if done.any():
+                i, m = _padded(Rf[done], few[done])
+                k1[few[done]], k2[few[done]] = _fit(N[few[done]], V[i] - V[few[done]][:, None, :], m)
+            few, Rf = few[~done], Rf[~done]
     return CurvatureResult(K=k1 * k2, H=(k1 + k2) / 2, k1=k1, k2=k2)
