@@ -159,8 +159,11 @@ class Method:
     def __call__(self, V, F, **params):
         """``finish(run())`` of `bind` on copies of the arrays: a method that writes into its
         input, or returns it, never changes or shares the caller's arrays."""
-        V, F = check_arrays(V, F)
-        run, finish = self.bind(V.copy(), F.copy(), **params)
+        V0, F0 = V, F
+        V, F = check_arrays(V, F)                  # copies of the caller's where they are the same arrays
+        V = V.copy() if isinstance(V0, np.ndarray) and np.shares_memory(V, V0) else V
+        F = F.copy() if isinstance(F0, np.ndarray) and np.shares_memory(F, F0) else F
+        run, finish = self.bind(V, F, **params)
         return finish(run())
 
 
