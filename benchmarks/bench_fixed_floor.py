@@ -12,7 +12,8 @@ Run:  .venv/bin/python benchmarks/bench_fixed_floor.py [--config C] [--repeats 5
      harness's own distance queries (`harness.metrics._bvh_kernel`): for a simplified mesh,
      drawing its samples, a hierarchy over it and the ``2 x hausdorff_samples`` sampled
      distances ``surface_dist_mean`` averages; for a smoothed mesh, the distance of every
-     vertex, which ``dist_mean`` integrates; for a Laplacian, one pass over the matrix for the
+     vertex, which ``dist_mean`` integrates, and of every clean vertex to the result, which
+     ``dist_mean_back`` integrates (its hierarchy refitted); for a Laplacian, one pass over the matrix for the
      PSD column (`harness.metrics._psd_kernel.face_split_bound`, where diagonal dominance does
      not settle it);
    - **this bracket's vertex queries**: the distance of every vertex of both meshes, which the
@@ -92,6 +93,7 @@ def _smoothing_work(inp, res):
     def required():
         order = morton_order(res.V)
         query_many(np.ascontiguousarray(res.V[order]), S.leaf_faces(hints[order]), *S.bvh())
+        S.displaced(res.V).corresponding_distances(S.V, S.walk())
     return required, None
 
 
