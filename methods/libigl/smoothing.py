@@ -69,8 +69,9 @@ def implicit(V, F, *, step=1.0, iterations=1, reassemble=False, solver="auto"):
     The same algorithm and parameters as ``scratch.implicit`` with ``weights: cotan_area``
     (Desbrun et al. 1999), only the operators come from libigl (``igl.cotmatrix``; mass
     ``MASSMATRIX_TYPE_VORONOI``, the mixed Voronoi area of Meyer et al. 2003), so the pair
-    cross-validates to solver precision. libigl's own tutorial (``102_..`` / smoothing
-    example) solves the same ``(M - h L)`` system with Eigen's SimplicialLLT.
+    cross-validates to solver precision. libigl's own tutorial 205 (Laplacian smoothing) solves
+    an ``(M - h L)`` system too, but with the barycentric mass rebuilt every step and the area
+    renormalised, so it is not this method's twin.
     """
     h = float(step) * _mean_edge_length(V, F) ** 2
     X = backward_euler(V, F, lambda P: _igl_operator(P, F), h, iterations, reassemble, solver)
