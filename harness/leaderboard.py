@@ -718,7 +718,7 @@ def ranking_metrics(spec: dict) -> list[dict]:
     return [m for m in spec.get("metrics", []) if m.get("rank") and m.get("better") in ("lower", "higher")]
 
 
-def _no_ranking(frames: dict, specs: dict) -> str:
+def no_ranking_text(frames: dict, specs: dict) -> str:
     """Why a run ranks nothing: per task, its ranking metrics and whether any row has a value in one."""
     why = []
     for task in sorted(frames):
@@ -739,7 +739,7 @@ def write(run_dir, frames: dict, specs: dict) -> pd.DataFrame:
     lb = leaderboard(frames, specs)
     d = Path(run_dir)
     from .results import atomic_write
-    none = _no_ranking(frames, specs)
+    none = no_ranking_text(frames, specs)
     w = winners(frames, specs)
     for name, text in (("leaderboard.csv", lb.to_csv(index=False)), ("leaderboard.md", to_markdown(lb) or none),
                        ("leaderboard.tex", to_latex(lb)), ("winners.csv", w.to_csv(index=False)),

@@ -157,8 +157,9 @@ class Method:
         return (lambda: self.func(V, F, **full)), (lambda result: task.validate_result(self.name, result, V, F))
 
     def __call__(self, V, F, **params):
-        """``finish(run())`` of `bind` on copies of the arrays: a method that writes into its
-        input, or returns it, never changes or shares the caller's arrays."""
+        """``finish(run())`` of `bind`, on copies of the caller's arrays where `check_arrays`
+        kept them as given: a method that writes into its input, or returns it, never changes or
+        shares the caller's arrays."""
         V0, F0 = V, F
         V, F = check_arrays(V, F)                  # copies of the caller's where they are the same arrays
         V = V.copy() if isinstance(V0, np.ndarray) and np.shares_memory(V, V0) else V

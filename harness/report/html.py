@@ -20,7 +20,7 @@ from pathlib import Path
 
 
 from .. import tasks as _tasks
-from ..leaderboard import LEFT_OUT, _no_ranking, label_text, leaderboard, validity
+from ..leaderboard import LEFT_OUT, label_text, leaderboard, no_ranking_text, validity
 from ..results import REPORT_FILES, RunFolder, with_not_run
 from ..schema import scalar as _clean
 from .common import esc as _esc
@@ -348,7 +348,7 @@ def collect(run_dir) -> dict:
     tasks = {t: _frame_payload(specs[t], frames[t]) for t in specs if t in frames}
     return {"meta": meta, "frames": frames, "specs": specs, "tasks": tasks,
             "views": folder.read_views(), "leaderboard": _leaderboard_payload(frames, specs),
-            "no_ranking": _no_ranking(frames, specs)}
+            "no_ranking": no_ranking_text(frames, specs)}
 
 
 def _leaderboard_payload(frames, specs) -> list[dict]:
