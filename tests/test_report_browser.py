@@ -134,18 +134,34 @@ class CDP:
         shutil.rmtree(self.user_dir, ignore_errors=True)
 
 
+def _open_ready(cdp, report: Path, timeout: float) -> None:
+    """Open ``report`` (resolved) in ``cdp`` and wait until its script set data-ready."""
+    cdp.open(report.as_uri())
+    deadline = time.monotonic() + timeout
+    while cdp.eval("document.body && document.body.dataset.ready") != "1":
+        if time.monotonic() > deadline:
+            raise TimeoutError("the report's script never set data-ready")
+        cdp.pump(0.2)
+
+
+def page_value(report: Path, expr: str, timeout=30.0):
+    """Open ``report`` offline, wait until its script set data-ready, return ``expr`` evaluated there."""
+    report = Path(report).resolve()
+    cdp = CDP(report.parent)
+    try:
+        _open_ready(cdp, report, timeout)
+        return cdp.eval(expr)
+    finally:
+        cdp.close()
+
+
 def check_report_in_browser(report: Path, screenshot: Path | None = None, timeout=30.0, full_page=False,
                             interact=True) -> dict:
     """Open ``report`` from file:// offline; return what the page did (used by the test and for docs)."""
     report = Path(report).resolve()
     cdp = CDP(report.parent)
     try:
-        cdp.open(report.as_uri())
-        deadline = time.monotonic() + timeout
-        while cdp.eval("document.body && document.body.dataset.ready") != "1":
-            if time.monotonic() > deadline:
-                raise TimeoutError("the report's script never set data-ready")
-            cdp.pump(0.2)
+        _open_ready(cdp, report, timeout)
         cdp.pump(0.3)
         state = cdp.eval("""(() => {
             const b = document.body.dataset;
@@ -533,20 +549,11 @@ def test_the_report_ties_a_sampled_metric_and_a_certified_bracket_as_winners_csv
     assert len(rows) == 2 and all(r["status"] == "ok" for r in rows)
 
     def best_rows(metric):
-        cdp = CDP(tmp_path)
-        try:
-            cdp.open((tmp_path / "report.html").resolve().as_uri())
-            deadline = time.monotonic() + 30
-            while cdp.eval("document.body && document.body.dataset.ready") != "1":
-                assert time.monotonic() < deadline, "the report never set data-ready"
-                cdp.pump(0.2)
-            return cdp.eval("""(() => {
-                const s = document.querySelector('#plots-simplification select');
-                s.value = '%s'; s.dispatchEvent(new Event('change'));
-                return [...document.querySelectorAll('#plots-simplification table.best tr')].slice(1)
-                    .map(r => r.textContent); })()""" % metric)
-        finally:
-            cdp.close()
+        return page_value(tmp_path / "report.html", """(() => {
+            const s = document.querySelector('#plots-simplification select');
+            s.value = '%s'; s.dispatchEvent(new Event('change'));
+            return [...document.querySelectorAll('#plots-simplification table.best tr')].slice(1)
+                .map(r => r.textContent); })()""" % metric)
 
     cases = [("surface_dist_mean", {"libigl.qslim": 0.01, "scratch.qem": 0.01015}, se, tied)
              for se, tied in ((0.005, True), (0.0001, False))]
@@ -616,16 +623,7 @@ def test_the_leaderboard_card_names_and_explains_the_methods_left_out(tmp_path):
     harness.run(cfg, out=tmp_path / "geo", quiet=True, workers=1)
 
     def board(run):
-        cdp = CDP(run)
-        try:
-            cdp.open((run / "report.html").resolve().as_uri())
-            deadline = time.monotonic() + 30
-            while cdp.eval("document.body && document.body.dataset.ready") != "1":
-                assert time.monotonic() < deadline, "the report never set data-ready"
-                cdp.pump(0.2)
-            return cdp.eval("document.getElementById('leaderboard-body').textContent")
-        finally:
-            cdp.close()
+        return page_value(run / "report.html", "document.getElementById('leaderboard-body').textContent")
     text = board(tmp_path / "geo")
     assert "Left out: libigl.exact_geodesic: no measurement in some cells (the reference scored against itself)" in text, text
     # a run that ranks nothing says why, as winners.md does (it said "no task with two or more methods")
