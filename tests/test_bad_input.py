@@ -296,7 +296,7 @@ def check_ok_row(task: str, row, closed: bool) -> list[str]:
             (need if closed else optional)(["volume_ratio"])
     else:
         need(["target_faces"], 1)
-        need(["out_faces"], 0)
+        need(["out_faces", "zero_area_faces"], 0)
         flag(["manifold", "topology_changed"])
         if _finite(row, "out_faces") and row["out_faces"] > 0:
             need(["hausdorff", "surface_dist_mean"], 0)

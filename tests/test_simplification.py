@@ -358,6 +358,27 @@ def test_genus_change_is_blank_for_a_non_manifold_output():
     assert same["manifold"] and same["genus_change"] == 0 and same["topology_changed"] is False
 
 
+def test_zero_area_output_faces_are_counted():
+    """A simplified output with a collapsed triangle (three collinear corners) showed it only as a
+    min_angle of 0; zero_area_faces counts such faces (0 for a sound output)."""
+    from harness import tasks
+    from harness.mesh import validate
+    from harness.tasks import simplification as simp
+    from harness.tasks.base import CaseInput
+    s = np.linspace(0, 1, 5)
+    X, Y = np.meshgrid(s, s)
+    V = np.c_[X.ravel(), Y.ravel(), np.zeros(X.size)]
+    q = (np.arange(4)[:, None] * 5 + np.arange(4)[None, :]).ravel()
+    F = np.vstack([np.c_[q, q + 1, q + 6], np.c_[q, q + 6, q + 5]])
+    clean = validate(V, F, repair=False)
+    inp = CaseInput(clean, clean.V, clean.F, clean.diagonal(), {"hausdorff_samples": 200})
+    task = tasks.get("simplification")
+    assert task.measure(inp, simp.SimplificationResult(V.copy(), F.copy()), {"target_faces": len(F)})["zero_area_faces"] == 0
+    flat = np.vstack([F, [[0, 1, 2]]])                       # three corners on the line y = 0
+    row = task.measure(inp, simp.SimplificationResult(V.copy(), flat), {"target_faces": len(flat)})
+    assert row["zero_area_faces"] == 1 and row["min_angle"] == 0
+
+
 def test_a_flipped_face_or_a_moebius_output_is_judged():
     """An outside review: one face of a simplified output reversed kept ``manifold`` True,
     ``topology_changed`` False and a Hausdorff distance of 1e-16, a valid row; an annulus

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..core.geometry import compact
+from ..core.geometry import compact, zero_area_faces
 from ..core.params import Param
 from ..errors import MethodFailed
 from ..metrics.hausdorff import hausdorff
@@ -104,6 +104,7 @@ def measure(inp, result, params) -> dict:
                                    or row["components_change"] != 0)
     q = triangle_quality(V_out, F_out)
     row.update({k: q[k] for k in ("min_angle", "radius_ratio_mean", "obtuse_fraction", "min_angle_hist")})
+    row["zero_area_faces"] = int(len(zero_area_faces(V_out, F_out)))
     return row
 
 
@@ -171,6 +172,8 @@ TASK = Task(
         Metric("obtuse_fraction", "lower", "fraction of faces with an angle above 90 degrees", rel=0.01, abs=2e-3),
         Metric("min_angle_hist", "info", "histogram of the smallest angle per face (12 bins of 5 degrees)",
                kind="json"),
+        Metric("zero_area_faces", "count", "output faces of zero area (collapsed: no normal, and no cotangent "
+               "weight for a Laplacian built on them), by the cross product or Heron's formula", kind="int"),
     ),
     params=PARAMS, prepare=prepare, measure=measure, check_result=_check, output_mesh=output_mesh, view=view,
     view_metric="hausdorff", axis_params=frozenset({"target_ratio", "target_faces"}),
