@@ -234,7 +234,7 @@ def _read_off(text: str):
         if stream is not None:
             return stream
     try:
-        return _off_lines(tokens_lines[start:], nv, nf)
+        return _off_lines(tokens_lines[start:], nv, nf, tokens_lines[0][0])
     except (InvalidMeshError, ValueError):
         if plain and len(tokens_lines) == start + nv + nf:   # a free layout whose line count happens to fit
             stream = _off_free(head, tokens_lines[start:], nv, nf)
@@ -260,10 +260,15 @@ def _off_free(head: list, lines: list, nv: int, nf: int):
     return with_count if with_count is not None else without
 
 
-def _off_lines(lines: list, nv: int, nf: int):
+def _off_lines(lines: list, nv: int, nf: int, kind: str = "OFF"):
     """An OFF body of one vertex a line (its first three tokens) and one face a line (``k i_1 .. i_k``,
-    colours after them ignored)."""
+    colours after them ignored). ``kind``: the header's keyword (a COFF, NOFF, ... has extra
+    values a vertex, so only a plain OFF is also read as a free token stream)."""
     if len(lines) < nv + nf:
+        if kind != "OFF":
+            raise InvalidMeshError(f"{kind}: header promises {nv} vertices and {nf} faces, file has {len(lines)} "
+                                   "data lines: truncated, or not one vertex and one face a line (only a plain OFF "
+                                   "may spread its values freely)")
         raise InvalidMeshError(f"truncated OFF: header promises {nv} vertices and {nf} faces, "
                                f"file has {len(lines)} data lines")
     V = np.asarray([t[:3] for t in lines[:nv]], dtype=np.float64).reshape(-1, 3)

@@ -649,3 +649,18 @@ def test_a_binary_stl_with_bytes_past_its_triangles_says_so(tmp_path):
     (tmp_path / "pad.stl").write_bytes(data + b"\0" * 4)
     with pytest.raises(InvalidMeshError, match=r"binary STL of 1 triangle\(s\) with 4 byte\(s\) past them"):
         read_mesh(tmp_path / "pad.stl")
+
+
+def test_a_coff_off_one_vertex_a_line_is_not_called_truncated(tmp_path):
+    """A COFF (or NOFF) has extra values a vertex, so only its one-vertex-a-line layout is read; one
+    laid out freely was refused as 'truncated' with all its values there. It still is refused, but
+    saying both things it may be; a COFF one vertex a line reads, colours ignored."""
+    from harness.errors import InvalidMeshError
+    rows = ["0 0 0 255 0 0 255", "1 0 0 0 255 0 255", "0 1 0 0 0 255 255", "0 0 1 9 9 9 255"]
+    faces = ["3 0 2 1", "3 0 1 3", "3 0 3 2", "3 1 2 3"]
+    (tmp_path / "lines.off").write_text("COFF\n4 4 0\n" + "\n".join(rows + faces) + "\n")
+    assert read_mesh(tmp_path / "lines.off").V.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]
+    (tmp_path / "free.off").write_text("COFF\n4 4 0\n" + " ".join(rows) + "\n" + " ".join(faces) + "\n")
+    with pytest.raises(InvalidMeshError, match="COFF: header promises 4 vertices and 4 faces, file has 2 data lines: "
+                                               "truncated, or not one vertex and one face a line"):
+        read_mesh(tmp_path / "free.off")
