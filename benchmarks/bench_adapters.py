@@ -506,7 +506,7 @@ def main(argv=None) -> int:
             f"{'output diff (tol)':27s} compared")
     print(head)
     print("-" * len(head))
-    rows = {}
+    rows, errors = {}, []
     for m in adapters:
         why = m.unavailable_reason()
         if m.name not in CASES:
@@ -519,6 +519,7 @@ def main(argv=None) -> int:
             r = _bench(m, CASES[m.name], V, F, pairs, a.budget, 3)
         except Exception as exc:      # one adapter failing must not end the run
             print(f"{m.name:28s} error: {type(exc).__name__}: {str(exc)[:200]}", flush=True)
+            errors.append(m.name)
             continue
         rows[m.name] = r
         bad = not (r["diff"] <= r["tol"])
@@ -533,8 +534,9 @@ def main(argv=None) -> int:
     bad = [k for k, r in rows.items() if not (r["diff"] <= r["tol"])]
     print(f"\nA/B median > 1.05: {', '.join(over) or 'none'}")
     print(f"outputs not matching: {', '.join(bad) or 'none'}")
+    print(f"adapters that failed: {', '.join(errors) or 'none'}")
     print(f"load average {os.getloadavg()}")
-    return 0
+    return 1 if bad or errors else 0
 
 
 if __name__ == "__main__":
