@@ -1,7 +1,7 @@
 """Benchmark: heat-method geodesics at large sizes, scratch.heat against libigl's and
 geometry-central's (potpourri3d) heat methods, precomputation and per-source cost.
 
-Run:  .venv/bin/python benchmarks/bench_geodesics.py [--subdivisions 7,8] [--pairs 3] [--sources 4]
+Run:  .venv/bin/python benchmarks/bench_geodesics.py [--subdivisions 7,8] [--pairs 3] [--sources 4] [--threads 1]
 
 Meshes: icosphere subdivisions 7 (327,680 faces) and 8 (1,310,720 faces). All three are run in
 one process, alternating (scratch, libigl, potpourri3d) per round, after a warm-up on a small
@@ -9,8 +9,9 @@ mesh and at each size; each prints the median over rounds of its precomputation 
 per-source time (each method's own split), the min-max of the per-round ratios to scratch.heat,
 how far its distances are from scratch.heat's (libigl's must agree to 1e-8: MISMATCH and exit 1
 otherwise; potpourri3d uses geometry-central's robust intrinsic operator by default, so it
-differs), with the load average and the math libraries' thread counts (scratch.heat's solver
-may use several threads, the libraries' own one).
+differs), with the load average and the math libraries' thread counts: ``--threads`` (default
+1, as libigl's and geometry-central's solvers use one; scratch.heat's PARDISO would otherwise
+take every core, which a ratio would count as the method's).
 Before every call the harness's solver helpers forget the symbolic analyses of earlier calls
 (`harness.runner.forget_inputs`, as a run does before every sample): every call pays for its
 ordering like a first call, as the libraries' do.
@@ -31,7 +32,9 @@ def main(argv=None) -> int:
     ap.add_argument("--subdivisions", default="7,8")
     ap.add_argument("--pairs", type=int, default=3)
     ap.add_argument("--sources", type=int, default=4)
+    ap.add_argument("--threads", type=int, default=1, help="math-library threads for every method (default 1)")
     a = ap.parse_args(argv)
+    from threadpoolctl import threadpool_limits
     import methods
     from harness import datasets
     from harness.runner import forget_inputs
@@ -45,6 +48,7 @@ def main(argv=None) -> int:
         for m in names:                          # warm-up at this size: one-off costs of a first call
             forget_inputs()
             methods.get(m)(V, F, sources=1)
+        threadpool_limits(a.threads)             # after the warm-up: it may have loaded MKL
         pre = {m: [] for m in names}
         per = {m: [] for m in names}
         for _ in range(a.pairs):
