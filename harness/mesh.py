@@ -206,7 +206,7 @@ def _off_stream(toks: list, nv: int, nf: int):
             if pos >= len(toks):
                 return None
             k = int(toks[pos])
-            if k < 0 or pos + 1 + k > len(toks):
+            if k < 3 or pos + 1 + k > len(toks):     # a face has 3 corners at least
                 return None
             polys.append([int(x) for x in toks[pos + 1:pos + 1 + k]])
             pos += 1 + k
@@ -246,14 +246,15 @@ def _read_off(text: str):
 def _off_free(head: list, lines: list, nv: int, nf: int):
     """A plain OFF laid out freely, read as a token stream (`_off_stream`) from the counts line's
     ``head`` tokens and the data ``lines``, or None. A third token after the counts is an edge
-    count only where it is an integer; where it is not, or more data follows it, the reading
-    without an edge count is tried too (three tokens alone: the OFF convention's count, unless
-    the file does not read whole with it). Both readings whole: `InvalidMeshError` (ambiguous)."""
+    count only where it is an integer; where it is not, or more data follows it on that line, the
+    reading without an edge count is tried too. An integer third token alone is the OFF
+    convention's edge count, never a coordinate: a file that does not read whole with it is not
+    read (a value missing further on would otherwise shift every coordinate by one). Both
+    readings whole: `InvalidMeshError` (ambiguous)."""
     body = [x for t in lines for x in t]
     edges = len(head) > 2 and head[2].lstrip("+-").isdigit()
     with_count = _off_stream(head[3:] + body, nv, nf) if edges or len(head) < 3 else None
-    without = (_off_stream(head[2:] + body, nv, nf)
-               if len(head) > 2 and (not edges or len(head) > 3 or with_count is None) else None)
+    without = _off_stream(head[2:] + body, nv, nf) if len(head) > 2 and (not edges or len(head) > 3) else None
     if with_count is not None and without is not None:
         raise InvalidMeshError("ambiguous OFF: data follows the counts on their line, and it reads whole both "
                                "with and without an edge count; put the data on lines of their own")

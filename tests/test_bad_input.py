@@ -620,9 +620,21 @@ def test_an_off_stream_that_reads_whole_with_and_without_an_edge_count_is_refuse
     file without an edge count whose first coordinate could pass for one was read with the
     wrong geometry (2,878 misread). Both readings whole: the file is refused, never guessed."""
     from harness.errors import InvalidMeshError
-    (tmp_path / "a.off").write_text("OFF\n4 3 0 1 1 1\n0 2 0 0 0 0 3 0 3 2 0 1 3 0 2 3 3 2 1 0\n")
+    (tmp_path / "a.off").write_text("OFF\n4 3 1 0 1 4\n0 3 1 0 4 3 3 2 4 3 0 4 3 3 1 4 0 4 0 1 2 0\n")
     with pytest.raises(InvalidMeshError, match="ambiguous OFF"):
-        read_mesh(tmp_path / "a.off")
+        read_mesh(tmp_path / "a.off", repair=False)
+    # a face of fewer than 3 corners is no reading (this file was ambiguous through a 2-corner face)
+    (tmp_path / "a2.off").write_text("OFF\n4 3 0 1 1 1\n0 2 0 0 0 0 3 0 3 2 0 1 3 0 2 3 3 2 1 0\n")
+    assert read_mesh(tmp_path / "a2.off", repair=False).F.tolist() == [[2, 0, 1], [0, 2, 3], [2, 1, 0]]
+    # a fourth review: a value missing from a vertex line of a file with an edge count was read with
+    # the edge count as the first coordinate, every coordinate shifted by one; a file short of a
+    # vertex failed with "face with 1 corners"
+    (tmp_path / "m.off").write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n0 1\n3 0 1 2\n")
+    with pytest.raises(InvalidMeshError):
+        read_mesh(tmp_path / "m.off")
+    (tmp_path / "t.off").write_text("OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 2 3\n")
+    with pytest.raises(InvalidMeshError, match="truncated OFF"):
+        read_mesh(tmp_path / "t.off")
     # a second review: the shifted reading raised on a coordinate (1.5) where a count belongs, and
     # half of 16,472 valid free-layout files (counts with an edge count on their own line) were refused
     (tmp_path / "b.off").write_text("OFF\n4 3 6\n0 0 0 1 0 0\n0 1 0 0 0 1.5\n3 0 2 1\n3 0 1 3 3 0 3 2\n")
