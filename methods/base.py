@@ -157,13 +157,13 @@ class Method:
         return (lambda: self.func(V, F, **full)), (lambda result: task.validate_result(self.name, result, V, F))
 
     def __call__(self, V, F, **params):
-        """``finish(run())`` of `bind`, on copies of the caller's arrays where `check_arrays`
-        kept them as given: a method that writes into its input, or returns it, never changes or
-        shares the caller's arrays."""
+        """``finish(run())`` of `bind`, on copies of the caller's arrays wherever `check_arrays`
+        may have kept their memory (a numpy array, a memoryview, an object numpy reads in place):
+        a method that writes into its input, or returns it, never changes or shares the caller's."""
         V0, F0 = V, F
-        V, F = check_arrays(V, F)                  # copies of the caller's where they are the same arrays
-        V = V.copy() if isinstance(V0, np.ndarray) and np.shares_memory(V, V0) else V
-        F = F.copy() if isinstance(F0, np.ndarray) and np.shares_memory(F, F0) else F
+        V, F = check_arrays(V, F)                  # copies where they may still be the caller's memory
+        V = V.copy() if np.may_share_memory(V, np.asarray(V0)) else V
+        F = F.copy() if np.may_share_memory(F, np.asarray(F0)) else F
         run, finish = self.bind(V, F, **params)
         return finish(run())
 

@@ -143,3 +143,6 @@ def test_a_method_called_through_the_api_never_writes_into_or_returns_the_caller
     r = methods.get("scratch.explicit")(V, F)
     assert np.array_equal(V, V0) and np.array_equal(F, F0) and not np.shares_memory(r.V, V)
     assert np.array_equal(r.V, V0 + 1.0)
+    # so do objects numpy reads in place (a review: a memoryview slipped past a check for ndarray)
+    r = methods.get("scratch.explicit")(memoryview(V), memoryview(F))
+    assert np.array_equal(V, V0) and np.array_equal(F, F0) and not np.shares_memory(r.V, V)
