@@ -162,8 +162,9 @@ class Method:
         a method that writes into its input, or returns it, never changes or shares the caller's."""
         V0, F0 = V, F
         V, F = check_arrays(V, F)                  # copies where they may still be the caller's memory
-        V = V.copy() if np.may_share_memory(V, np.asarray(V0)) else V
-        F = F.copy() if np.may_share_memory(F, np.asarray(F0)) else F
+        shared = lambda X, X0: not isinstance(X0, (list, tuple)) and np.may_share_memory(X, np.asarray(X0))  # noqa: E731
+        V = V.copy() if shared(V, V0) else V
+        F = F.copy() if shared(F, F0) else F
         run, finish = self.bind(V, F, **params)
         return finish(run())
 
