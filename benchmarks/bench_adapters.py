@@ -511,9 +511,11 @@ def main(argv=None) -> int:
         why = m.unavailable_reason()
         if m.name not in CASES:
             print(f"{m.name:28s} skipped: no plain pipeline in this benchmark", flush=True)
+            errors += [m.name] if m.name in only else []         # asked for by name: not measured
             continue
         if why:
             print(f"{m.name:28s} skipped: unavailable ({why.split(';')[0]})", flush=True)
+            errors += [m.name] if m.name in only else []
             continue
         try:
             r = _bench(m, CASES[m.name], V, F, pairs, a.budget, 3)
@@ -534,7 +536,7 @@ def main(argv=None) -> int:
     bad = [k for k, r in rows.items() if not (r["diff"] <= r["tol"])]
     print(f"\nA/B median > 1.05: {', '.join(over) or 'none'}")
     print(f"outputs not matching: {', '.join(bad) or 'none'}")
-    print(f"adapters that failed: {', '.join(errors) or 'none'}")
+    print(f"adapters that failed (or, asked for by --only, could not run): {', '.join(errors) or 'none'}")
     print(f"load average {os.getloadavg()}")
     return 1 if bad or errors else 0
 
