@@ -358,20 +358,26 @@ def test_genus_change_is_blank_for_a_non_manifold_output():
     assert same["manifold"] and same["genus_change"] == 0 and same["topology_changed"] is False
 
 
+def _unit_square_input(k: int, samples: int):
+    """``(V, F, inp)``: the unit square as a k x k grid of vertices, two triangles a cell, and its
+    noise-free case input measured with ``samples`` Hausdorff samples."""
+    from harness.mesh import validate
+    from harness.tasks.base import CaseInput
+    s = np.linspace(0, 1, k)
+    X, Y = np.meshgrid(s, s)
+    V = np.c_[X.ravel(), Y.ravel(), np.zeros(X.size)]
+    q = (np.arange(k - 1)[:, None] * k + np.arange(k - 1)[None, :]).ravel()
+    F = np.vstack([np.c_[q, q + 1, q + k + 1], np.c_[q, q + k + 1, q + k]])
+    clean = validate(V, F, repair=False)
+    return V, F, CaseInput(clean, clean.V, clean.F, clean.diagonal(), {"hausdorff_samples": samples})
+
+
 def test_zero_area_output_faces_are_counted():
     """A simplified output with a collapsed triangle (three collinear corners) showed it only as a
     min_angle of 0; zero_area_faces counts such faces (0 for a sound output)."""
     from harness import tasks
-    from harness.mesh import validate
     from harness.tasks import simplification as simp
-    from harness.tasks.base import CaseInput
-    s = np.linspace(0, 1, 5)
-    X, Y = np.meshgrid(s, s)
-    V = np.c_[X.ravel(), Y.ravel(), np.zeros(X.size)]
-    q = (np.arange(4)[:, None] * 5 + np.arange(4)[None, :]).ravel()
-    F = np.vstack([np.c_[q, q + 1, q + 6], np.c_[q, q + 6, q + 5]])
-    clean = validate(V, F, repair=False)
-    inp = CaseInput(clean, clean.V, clean.F, clean.diagonal(), {"hausdorff_samples": 200})
+    V, F, inp = _unit_square_input(5, 200)
     task = tasks.get("simplification")
     assert task.measure(inp, simp.SimplificationResult(V.copy(), F.copy()), {"target_faces": len(F)})["zero_area_faces"] == 0
     flat = np.vstack([F, [[0, 1, 2]]])                       # three corners on the line y = 0
@@ -389,15 +395,7 @@ def test_a_flipped_face_or_a_moebius_output_is_judged():
     from harness.leaderboard import validity
     from harness.tasks import simplification as simp
     task = tasks.get("simplification")
-    s = np.linspace(0, 1, 9)
-    X, Y = np.meshgrid(s, s)
-    V = np.c_[X.ravel(), Y.ravel(), np.zeros(X.size)]
-    q = (np.arange(8)[:, None] * 9 + np.arange(8)[None, :]).ravel()
-    F = np.vstack([np.c_[q, q + 1, q + 10], np.c_[q, q + 10, q + 9]])
-    from harness.mesh import validate
-    from harness.tasks.base import CaseInput
-    clean = validate(V, F, repair=False)
-    inp = CaseInput(clean, clean.V, clean.F, clean.diagonal(), {"hausdorff_samples": 1000})
+    V, F, inp = _unit_square_input(9, 1000)
     flipped = F.copy()
     flipped[5] = flipped[5, ::-1]
     row = task.measure(inp, simp.SimplificationResult(V.copy(), flipped), {"target_faces": len(F)})
