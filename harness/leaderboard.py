@@ -730,7 +730,7 @@ def no_ranking_text(frames: dict, specs: dict) -> str:
             listed = ", ".join(names)
             why.append(f"{task} has no value in {listed}" if not any(n in df and df[n].notna().any() for n in names)
                        else f"{task}: no cell compares two or more methods on {listed}")
-    return f"No ranking: {'; '.join(why) or 'no results'}. See report.html.\n"
+    return f"No ranking: {'; '.join(why) or 'no results'}."
 
 
 def write(run_dir, frames: dict, specs: dict) -> pd.DataFrame:
@@ -739,7 +739,7 @@ def write(run_dir, frames: dict, specs: dict) -> pd.DataFrame:
     lb = leaderboard(frames, specs)
     d = Path(run_dir)
     from .results import atomic_write
-    none = no_ranking_text(frames, specs)
+    none = no_ranking_text(frames, specs) + " See report.html.\n"
     w = winners(frames, specs)
     for name, text in (("leaderboard.csv", lb.to_csv(index=False)), ("leaderboard.md", to_markdown(lb) or none),
                        ("leaderboard.tex", to_latex(lb)), ("winners.csv", w.to_csv(index=False)),

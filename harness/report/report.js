@@ -1081,7 +1081,7 @@
       RERENDER.forEach(function (f) { f(); });
     });
     var groups = D.leaderboard || [];
-    if (!groups.length) { host.appendChild(el('p', {'class': 'muted', text: (D.no_ranking || 'No ranking.').replace(' See report.html.', '')})); return; }
+    if (!groups.length) { host.appendChild(el('p', {'class': 'muted', text: D.no_ranking || 'No ranking.'})); return; }
     groups.forEach(function (g) {
       var card = el('div', {'class': 'lb'});
       card.appendChild(el('h4', {text: g.task + ': ' + g.metric + ' (' + g.better + ' is better), ' + g.cells + (g.cells === 1 ? ' cell' : ' cells') + ', Friedman p = ' +
