@@ -250,10 +250,9 @@ def _cmd_report(a) -> int:
         meta = folder.read_run_json() or {}
         if ours and meta.get("kind") != "eval":      # the rankings too: an interrupted run's, or a failed write's
             from .leaderboard import write as write_leaderboard
-            from .report.html import task_specs
-            from .results import with_not_run
+            from .results import recorded_specs, with_not_run
             frames = with_not_run(folder.frames(), folder.read_plan())
-            write_leaderboard(d, frames, task_specs(meta, frames))
+            write_leaderboard(d, frames, recorded_specs(meta, frames))
         print(build_report(d))
     finally:
         lock.close()

@@ -159,6 +159,18 @@ def _sane(meta: dict) -> dict:
     return out
 
 
+def recorded_specs(meta: dict, frames) -> dict:
+    """Task declarations: those recorded in run.json (a hand-edited one whose ``metrics`` is not a
+    list of declarations gives way to the installed kind's), then known tasks with a CSV in the folder."""
+    recorded = meta.get("tasks") if isinstance(meta.get("tasks"), dict) else {}
+    specs = {k: v for k, v in recorded.items() if isinstance(v, dict) and isinstance(v.get("metrics"), list)
+             and all(isinstance(m, dict) and isinstance(m.get("name"), str) for m in v["metrics"])}
+    for name, task in tasks.all_tasks().items():
+        if name not in specs and name in frames:
+            specs[name] = task.spec()
+    return specs
+
+
 class RunFolder:
     """Files of one run: ``<task>.csv``, ``run.json``, ``report.html``, ``meshes/``."""
 

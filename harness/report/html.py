@@ -21,7 +21,7 @@ from pathlib import Path
 
 from .. import tasks as _tasks
 from ..leaderboard import LEFT_OUT, label_text, leaderboard, no_ranking_text, validity
-from ..results import REPORT_FILES, RunFolder, with_not_run
+from ..results import REPORT_FILES, RunFolder, recorded_specs, with_not_run
 from ..schema import scalar as _clean
 from .common import esc as _esc
 from .common import fmt as _fmt
@@ -33,18 +33,6 @@ MAX_DISPLAY_FACES = 8000    # what the views were decimated to (stated on the pa
 
 
 # ----------------------------------------------------------------------------- helpers
-
-def task_specs(meta: dict, frames) -> dict:
-    """Task declarations: those recorded in run.json (a hand-edited one whose ``metrics`` is not a
-    list of declarations gives way to the installed kind's), then known tasks with a CSV in the folder."""
-    recorded = meta.get("tasks") if isinstance(meta.get("tasks"), dict) else {}
-    specs = {k: v for k, v in recorded.items() if isinstance(v, dict) and isinstance(v.get("metrics"), list)
-             and all(isinstance(m, dict) and isinstance(m.get("name"), str) for m in v["metrics"])}
-    for name, task in _tasks.all_tasks().items():
-        if name not in specs and name in frames:
-            specs[name] = task.spec()
-    return specs
-
 
 def _frame_payload(spec, df) -> dict:
     """Columns and rows of one task CSV plus derived columns (prefixed with _)."""
@@ -344,7 +332,7 @@ def collect(run_dir) -> dict:
     folder = RunFolder(run_dir)
     meta = folder.read_run_json() or {}
     frames = with_not_run(folder.frames(), folder.read_plan())   # cases an interrupted run never ran: "not run" rows
-    specs = task_specs(meta, frames)
+    specs = recorded_specs(meta, frames)
     tasks = {t: _frame_payload(specs[t], frames[t]) for t in specs if t in frames}
     return {"meta": meta, "frames": frames, "specs": specs, "tasks": tasks,
             "views": folder.read_views(), "leaderboard": _leaderboard_payload(frames, specs),
