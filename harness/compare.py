@@ -71,6 +71,10 @@ refused:
   Under equal load nothing is excused: on equally quiet machines a wall-time change counts
   whatever its CPU time does (sleeps, I/O, lost parallelism). Rows without samples fall back
   to: median over ``time_factor`` x A's, fastest B repeat slower than slowest A repeat, > 1 ms;
+* a case whose result was valid and is not any more (the task's ``invalid_when`` rules, e.g.
+  ``diverged``, or a smoothing result farther from the clean surface than its noisy input; each
+  run judged by the rules its run.json recorded, as its report) regresses, whatever its metrics'
+  own verdicts; one that turns valid improves; one invalid for another reason changed;
 * a case whose status was ok and is not any more regresses; a case of RUN_A missing in RUN_B
   regresses too (an interrupted or shrunken run must not pass CI); cases new in RUN_B are listed.
 
@@ -90,9 +94,9 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from .errors import ShootoutError
-from .leaderboard import params_text
+from .leaderboard import params_text, validity
 from .tasks.base import target_tolerance
-from .results import RunFolder
+from .results import RunFolder, recorded_specs
 from .schema import fmt
 from .schema import number as _num
 
@@ -545,11 +549,13 @@ def _rows(run) -> dict[str, dict]:
     frames = folder.frames()
     if not frames:
         raise ShootoutError(f"{run}: not a run folder (no task CSV such as smoothing.csv)")
+    specs = recorded_specs(folder.read_run_json() or {}, frames)
     out, twice = {}, set()
     for task, df in frames.items():
-        for rec in df.to_dict("records"):
+        why = validity(specs.get(task) or {"name": task}, df, measured=True)     # the run's own rules, as its report
+        for rec, bad in zip(df.to_dict("records"), why):
             rec = {k: (None if isinstance(v, float) and math.isnan(v) else v) for k, v in rec.items()}
-            rec["task"] = task
+            rec["task"], rec["_invalid"] = task, bad if rec.get("status") == "ok" else ""
             cid = str(rec["case_id"])
             if cid in out:
                 twice.add(cid)
@@ -620,6 +626,13 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
                                 "note": _time_note(ra, rb, used_drift)})
         if sa != "ok" or sb != "ok":
             continue
+        wa, wb = ra.get("_invalid") or "", rb.get("_invalid") or ""
+        if wa != wb:                 # a valid result turned invalid (e.g. diverged, worse than its input), or back
+            why = "; ".join(f"{w} invalid: {x}" for w, x in (("A", wa), ("B", wb)) if x)
+            changes.append({**base, "metric": "validity", "a": "invalid" if wa else "valid",
+                            "b": "invalid" if wb else "valid",
+                            "verdict": "regression" if not wa else ("improvement" if not wb else "changed"),
+                            "note": f"{why} (the task's invalid_when rules, as each run's report marks it)"})
         for metric in {**ra, **rb}:
             if metric in SKIP or metric.startswith("_"):
                 continue

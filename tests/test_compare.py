@@ -900,3 +900,22 @@ def test_the_report_refuses_a_case_id_in_two_rows(run_a, tmp_path):
     assert r.returncode == 2 and f"case id {cid} appears in more than one row" in r.stderr, r.stderr
     with pytest.raises(harness.errors.ShootoutError, match="appears in more than one row"):
         harness.load_run(b)
+
+
+def test_a_result_turned_invalid_regresses_though_its_metrics_stay_within_tolerance(run_a, tmp_path):
+    """Each run's rows are judged valid by its own ``invalid_when`` rules, as its report marks them:
+    a smoothing result 0.4 % farther from the clean surface than before but now past its noisy
+    input's distance (by more than the 1 % tolerance) is a regression, listed as ``validity``."""
+    a, b = copy(run_a, tmp_path, "a"), copy(run_a, tmp_path, "b")
+    for d, factor in ((a, 1.008), (b, 1.012)):
+        edit(d / "smoothing.csv", lambda rows, f=factor: rows[0].update(
+            dist_mean_sym=repr(float(rows[0]["input_dist_mean_sym"]) * f)))
+    code, out = run_compare(a, b, time_factor=None)
+    assert code == 1, out
+    line = next(ln for ln in out.splitlines() if ln.startswith("REGRESSION"))
+    assert " validity " in line and "valid" in line and "dist_mean_sym" not in line.split(" validity ")[0], out
+    assert "1 regression(s)" in out and "1 change(s) within tolerance" in out, out
+    code, out = run_compare(b, a, time_factor=None)       # back to valid: an improvement
+    assert code == 0 and "1 improvement(s)" in out, out
+    code, out = run_compare(b, b, time_factor=None)       # invalid in both: no change
+    assert code == 0 and "validity" not in out, out
