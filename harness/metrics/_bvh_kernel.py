@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -40,7 +41,9 @@ def drop_stale_cache(here: Path | None = None) -> bool:
         for f in stale:
             f.unlink(missing_ok=True)
         cache.mkdir(exist_ok=True)
-        stamp.write_text(digest)
+        tmp = stamp.with_name(f"{stamp.name}.{os.getpid()}.tmp")   # whole or absent to a concurrent first import
+        tmp.write_text(digest)
+        os.replace(tmp, stamp)
         return bool(stale)
     except OSError:
         return False
