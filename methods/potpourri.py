@@ -6,12 +6,19 @@ operators are built on the intrinsic Delaunay triangulation of the tufted cover 
 2020, "A Laplacian for nonmanifold triangle meshes"), ``t = t_coef * h^2``. Input units. On an
 open mesh it uses the Neumann heat solution alone (the lumped barycentric mass), not the paper's
 average of the Neumann and Dirichlet ones that ``scratch.heat`` and ``libigl.heat`` use by
-default: with ``use_robust`` off it is ``scratch.heat`` with ``boundary: neumann, mass:
-barycentric`` (to 1e-4 of the largest distance on a cylinder and on Delaunay and non-Delaunay
-planes, `tests/test_geodesics.py`; 2e-4 on bunny, 9e-4 on camelhead, 8e-4 on camelhead with
-noise); with it on, the nearest setting is
-``scratch.heat`` with ``laplacian: tufted, boundary: neumann, mass: barycentric``, which is not
-the same operator (2e-5 to 6e-3 of the largest distance apart on those meshes, woody and noisy ones).
+default. Its Poisson step solves with ``L + 1e-6 I`` (geometry-central's
+``heat_method_distance.cpp``: a fixed shift, not pinned at a vertex as ``scratch.heat`` does),
+whose effect grows as L's smallest non-zero eigenvalue shrinks with the vertex count: 2.5e-3 of
+the largest distance from ``scratch.heat`` on a 327k-face icosphere (1.3e-3 mean), 4e-4 at 20k
+faces. So with ``use_robust`` off it is ``scratch.heat`` with ``boundary: neumann, mass:
+barycentric`` up to that shift (to 1e-4 of the largest distance on a cylinder and on Delaunay and
+non-Delaunay planes, `tests/test_geodesics.py`; 2e-4 on bunny, 9e-4 on camelhead, 8e-4 on
+camelhead with noise); with it on, the nearest setting is
+``scratch.heat`` with ``laplacian: tufted, boundary: neumann, mass: barycentric`` (2e-5 to 6e-3
+of the largest distance apart on those meshes, woody and noisy ones): the same operator, but
+geometry-central takes h from the intrinsic Delaunay mesh (t 0.948 of ours on bunny) besides the
+shift. That t and the shift, set by hand, reproduce both settings to 1e-13 of the largest
+distance on bunny and on icospheres.
 ``pygeodesic.exact``: ``pygeodesic.geodesic.PyGeodesicAlgorithmExact`` (the exact MMP algorithm
 of Surazhsky et al. 2005, the ``geodesic`` C++ library by Kirsanov), distances to all vertices.
 """
