@@ -70,23 +70,31 @@ def main(argv=None) -> int:
     Ws, Ms = operator_and_mass(Vs, Fs, "cotan", "voronoi")
     for f in routes.values():
         f(Ws, Ms, Vs, Fs, 120)
-    threadpool_limits(a.threads)                 # again: the warm-up loaded more libraries (MKL)
     m = datasets.load("armadillo").clean
     W, M = operator_and_mass(m.V, m.F, "cotan", "voronoi")
+    threadpool_limits(a.threads)                 # again: the warm-up and the loading loaded more libraries
+    from threadpoolctl import threadpool_info
+
+    def pools():
+        return ", ".join(sorted({f"{p.get('internal_api')} {p.get('num_threads')}" for p in threadpool_info()}))
+    before = pools()
     T = {r: [] for r in routes}
+    C = {r: [] for r in routes}
     out = {}
     load0 = os.getloadavg()
     for _ in range(a.pairs):
         for name, f in routes.items():
-            t = time.perf_counter()
+            c, t = time.process_time(), time.perf_counter()
             out[name] = f(W, M, m.V, m.F, a.k)
             T[name].append(time.perf_counter() - t)
-    from threadpoolctl import threadpool_info
-    threads = ", ".join(sorted({f"{p.get('internal_api')} {p.get('num_threads')}" for p in threadpool_info()}))
+            C[name].append(time.process_time() - c)
+    after = pools()
     print(f"armadillo {len(m.F):,} faces, k = {a.k}, {a.pairs} rounds, load average {load0} -> {os.getloadavg()}; "
-          f"math-library threads: {threads}")
+          f"math-library threads: {before}" + ("" if after == before else
+                                                f" (after the rounds, a pool loaded by them unlimited: {after})"))
     for name in routes:
-        print(f"  {name:13s} median {statistics.median(T[name]):6.2f} s")
+        print(f"  {name:13s} median {statistics.median(T[name]):6.2f} s, cpu/wall "
+              f"{statistics.median(c / w for c, w in zip(C[name], T[name])):.2f}")
 
     def ratio(x, y, label):
         r = [p / q for p, q in zip(T[x], T[y])]
