@@ -35,13 +35,12 @@ def main(argv=None) -> int:
     ap.add_argument("--sources", type=int, default=4)
     ap.add_argument("--threads", type=int, default=1, help="math-library threads for every method (default 1)")
     a = ap.parse_args(argv)
-    from threadpoolctl import threadpool_limits
+    from _threads import limit_threads
     import methods
     from harness import datasets
     from harness.runner import forget_inputs
     names = ["scratch.heat", "libigl.heat", "potpourri3d.heat"]
     import numpy as np
-    from threadpoolctl import threadpool_info
     print(f"load average {os.getloadavg()}")
     bad = 0
     for s in map(int, a.subdivisions.split(",")):
@@ -49,7 +48,7 @@ def main(argv=None) -> int:
         for m in names:                          # warm-up at this size: one-off costs of a first call
             forget_inputs()
             methods.get(m)(V, F, sources=1)
-        threadpool_limits(a.threads)             # after the warm-up: it may have loaded MKL
+        threads = limit_threads(a.threads)       # after the warm-up: it may have loaded MKL
         pre = {m: [] for m in names}
         per = {m: [] for m in names}
         for _ in range(a.pairs):
@@ -68,7 +67,7 @@ def main(argv=None) -> int:
             print(f"MISMATCH: icosphere {s}: libigl.heat and scratch.heat differ by {gap['libigl.heat']:.1e}")
         print(f"\nicosphere {s}: {len(V):,} vertices, {len(F):,} faces, {a.sources} sources, {a.pairs} rounds, "
               f"load average {os.getloadavg()[0]:.2f}; math-library threads: "
-              + ", ".join(sorted({f"{p.get('internal_api')} {p.get('num_threads')}" for p in threadpool_info()})))
+              + threads)
         p0, q0 = statistics.median(pre["scratch.heat"]), statistics.median(per["scratch.heat"])
         for m in names:
             p, q = statistics.median(pre[m]), statistics.median(per[m])

@@ -40,8 +40,8 @@ def main(argv=None) -> int:
                          "worker per core has; with the libraries' defaults the times vary several-fold "
                          "on a shared machine)")
     a = ap.parse_args(argv)
-    from threadpoolctl import threadpool_limits
-    threadpool_limits(a.threads)
+    from _threads import limit_threads, pools
+    limit_threads(a.threads)
     import scipy.sparse as sp
     from scipy.sparse.linalg import eigsh
 
@@ -72,12 +72,7 @@ def main(argv=None) -> int:
         f(Ws, Ms, Vs, Fs, 120)
     m = datasets.load("armadillo").clean
     W, M = operator_and_mass(m.V, m.F, "cotan", "voronoi")
-    threadpool_limits(a.threads)                 # again: the warm-up and the loading loaded more libraries
-    from threadpoolctl import threadpool_info
-
-    def pools():
-        return ", ".join(sorted({f"{p.get('internal_api')} {p.get('num_threads')}" for p in threadpool_info()}))
-    before = pools()
+    before = limit_threads(a.threads)            # again: the warm-up and the loading loaded more libraries
     T = {r: [] for r in routes}
     C = {r: [] for r in routes}
     out = {}
