@@ -121,13 +121,21 @@ def _load_builtins() -> None:
                 importlib.import_module(info.name)
             except Exception as exc:  # noqa: BLE001 - recorded and shown, never swallowed silently
                 BROKEN[info.name] = f"{type(exc).__name__}: {exc}"
-    for ep in entry_points(group=ENTRY_POINT_GROUP):
+    eps = list(entry_points(group=ENTRY_POINT_GROUP))
+    if eps:                          # an installed package's modules: tried in another process first, as plugins
+        from harness.plugins import import_failure, import_problems
+        found = import_problems([ep.module for ep in eps])
+    for ep in eps:
+        label = f"entry point {ep.name} ({ep.value})"
+        if ep.module in found:       # it raised, exited or ended the process trying it: not imported here
+            BROKEN[label] = found[ep.module]
+            continue
         try:
             obj = ep.load()
             if callable(obj) and not isinstance(obj, type(importlib)):
                 obj()
-        except Exception as exc:  # noqa: BLE001
-            BROKEN[f"entry point {ep.name} ({ep.value})"] = f"{type(exc).__name__}: {exc}"
+        except (Exception, SystemExit) as exc:  # noqa: BLE001 - an installed package's code: its failure is shown
+            BROKEN[label] = import_failure(exc)
 
 
 def _onerror(name):

@@ -621,6 +621,33 @@ def test_methods_lists_a_plugins_methods(tmp_path):
     assert r.returncode == 2 and "--plugin no_such_mod_zz: cannot import it" in r.stderr
 
 
+def test_an_entry_point_module_is_tried_in_another_process_before_it_is_imported(tmp_path):
+    """Installed packages' ``mesh_shootout.methods`` entry points load with the registry: each
+    module is first imported in a throwaway process, as a config's plugins are, so one that ends
+    the process on import (``os._exit``) or calls ``sys.exit`` is named in a warning and left
+    out, and the others' methods are listed; before, the first ended every command silently."""
+    from pathlib import Path
+    site = tmp_path / "site"
+    dist = site / "mylab_eps-0.1.dist-info"
+    dist.mkdir(parents=True)
+    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: mylab-eps\nVersion: 0.1\n")
+    (dist / "entry_points.txt").write_text("[mesh_shootout.methods]\nends = mylab_ep_ends\n"
+                                           "exits = mylab_ep_exits\ngood = mylab_ep_good\n")
+    (site / "mylab_ep_ends.py").write_text("import os\nos._exit(7)\n")
+    (site / "mylab_ep_exits.py").write_text("import sys\nsys.exit(3)\n")
+    (site / "mylab_ep_good.py").write_text(
+        "from methods import register\nfrom harness.tasks.smoothing import SmoothingResult\n\n"
+        "@register('mylab_ep_good.same', task='smoothing', library='mylab')\n"
+        "def same(V, F):\n    \"\"\"Returns its input.\"\"\"\n    return SmoothingResult(V=V.copy())\n")
+    root = Path(__file__).resolve().parents[1]
+    env = {**__import__("os").environ, "PYTHONPATH": f"{site}:{root}"}
+    r = subprocess.run([sys.executable, "-m", "harness.cli", "methods", "--task", "smoothing"],
+                       cwd=tmp_path, capture_output=True, text=True, env=env, timeout=120)
+    assert r.returncode == 0 and "mylab_ep_good.same" in r.stdout, (r.returncode, r.stderr)
+    assert "entry point ends (mylab_ep_ends)" in r.stderr and "exit status 7" in r.stderr, r.stderr
+    assert "entry point exits (mylab_ep_exits)" in r.stderr and "sys.exit(3)" in r.stderr, r.stderr
+
+
 def test_method_sources_name_each_methods_module_and_distribution(monkeypatch):
     """run.json's method_sources: our methods are mesh-shootout's at its version; a plugin's
     module is looked up among the installed distributions (none for the test plugins)."""
