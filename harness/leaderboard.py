@@ -372,7 +372,7 @@ def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_para
 
 WINNER_COLUMNS = ["task", "metric", "better", "mesh", "noise_model", "noise_level", "setting", "best", "value",
                   "tied_with_best", "runner_up", "runner_up_value", "tied_with_runner_up", "input_value", "variants",
-                  "invalid_excluded", "seeds"]
+                  "invalid_excluded", "seeds", "value_upper", "value_se", "runner_up_upper", "runner_up_se"]
 
 
 def winners(frames: dict, specs: dict) -> pd.DataFrame:
@@ -382,7 +382,11 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
     seed they share; for a sampled metric the tolerance on a seed is at least ``SE_Z`` times the
     two values' combined standard error) and the runner-up, the best variant outside that tie (invalid results are excluded and counted in
     ``invalid_excluded``); ``input_value``: the metric of the case's input where the task
-    measures it (``input_<metric>``, e.g. smoothing's noisy input), else blank."""
+    measures it (``input_<metric>``, e.g. smoothing's noisy input), else blank. For a certified
+    bound (``hausdorff``), ``value`` is the mean lower end of the brackets and ``value_upper`` the
+    mean upper end; for a sampled metric (``surface_dist_mean``), ``value_se`` is the standard
+    error of the mean over seeds, ``sqrt(sum se_i^2) / n`` (`_mean_se` over ``se_z``); the same
+    for the runner-up; blank otherwise."""
     rows = []
     for task, df in frames.items():
         spec = specs.get(task) or {}
@@ -397,6 +401,7 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
             se_col = m.get("se")                  # a sampled metric: its standard error per seed
             per_seed_se = (seed_values(spec, df, se_col, axis, cells) if se_col and se_col in df else None)
             se_z = float(m.get("se_z", 3.0))
+            errs = _mean_se(spec, df, m["name"], axis, cells)           # se_z x the standard error of each mean
             d = bracket_rows(spec, df, m["name"], m["better"], axis, cells)         # a certified bound's upper ends
             tops = None if d is None else cell_values(spec, d, "_top", axis, d)[0]
             seed_tops = None if d is None else seed_values(spec, d, "_top", axis, d)
@@ -417,13 +422,15 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
                                      "tied_with_best": "", "runner_up": "", "runner_up_value": None,
                                      "tied_with_runner_up": "", "input_value": iv,
                                      "variants": int(v.notna().sum()), "invalid_excluded": int(inval.loc[cell].sum()),
-                                     "seeds": int(n_seeds.get(cell, 1))})
+                                     "seeds": int(n_seeds.get(cell, 1)), "value_upper": None, "value_se": None,
+                                     "runner_up_upper": None, "runner_up_se": None})
                     continue
                 order = ok.sort_values(ascending=m["better"] == "lower", kind="stable")
                 sign = -1.0 if m["better"] == "higher" else 1.0
                 S = per_seed.loc[cell] if cell in per_seed.index.get_level_values(0) else None
                 E = (se_z * per_seed_se.loc[cell] if S is not None and per_seed_se is not None
                      and cell in per_seed_se.index.get_level_values(0) else None)
+                err = None if errs is None or cell not in errs.index else errs.loc[cell] / se_z
                 T = (seed_tops.loc[cell] if S is not None and seed_tops is not None
                      and cell in seed_tops.index.get_level_values(0) else None)
                 S = None if S is None else (S, E, T)
@@ -431,8 +438,11 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
                 tie = _tied_with_first(order, S, sign, rel, abs_, top)
                 rest = order[[v for v in order.index[1:] if v not in tie]]
                 second = _tied_with_first(rest, S, sign, rel, abs_, top) if len(rest) else []
+                first, up = order.index[0], (rest.index[0] if len(rest) else None)
                 rows.append({"task": task, "metric": m["name"], "better": m["better"], "mesh": mesh,
                              "noise_model": noise, "noise_level": level, "setting": "" if setting == "{}" else setting,
+                             "value_upper": _at(top, first), "runner_up_upper": _at(top, up),
+                             "value_se": _at(err, first), "runner_up_se": _at(err, up),
                              "best": order.index[0], "value": float(order.iloc[0]),
                              "tied_with_best": ", ".join(str(x) for x in tie),
                              "runner_up": rest.index[0] if len(rest) else "",
@@ -441,6 +451,13 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
                              "variants": int(v.notna().sum()), "invalid_excluded": int(inval.loc[cell].sum()),
                              "seeds": int(n_seeds.get(cell, 1))})
     return pd.DataFrame(rows, columns=WINNER_COLUMNS)
+
+
+def _at(values: pd.Series | None, variant) -> float | None:
+    """``values[variant]`` as a float, None where absent or blank."""
+    if values is None or variant is None or variant not in values.index or pd.isna(values[variant]):
+        return None
+    return float(values[variant])
 
 
 def _tied_with_first(order: pd.Series, S, sign: float, rel: float, abs_: float, top: pd.Series | None = None) -> list:
@@ -493,6 +510,17 @@ def _g(x) -> str:
     return "" if x is None or pd.isna(x) else format(x, ".4g")
 
 
+def _val(x, upper=None, se=None) -> str:
+    """A winner's value as printed: ``[lower, upper]`` for a certified bracket whose ends differ
+    at 4 digits, ``value ± se`` for a sampled metric, else the value (4 significant digits)."""
+    text = _g(x)
+    if text and upper is not None and not pd.isna(upper) and _g(upper) != text:
+        return f"[{text}, {_g(upper)}]"
+    if text and se is not None and not pd.isna(se):
+        return f"{text} ± {format(se, '.2g')}"
+    return text
+
+
 def winners_markdown(w: pd.DataFrame) -> str:
     out = []
     for (task, metric), g in w.groupby(["task", "metric"], sort=False):
@@ -500,10 +528,17 @@ def winners_markdown(w: pd.DataFrame) -> str:
         out.append(f"### {task}: best by {metric} ({g.iloc[0].better} is better)\n\n"
                    "| mesh | noise | setting | best | value | runner-up | value |" + (" input |" if inp else "") +
                    " invalid excluded |\n|---|---|---|---|---:|---|---:|" + ("---:|" if inp else "") + "---:|")
-        out += [f"| {_md(r.mesh)} | {_md(r.noise_model)} {r.noise_level} | {_md(setting_text(r.setting))} | {_md(_best(r))} | {_g(r.value)} | "
+        out += [f"| {_md(r.mesh)} | {_md(r.noise_model)} {r.noise_level} | {_md(setting_text(r.setting))} | {_md(_best(r))} | "
+                f"{_val(r.value, getattr(r, 'value_upper', None), getattr(r, 'value_se', None))} | "
                 f"{_md(_runner_up(r))} | "
-                f"{_g(r.runner_up_value)} |" + (f" {_g(r.input_value)} |" if inp else "") + f" {r.invalid_excluded} |"
+                f"{_val(r.runner_up_value, getattr(r, 'runner_up_upper', None), getattr(r, 'runner_up_se', None))} |"
+                + (f" {_g(r.input_value)} |" if inp else "") + f" {r.invalid_excluded} |"
                 for r in g.itertuples()]
+        if g[[c for c in ("value_upper", "runner_up_upper") if c in g]].notna().any(axis=None):
+            out.append(f"\n{metric}: the lower end of a certified bracket; [lower, upper] where the two differ "
+                       "at 4 digits (means over seeds).")
+        if g[[c for c in ("value_se", "runner_up_se") if c in g]].notna().any(axis=None):
+            out.append(f"\n{metric}: a sampled estimate ± its standard error (of the mean over seeds).")
         if inp:
             out.append(f"\ninput: {metric} of the case's input itself; a result worse than it made the input worse.")
         out.append(_seeds_note(g))
@@ -526,6 +561,12 @@ def _seeds_note(g: pd.DataFrame) -> str:
     return f"\nNoisy cells rest on {said} noise seed(s) each.{one}"
 
 
+def _tex_val(r, which: str) -> str:
+    """`_val` of a winners row's ``value`` or ``runner_up`` value, in LaTeX."""
+    v = r.value if which == "value" else r.runner_up_value
+    return _val(v, getattr(r, f"{which}_upper", None), getattr(r, f"{which}_se", None)).replace(" ± ", r" $\pm$ ")
+
+
 def winners_latex(w: pd.DataFrame) -> str:
     out = ["% mesh-shootout winners per cell; needs \\usepackage{booktabs} and \\usepackage{graphicx}"]
     for (task, metric), g in w.groupby(["task", "metric"], sort=False):
@@ -534,10 +575,14 @@ def winners_latex(w: pd.DataFrame) -> str:
                 r"\toprule", r"mesh & noise & setting & best & value & runner-up & value" + (" & input" if inp else "")
                 + r" \\", r"\midrule"]
         out += [f"{_tex(r.mesh)} & {_tex(r.noise_model)} {_tex(r.noise_level)} & {_tex(setting_text(r.setting))} & {_tex(_best(r))} & "
-                f"{_g(r.value)} & {_tex(_runner_up(r))} & {_g(r.runner_up_value)}" + (f" & {_g(r.input_value)}" if inp else "")
-                + " \\\\" for r in g.itertuples()]
+                f"{_tex_val(r, 'value')} & {_tex(_runner_up(r))} & {_tex_val(r, 'runner_up')}"
+                + (f" & {_g(r.input_value)}" if inp else "") + " \\\\" for r in g.itertuples()]
         said = (f"; input: \\texttt{{{_tex(metric)}}} of the case's input itself (a result worse than it made the "
                 "input worse)") if inp else ""
+        if g[[c for c in ("value_upper", "runner_up_upper") if c in g]].notna().any(axis=None):
+            said += "; values are the lower ends of certified brackets, [lower, upper] where the two differ at 4 digits"
+        if g[[c for c in ("value_se", "runner_up_se") if c in g]].notna().any(axis=None):
+            said += r"; sampled estimates $\pm$ their standard errors"
         out += [r"\bottomrule", r"\end{tabular}}",
                 f"\\caption{{{_tex(task)}: best valid method per cell by \\texttt{{{_tex(metric)}}} ({g.iloc[0].better} is "
                 f"better); invalid results excluded{said}.}}", r"\end{table}", ""]

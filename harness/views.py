@@ -150,6 +150,9 @@ def compute_views(cases_by_id: dict, frames, report_cfg: dict, budget_s: float =
             continue
         if task.view_metric:
             v["metric"], v["value"] = task.view_metric, scalar(row.get(task.view_metric))
+            m = task.metric(task.view_metric)
+            if m is not None and m.upper:           # a certified bracket's lower end: its upper end beside it
+                v["upper"] = scalar(row.get(m.upper))
         if row.get("status") != "ok":
             v["error"] = f"the case has status {row.get('status')}: {row.get('error')}"
             continue

@@ -574,6 +574,41 @@ def test_the_report_ties_a_sampled_metric_and_a_certified_bracket_as_winners_csv
         best = best_rows(metric)
         assert len(best) == 1 and "libigl.qslim" in best[0] and ("(tied: scratch.qem)" in best[0]) == tied, (metric, best)
         assert re.search(r"s \[[0-9.]+ [µm]?s–[0-9.]+ [µm]?s\]", best[0]), best       # times carry their spread
+        # the value carries its error bar, on the page and in winners.md: a bracket whose ends differ
+        # at 4 digits is printed whole, a sampled value with its standard error
+        md = (tmp_path / "winners.md").read_text()
+        if metric == "hausdorff":
+            want = "[0.007, 0.01]" if tied else "[0.007, 0.00701]"
+            assert want in best[0] and f"| {want} |" in md, (best, md)
+        else:
+            assert re.search(r"0\.01 ± \d", best[0]) and "| 0.01 ± " in md, (best, md)
+
+
+def test_the_report_colours_a_flag_by_its_declared_direction(tmp_path):
+    """A review: the rows table coloured manifold_lost and orientation_lost true as good and
+    over_target false as bad (only topology_changed and diverged were known to be bad when true)."""
+    import csv
+
+    import harness
+    from harness.cli import main
+    cfg = {"name": "flags", "repeats": 1, "time_budget": 0, "meshes": ["knight"], "hausdorff_samples": 0,
+           "noise": [{"model": "none"}],
+           "tasks": {"simplification": {"methods": ["scratch.qem"], "params": {"target_ratio": [0.5]}}}}
+    harness.run(cfg, out=tmp_path, quiet=True, workers=1)
+    path = tmp_path / "simplification.csv"
+    rows = list(csv.DictReader(path.open()))
+    rows[0].update(manifold_lost="True", orientation_lost="False", over_target="False")
+    _write_rows(path, rows)
+    assert main(["report", str(tmp_path)]) == 0
+    got = page_value(tmp_path / "report.html", """(() => {
+        const t = document.querySelector('#rows-simplification table.rowtable');
+        const head = [...t.querySelectorAll('thead th')].map(h => h.textContent.split(' ')[0].replace(/[▲▼]/g, ''));
+        const cells = [...t.querySelectorAll('tbody tr')][0].querySelectorAll('td');
+        const out = {};
+        for (const c of ['manifold_lost', 'orientation_lost', 'over_target', 'manifold'])
+            out[c] = cells[head.indexOf(c)] ? cells[head.indexOf(c)].className : null;
+        return out; })()""")
+    assert got == {"manifold_lost": "f", "orientation_lost": "t", "over_target": "t", "manifold": "t"}, got
 
 
 def test_the_pareto_front_tells_times_apart_only_beyond_their_noise(tiny_run, tmp_path):
@@ -626,6 +661,14 @@ def test_the_leaderboard_card_names_and_explains_the_methods_left_out(tmp_path):
         return page_value(run / "report.html", "document.getElementById('leaderboard-body').textContent")
     text = board(tmp_path / "geo")
     assert "Left out: libigl.exact_geodesic: no measurement in some cells (the reference scored against itself)" in text, text
+    # with invalid results shown, the reference scored against itself still wins nothing (a review:
+    # it was named best on knight with its distance 0 by construction)
+    best = page_value(tmp_path / "geo" / "report.html", """(() => {
+        const box = document.getElementById('show-invalid');
+        box.checked = true; box.dispatchEvent(new Event('change'));
+        return [...document.querySelectorAll('#plots-geodesics table.best tr')].slice(1).map(r => r.textContent); })()""")
+    knight = [r for r in best if r.startswith("knight")]
+    assert knight and not any("exact_geodesic" in r for r in knight), best
     # a run that ranks nothing says why, as winners.md does (it said "no task with two or more methods")
     harness.run({"name": "norank", "repeats": 1, "time_budget": 0, "noise": [{"model": "none"}], "meshes": ["knight"],
                  "tasks": {"curvature": {"methods": ["scratch.angle_defect", "scratch.cotan_mean"]}}},

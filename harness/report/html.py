@@ -20,7 +20,7 @@ from pathlib import Path
 
 
 from .. import tasks as _tasks
-from ..leaderboard import LEFT_OUT, label_text, leaderboard, no_ranking_text, validity
+from ..leaderboard import LEFT_OUT, label_text, leaderboard, no_ranking_text, not_measured, validity
 from ..results import REPORT_FILES, RunFolder, recorded_specs, with_not_run
 from ..schema import scalar as _clean
 from .common import esc as _esc
@@ -54,9 +54,10 @@ def _frame_payload(spec, df) -> dict:
         target.append(p.get("target_ratio") if p.get("target_ratio") is not None else p.get("target_faces"))
         axis.append(" ".join(f"{k}={short(p.get(k))}" for k in axes if k in p))   # e.g. "k=50": ranked apart
     invalid = validity(spec, df).tolist() if "status" in df else [""] * len(rows)
-    cols += ["_variant", "_noise", "_hist", "_target", "_invalid", "_axis"]
-    for r, v, n, h, t, bad, ax in zip(rows, variants, noise, hist, target, invalid, axis):
-        r += [v, n, h, _clean(t) if not isinstance(t, str) else t, bad or None, ax]
+    missing = not_measured(spec, df).tolist() if "status" in df else [False] * len(rows)   # never a result
+    cols += ["_variant", "_noise", "_hist", "_target", "_invalid", "_axis", "_missing"]
+    for r, v, n, h, t, bad, ax, miss in zip(rows, variants, noise, hist, target, invalid, axis, missing):
+        r += [v, n, h, _clean(t) if not isinstance(t, str) else t, bad or None, ax, bool(miss)]
     order = sorted(set(variants), key=natural_key)
     return {"columns": cols, "rows": rows, "variants": order, "spec": spec}
 

@@ -321,6 +321,29 @@
     var xs = rows.filter(function (r) { return r._variant === v && isNum(r[key]); }).map(function (r) { return rowTop(r, key, tol); });
     return xs.length ? mean(xs) : undefined;
   }
+  // variant v's mean value over a cell's rows as printed (d significant digits): [lower, upper] for a
+  // certified bound whose mean bracket ends differ at those digits (tol[4], e.g. hausdorff_upper), the
+  // value ± the standard error of the mean over seeds, sqrt(sum se^2) / n, for a sampled metric
+  // (tol[2]), else the value; as winners.md prints it
+  function valueText(rows, v, key, tol, d) {
+    var rs = rows.filter(function (r) { return r._variant === v && isNum(r[key]); });
+    if (!rs.length) return '';
+    var txt = fmt(mean(rs.map(function (r) { return r[key]; })), d);
+    var up = tol[4] ? mean(rs.map(function (r) { return rowTop(r, key, tol); })) : null;
+    if (isNum(up) && fmt(up, d) !== txt) return '[' + txt + ', ' + fmt(up, d) + ']';
+    var es = tol[2] ? rs.map(function (r) { return r[tol[2]]; }) : [];
+    if (es.length && es.every(isNum)) {
+      return txt + ' ± ' + fmt(Math.sqrt(es.reduce(function (a, e) { return a + e * e; }, 0)) / es.length, 2);
+    }
+    return txt;
+  }
+  // the caption under a best table for a bracketed or sampled metric, as winners.md words it
+  function valueNote(key, tol) {
+    if (tol[4]) return el('p', {'class': 'caption', text: key + ': the lower end of a certified bracket; [lower, upper] ' +
+      'where the two differ at 4 digits (means over seeds).'});
+    if (tol[2]) return el('p', {'class': 'caption', text: key + ': a sampled estimate ± its standard error (of the mean over seeds).'});
+    return el('span');
+  }
   // with several seeds, a variant ties with the best unless the best is better beyond the tolerance on
   // every seed both have (as winners.csv); rows: the cell's rows, one per variant and seed
   // (a sampled metric: the tolerance on a seed is at least se_z times the two values' combined standard error)
@@ -379,7 +402,7 @@
     var nSeeds = new Set(cell.map(seedOf)).size;      // a variant without a row on some seed of the cell: blank, as winners.csv
     groupBy(cell, function (r) { return r._variant; }).forEach(function (g, v) {
       var blank = new Set(g.map(seedOf)).size < nSeeds ||
-        g.some(function (r) { return r.status !== 'ok' || r.diverged || !isNum(r[key]); });
+        g.some(function (r) { return r.status !== 'ok' || r.diverged || r._missing || !isNum(r[key]); });   // _missing: no measurement, shown invalid or not
       if (!blank && (showInvalid || !g.some(function (r) { return r._invalid; }))) keep.add(v);
     });
     return keep;
@@ -537,6 +560,8 @@
     var texts = d.rows.map(function (r) {
       return cols.map(function (c) { return c === 'params' ? paramText(r[c]) : fmt(r[c]); }).join(' ').toLowerCase();
     });
+    var badWhenTrue = {topology_changed: 1, diverged: 1};
+    ((d.T.spec || {}).metrics || []).forEach(function (m) { if (m.better === 'false') badWhenTrue[m.name] = 1; });
     function cell(r, c) {
       var v = r[c];
       if (v === null || v === undefined || v === '') return '<td></td>';
@@ -545,7 +570,7 @@
       if (c === 'error') return '<td class="err" title="' + esc(v) + '">' + esc(v) + '</td>';
       if (c === 'case_id') return '<td class="mono">' + esc(v) + '</td>';
       if (typeof v === 'boolean' || BOOL_COLS[c]) {
-        var good = (c === 'topology_changed' || c === 'diverged') ? !v : v;
+        var good = badWhenTrue[c] ? !v : v;          // the metric's declared direction (better: false)
         return '<td class="' + (good ? 't' : 'f') + '">' + (v ? '✓' : '✗') + '</td>';
       }
       if (isNum(v)) return '<td class="num" title="' + v + '">' + (c.indexOf('time') === 0 ? fmtTime(v) : fmt(v)) + '</td>';
@@ -685,12 +710,13 @@
         var front = pareto(pts, tol, rs, key).map(function (p) { return esc(p[4]) + ' ' + fmt(p[1], 3) + ', ' + timeCell(p[0], rs, p[4]); }).join('<br>');
         var tr = el('tr', {html: '<td>' + esc(rs[0].mesh) + '</td><td>' + esc(rs[0]._noise) + '</td><td><i style="color:' +
           d.colors[best[4]] + '">●</i> ' + esc(best[4]) + tiedNote(tied) + '</td><td class="num' +
-          (isNum(inp) && best[1] > inp ? ' worse" title="worse than the noisy input' : '') + '">' + fmt(best[1], 4) + '</td><td class="num">' +
+          (isNum(inp) && best[1] > inp ? ' worse" title="worse than the noisy input' : '') + '">' + valueText(rs, best[4], key, tol, 4) + '</td><td class="num">' +
           (isNum(inp) ? fmt(inp, 4) : '—') + '</td><td class="num">' + timeCell(best[0], rs, best[4]) + '</td><td>' + front + '</td>'});
         bt.appendChild(tr);
       });
       plots.appendChild(el('h4', {text: 'Most accurate method per mesh and noise level'}));
       plots.appendChild(bt);
+      plots.appendChild(valueNote(key, tol));
       plots.appendChild(invalidNote(nInvalid));
       if (anyWorse) plots.appendChild(el('p', {'class': 'caption', html: 'Red: even the most accurate method left the mesh ' +
         'further from the clean one than the noisy input was (by ' + esc(key) + ').'}));
@@ -821,13 +847,14 @@
         var fastTied = timed.filter(function (r) { return r !== fast && timeTiedWith(rows, fast._variant, r._variant); })
           .map(function (r) { return r._variant; });
         bt.appendChild(el('tr', {html: '<td>' + esc(best.mesh) + '</td><td>' + esc(best._noise) + '</td><td>' + esc(fmt(best._target)) +
-          '</td><td><i style="color:' + d.colors[best._variant] + '">●</i> ' + esc(best._variant) + tiedNote(tied) + '</td><td class="num">' + fmt(best[key], 4) +
+          '</td><td><i style="color:' + d.colors[best._variant] + '">●</i> ' + esc(best._variant) + tiedNote(tied) + '</td><td class="num">' + valueText(rows, best._variant, key, tol, 4) +
           '</td><td class="num">' + best.out_faces + '</td><td class="num">' + timeCell(best.time_s, rows, best._variant) + '</td><td>' +
           esc(fast._variant) + timeTiedNote(fastTied) +
-          '</td><td class="num">' + fmt(fast[key], 4) + '</td><td class="num">' + timeCell(fast.time_s, rows, fast._variant) + '</td>'}));
+          '</td><td class="num">' + valueText(rows, fast._variant, key, tol, 4) + '</td><td class="num">' + timeCell(fast.time_s, rows, fast._variant) + '</td>'}));
       });
       plots.appendChild(el('h4', {text: 'Most accurate and fastest method per mesh, noise level and target (mean over seeds)'}));
       plots.appendChild(bt);
+      plots.appendChild(valueNote(key, tol));
       plots.appendChild(invalidNote(nInvalid));
       var panels = panelGroup(plots, key + ' vs output face count, per mesh and noise level',
         'One line per method through its face targets (log–log; mean over seeds). Lower-left is better: fewer faces, ' +
@@ -937,7 +964,8 @@
     var card = el('div', {'class': 'view', 'data-case': v.case_id});
     card.appendChild(el('h4', {text: (v.title || 'case ' + v.case_id)}));
     var sub = (v.why ? v.why + ' — ' : '') + 'case ' + v.case_id + (v.params ? ', params ' + paramText(v.params) : '') +
-      (v.metric && isNum(v.value) ? ', ' + v.metric + ' = ' + fmt(v.value) : '');
+      (v.metric && isNum(v.value) ? ', ' + v.metric + (isNum(v.upper) && fmt(v.upper) !== fmt(v.value) ?
+        ' in [' + fmt(v.value) + ', ' + fmt(v.upper) + '] (certified bracket)' : ' = ' + fmt(v.value)) : '');
     card.appendChild(el('div', {'class': 'caption', text: sub}));
     if (v.error) { card.appendChild(el('p', {'class': 'err', text: 'No 3D view: ' + v.error})); return {card: card, ok: false}; }
     if (v.source) card.appendChild(el('div', {'class': 'caption', text: v.source}));
@@ -1148,12 +1176,13 @@
         var tied = tiedWith(rs, best, function (r) { return r[key]; }, function (r) { return r._variant; }, rows, key, tol, lower);
         bt.appendChild(el('tr', {html: '<td>' + esc(best.mesh) + '</td><td>' + esc(best._noise) + '</td>' +
           (axes ? '<td>' + esc(best._axis || '') + '</td>' : '') + '<td><i style="color:' +
-          d.colors[best._variant] + '">●</i> ' + esc(best._variant) + tiedNote(tied) + '</td><td class="num">' + fmt(best[key], 4) +
-          '</td><td class="num">' + timeCell(best.time_s, rows, best._variant) + '</td>'}));
+          d.colors[best._variant] + '">●</i> ' + esc(best._variant) + tiedNote(tied) + '</td><td class="num">' +
+          valueText(rows, best._variant, key, tol, 4) + '</td><td class="num">' + timeCell(best.time_s, rows, best._variant) + '</td>'}));
       });
       plots.appendChild(el('h4', {text: 'Best method per mesh, noise level' + (axes ? ' and setting' : '') + ' by ' + key +
         ' (mean over seeds)'}));
       plots.appendChild(bt);
+      plots.appendChild(valueNote(key, tolOf(spec, key)));
       var panels = panelGroup(plots, key + ' vs time, per mesh' + (axes ? ' and setting' : ''), 'One point per case; ' + esc(m.better) +
         ' is better' + (m.unit ? ' (' + esc(m.unit) + ')' : '') + '.', function () { return legend(d.variants, d.colors, hidden, render); });
       groupBy(vis.filter(function (r) { return isNum(r.time_s); }), function (r) {
