@@ -118,6 +118,8 @@ def _rule_hits(spec: dict, df: pd.DataFrame, why: pd.Series):
             a, b = pd.to_numeric(df[col], errors="coerce"), pd.to_numeric(df[rule["than"]], errors="coerce")
             rel, abs_ = tolerance(spec or {}, col)      # beyond the metric's own resolution, as compare
             hit = (a > b + np.maximum(rel * b.abs(), abs_)).fillna(False)
+        elif rule.get("op") == "blank":
+            hit = pd.to_numeric(df[col], errors="coerce").isna()
         elif rule.get("op") == ">":
             hit = (pd.to_numeric(df[col], errors="coerce") > float(rule["value"])).fillna(False)
         else:
@@ -335,6 +337,17 @@ def _tied_rank_row(score: np.ndarray, rel: float, abs_: float, se: np.ndarray | 
     return ranks
 
 
+def _applies(cells: pd.DataFrame, metric: str, index) -> pd.Series:
+    """Per cell of ``index``: whether ``metric`` applies there, i.e. an ok row of ``cells`` (the
+    `_cells` frame) has a value, or no row is ok (every result failed or did not run). A cell
+    whose ok rows all lack it (a spectrum on a mesh with no analytic reference) is no cell of the
+    metric's, whatever failed there too."""
+    ok = cells["status"] == "ok"
+    has = (ok & _value(cells, metric).notna()).groupby(cells["_cell"]).any().reindex(index).fillna(False)
+    any_ok = ok.groupby(cells["_cell"]).any().reindex(index).fillna(False)
+    return has.astype(bool) | ~any_ok.astype(bool)
+
+
 def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_params=(), cells=None):
     """(ranks DataFrame cells x variants, missing per variant, invalid per variant, left out); values
     within the metric's tolerance tie (`tie_groups`). A variant that is no measurement in some cell
@@ -350,10 +363,7 @@ def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_para
     missing = vals.isna() & ~inval
     ran = ~missing.all(axis=0)             # a variant with no value anywhere (unavailable) is left out
     vals, inval, missing = vals.loc[:, ran], inval.loc[:, ran], missing.loc[:, ran]
-    # a cell whose every row is ok and none has a value: the metric does not apply there (no reference)
-    kept = cells[cells["_variant"].isin(set(vals.columns))]     # the ranked variants' rows (not the unavailable)
-    all_ok = (kept["status"] == "ok").groupby(kept["_cell"]).all().reindex(missing.index).fillna(False)
-    applies = ~(missing.all(axis=1) & all_ok.astype(bool))
+    applies = _applies(cells[cells["_variant"].isin(set(vals.columns))], metric, vals.index)   # the ranked variants' rows
     vals, inval, missing = vals.loc[applies], inval.loc[applies], missing.loc[applies]
     complete = vals[~missing.any(axis=1)]
     inv = inval.loc[complete.index]
@@ -397,6 +407,7 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
             if m["name"] not in df or not len(df):
                 continue
             vals, inval = cell_values(spec, df, m["name"], axis, cells)
+            applies = _applies(cells, m["name"], vals.index) if cells is not None else None
             per_seed = seed_values(spec, df, m["name"], axis, cells)
             se_col = m.get("se")                  # a sampled metric: its standard error per seed
             per_seed_se = (seed_values(spec, df, se_col, axis, cells) if se_col and se_col in df else None)
@@ -415,7 +426,7 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
                 ok = v[~inval.loc[cell] & v.notna()]
                 mesh, noise, level, setting = cell.split(CELL_SEP, 3)
                 if ok.empty:
-                    if inval.loc[cell].any():      # every result invalid: said, not left out
+                    if inval.loc[cell].any() and (applies is None or applies.loc[cell]):   # every result invalid: said
                         rows.append({"task": task, "metric": m["name"], "better": m["better"], "mesh": mesh,
                                      "noise_model": noise, "noise_level": level,
                                      "setting": "" if setting == "{}" else setting, "best": "", "value": None,

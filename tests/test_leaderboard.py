@@ -616,3 +616,28 @@ def test_an_uncertified_hausdorff_ties_where_its_bracket_reaches_and_certified_o
     assert L.tie_groups(np.array([1.0, 1.2, 1.5]), .01, 0, None, np.array([1.3, 1.2, 1.5])).tolist() == [0, 0, 1]
     inf = pd.DataFrame({"hausdorff": [1.0, 1.0], "hausdorff_upper": [np.inf, 0.5]})   # as compare reads them: no bracket
     assert L.row_tops(inf, "hausdorff", "hausdorff_upper").tolist() == [1.0, 1.0]
+
+
+def test_a_cell_where_the_metric_does_not_apply_is_no_cell_though_a_method_failed_there():
+    """A review: on camelhead (no analytic spectrum) three methods ran with no value and one
+    failed; the cell counted as missing for the three (``missing 1``), not for the one that
+    failed, and winners.md said "no valid result" for a metric that does not apply there. A cell
+    whose ok rows all lack the metric drops out; a cell where every result failed still counts."""
+    spec = {"spectrum": {"metrics": [{"name": "eig_rel_error_mean", "better": "lower", "rank": True, "rel": 0.01,
+                                      "abs": 1e-12}], "axis_params": [], "invalid_when": []}}
+    rows = []
+    for mesh, vals in (("sphere", {"A": 0.01, "B": 0.02, "C": 0.03, "D": 0.04}),
+                       ("sphere2", {"A": 0.01, "B": 0.03, "C": 0.02, "D": 0.05}),
+                       ("camelhead", {"A": None, "B": None, "C": None, "D": "error"}),
+                       ("plane", {"A": "error", "B": "error", "C": "error", "D": "error"})):
+        for m, v in vals.items():
+            rows.append({"case_id": f"{mesh}{m}", "task": "spectrum", "mesh": mesh, "noise_model": "none",
+                         "noise_level": 0.0, "seed": 0, "method": m, "params": "{}",
+                         "status": "error" if v == "error" else "ok",
+                         "eig_rel_error_mean": v if isinstance(v, float) else None})
+    frames = {"spectrum": pd.DataFrame(rows)}
+    lb = L.leaderboard(frames, spec).set_index("method")
+    assert lb["missing_cells"].to_dict() == {"A": 0, "B": 0, "C": 0, "D": 0}, lb
+    assert lb["cells"].iloc[0] == 3 and lb["invalid_cells"].to_dict() == {"A": 1, "B": 1, "C": 1, "D": 1}, lb
+    w = L.winners(frames, spec).set_index("mesh")
+    assert "camelhead" not in w.index and w.loc["plane", "best"] == "", w      # every result failed: said

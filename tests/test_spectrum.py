@@ -391,3 +391,41 @@ def test_a_disconnected_meshs_zero_eigenvalues_are_neither_skipped_nor_out_of_or
     r = methods.get("scratch.spectrum")(Vn, Fn, k=10)
     zero = 1e-8 / float(np.linalg.norm(np.ptp(Vn, axis=0))) ** 2
     assert missed_below(r.W, r.M, np.delete(r.values, 4), zero) == 1
+
+
+def test_a_repeated_pair_or_unverifiable_values_are_invalid_not_a_better_score():
+    """A review: returning a pair twice in place of a skipped one hid the skip from ``k_missed``
+    (the count below the top value still matched), and returning the best member of each
+    multiplet 2l+1 times lowered the mean error by 2%, beyond the tie tolerance; a result of
+    values alone (no vectors, W or M) scored 0 against the analytic list with nothing to check
+    it. Pairs that do not solve -W x = lambda M x, or whose vectors are not M-orthonormal, or
+    that cannot be checked, are invalid."""
+    from harness import tasks
+    from harness.config import load_config
+    from harness.leaderboard import validity
+    from harness.runner import prepare_input
+    from harness.tasks.spectrum import analytic
+    cfg = load_config({"meshes": [{"procedural": "sphere", "subdivisions": 2}],
+                       "tasks": {"spectrum": {"methods": ["scratch.spectrum"], "params": {"k": 36}}}})
+    inp, _ = prepare_input(cfg.cases[0])
+    task = tasks.get("spectrum")
+    full = methods.get("scratch.spectrum")(inp.V, inp.F, k=37)
+    lam, X = full.values[:36], full.vectors[:, :36]
+    twice = np.r_[0:12, 11, 13:36]                           # the 12th pair returned twice, the 13th skipped
+    best_of = []                                             # each multiplet l <= 4: its member closest to l(l+1), 2l+1 times
+    ref = analytic(inp.shape, 36)
+    for l in range(5):
+        idx = np.arange(l * l, (l + 1) ** 2)
+        best_of += [idx[np.argmin(np.abs(lam[idx] - ref[idx]))]] * len(idx)
+    best_of += list(range(25, 36))
+    rows = []
+    for name, res in (("honest", type(full)(lam, X, full.W, full.M)),
+                      ("twice", type(full)(lam[twice], X[:, twice], full.W, full.M)),
+                      ("best of each multiplet", type(full)(lam[best_of], X[:, best_of], full.W, full.M)),
+                      ("values alone", type(full)(ref.copy()))):
+        rows.append({**task.measure(inp, res, {"k": 36}), "status": "ok", "method": name})
+    df = pd.DataFrame(rows)
+    assert df.k_missed.tolist()[:3] == [0, 0, 0]             # the inertia count alone sees none of them
+    assert df.eig_rel_error_mean[2] < 0.99 * df.eig_rel_error_mean[0] and df.eig_rel_error_max[3] == 0.0
+    why = validity(task.spec(), df).tolist()
+    assert why[0] == "" and "M-orthonormal" in why[1] and "M-orthonormal" in why[2] and "unverified" in why[3], why

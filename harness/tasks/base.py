@@ -82,9 +82,11 @@ class Metric:
 @dataclass(frozen=True)
 class Invalid:
     """A row is not a valid result when ``column`` ``op`` (``==`` or ``>``) ``value``, or, with
-    ``than``, when ``column > row[than]`` (e.g. an error above the input's own error); with
-    ``method``, only that method's rows (e.g. the method that computes the reference itself);
-    ``why`` is what the report and leaderboard say. Blank values never match. ``missing``: the
+    ``than``, when ``column > row[than]`` (e.g. an error above the input's own error), or, with
+    ``op`` ``blank``, when the ok row has no value in ``column`` (e.g. a check the result gave
+    nothing to make); with ``method``, only that method's rows (e.g. the method that computes the
+    reference itself); ``why`` is what the report and leaderboard say. Otherwise blank values
+    never match. ``missing``: the
     matching rows are no measurement of the method at all (the reference scored against itself):
     rankings leave the method out instead of ranking it last (`harness.leaderboard.not_measured`);
     the report still hides them as invalid."""

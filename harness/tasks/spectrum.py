@@ -258,5 +258,10 @@ TASK = Task(
     ),
     params=PARAMS, measure=measure, check_result=_check, view=view, view_metric="eig_rel_error_mean", order=60,
     axis_params=frozenset({"k"}),         # methods are ranked against each other at the same k
-    invalid_when=(Invalid("k_missed", ">", "skipped eigenvalues: not the k smallest", value=0),),
+    invalid_when=(Invalid("k_missed", ">", "skipped eigenvalues: not the k smallest", value=0),
+                  Invalid("residual_max", ">", "not eigenpairs of its W and M (residual above 1e-6)", value=1e-6),
+                  Invalid("orthogonality_error", ">", "eigenvectors not M-orthonormal (above 1e-6): a pair repeated "
+                          "or not independent", value=1e-6),
+                  Invalid("residual_max", "blank", "unverified: no eigenvectors, W and M (or a singular M) to "
+                          "check the pairs against")),
     checks=(("zero_first", _zero_first),))
