@@ -103,6 +103,32 @@ def test_the_inertia_check_rejects_an_incomplete_band():
         band_eigenpairs(-W, M, 10, sigma0=0.5 * (ref[100] + ref[101]), band=10)
 
 
+def test_the_inertia_check_covers_the_pairs_the_last_band_found_above_its_shift(monkeypatch):
+    """A review: each band's inertia check counts the eigenvalues below its shift, so a pair ARPACK
+    missed above the last shift (with one band, k up to ~47: every pair) went uncounted. A final
+    count at the k-th value certifies them: here ARPACK is made to drop one pair, and the bands
+    refuse instead of returning an incomplete set; honest bands pass it."""
+    import scipy.sparse.linalg as sla
+
+    from methods.scratch.bands import BandFailure, band_eigenpairs
+    from methods.scratch.spectrum import operator_and_mass, smallest_eigenpairs
+    V, F, _ = sphere(3)
+    W, M = operator_and_mass(V, F, "cotan", "voronoi")
+    ref, _ = smallest_eigenpairs(W, M, 60, "dense")
+    sigma0 = -1e-3 * ref[1]
+    lam, _ = band_eigenpairs(-W, M, 40, sigma0=sigma0, band=50)
+    assert np.allclose(lam, ref[:40], rtol=1e-9, atol=1e-9 * ref[1])
+    real = sla.eigsh
+
+    def drops_one(*a, **kw):
+        lam, X = real(*a, **kw)
+        i = int(np.argsort(lam)[20])                      # above the shift: below it, the band's own count sees it
+        return np.delete(lam, i), np.delete(X, i, axis=1)
+    monkeypatch.setattr(sla, "eigsh", drops_one)
+    with pytest.raises(BandFailure, match="inertia"):
+        band_eigenpairs(-W, M, 40, sigma0=sigma0, band=50)
+
+
 def test_heat_kernel_signature_on_the_sphere_and_between_solvers():
     """HKS from k = 36 pairs on icospheres 4 and 5 against the sphere's exact, constant HKS
     (full sum): the error falls by ~4 per subdivision (second order, like the eigenvalues, whose

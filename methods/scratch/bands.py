@@ -12,7 +12,9 @@ surface, ``N(lambda)`` grows linearly: Weyl's law). Per band the ARPACK work is
 
 Completeness is certified, not assumed: by Sylvester's law of inertia the number of negative
 entries of ``D`` is the number of eigenvalues below ``sigma``, and after each band the pairs
-collected below ``sigma`` must be exactly that many. A band whose window leaves a gap, or whose
+collected below ``sigma`` must be exactly that many; at the end, one more factorization at the
+k-th value less ``1e-6`` of it certifies the pairs the last band found above its own shift (a
+multiplet cut at k is whole below that point, as the spectrum task's ``k_missed`` counts it). A band whose window leaves a gap, or whose
 count disagrees, is redone with a closer shift; after ``retries`` failures `BandFailure` is
 raised and the caller falls back to one ARPACK run. At the top of each window the outermost
 cluster (eigenvalues within ``1e-6`` relative of the largest found) is left to the next band,
@@ -91,4 +93,10 @@ def band_eigenpairs(A, M, k: int, sigma0: float, band: int = 50, seed: int = 0, 
     lam = np.concatenate(lams)
     X = np.concatenate(vecs, axis=1)
     order = np.argsort(lam)[:k]
-    return lam[order], X[:, order]
+    lam, X = lam[order], X[:, order]
+    s = float(lam[-1]) - 1e-6 * max(abs(float(lam[-1])), 1e-300)     # the last band's pairs above its shift too
+    if s > sigma0:
+        _, below = _factor((A - s * M).tocsc())
+        if below != int(np.count_nonzero(lam < s)):
+            raise BandFailure(f"{int(np.count_nonzero(lam < s))} eigenvalues returned below {s:.6g}, inertia says {below}")
+    return lam, X
