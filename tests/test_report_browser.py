@@ -399,7 +399,7 @@ def test_winner_tables_show_ties_and_cells_without_a_valid_result(tiny_run, tmp_
     build_report(run)
     s = check_report_in_browser(run / "report.html", interact=False)
     (qem,) = [r for r in s["bestRows"] if "fast_simplification.qem (tied: copy.qem)" in r]
-    assert "µs]fast_simplification.qem0." in qem, qem
+    assert re.search(r"µs\]fast_simplification\.qem\[?0\.", qem), qem     # a bracket where its ends differ
     for p in (path, sm):                         # rows in another order (workers finish in any): the same tables
         rows = list(csv.DictReader(p.open()))
         _write_rows(p, rows[::-1])

@@ -20,7 +20,7 @@ from pathlib import Path
 
 
 from .. import tasks as _tasks
-from ..leaderboard import LEFT_OUT, label_text, leaderboard, no_ranking_text, not_measured, validity
+from ..leaderboard import LEFT_OUT, friedman_p_text, label_text, leaderboard, no_ranking_text, not_measured, validity
 from ..results import REPORT_FILES, RunFolder, recorded_specs, with_not_run
 from ..schema import scalar as _clean
 from .common import esc as _esc
@@ -346,7 +346,8 @@ def _leaderboard_payload(frames, specs) -> list[dict]:
     for (task, metric), g in lb.groupby(["task", "metric"], sort=False):
         r0 = g.iloc[0]
         out.append({"task": task, "metric": metric, "better": r0.better, "cells": int(r0.cells), "k": int(r0.k),
-                    "p": _clean(r0.friedman_p), "cd": _clean(r0.critical_difference),
+                    "p": _clean(r0.friedman_p), "p_text": None if _clean(r0.friedman_p) is None else friedman_p_text(r0),
+                    "cd": _clean(r0.critical_difference),
                     "left_out": r0.left_out if isinstance(r0.left_out, str) else "", "left_out_why": LEFT_OUT,
                     "methods": [{"method": r.method, "mean_rank": float(r.mean_rank), "missing": int(r.missing_cells),
                                  "invalid": int(r.invalid_cells)} for r in g.itertuples()]})

@@ -1112,8 +1112,8 @@
     if (!groups.length) { host.appendChild(el('p', {'class': 'muted', text: D.no_ranking || 'No ranking.'})); return; }
     groups.forEach(function (g) {
       var card = el('div', {'class': 'lb'});
-      card.appendChild(el('h4', {text: g.task + ': ' + g.metric + ' (' + g.better + ' is better), ' + g.cells + (g.cells === 1 ? ' cell' : ' cells') + ', Friedman p = ' +
-        (isNum(g.p) ? fmt(g.p, 2) : '—')}));
+      card.appendChild(el('h4', {text: g.task + ': ' + g.metric + ' (' + g.better + ' is better), ' + g.cells + (g.cells === 1 ? ' cell' : ' cells') + ', Friedman ' +
+        (g.p_text || 'p = —')}));
       if (g.methods.length >= 2) card.appendChild(cdDiagram(g));
       var t = el('table', {'class': 'best'});
       t.innerHTML = '<tr><th>method</th><th>mean rank</th><th>missing cells</th><th>invalid cells</th></tr>' +
