@@ -742,7 +742,7 @@ def to_markdown(lb: pd.DataFrame) -> str:
         out.append(f"### {task}: {metric} ({r0.better} is better)\n\n{int(r0.cells)} cell{'' if int(r0.cells) == 1 else 's'}, Friedman {p}, "
                    f"Nemenyi critical difference (alpha 0.05) = {cd}\n\n| method | mean rank | missing | invalid |\n"
                    "|---|---:|---:|---:|")
-        out += [f"| {_md(r.method)} | {r.mean_rank:.2f} | {r.missing_cells} | {r.invalid_cells} |" for r in g.itertuples()]
+        out += [f"| {_md(r.method)} | {_rank(r.mean_rank)} | {r.missing_cells} | {r.invalid_cells} |" for r in g.itertuples()]
         gone = getattr(r0, "left_out", "")
         if isinstance(gone, str) and gone:
             out.append(f"\nLeft out: {_md(gone)}: {LEFT_OUT}.")
@@ -756,6 +756,13 @@ def _md(s) -> str:
     break as ``<br>`` (it ends the table row)."""
     t = str(s).replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;").replace("|", "\\|")
     return t.replace("\r\n", "<br>").replace("\n", "<br>").replace("\r", "<br>")
+
+
+def _rank(x: float) -> str:
+    """A mean rank to 2 decimals, a half rounded up (2.125 is 2.13), as the report's
+    ``toFixed(2)`` prints it (Python's format rounds a half to even: 2.12)."""
+    from decimal import ROUND_HALF_UP, Decimal
+    return str(Decimal(float(x)).quantize(Decimal("0.01"), rounding=ROUND_HALF_UP))
 
 
 def _tex_num(x: float, digits: int = 2) -> str:
@@ -807,7 +814,7 @@ def to_latex(lb: pd.DataFrame) -> str:
         cd = _cd_text(r0, "--").replace(">=", r"$\geq$")
         out += [r"\begin{table}[t]", r"\centering", FIT, r"\begin{tabular}{lrrr}", r"\toprule",
                 r"method & mean rank & missing & invalid \\", r"\midrule"]
-        out += [f"{_tex(r.method)} & {r.mean_rank:.2f} & {r.missing_cells} & {r.invalid_cells} \\\\"
+        out += [f"{_tex(r.method)} & {_rank(r.mean_rank)} & {r.missing_cells} & {r.invalid_cells} \\\\"
                 for r in g.itertuples()]
         out += [r"\bottomrule", r"\end{tabular}}",
                 f"\\caption{{{_tex(task)}: mean rank by \\texttt{{{_tex(metric)}}} ({r0.better} is better) over "

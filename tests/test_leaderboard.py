@@ -670,3 +670,9 @@ def test_the_friedman_p_is_a_permutation_p_within_its_error_of_the_exact_one():
     row = pd.Series({"friedman_p": 0.043, "friedman_p_se": 0.0014})
     assert L.friedman_p_text(row) == "p = 0.043 ± 0.001"
     assert L.friedman_permutation_p(X.iloc[:1]) == (None, None)
+
+
+def test_mean_ranks_print_alike_in_the_markdown_and_the_report():
+    """A review: 2.125 read 2.12 in leaderboard.md (Python rounds a half to even) and 2.13 on the
+    page (JavaScript's toFixed rounds it up); both now print a half rounded up, 2 decimals."""
+    assert [L._rank(x) for x in (2.125, 2.675, 5, 10.125, 1.0 / 3)] == ["2.13", "2.67", "5.00", "10.13", "0.33"]

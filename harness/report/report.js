@@ -1117,7 +1117,7 @@
       if (g.methods.length >= 2) card.appendChild(cdDiagram(g));
       var t = el('table', {'class': 'best'});
       t.innerHTML = '<tr><th>method</th><th>mean rank</th><th>missing cells</th><th>invalid cells</th></tr>' +
-        g.methods.map(function (m) { return '<tr><td>' + esc(m.method) + '</td><td class="num">' + fmt(m.mean_rank, 3) +
+        g.methods.map(function (m) { return '<tr><td>' + esc(m.method) + '</td><td class="num">' + m.mean_rank.toFixed(2) +
           '</td><td class="num">' + m.missing + '</td><td class="num">' + m.invalid + '</td></tr>'; }).join('');
       card.appendChild(t);
       if (g.left_out) card.appendChild(el('p', {'class': 'muted', text: 'Left out: ' + g.left_out + ': ' + g.left_out_why + '.'}));
