@@ -18,7 +18,11 @@ camelhead with noise); with it on, the nearest setting is
 of the largest distance apart on those meshes, woody and noisy ones): the same operator, but
 geometry-central takes h from the intrinsic Delaunay mesh (t 0.948 of ours on bunny) besides the
 shift. That t and the shift, set by hand, reproduce both settings to 1e-13 of the largest
-distance on bunny and on icospheres.
+distance on bunny and on icospheres. On fine meshes far from the source it fails: it normalises
+each face's heat gradient as ``v / sqrt(x*x + y*y)``, whose squares underflow where the heat
+solution is below about 1e-154 (at ``t = h^2``, beyond geodesic 1.75 on a unit icosphere of 1.31M
+faces: 41% of the vertices), and such faces add nothing to the divergence: 0.43 of the largest
+distance off the exact geodesic there, ``use_robust`` on or off (``scratch.heat``: 7.2e-3).
 ``pygeodesic.exact``: ``pygeodesic.geodesic.PyGeodesicAlgorithmExact`` (the exact MMP algorithm
 of Surazhsky et al. 2005, the ``geodesic`` C++ library by Kirsanov), distances to all vertices.
 """
