@@ -669,6 +669,9 @@ def test_the_leaderboard_card_names_and_explains_the_methods_left_out(tmp_path):
         return [...document.querySelectorAll('#plots-geodesics table.best tr')].slice(1).map(r => r.textContent); })()""")
     knight = [r for r in best if r.startswith("knight")]
     assert knight and not any("exact_geodesic" in r for r in knight), best
+    notes = page_value(tmp_path / "geo" / "report.html", """[...document.querySelectorAll('#plots-geodesics p.caption')]
+        .map(p => p.textContent).join(' | ')""")
+    assert "row(s) are no measurement (" in notes, notes          # they were left out without a word
     # a run that ranks nothing says why, as winners.md does (it said "no task with two or more methods")
     harness.run({"name": "norank", "repeats": 1, "time_budget": 0, "noise": [{"model": "none"}], "meshes": ["knight"],
                  "tasks": {"curvature": {"methods": ["scratch.angle_defect", "scratch.cotan_mean"]}}},

@@ -1156,7 +1156,7 @@
       var bt = el('table', {'class': 'best'});
       var axes = vis.some(function (r) { return r._axis; });    // the task's axis parameters (e.g. k): ranked apart
       bt.innerHTML = '<tr><th>mesh</th><th>noise</th>' + (axes ? '<th>setting</th>' : '') + '<th>best</th><th>' + esc(key) +
-        '</th><th>time</th></tr>';
+        (m.unit ? ' [' + esc(m.unit) + ']' : '') + '</th><th>time</th></tr>';
       var visSet = new Set(vis);
       groupBy(inCellOrder(d.rows.filter(function (r) { return !state.mesh || r.mesh === state.mesh; })), function (r) {
         return r.mesh + '|' + r._noise + '|' + (r._axis || '');
@@ -1183,6 +1183,15 @@
         ' (mean over seeds)'}));
       plots.appendChild(bt);
       plots.appendChild(valueNote(key, tolOf(spec, key)));
+      var bad = d.rows.filter(function (r) {
+        return (!state.mesh || r.mesh === state.mesh) && r.status === 'ok' && isNum(r[key]) && r._invalid; });
+      [[bad.filter(function (r) { return !r._missing; }), ' row(s) are not valid results (', ') and are ' +
+        (showInvalid ? 'included in' : 'left out of') + ' the table above and the plots below; the checkbox at the top of the page toggles them.'],
+       [bad.filter(function (r) { return r._missing; }), ' row(s) are no measurement (', ') and are left out of the table above.']
+      ].forEach(function (x) {
+        if (x[0].length) plots.appendChild(el('p', {'class': 'caption', text: x[0].length + x[1] +
+          uniq(x[0].map(function (r) { return r._invalid; })).join('; ') + x[2]}));
+      });
       var panels = panelGroup(plots, key + ' vs time, per mesh' + (axes ? ' and setting' : ''), 'One point per case; ' + esc(m.better) +
         ' is better' + (m.unit ? ' (' + esc(m.unit) + ')' : '') + '.', function () { return legend(d.variants, d.colors, hidden, render); });
       groupBy(vis.filter(function (r) { return isNum(r.time_s); }), function (r) {
