@@ -72,9 +72,10 @@ refused:
   whatever its CPU time does (sleeps, I/O, lost parallelism). Rows without samples fall back
   to: median over ``time_factor`` x A's, fastest B repeat slower than slowest A repeat, > 1 ms;
 * a case whose result was valid and is not any more (the task's ``invalid_when`` rules, e.g.
-  ``diverged``, or a smoothing result farther from the clean surface than its noisy input; each
-  run judged by the rules its run.json recorded, as its report) regresses, whatever its metrics'
-  own verdicts; one that turns valid improves; one invalid for another reason changed;
+  ``diverged``, or a smoothing result farther from the clean surface than its noisy input; both
+  runs judged by the rules A's run.json recorded, or the installed kind's, and a note when B
+  declares others) regresses, whatever its metrics' own verdicts; one that turns valid improves;
+  one invalid for another reason changed;
 * a case whose status was ok and is not any more regresses; a case of RUN_A missing in RUN_B
   regresses too (an interrupted or shrunken run must not pass CI); cases new in RUN_B are listed.
 
@@ -536,7 +537,9 @@ def _time_note(ra: dict, rb: dict, drift: float = 1.0) -> str:
             f"{eff['n'][0]} vs {eff['n'][1]} samples" + ("" if eff["conclusive"] else " (too few to decide)"))
 
 
-def _rows(run) -> dict[str, dict]:
+def _rows(run, specs: dict | None = None) -> dict[str, dict]:
+    """``{case_id: row}`` of a run folder, each row with ``task`` and ``_invalid`` (why it is not a
+    valid result, by ``specs``' rules for its task where given, else by its own run's)."""
     folder = RunFolder(run)
     if not Path(run).is_dir():
         raise ShootoutError(f"{run}: no such run folder")
@@ -549,10 +552,10 @@ def _rows(run) -> dict[str, dict]:
     frames = folder.frames()
     if not frames:
         raise ShootoutError(f"{run}: not a run folder (no task CSV such as smoothing.csv)")
-    specs = recorded_specs(folder.read_run_json() or {}, frames)
+    specs = {**recorded_specs(folder.read_run_json() or {}, frames), **(specs or {})}
     out, twice = {}, set()
     for task, df in frames.items():
-        why = validity(specs.get(task) or {"name": task}, df, measured=True)     # the run's own rules, as its report
+        why = validity(specs.get(task) or {"name": task}, df, measured=True)
         for rec, bad in zip(df.to_dict("records"), why):
             rec = {k: (None if isinstance(v, float) and math.isnan(v) else v) for k, v in rec.items()}
             rec["task"], rec["_invalid"] = task, bad if rec.get("status") == "ok" else ""
@@ -632,7 +635,7 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
             changes.append({**base, "metric": "validity", "a": "invalid" if wa else "valid",
                             "b": "invalid" if wb else "valid",
                             "verdict": "regression" if not wa else ("improvement" if not wb else "changed"),
-                            "note": f"{why} (the task's invalid_when rules, as each run's report marks it)"})
+                            "note": f"{why} (the task's invalid_when rules, A's)"})
         for metric in {**ra, **rb}:
             if metric in SKIP or metric.startswith("_"):
                 continue
@@ -746,9 +749,14 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
     ``time_factor=None`` (or 0) leaves timings out (metrics only), e.g. for runs from different machines.
     """
     out = out or sys.stdout
-    ra, rb = _rows(run_a), _rows(run_b)
     meta_a = RunFolder(run_a).read_run_json() or {}
     meta_b = RunFolder(run_b).read_run_json() or {}
+    ra = _rows(run_a)
+    spec_a = recorded_specs(meta_a, {r["task"]: None for r in ra.values()})
+    rb = _rows(run_b, spec_a)                 # validity by the baseline's rules, as its metrics' tolerances
+    spec_b = recorded_specs(meta_b, {r["task"]: None for r in rb.values()})
+    other_validity = sorted(t for t in spec_a.keys() & spec_b.keys()
+                            if spec_a[t].get("invalid_when") != spec_b[t].get("invalid_when"))
     rules_a, rules_b = rules_from_specs(meta_a.get("tasks")), rules_from_specs(meta_b.get("tasks"))
     rules = {t: {**rules_b.get(t, {}), **rules_a.get(t, {})} for t in {*rules_a, *rules_b}}   # the baseline's rules
     for t in rules_a.keys() & rules_b.keys():   # a standard-error column either run names is read (older A: none)
@@ -803,6 +811,9 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
     if other_rules:
         print(f"note: B declares other rules (direction or tolerance) for {len(other_rules)} metric(s), e.g. "
               f"{', '.join(other_rules[:5])}: A's (the baseline's) are used", file=out)
+    if other_validity:
+        print(f"note: B declares other validity rules (invalid_when) for {', '.join(other_validity)}: both runs' "
+              "results are judged valid or not by A's (the baseline's)", file=out)
     if res["input_changes"]:
         n = len({c['case_id'] for c in res['input_changes']})
         print(f"warning: {n} case(s) saw different input data (mesh or noise changed): "

@@ -340,11 +340,12 @@ def _tied_rank_row(score: np.ndarray, rel: float, abs_: float, se: np.ndarray | 
 
 
 def _applies(cells: pd.DataFrame, metric: str, index) -> pd.Series:
-    """Per cell of ``index``: whether ``metric`` applies there, i.e. an ok row of ``cells`` (the
-    `_cells` frame) has a value, or no row is ok (every result failed or did not run). A cell
-    whose ok rows all lack it (a spectrum on a mesh with no analytic reference) is no cell of the
-    metric's, whatever failed there too."""
-    ok = cells["status"] == "ok"
+    """Per cell of ``index``: whether ``metric`` applies there, i.e. a valid, measured ok row of
+    ``cells`` (the `_cells` frame) has a value, or no such row exists (every result failed,
+    diverged, was invalid or did not run: "no valid result"). A cell whose valid ok rows all lack
+    it (a spectrum on a mesh with no analytic reference) is no cell of the metric's, whatever
+    failed there too."""
+    ok = (cells["status"] == "ok") & ~cells["_invalid"].astype(bool) & ~cells["_unmeasured"].astype(bool)
     has = (ok & _value(cells, metric).notna()).groupby(cells["_cell"]).any().reindex(index).fillna(False)
     any_ok = ok.groupby(cells["_cell"]).any().reindex(index).fillna(False)
     return has.astype(bool) | ~any_ok.astype(bool)

@@ -33,6 +33,7 @@ import pandas as pd
 from . import tasks
 from .errors import ShootoutError
 from .schema import STATUSES, cell, columns, scalar, task_file
+from .tasks.base import rule_ok
 
 MANIFEST = ".written"
 
@@ -161,11 +162,17 @@ def _sane(meta: dict) -> dict:
 
 def recorded_specs(meta: dict, frames) -> dict:
     """Task declarations: those recorded in run.json (a hand-edited one whose ``metrics`` is not a
-    list of declarations gives way to the installed kind's), then known tasks with a CSV in the folder."""
+    list of declarations gives way to the installed kind's, and so do ``invalid_when`` rules that
+    are not a list of rules with a column and an operator), then known tasks with a CSV in the folder."""
     recorded = meta.get("tasks") if isinstance(meta.get("tasks"), dict) else {}
     specs = {k: v for k, v in recorded.items() if isinstance(v, dict) and isinstance(v.get("metrics"), list)
              and all(isinstance(m, dict) and isinstance(m.get("name"), str) for m in v["metrics"])}
-    for name, task in tasks.all_tasks().items():
+    known = tasks.all_tasks()
+    for name, spec in specs.items():     # hand-edited validity rules no version writes: the installed kind's
+        rules = spec.get("invalid_when", [])
+        if not (isinstance(rules, list) and all(rule_ok(r) for r in rules)):
+            specs[name] = {**spec, "invalid_when": known[name].spec()["invalid_when"] if name in known else []}
+    for name, task in known.items():
         if name not in specs and name in frames:
             specs[name] = task.spec()
     return specs

@@ -903,8 +903,7 @@ def test_the_report_refuses_a_case_id_in_two_rows(run_a, tmp_path):
 
 
 def test_a_result_turned_invalid_regresses_though_its_metrics_stay_within_tolerance(run_a, tmp_path):
-    """Each run's rows are judged valid by its own ``invalid_when`` rules, as its report marks them:
-    a smoothing result 0.4 % farther from the clean surface than before but now past its noisy
+    """Both runs' rows are judged valid by the baseline's ``invalid_when`` rules: a smoothing result 0.4 % farther from the clean surface than before but now past its noisy
     input's distance (by more than the 1 % tolerance) is a regression, listed as ``validity``."""
     a, b = copy(run_a, tmp_path, "a"), copy(run_a, tmp_path, "b")
     for d, factor in ((a, 1.008), (b, 1.012)):
@@ -919,3 +918,25 @@ def test_a_result_turned_invalid_regresses_though_its_metrics_stay_within_tolera
     assert code == 0 and "1 improvement(s)" in out, out
     code, out = run_compare(b, b, time_factor=None)       # invalid in both: no change
     assert code == 0 and "validity" not in out, out
+
+
+def test_validity_rules_that_changed_between_versions_are_no_regression(run_a, tmp_path):
+    """A review: with each run judged by its own recorded rules, a baseline from a version before
+    a new rule made every row the new rule catches a "regression" on upgrading. Both runs are
+    judged by A's rules (as the metrics' tolerances), and a note says B declares others; a
+    hand-edited rule no version writes gives way to the installed kind's."""
+    b = copy(run_a, tmp_path)
+    meta = json.loads((b / "run.json").read_text())
+    rules = meta["tasks"]["smoothing"]["invalid_when"]
+    meta["tasks"]["smoothing"]["invalid_when"] = rules + [{"column": "ev_mean", "op": ">", "value": 0.0,
+                                                           "why": "a stricter rule of a later version"}]
+    (b / "run.json").write_text(json.dumps(meta))
+    for x, y in ((run_a, b), (b, run_a)):
+        code, out = run_compare(x, y, time_factor=None)
+        assert code == 0 and not [ln for ln in out.splitlines() if " validity " in ln and not ln.startswith("note")], out
+        assert "B declares other validity rules (invalid_when) for smoothing" in out, out
+    for bad in ([None], "x", [{"column": "ev_mean", "op": ">", "value": None}]):
+        meta["tasks"]["smoothing"]["invalid_when"] = bad
+        (b / "run.json").write_text(json.dumps(meta))
+        code, out = run_compare(b, run_a, time_factor=None)
+        assert code == 0 and not [ln for ln in out.splitlines() if " validity " in ln and not ln.startswith("note")], (bad, out)

@@ -624,23 +624,26 @@ def test_a_cell_where_the_metric_does_not_apply_is_no_cell_though_a_method_faile
     failed, and winners.md said "no valid result" for a metric that does not apply there. A cell
     whose ok rows all lack the metric drops out; a cell where every result failed still counts."""
     spec = {"spectrum": {"metrics": [{"name": "eig_rel_error_mean", "better": "lower", "rank": True, "rel": 0.01,
-                                      "abs": 1e-12}], "axis_params": [], "invalid_when": []}}
+                                      "abs": 1e-12}], "axis_params": [],
+                         "invalid_when": [{"column": "diverged", "op": "==", "value": True, "why": "diverged"}]}}
     rows = []
     for mesh, vals in (("sphere", {"A": 0.01, "B": 0.02, "C": 0.03, "D": 0.04}),
                        ("sphere2", {"A": 0.01, "B": 0.03, "C": 0.02, "D": 0.05}),
                        ("camelhead", {"A": None, "B": None, "C": None, "D": "error"}),
-                       ("plane", {"A": "error", "B": "error", "C": "error", "D": "error"})):
+                       ("plane", {"A": "error", "B": "error", "C": "error", "D": "error"}),
+                       ("blowup", {"A": "diverged", "B": "diverged", "C": "diverged", "D": "diverged"})):
         for m, v in vals.items():
             rows.append({"case_id": f"{mesh}{m}", "task": "spectrum", "mesh": mesh, "noise_model": "none",
                          "noise_level": 0.0, "seed": 0, "method": m, "params": "{}",
-                         "status": "error" if v == "error" else "ok",
+                         "status": "error" if v == "error" else "ok", "diverged": v == "diverged",
                          "eig_rel_error_mean": v if isinstance(v, float) else None})
     frames = {"spectrum": pd.DataFrame(rows)}
     lb = L.leaderboard(frames, spec).set_index("method")
     assert lb["missing_cells"].to_dict() == {"A": 0, "B": 0, "C": 0, "D": 0}, lb
-    assert lb["cells"].iloc[0] == 3 and lb["invalid_cells"].to_dict() == {"A": 1, "B": 1, "C": 1, "D": 1}, lb
+    assert lb["cells"].iloc[0] == 4 and lb["invalid_cells"].to_dict() == {"A": 2, "B": 2, "C": 2, "D": 2}, lb
     w = L.winners(frames, spec).set_index("mesh")
-    assert "camelhead" not in w.index and w.loc["plane", "best"] == "", w      # every result failed: said
+    assert "camelhead" not in w.index, w
+    assert w.loc["plane", "best"] == "" and w.loc["blowup", "best"] == "", w     # every result failed or diverged: said
 
 
 def test_the_friedman_p_is_a_permutation_p_within_its_error_of_the_exact_one():

@@ -413,7 +413,9 @@
     var keep = cellVariants(cell, key);
     if (!keep.size) {
       var bad = cell.filter(function (r) { return r._invalid && r.status !== 'unavailable' && r.status !== 'not run'; });   // missing, as in winners.csv
-      if (bad.length) bt.appendChild(noValidRow(bad, ncol, target));
+      var valid = cell.filter(function (r) { return r.status === 'ok' && !r._invalid && !r._missing; });
+      var applies = !valid.length || valid.some(function (r) { return isNum(r[key]); });   // as winners.csv: the metric applies here
+      if (bad.length && applies) bt.appendChild(noValidRow(bad, ncol, target));
       return [];
     }
     return cell.filter(function (r) { return keep.has(r._variant) && visSet.has(r); });

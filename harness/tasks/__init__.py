@@ -7,7 +7,7 @@ import pkgutil
 import re
 import sys
 
-from .base import COMMON_COLUMNS, CaseInput, Invalid, Metric, Task
+from .base import COMMON_COLUMNS, CaseInput, Invalid, Metric, Task, rule_ok
 
 _TASKS: dict[str, Task] = {}
 BROKEN: dict[str, str] = {}         # module name -> why it is not a task kind (import error, bad declaration)
@@ -31,6 +31,8 @@ def declaration_problems(task: Task) -> list[str]:
         P.append(f"view_metric {task.view_metric!r} is not one of its metrics {names}")
     P += [f"invalid_when column {r.column!r} is not one of its metrics" for r in task.invalid_when
           if r.column not in names]
+    P += [f"invalid_when rule on {r.column!r}: op must be '==', '>' (with a number, or than=another column) "
+          f"or 'blank', not {r.op!r} with value {r.value!r}" for r in task.invalid_when if not rule_ok(r.spec())]
     return P
 
 

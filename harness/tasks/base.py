@@ -104,6 +104,18 @@ class Invalid:
                 "method": self.method, "missing": self.missing}
 
 
+def rule_ok(r) -> bool:
+    """Whether ``r`` is a validity rule as a version writes it (`harness.tasks.base.Invalid.spec`):
+    a column, an operator ``==``, ``>`` or ``blank``, a number to compare with for ``>`` unless
+    it compares with another column (``than``)."""
+    if not (isinstance(r, dict) and isinstance(r.get("column"), str) and r.get("op") in ("==", ">", "blank")):
+        return False
+    if r.get("than") is not None:
+        return isinstance(r["than"], str)
+    v = r.get("value")
+    return r["op"] != ">" or (isinstance(v, (int, float)) and not isinstance(v, bool))
+
+
 @dataclass
 class CaseInput:
     """What a method is run on and measured against.

@@ -95,7 +95,9 @@ def band_eigenpairs(A, M, k: int, sigma0: float, band: int = 50, seed: int = 0, 
     order = np.argsort(lam)[:k]
     lam, X = lam[order], X[:, order]
     s = float(lam[-1]) - 1e-6 * max(abs(float(lam[-1])), 1e-300)     # the last band's pairs above its shift too
-    if s > sigma0:
+    d = M.diagonal()
+    zero = 1e-8 * float(np.max(np.abs(np.divide(A.diagonal(), d, out=np.zeros_like(d), where=d > 0)), initial=0.0))
+    if s > sigma0 and lam[-1] > zero:        # k zero eigenvalues (k components or more): their inertia is rounding
         _, below = _factor((A - s * M).tocsc())
         if below != int(np.count_nonzero(lam < s)):
             raise BandFailure(f"{int(np.count_nonzero(lam < s))} eigenvalues returned below {s:.6g}, inertia says {below}")
