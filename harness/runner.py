@@ -344,7 +344,8 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
     env = contextlib.ExitStack()          # the thread variables, restored for an in-process (serial) caller
     t_case = time.perf_counter()
     try:
-        from .plugins import ENDED, import_methods
+        from .plugins import import_methods
+        from .trial import ENDED
         methods = import_methods()
         for mod in case.plugins:           # the config checked them in the driver; a worker may lack them
             if mod in ENDED:               # its import ended the trial process of this one's parent (a Dask worker)

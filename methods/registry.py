@@ -123,7 +123,7 @@ def _load_builtins() -> None:
                 BROKEN[info.name] = f"{type(exc).__name__}: {exc}"
     eps = list(entry_points(group=ENTRY_POINT_GROUP))
     if eps:                          # an installed package's modules: tried in another process first, as plugins
-        from harness.plugins import import_failure, import_problems
+        from harness.trial import import_failure, import_problems
         found = import_problems([ep.module for ep in eps])
     for ep in eps:
         label = f"entry point {ep.name} ({ep.value})"

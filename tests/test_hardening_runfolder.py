@@ -738,7 +738,7 @@ def test_plugin_import_is_tried_in_a_child_that_takes_what_it_started(tmp_path, 
     import subprocess
     import threading
 
-    from harness import plugins
+    from harness import plugins, trial
     mark = tmp_path / "pid"
     (tmp_path / "probe_spawn.py").write_text(
         "import subprocess\np = subprocess.Popen(['sleep', '300'])\n"
@@ -749,7 +749,7 @@ def test_plugin_import_is_tried_in_a_child_that_takes_what_it_started(tmp_path, 
     (tmp_path / "probe_86.py").write_text("import os\nos._exit(86)\n")            # the code of a lost record pipe
     (tmp_path / "probe_closer.py").write_text("import os\nos.closerange(3, 65536)\n")
     monkeypatch.syspath_prepend(str(tmp_path))
-    monkeypatch.setattr(plugins, "ENDED", {})
+    monkeypatch.setattr(trial, "ENDED", {})
     stop = threading.Event()
     other = threading.Thread(target=stop.wait, daemon=True)
     if threaded:
@@ -759,15 +759,15 @@ def test_plugin_import_is_tried_in_a_child_that_takes_what_it_started(tmp_path, 
         found = plugins.import_problems(["probe_spawn", "probe_exit", "probe_raise", "probe_ok"])
         assert found == {"probe_exit": "importing it ended the process (exit status 3)",
                          "probe_raise": "ValueError: nope"}, found
-        assert plugins.ENDED == {"probe_exit": "importing it ended the process (exit status 3)"}
+        assert trial.ENDED == {"probe_exit": "importing it ended the process (exit status 3)"}
         pid = int(mark.read_text())
         gone = subprocess.run(["ps", "-o", "stat=", "-p", str(pid)], capture_output=True, text=True).stdout.strip()
         assert gone in ("", "Z"), gone                       # killed (a zombie until init reaps it)
         assert "probe_spawn" not in sys.modules and "probe_ok" not in sys.modules   # tried, not imported here
-        assert (tmp_path / "argv").read_text().endswith("plugins.py") == fresh   # a fresh interpreter, or a fork
+        assert (tmp_path / "argv").read_text().endswith("trial.py") == fresh   # a fresh interpreter, or a fork
         assert fresh or not threaded
         (tmp_path / "probe_exit.py").write_text("X = 2\n")                         # fixed
-        assert plugins.import_problems(["probe_exit"]) == {} and plugins.ENDED == {}
+        assert plugins.import_problems(["probe_exit"]) == {} and trial.ENDED == {}
         # a second review: os._exit(86) passed as a lost pipe, and a module after one that closed it went untried
         assert plugins.import_problems(["probe_86", "probe_closer", "probe_exit", "probe_raise"]) == {
             "probe_86": "importing it closed the files the process had open",
@@ -792,11 +792,11 @@ def test_a_plugin_trial_in_a_process_that_ignores_sigchld(tmp_path, monkeypatch)
     ChildProcessError out of load_config. The failing module is still named."""
     import signal
 
-    from harness import plugins
+    from harness import plugins, trial
     (tmp_path / "probe_sigchld_exit.py").write_text("import os\nos._exit(3)\n")
     (tmp_path / "probe_sigchld_raise.py").write_text("raise ValueError('nope')\n")
     monkeypatch.syspath_prepend(str(tmp_path))
-    monkeypatch.setattr(plugins, "ENDED", {})
+    monkeypatch.setattr(trial, "ENDED", {})
     old = signal.signal(signal.SIGCHLD, signal.SIG_IGN)
     try:
         found = plugins.import_problems(["probe_sigchld_exit", "probe_sigchld_raise"])
