@@ -16,8 +16,8 @@ the cell, which is not ranked on the seeds it survived. Cells where a variant ha
 some seed otherwise (not run, unavailable, the metric not measured) are left out of the test
 and counted in ``missing_cells``; a variant with no value in any cell (e.g. its library is not
 installed) is left out of the ranking altogether instead of emptying it, and a cell where no
-ok row of the ranked variants has a value (the metric does not apply there: a spectrum without
-an analytic reference) is no cell of that metric (`_applies`). With N complete cells
+valid ok row of the ranked variants has a value, though some exist (the metric does not apply
+there: a spectrum without an analytic reference), is no cell of that metric (`_applies`). With N complete cells
 and k variants:
 
 - Friedman: ``chi2_F = 12 N / (k (k+1)) [sum_j R_j^2 - k (k+1)^2 / 4] / C``, R_j the mean ranks
