@@ -73,6 +73,9 @@ def band_eigenpairs(A, M, k: int, sigma0: float, band: int = 50, seed: int = 0, 
             if not inner.any():
                 raise BandFailure("a band holds one cluster only")
             new = inner & (lam > top)
+            if not new.any():           # the window above `top` is one cluster, left to the next band: no progress
+                raise BandFailure(f"the band at {sigma:.6g} found nothing new above {top:.6g} (a cluster as wide "
+                                  "as the band)")
             n_below = collected + int(np.count_nonzero(lam[new] < sigma))   # all collected lie below top < sigma
             if n_below != below:
                 raise BandFailure(f"{n_below} eigenvalues collected below {sigma:.6g}, inertia says {below}")
