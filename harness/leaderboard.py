@@ -506,6 +506,18 @@ def _beaten_on_every_seed(S, best, other, sign: float, rel: float, abs_: float) 
     return bool((gap > tol).all())
 
 
+def noise_label(model, level) -> str:
+    """A noise cell's label, as every output prints it: ``no noise``, ``gaussian_normal 0.3``."""
+    if model in (None, "none") or (isinstance(model, float) and math.isnan(model)):
+        return "no noise"
+    if level is None or (isinstance(level, float) and math.isnan(level)):
+        return str(model)
+    try:
+        return f"{model} {float(level):g}"
+    except (TypeError, ValueError):
+        return f"{model} {level}"
+
+
 def _best(r) -> str:
     """The best variant, and those tied with it ("no valid result" where every result is invalid)."""
     if pd.isna(r.best) or not str(r.best):
@@ -542,7 +554,7 @@ def winners_markdown(w: pd.DataFrame) -> str:
         out.append(f"### {task}: best by {metric} ({g.iloc[0].better} is better)\n\n"
                    "| mesh | noise | setting | best | value | runner-up | value |" + (" input |" if inp else "") +
                    " invalid excluded |\n|---|---|---|---|---:|---|---:|" + ("---:|" if inp else "") + "---:|")
-        out += [f"| {_md(r.mesh)} | {_md(r.noise_model)} {r.noise_level} | {_md(setting_text(r.setting))} | {_md(_best(r))} | "
+        out += [f"| {_md(r.mesh)} | {_md(noise_label(r.noise_model, r.noise_level))} | {_md(setting_text(r.setting))} | {_md(_best(r))} | "
                 f"{_val(r.value, getattr(r, 'value_upper', None), getattr(r, 'value_se', None))} | "
                 f"{_md(_runner_up(r))} | "
                 f"{_val(r.runner_up_value, getattr(r, 'runner_up_upper', None), getattr(r, 'runner_up_se', None))} |"
@@ -588,7 +600,7 @@ def winners_latex(w: pd.DataFrame) -> str:
         out += [r"\begin{table}[t]", r"\centering", FIT, r"\begin{tabular}{llllrlr" + ("r" if inp else "") + "}",
                 r"\toprule", r"mesh & noise & setting & best & value & runner-up & value" + (" & input" if inp else "")
                 + r" \\", r"\midrule"]
-        out += [f"{_tex(r.mesh)} & {_tex(r.noise_model)} {_tex(r.noise_level)} & {_tex(setting_text(r.setting))} & {_tex(_best(r))} & "
+        out += [f"{_tex(r.mesh)} & {_tex(noise_label(r.noise_model, r.noise_level))} & {_tex(setting_text(r.setting))} & {_tex(_best(r))} & "
                 f"{_tex_val(r, 'value')} & {_tex(_runner_up(r))} & {_tex_val(r, 'runner_up')}"
                 + (f" & {_g(r.input_value)}" if inp else "") + " \\\\" for r in g.itertuples()]
         said = (f"; input: \\texttt{{{_tex(metric)}}} of the case's input itself (a result worse than it made the "

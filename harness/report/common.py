@@ -3,12 +3,11 @@ from __future__ import annotations
 
 import html
 import json
-import math
 import re
 
 import numpy as np
 
-from ..leaderboard import params_of, variant_labels  # noqa: F401  (one labelling for every reader)
+from ..leaderboard import noise_label, params_of, variant_labels  # noqa: F401  (one labelling for every reader)
 from ..schema import fmt  # noqa: F401  (the report's formatter is the project's)
 
 
@@ -23,13 +22,5 @@ def short(v) -> str:
 def natural_key(s: str):
     """Sort key that orders "iterations=5" before "iterations=20"."""
     return [(0, float(t), "") if re.fullmatch(r"\d+(\.\d+)?", t) else (1, 0.0, t) for t in re.split(r"(\d+(?:\.\d+)?)", s)]
-
-
-def noise_label(model, level) -> str:
-    if model in (None, "none") or (isinstance(model, float) and math.isnan(model)):
-        return "no noise"
-    if level is None or (isinstance(level, float) and math.isnan(level)):
-        return str(model)
-    return f"{model} {level:g}"
 
 
