@@ -14,8 +14,9 @@ Completeness is certified, not assumed: by Sylvester's law of inertia the number
 entries of ``D`` is the number of eigenvalues below ``sigma``, and after each band the pairs
 collected below ``sigma`` must be exactly that many; at the end, one more factorization at the
 k-th value less ``1e-6`` of it certifies the pairs the last band found above its own shift (a
-multiplet cut at k is whole below that point, as the spectrum task's ``k_missed`` counts it). A band whose window leaves a gap, or whose
-count disagrees, is redone with a closer shift; after ``retries`` failures `BandFailure` is
+multiplet cut at k is whole below that point, as the spectrum task's ``k_missed`` counts it).
+A band whose window leaves a gap, whose count disagrees, or that finds nothing new (its window
+above the part collected is one cluster) is redone with a closer shift; after ``retries`` failures `BandFailure` is
 raised and the caller falls back to one ARPACK run. At the top of each window the outermost
 cluster (eigenvalues within ``1e-6`` relative of the largest found) is left to the next band,
 so a multiplet is never split between bands. ARPACK converges slowly when a window's edge
