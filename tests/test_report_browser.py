@@ -669,6 +669,9 @@ def test_the_leaderboard_card_names_and_explains_the_methods_left_out(tmp_path):
         return [...document.querySelectorAll('#plots-geodesics table.best tr')].slice(1).map(r => r.textContent); })()""")
     knight = [r for r in best if r.startswith("knight")]
     assert knight and not any("exact_geodesic" in r for r in knight), best
+    md = (tmp_path / "geo" / "winners.md").read_text()     # a setting reads alike on the page and in the Markdown
+    settings = {ln.split(" | ")[2] for ln in md.splitlines() if ln.startswith("| knight |")}
+    assert settings and all(any(x in r for r in knight) for x in settings), (settings, knight)
     notes = page_value(tmp_path / "geo" / "report.html", """[...document.querySelectorAll('#plots-geodesics p.caption')]
         .map(p => p.textContent).join(' | ')""")
     assert "row(s) are no measurement (" in notes, notes          # they were left out without a word

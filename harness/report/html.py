@@ -20,12 +20,13 @@ from pathlib import Path
 
 
 from .. import tasks as _tasks
-from ..leaderboard import LEFT_OUT, friedman_p_text, label_text, leaderboard, no_ranking_text, not_measured, validity
+from ..leaderboard import (LEFT_OUT, friedman_p_text, label_text, leaderboard, no_ranking_text, not_measured,
+                           setting_text, validity)
 from ..results import REPORT_FILES, RunFolder, recorded_specs, with_not_run
 from ..schema import scalar as _clean
 from .common import esc as _esc
 from .common import fmt as _fmt
-from .common import natural_key, noise_label, params_of, short, variant_labels
+from .common import natural_key, noise_label, params_of, variant_labels
 from .laplacian import property_matrix_section
 
 HERE = Path(__file__).parent
@@ -52,7 +53,7 @@ def _frame_payload(spec, df) -> dict:
     for s in df["params"]:
         p = params_of(s)
         target.append(p.get("target_ratio") if p.get("target_ratio") is not None else p.get("target_faces"))
-        axis.append(" ".join(f"{k}={short(p.get(k))}" for k in axes if k in p))   # e.g. "k=50": ranked apart
+        axis.append(setting_text(json.dumps({k: p.get(k) for k in axes if k in p})))   # e.g. "k=50": as winners.md
     invalid = validity(spec, df).tolist() if "status" in df else [""] * len(rows)
     missing = not_measured(spec, df).tolist() if "status" in df else [False] * len(rows)   # never a result
     cols += ["_variant", "_noise", "_hist", "_target", "_invalid", "_axis", "_missing"]
