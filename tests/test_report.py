@@ -404,3 +404,12 @@ def test_the_report_shows_the_run_tasks_in_their_declared_order(tmp_path):
     build_report(tmp_path / "o")
     page = (tmp_path / "o" / "report.html").read_text()
     assert page.index("id='task-spectrum'") < page.index("id='task-smoothing'")
+
+
+def test_the_status_table_counts_zero_as_0_not_a_blank():
+    """A review: a status no case had showed an empty cell, which reads as "not counted"."""
+    import pandas as pd
+
+    from harness.report.html import _status_html
+    html = _status_html({"smoothing": pd.DataFrame({"status": ["ok", "ok", "error"]})})
+    assert "<td class='st-ok'>2</td><td class='st-error'>1</td><td class='st-timeout'>0</td>" in html, html

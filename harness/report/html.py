@@ -75,7 +75,7 @@ def _status_html(frames) -> str:
         if task not in frames:
             continue
         vc = frames[task]["status"].value_counts()
-        cells = "".join(f"<td class='st-{_esc(s)}'>{int(vc.get(s, 0)) or ''}</td>" for s in statuses)
+        cells = "".join(f"<td class='st-{_esc(s)}'>{int(vc.get(s, 0))}</td>" for s in statuses)   # 0 too: a count
         body.append(f"<tr><th><a href='#task-{task}'>{task}</a></th>{cells}<td>{len(frames[task])}</td></tr>")
     if not body:
         return "<p class='warn'>No rows: the run folder has no task CSV.</p>"
