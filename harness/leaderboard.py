@@ -560,10 +560,10 @@ def winners_markdown(w: pd.DataFrame) -> str:
                 f"{_val(r.runner_up_value, getattr(r, 'runner_up_upper', None), getattr(r, 'runner_up_se', None))} |"
                 + (f" {_g(r.input_value)} |" if inp else "") + f" {r.invalid_excluded} |"
                 for r in g.itertuples()]
-        if g[[c for c in ("value_upper", "runner_up_upper") if c in g]].notna().any(axis=None):
+        if _carries(g, "upper"):
             out.append(f"\n{metric}: the lower end of a certified bracket; [lower, upper] where the two differ "
                        "at 4 digits (means over seeds).")
-        if g[[c for c in ("value_se", "runner_up_se") if c in g]].notna().any(axis=None):
+        if _carries(g, "se"):
             out.append(f"\n{metric}: a sampled estimate ± its standard error (of the mean over seeds).")
         if inp:
             out.append(f"\ninput: {metric} of the case's input itself; a result worse than it made the input worse.")
@@ -587,6 +587,13 @@ def _seeds_note(g: pd.DataFrame) -> str:
     return f"\nNoisy cells rest on {said} noise seed(s) each.{one}"
 
 
+def _carries(g: pd.DataFrame, kind: str) -> bool:
+    """Whether some winners row of ``g`` carries a bracket upper end (``kind`` ``upper``) or a
+    standard error (``se``) for its value or its runner-up's (a caption then says so)."""
+    cols = [c for c in (f"value_{kind}", f"runner_up_{kind}") if c in g]
+    return bool(g[cols].notna().any(axis=None))
+
+
 def _tex_val(r, which: str) -> str:
     """`_val` of a winners row's ``value`` or ``runner_up`` value, in LaTeX."""
     v = r.value if which == "value" else r.runner_up_value
@@ -605,9 +612,9 @@ def winners_latex(w: pd.DataFrame) -> str:
                 + (f" & {_g(r.input_value)}" if inp else "") + " \\\\" for r in g.itertuples()]
         said = (f"; input: \\texttt{{{_tex(metric)}}} of the case's input itself (a result worse than it made the "
                 "input worse)") if inp else ""
-        if g[[c for c in ("value_upper", "runner_up_upper") if c in g]].notna().any(axis=None):
+        if _carries(g, "upper"):
             said += "; values are the lower ends of certified brackets, [lower, upper] where the two differ at 4 digits"
-        if g[[c for c in ("value_se", "runner_up_se") if c in g]].notna().any(axis=None):
+        if _carries(g, "se"):
             said += r"; sampled estimates $\pm$ their standard errors"
         out += [r"\bottomrule", r"\end{tabular}}",
                 f"\\caption{{{_tex(task)}: best valid method per cell by \\texttt{{{_tex(metric)}}} ({g.iloc[0].better} is "

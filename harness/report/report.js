@@ -329,7 +329,7 @@
     var rs = rows.filter(function (r) { return r._variant === v && isNum(r[key]); });
     if (!rs.length) return '';
     var txt = fmt(mean(rs.map(function (r) { return r[key]; })), d);
-    var up = tol[4] ? mean(rs.map(function (r) { return rowTop(r, key, tol); })) : null;
+    var up = bracketTop(rows, v, key, tol, true);
     if (isNum(up) && fmt(up, d) !== txt) return '[' + txt + ', ' + fmt(up, d) + ']';
     var es = tol[2] ? rs.map(function (r) { return r[tol[2]]; }) : [];
     if (es.length && es.every(isNum)) {
