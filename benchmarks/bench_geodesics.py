@@ -68,7 +68,6 @@ def main(argv=None) -> int:
         print(f"\nicosphere {s}: {len(V):,} vertices, {len(F):,} faces, {a.sources} sources, {a.pairs} rounds, "
               f"load average {os.getloadavg()[0]:.2f}; math-library threads: "
               + threads)
-        p0, q0 = statistics.median(pre["scratch.heat"]), statistics.median(per["scratch.heat"])
         for m in names:
             p, q = statistics.median(pre[m]), statistics.median(per[m])
             rp = [x / y for x, y in zip(pre[m], pre["scratch.heat"])]

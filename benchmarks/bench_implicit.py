@@ -58,10 +58,10 @@ def bench_backend(name, A, A2, B, ref):
     fac, t_fac = _timed(lambda: solvers.factorize(A, name))
     X, t_sol = _timed(lambda: fac.solve(B))
     err = float(np.abs(X - ref).max() / np.abs(ref).max())
-    del fac
+    fac = None                     # free the factor before the next one
     fac2, t_fac2 = _timed(lambda: solvers.factorize(A2, name))
     _, t_sol2 = _timed(lambda: fac2.solve(B))
-    del fac2
+    fac2 = None
     solvers.clear_cache()
     return {"solver": name, "cold_factor_s": t_fac, "cold_solve_s": t_sol,
             "cold_total_s": t_fac + t_sol, "warm_factor_s": t_fac2, "warm_solve_s": t_sol2,

@@ -49,7 +49,6 @@ import os
 import resource
 import socket
 import statistics
-import sys
 import threading
 import time
 import traceback

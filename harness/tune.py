@@ -129,6 +129,7 @@ def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | 
     """Validate the ``tune:`` section (problems appended to ``P`` with their key paths); None
     when it has problems of its own (others already in ``P`` do not count)."""
     import methods
+    from . import tasks as _tasks
     n0 = len(P)
     if not isinstance(raw, dict):
         P.append(f"tune: expected a mapping with {sorted(TUNE_KEYS)}, got {type(raw).__name__}")
@@ -165,7 +166,6 @@ def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | 
                      "with the chosen one: list it once (its values as lists in one entry)")
             continue
         meth = methods.get(m)
-        from . import tasks as _tasks
         axis = _tasks.get(configured[m][0]).axis_params
         ok = {}
         for k, vals in ranges.items():
@@ -197,7 +197,6 @@ def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | 
                     P.append(f"{at}: a candidate setting {json.dumps(dict(zip(ok, combo)), default=str)} cannot "
                              f"run: {why}")
                     break
-        from . import tasks as _tasks
         spec = _tasks.get(configured[m][0])
         mt = spec.metric(metric) if isinstance(metric, str) else None
         if mt is None or mt.better not in ("lower", "higher"):

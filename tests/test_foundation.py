@@ -13,7 +13,7 @@ from harness.cli import main
 from harness.config import load_config
 from harness.errors import ConfigError, InvalidMeshError
 from harness.tasks.smoothing import diverged
-from harness.schema import COMMON_COLUMNS, columns
+from harness.schema import columns
 from harness.mesh import read_mesh, topology
 from harness.metrics.hausdorff import hausdorff
 from harness.metrics.normal_error import normal_error

@@ -138,7 +138,6 @@ def test_a_killed_sessions_private_directory_is_swept_and_a_live_one_is_not(tmp_
     import signal
     import subprocess
     import sys
-    import os
     import tempfile
     root = str(Path(__file__).resolve().parents[1])
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))      # this test's own temporary directory

@@ -146,7 +146,6 @@ class DaskExecutor:
 
     def __init__(self, workers: int | None = None, timeout: float | None = None, scheduler=None, **_):
         try:
-            import dask
             from distributed import Client, LocalCluster
         except ImportError as exc:
             raise ShootoutError(f"--executor dask needs the 'distributed' package ({exc})") from None

@@ -5,10 +5,10 @@ import html
 import json
 import re
 
-import numpy as np
-
 from ..leaderboard import noise_label, params_of, variant_labels  # noqa: F401  (one labelling for every reader)
 from ..schema import fmt  # noqa: F401  (the report's formatter is the project's)
+
+__all__ = ["esc", "fmt", "natural_key", "noise_label", "params_of", "short", "variant_labels"]
 
 
 def esc(x) -> str:

@@ -14,7 +14,7 @@ task declarations recorded in ``run.json`` (or, for older runs, `harness.tasks`)
 from __future__ import annotations
 
 import json
-from collections import Counter, defaultdict
+from collections import Counter
 from datetime import datetime, timezone
 from pathlib import Path
 

@@ -15,8 +15,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from harness.core.geometry import (corner_cotangents, double_areas, face_normals,  # noqa: F401
-                                   unique_edges, zero_area_faces)
+from harness.core.geometry import corner_cotangents, double_areas, unique_edges
 
 
 def assemble_weights(F: np.ndarray, half_w: np.ndarray, n: int) -> sp.csr_matrix:
