@@ -537,9 +537,10 @@ def _time_note(ra: dict, rb: dict, drift: float = 1.0) -> str:
             f"{eff['n'][0]} vs {eff['n'][1]} samples" + ("" if eff["conclusive"] else " (too few to decide)"))
 
 
-def _rows(run, specs: dict | None = None) -> dict[str, dict]:
+def _rows(run, specs: dict | None = None, meta: dict | None = None) -> dict[str, dict]:
     """``{case_id: row}`` of a run folder, each row with ``task`` and ``_invalid`` (why it is not a
-    valid result, by ``specs``' rules for its task where given, else by its own run's)."""
+    valid result, by ``specs``' rules for its task where given, else by its own run's: ``meta``,
+    its run.json, read here when not given)."""
     folder = RunFolder(run)
     if not Path(run).is_dir():
         raise ShootoutError(f"{run}: no such run folder")
@@ -552,7 +553,8 @@ def _rows(run, specs: dict | None = None) -> dict[str, dict]:
     frames = folder.frames()
     if not frames:
         raise ShootoutError(f"{run}: not a run folder (no task CSV such as smoothing.csv)")
-    specs = {**recorded_specs(folder.read_run_json() or {}, frames), **(specs or {})}
+    meta = (folder.read_run_json() or {}) if meta is None else meta
+    specs = {**recorded_specs(meta, frames), **(specs or {})}
     out, twice = {}, set()
     for task, df in frames.items():
         why = validity(specs.get(task) or {"name": task}, df, measured=True)
@@ -751,9 +753,9 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
     out = out or sys.stdout
     meta_a = RunFolder(run_a).read_run_json() or {}
     meta_b = RunFolder(run_b).read_run_json() or {}
-    ra = _rows(run_a)
+    ra = _rows(run_a, meta=meta_a)
     spec_a = recorded_specs(meta_a, {r["task"]: None for r in ra.values()})
-    rb = _rows(run_b, spec_a)                 # validity by the baseline's rules, as its metrics' tolerances
+    rb = _rows(run_b, spec_a, meta_b)                # validity by the baseline's rules, as its metrics' tolerances
     spec_b = recorded_specs(meta_b, {r["task"]: None for r in rb.values()})
     other_validity = sorted(t for t in spec_a.keys() & spec_b.keys()
                             if spec_a[t].get("invalid_when") != spec_b[t].get("invalid_when"))
