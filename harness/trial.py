@@ -182,7 +182,8 @@ def _ended(code) -> str:
     if code is not None and code < 0:
         return f"importing it killed the process ({signal_name(code)})"
     if code == LOST_PIPE:
-        return "importing it closed the files the process had open"
+        return (f"importing it closed the files the process had open, or ended the process with exit status "
+                f"{LOST_PIPE}")
     return f"importing it ended the process (exit status {'unknown' if code is None else code})"
 
 
