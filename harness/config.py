@@ -195,7 +195,7 @@ def load_config(source, base_dir: Path | None = None, label: str = "<config>") -
     text in messages (a path names itself)."""
     odd: list[str] = []                  # numbers YAML 1.1 reads otherwise: listed with the other problems
     if isinstance(source, dict):
-        raw = source
+        raw = _plain(source)
     elif isinstance(source, Path):
         label = str(source)
         if not _is_file(source):
@@ -223,9 +223,22 @@ def load_config(source, base_dir: Path | None = None, label: str = "<config>") -
         except yaml.YAMLError as exc:
             raise ConfigError(label, [f"not valid YAML: {exc}".replace("\n", " ")]) from None
     odd = [f"not valid YAML: {o}" for o in odd]
+    if raw is None:
+        raise ConfigError(label, odd + ["the config is empty: expected a mapping with name, meshes and tasks"])
     if not isinstance(raw, dict):
         raise ConfigError(label, odd + [f"top level: expected a mapping, got {type(raw).__name__}"])
     return _validate(raw, label, (base_dir or Path.cwd()).resolve(), odd)
+
+
+def _plain(x):
+    """A config given from Python with numpy scalars (``np.int64(5)``, ``np.float32(0.3)``) as
+    the Python numbers YAML would give: equal settings, equal case ids, JSON a run can record."""
+    import numpy as np
+    if isinstance(x, dict):
+        return {_plain(k): _plain(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return type(x)(_plain(v) for v in x)
+    return x.item() if isinstance(x, np.generic) else x
 
 
 def _validate(raw: dict, label: str, base_dir: Path, found=()) -> Config:

@@ -518,6 +518,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
     if refused:
         raise problems_error(refused)
     try:
+        planned = plan(cfg.cases)                # before anything is removed: a case no row can hold fails here
         if resume:
             relabelled = relabelled_meshes(folder, list(cfg.cases) + (list(cfg.tune.cases) if cfg.tune else []))
             if relabelled:
@@ -611,7 +612,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         meta.update(ex.describe())
     try:
         if not (resume and cfg.tune is not None):   # a tuned resume keeps its plan until tuning has chosen
-            folder.write_plan(plan(cfg.cases))
+            folder.write_plan(planned)
         folder.write_run_json(meta)
     except OSError as exc:
         ex.close()

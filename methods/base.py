@@ -98,7 +98,7 @@ class Method:
         out = []
         for k, v in params.items():
             if k not in self.params:
-                close = difflib.get_close_matches(k, list(self.params), n=3)
+                close = difflib.get_close_matches(str(k), list(self.params), n=3)
                 hint = f" (did you mean {', '.join(close)}?)" if close else ""
                 known = ", ".join(self.params) or "none"
                 out.append(f"unknown parameter {k!r}{hint}; {self.name} takes: {known}")
@@ -132,12 +132,17 @@ class Method:
         return self.with_defaults(params)
 
     def with_defaults(self, params: dict) -> dict:
-        """``params`` with the declared defaults filled in (no validation)."""
+        """``params`` with the declared defaults filled in (no validation); numpy scalars become
+        Python ones and integers given for a float parameter floats: equal settings, equal case
+        ids (and a setting a run can record as JSON)."""
         full = {k: p.default for k, p in self.params.items()}
         full.update(params)
-        for k, p in self.params.items():       # floats as floats: equal settings, equal case ids
-            if p.kind == "float" and isinstance(full.get(k), (int, np.integer)) and not isinstance(full[k], bool):
-                full[k] = float(full[k])
+        for k, p in self.params.items():
+            v = full.get(k)
+            if isinstance(v, np.generic):
+                full[k] = v = v.item()
+            if p.kind == "float" and isinstance(v, int) and not isinstance(v, bool):
+                full[k] = float(v)
         return full
 
     def bind(self, V, F, **params) -> tuple[Callable[[], object], Callable[[object], object]]:

@@ -146,3 +146,42 @@ def test_a_method_called_through_the_api_never_writes_into_or_returns_the_caller
     # so do objects numpy reads in place (a review: a memoryview slipped past a check for ndarray)
     r = methods.get("scratch.explicit")(memoryview(V), memoryview(F))
     assert np.array_equal(V, V0) and np.array_equal(F, F0) and not np.shares_memory(r.V, V)
+
+
+def test_numpy_numbers_in_a_config_dict_are_the_numbers_yaml_gives(tmp_path):
+    """A review: ``np.int64(5)`` as a parameter passed validation, then the run cleared the earlier
+    run's folder and crashed writing its plan (int64 is no JSON); its case id also differed from 5's."""
+    import numpy as np
+
+    def cfg(it, lam):
+        return {"name": "np", "meshes": ["knight"], "time_budget": 0, "tasks": {"smoothing": {"methods": [
+            {"name": "scratch.taubin", "params": {"iterations": it, "lambda": lam}}]}}}
+    plain = harness.run(cfg(2, 0.5), out=tmp_path / "o", quiet=True, workers=1)
+    from harness.config import load_config
+    assert [c.case_id for c in load_config(cfg(np.int64(2), np.float32(0.5))).cases] == \
+        [c.case_id for c in load_config(cfg(2, 0.5)).cases]
+    again = harness.run(cfg(np.int64(2), np.float32(0.5)), out=tmp_path / "o", quiet=True, workers=1, resume=True)
+    assert list(again["smoothing"]["case_id"]) == list(plain["smoothing"]["case_id"])
+    fresh = harness.run(cfg(np.int64(3), 0.5), out=tmp_path / "o", quiet=True, workers=1)
+    assert list(fresh["smoothing"]["status"]) == ["ok"]
+
+
+def test_a_parameter_name_that_is_not_a_string_is_a_problem_not_a_crash():
+    """``params: {1: 2}`` crashed the config check (difflib on an int) with a traceback."""
+    import methods
+    from harness.config import load_config
+    from harness.errors import ConfigError
+    m = methods.get("scratch.taubin")
+    assert m.param_problems({1: 2})[0].startswith("unknown parameter 1;")
+    with pytest.raises(ConfigError) as exc:
+        load_config({"name": "k", "meshes": ["knight"], "tasks": {"smoothing": {
+            "methods": [{"name": "scratch.taubin", "params": {1: 2, None: 4}}]}}})
+    assert "unknown parameter 1" in str(exc.value) and "unknown parameter None" in str(exc.value)
+
+
+def test_an_empty_config_says_so():
+    from harness.config import load_config
+    from harness.errors import ConfigError
+    with pytest.raises(ConfigError) as exc:
+        load_config("\n# nothing\n")
+    assert "the config is empty" in str(exc.value)
