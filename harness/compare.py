@@ -691,7 +691,10 @@ ORDER = {"regression": 0, "improvement": 1, "changed": 2, "within tolerance": 3,
 
 def _measurement(meta: dict) -> dict:
     """A run's measurement settings: run.json's ``measurement``, else its config's keys (an
-    eval's under ``eval``), else the defaults."""
+    eval's under ``eval``), else the defaults; none when there is no run.json to read (``meta``
+    empty: missing or damaged), as they are then not known."""
+    if not meta:
+        return {}
     got = meta.get("measurement") if isinstance(meta.get("measurement"), dict) else None
     if got is None:
         cfg = meta.get("config") if isinstance(meta.get("config"), dict) else {}
@@ -783,7 +786,7 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
     ma_, mb_ = _measurement(meta_a), _measurement(meta_b)
     differ = [f"{k} A {ma_[k]}, B {mb_[k]}" for k in ma_ if k in mb_ and ma_[k] != mb_[k]]
     res = compare_rows(ra, rb, time_factor, rules, absolute_time, cores=ca if ca == cb else None, threads=threads,
-                       samples_differ=ma_.get("hausdorff_samples") != mb_.get("hausdorff_samples"))
+                       samples_differ=not ma_ or not mb_ or ma_.get("hausdorff_samples") != mb_.get("hausdorff_samples"))
     changes = _sorted(res["changes"])
     regress = [c for c in changes if c["verdict"] == "regression"]
     shown = [c for c in changes if c["verdict"] not in ("within tolerance", "info", "inconclusive")]
@@ -793,7 +796,11 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
           f"{len(res['only_a'])} only in A, {len(res['only_b'])} only in B", file=out)
     for note in (timing_notes(meta_a, meta_b, res) if time_factor else []):     # --no-time: no timing notes
         print(f"note: {note}", file=out)
-    for which, meta in (("A", meta_a), ("B", meta_b)):
+    for which, meta, run in (("A", meta_a, run_a), ("B", meta_b, run_b)):
+        if not meta:
+            print(f"note: {which}'s run.json is {RunFolder(run).run_json_state()}: its measurement settings, metric "
+                  "rules and validity rules are not known; the installed version's rules are used, and a sampled "
+                  "value only one run has is a change, not a regression", file=out)
         if meta.get("status") in ("running", "interrupted"):
             print(f"note: {which}'s run.json says {meta['status']}: the run is still going, was killed or was "
                   "interrupted, so a case missing from it may not have run yet (--resume finishes it)", file=out)

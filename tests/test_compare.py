@@ -940,3 +940,22 @@ def test_validity_rules_that_changed_between_versions_are_no_regression(run_a, t
         (b / "run.json").write_text(json.dumps(meta))
         code, out = run_compare(b, run_a, time_factor=None)
         assert code == 0 and not [ln for ln in out.splitlines() if " validity " in ln and not ln.startswith("note")], (bad, out)
+
+
+@pytest.mark.parametrize("damage", ["missing", "torn"])
+def test_a_run_json_that_cannot_be_read_is_named_not_taken_for_the_defaults(run_a, tmp_path, damage):
+    """A review: with B's run.json gone or torn, compare printed 'the runs measured with other
+    settings (hausdorff_samples A 2000, B 20000)', B's settings read as the defaults."""
+    b = copy(run_a, tmp_path)
+    if damage == "missing":
+        (b / "run.json").unlink()
+    else:
+        (b / "run.json").write_text('{"name": "good", ')
+    code, out = run_compare(run_a, b, time_factor=None)
+    assert code == 0, out
+    assert "other settings" not in out, out
+    state = "missing" if damage == "missing" else "corrupt"
+    assert f"note: B's run.json is {state}: its measurement settings, metric rules and validity rules are not known" \
+        in out, out
+    code, out = run_compare(b, run_a, time_factor=None)
+    assert code == 0 and f"note: A's run.json is {state}" in out and "other settings" not in out, out
