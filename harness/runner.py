@@ -305,7 +305,11 @@ def prepare_input(case: Case) -> tuple[CaseInput, float | None]:
 
 
 def input_mesh_name(case: Case) -> str:
-    lvl = "pair" if math.isnan(case.noise_level) else f"{case.noise_level:g}"
+    """The saved input's file name: one per (mesh, noise, level, seed), the level as ``%g`` where
+    that reads back as the level, else whole (``repr``: two levels that differ past 6 digits are
+    two files)."""
+    x = float(case.noise_level)
+    lvl = "pair" if math.isnan(x) else f"{x:g}" if float(f"{x:g}") == x else repr(x)
     model = case.noise_model if case.noise_name == case.noise_model else f"{case.noise_model}-fraction{float(case.fraction)!r}"
     return f"{case.mesh_key}-{model}-{lvl}-{case.seed}-input.ply"
 

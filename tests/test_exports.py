@@ -102,3 +102,16 @@ def test_impulsive_entries_differing_only_in_fraction_are_different_inputs(tmp_p
         want = apply_noise(clean.V, clean.F, "impulsive", 0.5, 0, mesh_key="knight", fraction=frac,
                            frame=clean.noise_frame)
         np.testing.assert_allclose(V, want, rtol=0, atol=1e-12 * clean.diagonal())
+
+
+def test_two_levels_that_agree_to_six_digits_save_two_inputs():
+    """A review: ``{level:g}`` named the inputs at 0.1234567 and 0.1234568 alike, so the second
+    was never written and the saved file was the other level's input."""
+    from harness.config import load_config
+    from harness.runner import input_mesh_name
+    cfg = load_config({"name": "lv", "meshes": ["knight"], "noise": [
+        {"model": "gaussian_normal", "levels": [0.1234567, 0.1234568, 0.5]}, {"model": "none"}],
+        "tasks": {"smoothing": {"methods": ["scratch.taubin"]}}})
+    names = sorted({input_mesh_name(c) for c in cfg.cases})
+    assert names == ["knight-gaussian_normal-0.1234567-0-input.ply", "knight-gaussian_normal-0.1234568-0-input.ply",
+                     "knight-gaussian_normal-0.5-0-input.ply", "knight-none-0-0-input.ply"], names
