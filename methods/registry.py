@@ -12,6 +12,7 @@ import dataclasses
 import difflib
 import functools
 import importlib
+import os
 import pkgutil
 from importlib.metadata import entry_points
 
@@ -131,9 +132,10 @@ def _load_builtins() -> None:
             BROKEN[label] = found[ep.module]
             continue
         try:
-            obj = ep.load()
-            if callable(obj) and not isinstance(obj, type(importlib)):
-                obj()
+            with _same_cwd():
+                obj = ep.load()
+                if callable(obj) and not isinstance(obj, type(importlib)):
+                    obj()
         except (Exception, SystemExit) as exc:  # noqa: BLE001 - an installed package's code: its failure is shown
             BROKEN[label] = import_failure(exc)
 
@@ -142,11 +144,31 @@ def _onerror(name):
     BROKEN[name] = "package failed to import"
 
 
+class _same_cwd:
+    """The working directory as it was, after a user's module is imported: one that changes it
+    at import would otherwise move every relative path of the run (its folder, ``results/``)."""
+
+    def __enter__(self):
+        try:
+            self.cwd = os.getcwd()
+        except OSError:                  # already gone: nothing to go back to
+            self.cwd = None
+
+    def __exit__(self, *exc):
+        if self.cwd is not None:
+            try:
+                os.chdir(self.cwd)
+            except OSError:              # removed meanwhile: there is no going back
+                pass
+
+
 def load_plugins(modules) -> None:
-    """Import plugin modules (they register methods as a side effect)."""
+    """Import plugin modules (they register methods as a side effect); the working directory is
+    kept (`_same_cwd`)."""
     _load_builtins()
     for mod in modules or ():
-        importlib.import_module(mod)
+        with _same_cwd():
+            importlib.import_module(mod)
 
 
 def all_methods(task: str | None = None) -> list[Method]:

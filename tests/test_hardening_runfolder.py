@@ -820,3 +820,18 @@ def test_a_plugin_that_sends_itself_sigterm_is_named_in_a_forked_trial(tmp_path)
     r = subprocess.run([sys.executable, "-c", code, str(tmp_path)], capture_output=True, text=True, cwd=ROOT,
                        timeout=120, env={**os.environ, "PYTHONPATH": str(ROOT)})
     assert r.stdout.strip() == "{'probe_termed': 'importing it killed the process (SIGTERM)'}", r.stdout + r.stderr
+
+
+def test_a_plugin_that_changes_the_working_folder_at_import_moves_no_path_of_the_run(tmp_path):
+    """A review: a plugin calling os.chdir at import moved the run folder of a relative --out
+    (made after the plugins were imported) to wherever the plugin went."""
+    work, away = tmp_path / "work", tmp_path / "away"
+    work.mkdir()
+    away.mkdir()
+    (tmp_path / "cdplug.py").write_text(f"import os\nos.chdir({str(away)!r})\n")
+    cfg = write_cfg(work / "c.json", {**SMALL, "name": "cd", "plugins": ["cdplug"],
+                                      "tasks": {"smoothing": {"methods": ["scratch.taubin"]}}})
+    r = cli(["run", cfg, "--out", "myrun", "--workers", "1", "--quiet"], cwd=work,
+            PYTHONPATH=f"{ROOT}{os.pathsep}{tmp_path}")
+    assert r.returncode == 0, r.stderr
+    assert (work / "myrun" / "smoothing.csv").is_file() and list(away.iterdir()) == []
