@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import base64
 import dataclasses
+import json
 import math
 import time
 
@@ -77,6 +78,14 @@ def _decimate(V, F, err, limit):
     return V2, F2, e2, f"{len(F):,} faces shown decimated to {len(F2):,}"
 
 
+def _finite_values(err) -> np.ndarray:
+    """Per-vertex values as float64, those that are not finite (an infinity too) as NaN; None when
+    none is finite (no colours)."""
+    err = np.asarray(err, dtype=np.float64)
+    ok = np.isfinite(err)
+    return err if ok.all() else np.where(ok, err, np.nan) if ok.any() else None
+
+
 def pack(meshes: list) -> dict:
     """JSON payload of ``[(label, V, F, values or None, what[, options]), ...]``: positions
     quantised to 16 bits in a common box, faces as uint32, values to 8 bits on one colour scale per
@@ -84,9 +93,16 @@ def pack(meshes: list) -> dict:
     maximum when ``options`` has ``isolines: n``, which also draws ``n`` evenly spaced level lines
     of the values, e.g. of a distance field). With ``signed: True`` in ``options`` (a quantity
     with a meaningful sign: a curvature, an eigenvector) the scale is symmetric about 0 (of
-    |values|) and 0 maps to the middle of the 8 bits; other values are clipped at 0."""
+    |values|) and 0 maps to the middle of the 8 bits; other values are clipped at 0. Values that
+    are not finite are left out of the scale and the summaries, and drawn as 0; a mesh with a
+    coordinate that is not finite (a diverged result) cannot be drawn: ValueError."""
     meshes = [tuple(m) + ({},) * (6 - len(m)) for m in meshes]
+    meshes = [(label, V, F, None if err is None else _finite_values(err), what, opt)
+              for label, V, F, err, what, opt in meshes]
     allV = np.vstack([np.asarray(m[1], dtype=np.float64) for m in meshes])
+    if not np.isfinite(allV).all():
+        bad = [m[0] for m in meshes if not np.isfinite(np.asarray(m[1], dtype=np.float64)).all()]
+        raise ValueError(f"{', '.join(bad)}: coordinates that are not finite (a diverged result), nothing to draw")
     lo = allV.min(0)
     span = float((allV.max(0) - lo).max()) or 1.0
     scale: dict[str, float] = {}
@@ -94,7 +110,7 @@ def pack(meshes: list) -> dict:
     for _, _, _, err, what, opt in meshes:
         if err is not None and len(err):
             mag = np.abs(err) if what in signed else err      # a signed quantity: symmetric about 0
-            top = float(np.max(mag)) if opt.get("isolines") else float(np.percentile(mag, 99))
+            top = float(np.nanmax(mag)) if opt.get("isolines") else float(np.nanpercentile(mag, 99))
             scale[what] = max(scale.get(what, 0.0), top)
     out = []
     for label, V, F, err, what, opt in meshes:
@@ -103,15 +119,16 @@ def pack(meshes: list) -> dict:
         q = np.clip(np.round((V - lo) / span * 65535.0), 0, 65535).astype("<u2")
         m = {"label": label, "what": what, "nv": int(len(V)), "nf": int(len(F)), "V": _b64(q),
              "F": _b64(F.astype("<u4")), "note": note}
-        if err is not None:
+        if err is not None and len(err):
             emax = scale.get(what, 0.0)
+            e0 = np.nan_to_num(err, nan=0.0)                  # a value that is not finite is drawn as 0
             if emax > 0:
-                t = (0.5 + 0.5 * err / emax) if what in signed else err / emax    # signed: 0 maps to the middle
+                t = (0.5 + 0.5 * e0 / emax) if what in signed else e0 / emax    # signed: 0 maps to the middle
                 qe = np.clip(np.round(t * 255.0), 0, 255)
             else:
                 qe = np.full(len(err), 128.0 if what in signed else 0.0)
-            m.update(e=_b64(qe.astype(np.uint8)), emean=float(np.mean(err)), emaxv=float(np.max(err)),
-                     eminv=float(np.min(err)), escale=float(emax), signed=what in signed)
+            m.update(e=_b64(qe.astype(np.uint8)), emean=float(np.nanmean(err)), emaxv=float(np.nanmax(err)),
+                     eminv=float(np.nanmin(err)), escale=float(emax), signed=what in signed)
             if opt.get("isolines"):
                 m["isolines"] = int(opt["isolines"])
         out.append(m)
@@ -173,7 +190,9 @@ def compute_views(cases_by_id: dict, frames, report_cfg: dict, budget_s: float =
             if new_row.get("status") != "ok" or "view" not in extras:
                 v["error"] = f"computing the view failed ({new_row.get('status')}): {new_row.get('error')}"
                 continue
-            v.update(pack(extras["view"]))
+            packed = pack(extras["view"])
+            json.dumps(packed, allow_nan=False)       # what the view file cannot hold fails this view alone
+            v.update(packed)
             m = task.view_metric
             a, b = scalar(row.get(m)) if m else None, scalar(new_row.get(m)) if m else None
             if a is not None and b is not None and abs(a - b) > 1e-6 * max(abs(a), 1e-12) + 1e-12:

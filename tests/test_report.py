@@ -413,3 +413,24 @@ def test_the_status_table_counts_zero_as_0_not_a_blank():
     from harness.report.html import _status_html
     html = _status_html({"smoothing": pd.DataFrame({"status": ["ok", "ok", "error"]})})
     assert "<td class='st-ok'>2</td><td class='st-error'>1</td><td class='st-timeout'>0</td>" in html, html
+
+
+def test_a_view_of_a_diverged_result_fails_alone_and_values_that_are_not_finite_are_left_out():
+    """A review: a view whose result had NaN coordinates packed NaN/inf summaries, which the
+    view file (JSON) cannot hold, so writing it threw away every view of the run."""
+    import json
+
+    import numpy as np
+
+    from harness.views import pack
+    V = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    F = np.array([[0, 1, 2]])
+    with pytest.raises(ValueError, match="result: coordinates that are not finite"):
+        pack([("clean", V, F, None, "d"), ("result", V * np.nan, F, None, "d")])
+    got = pack([("result", V, F, np.array([0.5, np.nan, np.inf]), "d")])
+    json.dumps(got, allow_nan=False)
+    mesh = got["meshes"][0]
+    assert mesh["emean"] == mesh["emaxv"] == mesh["eminv"] == 0.5, mesh
+    nothing = pack([("result", V, F, np.array([np.nan] * 3), "d")])
+    json.dumps(nothing, allow_nan=False)
+    assert "e" not in nothing["meshes"][0]
