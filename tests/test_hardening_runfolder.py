@@ -835,3 +835,16 @@ def test_a_plugin_that_changes_the_working_folder_at_import_moves_no_path_of_the
             PYTHONPATH=f"{ROOT}{os.pathsep}{tmp_path}")
     assert r.returncode == 0, r.stderr
     assert (work / "myrun" / "smoothing.csv").is_file() and list(away.iterdir()) == []
+
+
+def test_a_config_path_that_is_not_utf8_still_gets_its_report(tmp_path):
+    """A review: run.json keeps the command line, whose undecodable byte (a lone surrogate) the
+    page embeds, so report.html could not be written and `shootout report` ended in a traceback."""
+    cfg = write_cfg(tmp_path / "tiny\udcff.json", {**SMALL, "name": "u8", "tasks": {
+        "smoothing": {"methods": ["scratch.taubin"]}}})
+    r = cli(["run", cfg, "--out", tmp_path / "o", "--workers", "1", "--quiet"])
+    assert r.returncode == 0 and "could not be built" not in r.stderr, r.stderr
+    page = (tmp_path / "o" / "report.html").read_text(encoding="utf-8")
+    assert "tiny\\udcff.json" in page
+    r = cli(["report", tmp_path / "o"])
+    assert r.returncode == 0, r.stderr

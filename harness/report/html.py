@@ -24,6 +24,7 @@ from ..leaderboard import (LEFT_OUT, friedman_p_text, label_text, leaderboard, n
                            setting_text, validity)
 from ..results import REPORT_FILES, RunFolder, recorded_specs, with_not_run
 from ..schema import scalar as _clean
+from ..schema import text
 from .common import esc as _esc
 from .common import fmt as _fmt
 from .common import natural_key, noise_label, params_of, variant_labels
@@ -437,7 +438,7 @@ def render(run_dir) -> str:
 def build_report(run_dir) -> Path:
     """Write ``run_dir/report.html`` from the CSVs and run.json; return its path."""
     out = Path(run_dir) / "report.html"
-    page = render(run_dir)
+    page = text(render(run_dir))                    # a path's undecodable bytes (surrogateescape) as escapes
     from ..results import atomic_write
     atomic_write(out, lambda fh: fh.write(page))       # no half-written page, no temporary left behind
     return out
