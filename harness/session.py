@@ -336,10 +336,11 @@ class DiskFull(ShootoutError):
 
 
 def _mesh_ok(path: Path) -> bool:
-    """A saved OBJ that exists and parses."""
+    """A saved mesh that exists and parses (a diverged result's coordinates that are not finite
+    included: they are the result)."""
     try:
         from .mesh import read_mesh
-        read_mesh(path, repair=False)
+        read_mesh(path, repair=False, finite=False)
         return True
     except Exception:  # noqa: BLE001
         return False

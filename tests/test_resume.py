@@ -461,3 +461,24 @@ def test_code_sha256_covers_a_namespace_package_plugin(tmp_path, monkeypatch):
     a = code_hash(["nsplug"])
     mod.write_text("X = 2\n")
     assert code_hash(["nsplug"]) != a and code_hash(["nsplug"]) == code_hash(["nsplug"])
+
+
+def test_resuming_a_finished_run_whose_result_diverged_runs_nothing(tmp_path):
+    """A review: with save_meshes, a diverged result's saved mesh (coordinates that are not
+    finite) counted as unreadable, so every --resume of a finished run ran those cases again."""
+    import json
+
+    import pandas as pd
+
+    import harness
+    cfg = {"name": "dv", "repeats": 1, "time_budget": 0, "save_meshes": True, "hausdorff_samples": 100,
+           "meshes": ["knight"], "noise": [{"model": "gaussian_normal", "levels": [0.3]}],
+           "tasks": {"smoothing": {"methods": [{"name": "scratch.explicit", "params": {"step": 5.0,
+                                                                                     "iterations": 400}},
+                                               "scratch.taubin"]}}}
+    out = tmp_path / "o"
+    first = harness.run(cfg, out=out, quiet=True, workers=1)["smoothing"]
+    assert first["diverged"].astype(str).str.lower().tolist().count("true") == 1, first[["method", "diverged"]]
+    again = harness.run(cfg, out=out, quiet=True, workers=1, resume=True)["smoothing"]
+    pd.testing.assert_series_equal(first["time_s"], again["time_s"])
+    assert json.loads((out / "run.json").read_text())["status_counts_this_session"] == {}
