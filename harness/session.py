@@ -615,12 +615,12 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
         if not (resume and cfg.tune is not None):   # a tuned resume keeps its plan until tuning has chosen
             folder.write_plan(planned)
         folder.write_run_json(meta)
-    except OSError as exc:
+    except BaseException as exc:          # a full disk, or an interrupt between the two files
         ex.close()
         folder.remove_temporaries()
-        if not resume:                    # a fresh run whose run.json did not fit leaves no plan either
+        if not resume:                    # a fresh run whose run.json was not written leaves no plan either
             (out_dir / PLAN_FILE).unlink(missing_ok=True)
-        if exc.errno in NO_ROOM:
+        if isinstance(exc, OSError) and exc.errno in NO_ROOM:
             raise DiskFull(_no_room(exc, out_dir, "nothing half-written was kept; make room (or raise the limit), "
                                     "then run again" + (" with --resume" if resume else ""))) from None
         raise

@@ -482,3 +482,21 @@ def test_resuming_a_finished_run_whose_result_diverged_runs_nothing(tmp_path):
     again = harness.run(cfg, out=out, quiet=True, workers=1, resume=True)["smoothing"]
     pd.testing.assert_series_equal(first["time_s"], again["time_s"])
     assert json.loads((out / "run.json").read_text())["status_counts_this_session"] == {}
+
+
+def test_an_interrupt_between_the_plan_and_run_json_leaves_a_folder_a_run_takes(tmp_path, monkeypatch):
+    """A review: a Ctrl-C while run.json was written left plan.csv alone, which both a fresh run
+    ('these may be your files') and --resume ('plan.csv but no run.json') then refused."""
+    import harness
+    from harness.results import RunFolder
+    cfg = {"name": "pi", "repeats": 1, "time_budget": 0, "hausdorff_samples": 100, "meshes": ["knight"],
+           "tasks": {"smoothing": {"methods": ["scratch.taubin"]}}}
+
+    def interrupted(self, data):
+        raise KeyboardInterrupt
+    with monkeypatch.context() as m:
+        m.setattr(RunFolder, "write_run_json", interrupted)
+        with pytest.raises(KeyboardInterrupt):
+            harness.run(cfg, out=tmp_path / "o", quiet=True, workers=1)
+    assert not (tmp_path / "o" / "plan.csv").exists()
+    assert list(harness.run(cfg, out=tmp_path / "o", quiet=True, workers=1)["smoothing"]["status"]) == ["ok"]
