@@ -260,6 +260,16 @@ def test_daemonic_worker_fallback_isolates_too(tmp_path):
     assert "cancelled" in row["error"] and time.monotonic() - t0 < 10, row
 
 
+def test_a_case_on_a_daemonic_worker_reads_no_input_as_a_local_case(tmp_path):
+    """A review: a case there inherited the pipe its case came on as stdin, open till it ended,
+    so a method reading its input hung the run (no --timeout) where a local case reads nothing."""
+    cfg = load_config({"plugins": ["tests.plugins.hostile"], "meshes": ["knight"], "repeats": 1, "time_budget": 0,
+                       "tasks": {"smoothing": {"methods": ["hostile.reads_stdin"]}}})
+    t0 = time.monotonic()
+    row = run_in_subprocess(cfg.cases[0], timeout=30)[0]
+    assert row["status"] == "ok" and time.monotonic() - t0 < 25, row
+
+
 def test_a_daemonic_workers_timeout_counts_the_case_not_the_interpreter_start(monkeypatch):
     """The fresh interpreter's start-up and imports (about 0.7 s here, and 1.5 s more for the
     plugin below, which a forking worker imports before it forks) counted against --timeout, which

@@ -763,6 +763,10 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
         return row, {}
     finally:
         os.unlink(out_path)
+        try:                             # a case killed while it wrote its result leaves this behind
+            os.unlink(out_path + ".part")
+        except FileNotFoundError:
+            pass
 
 
 STARTUP_S = 60.0     # a case subprocess's start-up (interpreter, imports) allowed beyond ``timeout``
@@ -801,6 +805,9 @@ def _subprocess_main(out_path: str, ready_fd: int | None = None) -> int:
     pid = os.fork()
     if pid == 0:
         try:
+            null = os.open(os.devnull, os.O_RDONLY)   # the case reads no input, as a local case's (its
+            os.dup2(null, 0)                           # stdin is the pipe its case came on, open till it ends)
+            os.close(null)
             result = run_case(case, want_meshes=want_meshes)
             result[0][CODE_KEY] = (code_hash(case.plugins), package_versions())   # what this process loaded and ran
             tmp = out_path + ".part"

@@ -241,3 +241,10 @@ def lazy_mkl(V, F):
     with open(os.path.join(mark, f"mkl-threads-{os.getpid()}.txt"), "a") as fh:
         fh.write(f"{max(mkl) if mkl else 'none'}\n")
     return SmoothingResult(V=V.copy())
+
+
+@register("hostile.reads_stdin", task="smoothing", library="hostile")
+def reads_stdin(V, F):
+    """Reads its standard input to the end (nothing, where it has none to read)."""
+    sys.stdin.read()
+    return SmoothingResult(V=V.copy())
