@@ -57,54 +57,52 @@ COVER = 1.5          # the covering bound keeps Y's triangles with b_t up to COV
 
 @njit(cache=True, inline="always", error_model="numpy")
 def _tri_dist2(px, py, pz, V, a, b, c):
-    """Squared distance from p to the closed triangle (V[a], V[b], V[c])."""
+    """Squared distance from p to the closed triangle (V[a], V[b], V[c]) (Ericson's regions).
+    Every difference is taken from p to a vertex (never from p to a point rebuilt in absolute
+    coordinates, whose rounding grows with the distance from the origin), and a point over the
+    inside is at the distance to the plane, ``(ap . n)^2 / |n|^2`` (barycentric coordinates of a
+    sliver lose their digits to cancellation, its normal far fewer)."""
     ax, ay, az = V[a, 0], V[a, 1], V[a, 2]
     abx, aby, abz = V[b, 0] - ax, V[b, 1] - ay, V[b, 2] - az
     acx, acy, acz = V[c, 0] - ax, V[c, 1] - ay, V[c, 2] - az
     nx, ny, nz = aby * acz - abz * acy, abz * acx - abx * acz, abx * acy - aby * acx
-    if nx * nx + ny * ny + nz * nz == 0.0:           # degenerate triangle: nearest of its edges
+    nn = nx * nx + ny * ny + nz * nz
+    if nn == 0.0:                                   # degenerate triangle: nearest of its edges
         return min(_seg2(px, py, pz, V, a, b), _seg2(px, py, pz, V, b, c), _seg2(px, py, pz, V, c, a))
     apx, apy, apz = px - ax, py - ay, pz - az
     d1 = abx * apx + aby * apy + abz * apz
     d2 = acx * apx + acy * apy + acz * apz
     if d1 <= 0.0 and d2 <= 0.0:
-        qx, qy, qz = ax, ay, az
-    else:
-        bpx, bpy, bpz = px - V[b, 0], py - V[b, 1], pz - V[b, 2]
-        d3 = abx * bpx + aby * bpy + abz * bpz
-        d4 = acx * bpx + acy * bpy + acz * bpz
-        if d3 >= 0.0 and d4 <= d3:
-            qx, qy, qz = V[b, 0], V[b, 1], V[b, 2]
-        else:
-            vc = d1 * d4 - d3 * d2
-            if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
-                t = d1 / (d1 - d3)
-                qx, qy, qz = ax + t * abx, ay + t * aby, az + t * abz
-            else:
-                cpx, cpy, cpz = px - V[c, 0], py - V[c, 1], pz - V[c, 2]
-                d5 = abx * cpx + aby * cpy + abz * cpz
-                d6 = acx * cpx + acy * cpy + acz * cpz
-                if d6 >= 0.0 and d5 <= d6:
-                    qx, qy, qz = V[c, 0], V[c, 1], V[c, 2]
-                else:
-                    vb = d5 * d2 - d1 * d6
-                    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
-                        t = d2 / (d2 - d6)
-                        qx, qy, qz = ax + t * acx, ay + t * acy, az + t * acz
-                    else:
-                        va = d3 * d6 - d5 * d4
-                        if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
-                            t = (d4 - d3) / ((d4 - d3) + (d5 - d6))
-                            qx = V[b, 0] + t * (V[c, 0] - V[b, 0])
-                            qy = V[b, 1] + t * (V[c, 1] - V[b, 1])
-                            qz = V[b, 2] + t * (V[c, 2] - V[b, 2])
-                        else:
-                            den = va + vb + vc
-                            v = vb / den
-                            w = vc / den
-                            qx, qy, qz = ax + abx * v + acx * w, ay + aby * v + acy * w, az + abz * v + acz * w
-    dx, dy, dz = px - qx, py - qy, pz - qz
-    return dx * dx + dy * dy + dz * dz
+        return apx * apx + apy * apy + apz * apz
+    bpx, bpy, bpz = px - V[b, 0], py - V[b, 1], pz - V[b, 2]
+    d3 = abx * bpx + aby * bpy + abz * bpz
+    d4 = acx * bpx + acy * bpy + acz * bpz
+    if d3 >= 0.0 and d4 <= d3:
+        return bpx * bpx + bpy * bpy + bpz * bpz
+    vc = d1 * d4 - d3 * d2
+    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
+        t = d1 / (d1 - d3)
+        dx, dy, dz = apx - t * abx, apy - t * aby, apz - t * abz
+        return dx * dx + dy * dy + dz * dz
+    cpx, cpy, cpz = px - V[c, 0], py - V[c, 1], pz - V[c, 2]
+    d5 = abx * cpx + aby * cpy + abz * cpz
+    d6 = acx * cpx + acy * cpy + acz * cpz
+    if d6 >= 0.0 and d5 <= d6:
+        return cpx * cpx + cpy * cpy + cpz * cpz
+    vb = d5 * d2 - d1 * d6
+    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
+        t = d2 / (d2 - d6)
+        dx, dy, dz = apx - t * acx, apy - t * acy, apz - t * acz
+        return dx * dx + dy * dy + dz * dz
+    va = d3 * d6 - d5 * d4
+    if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
+        t = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        dx = bpx - t * (V[c, 0] - V[b, 0])
+        dy = bpy - t * (V[c, 1] - V[b, 1])
+        dz = bpz - t * (V[c, 2] - V[b, 2])
+        return dx * dx + dy * dy + dz * dz
+    s = apx * nx + apy * ny + apz * nz
+    return s * s / nn
 
 
 @njit(cache=True, inline="always")

@@ -127,6 +127,13 @@ def _in_spatial_order(P: np.ndarray, Y: Surface, order: np.ndarray | None = None
     return d
 
 
+ROUND = 8 * float(np.finfo(np.float64).eps)
+"""The rounding allowance of a distance, times the largest coordinate magnitude of the two meshes:
+a point queried on a triangle is built in absolute coordinates (off the surface by a few units in
+the last place of its coordinates), and its distance is computed from differences to the nearest
+triangle's corners (`harness.metrics._bvh_kernel`)."""
+
+
 def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_points: int = 1_000_000,
               max_seconds: float = 30.0, n_samples: int = 20000, seed: int = 0,
               surface_b: Surface | None = None, corresponding: bool = False,
@@ -136,8 +143,11 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
     ``hausdorff``: the largest distance found (a lower bound), with ``hausdorff_upper`` the
     certified upper bound and ``hausdorff_gap = (upper - lower) / lower`` (0 when
     ``upper - lower <= atol``);
+    Both ends carry the rounding of the points queried: the lower end is the largest distance
+    found less ``r = ROUND * max |coordinate|`` (at least 0), the upper end the bound plus ``r``
+    (about 1.8e-15 for coordinates up to 1; 1.8e-10 at 1e5).
     ``hausdorff_certified``: ``upper <= (1 + eps) lower + atol`` (``atol`` default ``1e-12``
-    times the larger bounding-box diagonal, for exact reconstructions) before the budget
+    times the larger bounding-box diagonal plus ``2 r``, for exact reconstructions) before the budget
     (``max_points`` distance queries per direction, ``max_seconds`` in all) ran out: the gap
     is at most ``eps``, except for a distance near rounding level, where ``atol`` may certify
     a bracket whose relative gap is larger (e.g. ``[1e-12, 2.4e-12]`` of the diagonal).
@@ -171,8 +181,9 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
     ``surface_dist_mean_se`` its standard error (``sqrt(se_ab^2 + se_ba^2) / 2``). Input units.
     """
     VA, VB = np.asarray(VA, dtype=np.float64), np.asarray(VB, dtype=np.float64)
+    rnd = ROUND * max(float(np.abs(VA).max(initial=0.0)), float(np.abs(VB).max(initial=0.0)))
     if atol is None:
-        atol = 1e-12 * max(float(np.linalg.norm(np.ptp(VA, axis=0))), float(np.linalg.norm(np.ptp(VB, axis=0))))
+        atol = 1e-12 * max(float(np.linalg.norm(np.ptp(VA, axis=0))), float(np.linalg.norm(np.ptp(VB, axis=0)))) + 2 * rnd
     deadline = time.perf_counter() + max_seconds
     if corresponding and (VA.shape != VB.shape or not np.array_equal(FA, FB)):
         raise ValueError("corresponding=True needs the same faces on the same number of vertices")
@@ -225,8 +236,8 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
     else:
         ab = a_to_b()
         ba = b_to_a(floor=ab["lower"])
-    lower = max(ab["lower"], ba["lower"])
-    upper = max(ab["upper"], ba["upper"])
+    lower = max(max(ab["lower"], ba["lower"]) - rnd, 0.0)        # the points queried carry their rounding
+    upper = max(ab["upper"], ba["upper"]) + rnd
     gap = 0.0 if upper - lower <= atol else ((upper - lower) / lower if lower > 0 else float("inf"))
     out.update({"hausdorff": lower, "hausdorff_upper": upper, "hausdorff_gap": gap,
                 "hausdorff_certified": bool(upper <= (1.0 + eps) * lower + atol),
