@@ -675,9 +675,14 @@ def topology(V: np.ndarray, F: np.ndarray) -> dict:
     fractional or meaningless otherwise), ``nonmanifold_edges`` (edges with more than two faces),
     ``nonmanifold_vertices``, ``manifold`` (edge- and vertex-manifold), ``oriented`` (no directed
     edge in more than one face: on a manifold mesh, consistently oriented faces, which make it
-    orientable).
+    orientable). A face with a repeated corner (``[a, a, b]``: a triangle collapsed onto an edge
+    or a point, which ``zero_area_faces`` counts) has no edges of its own and is left out: it
+    made a closed mesh look non-manifold, misoriented and one boundary loop richer.
     """
     n = len(V)
+    F = np.asarray(F)
+    if len(F):
+        F = F[(F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 2] != F[:, 0])]
     edges, counts = edge_face_counts(F)
     used = np.flatnonzero(referenced(F, n)) if len(F) else np.zeros(0, np.int64)
     bnd = edges[counts == 1]

@@ -445,3 +445,18 @@ def test_libigl_decimation_refuses_an_inconsistently_oriented_mesh(name):
     V = np.array([[0, 0, 0], [1, 0, 0], [0.5, 1, 0], [0.5, -1, 0], [0.5, 0, 1.0]])
     with pytest.raises(ValueError, match="1 directed edge"):
         methods.get(name)(V, nm, target_ratio=0.5)
+
+
+def test_a_face_collapsed_onto_an_edge_is_counted_not_a_change_of_topology():
+    """A review: one face [a, a, b] on an existing edge of a closed output made it non-manifold,
+    misoriented and one boundary loop richer (the self-edge (a, a) read as a boundary), so the
+    result was invalid; the README says collapsed triangles are counted, not made invalid."""
+    from harness.mesh import topology
+    from harness.scoring import evaluate
+    m = load("bunny").clean
+    a, b = m.F[0, 0], m.F[0, 1]
+    F2 = np.vstack([m.F, [[a, a, b]]])
+    assert topology(m.V, F2) == topology(m.V, m.F)
+    r = evaluate(m.V, F2, m.V, m.F, task="simplification")
+    assert r["zero_area_faces"] == 1 and r["manifold"] and not r["manifold_lost"] and not r["orientation_lost"]
+    assert not r["topology_changed"] and r["boundary_loops_change"] == 0, r
