@@ -342,3 +342,23 @@ def test_explicit_with_a_self_weight_is_the_same_at_any_scale(knight, weights):
     for s in (1e-3, 1e3):
         got = methods.get("scratch.explicit")(V * s, F, weights=weights, step=0.2, iterations=5, self_weight=0.5).V
         assert np.abs(got / s - ref).max() <= 1e-9 * np.ptp(V, axis=0).max(), s
+
+
+def test_a_face_degenerate_in_the_clean_mesh_has_no_normal_error():
+    """A review: the clean knight with two zero-area faces scored against itself read
+    normal_error_deg 0.18 (rms 4.0): each degenerate face counted 90 degrees."""
+    from harness import datasets
+    from harness.metrics.normal_error import normal_error
+    from harness.scoring import evaluate
+    m = datasets.load("knight").clean
+    V = m.V.copy()
+    V[m.F[0, 2]] = V[m.F[0, 0]]                              # a corner on another: face 0 has zero area
+    r = evaluate(V, m.F, V, m.F, task="smoothing", V_noisy=V)
+    assert r["normal_error_deg"] == 0.0 and r["normal_error_rms_deg"] == 0.0, r
+    assert r["input_normal_error_deg"] == 0.0
+    assert normal_error(V, V, m.F)["normal_error_deg"] == 0.0
+    collapsed = m.V.copy()
+    collapsed[m.F[0, 2]] = collapsed[m.F[0, 0]]              # the result collapses a face the clean mesh has
+    got = normal_error(collapsed, m.V, m.F)
+    r = evaluate(collapsed, m.F, m.V, m.F, task="smoothing", V_noisy=m.V)
+    assert got["normal_error_deg"] == pytest.approx(r["normal_error_deg"], rel=1e-12) and got["normal_error_deg"] > 0

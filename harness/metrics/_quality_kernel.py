@@ -64,8 +64,8 @@ def face_terms(V, F, o, C):
     - ``vol`` (m,): ``(v0 - o) . ((v1 - o) x (v2 - o))``, six times the signed volume of the
       tetrahedron on the face and ``o`` (`harness.core.geometry.volume` of ``V - o`` sums them / 6);
     - ``ang`` (m,) when ``C`` (m, 3) holds reference unit normals (else empty): the angle in
-      degrees ``atan2(|N x C|, N . C)``, 90 where either normal is zero
-      (`harness.metrics.normal_error`)."""
+      degrees ``atan2(|N x C|, N . C)``; NaN where the reference normal is zero (no angle to
+      measure), else 90 where this face's is (`harness.metrics.normal_error`)."""
     m = F.shape[0]
     N = np.empty((m, 3))
     dbl = np.empty(m)
@@ -94,8 +94,10 @@ def face_terms(V, F, o, C):
         vol[f] = (q0x * (q1y * q2z - q1z * q2y) + q0y * (q1z * q2x - q1x * q2z)) + q0z * (q1x * q2y - q1y * q2x)
         if want:
             c0, c1, c2 = C[f, 0], C[f, 1], C[f, 2]
-            if math.sqrt(n0 * n0 + n1 * n1 + n2 * n2) == 0.0 or math.sqrt(c0 * c0 + c1 * c1 + c2 * c2) == 0.0:
-                ang[f] = 90.0
+            if math.sqrt(c0 * c0 + c1 * c1 + c2 * c2) == 0.0:
+                ang[f] = math.nan                     # no reference normal: no angle to measure
+            elif r == 0.0:
+                ang[f] = 90.0                         # the result's face collapsed: it has no normal
             else:
                 y0 = n1 * c2 - n2 * c1
                 y1 = n2 * c0 - n0 * c2

@@ -178,7 +178,8 @@ TASK = Task(
         Metric("hausdorff_gap", "info", "relative gap of the Hausdorff bracket (<= hausdorff_eps, default 1e-3, unless a budget ran out)",
                rel=1.0, abs=1e-3),
         Metric("hausdorff_upper", "info", "certified upper bound of the Hausdorff distance", **_LEN),
-        Metric("normal_error_deg", "lower", "mean angle between result and clean face normals", rank=True, **_DEG),
+        Metric("normal_error_deg", "lower", "mean angle between result and clean face normals (faces degenerate "
+               "in the clean mesh left out; a face the result collapsed counts 90)", rank=True, **_DEG),
         Metric("normal_error_rms_deg", "lower", "RMS angle between result and clean face normals", **_DEG),
         Metric("volume_ratio", "one", "enclosed volume / clean volume (closed, consistently oriented clean "
                "meshes; blank otherwise)", rel=0.01, abs=1e-4),
