@@ -26,6 +26,7 @@ candidates and the tuned case ids, and the report shows default vs tuned side by
 """
 from __future__ import annotations
 
+import difflib
 import itertools
 import json
 import math
@@ -35,6 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .tasks.base import SE_Z
+from .yaml_input import short
 
 TUNE_KEYS = {"metric", "train", "budget", "seed", "params"}
 
@@ -139,10 +141,10 @@ def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | 
             P.append(f"tune.{k}: unknown key; expected one of {sorted(TUNE_KEYS)}")
     budget, seed = raw.get("budget", 20), raw.get("seed", 0)
     if not isinstance(budget, int) or isinstance(budget, bool) or not 1 <= budget <= 1000:
-        P.append(f"tune.budget: expected an integer in [1, 1000], got {budget!r}")
+        P.append(f"tune.budget: expected an integer in [1, 1000], got {short(budget)}")
         budget = 20
     if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
-        P.append(f"tune.seed: expected an integer >= 0, got {seed!r}")
+        P.append(f"tune.seed: expected an integer >= 0, got {short(seed)}")
         seed = 0
     train = check_meshes(raw.get("train"))
     configured = {m: (t, [g for g in grid]) for t, entries in tasks.items() for m, grid in entries}
@@ -156,7 +158,9 @@ def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | 
     for m, ranges in params.items():
         at = f"tune.params.{m}"
         if m not in configured:
-            P.append(f"{at}: {m} is not one of the run's methods (list it under tasks: too)")
+            close = difflib.get_close_matches(str(m), list(configured), n=3, cutoff=0.5)
+            P.append(f"{at}: {short(m)} is not one of the run's methods (list it under tasks: too)"
+                     + (f"; did you mean {', '.join(close)}?" if close else ""))
             continue
         if not isinstance(ranges, dict) or not ranges:
             P.append(f"{at}: expected a mapping parameter -> list of values")
@@ -197,12 +201,14 @@ def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | 
                     P.append(f"{at}: a candidate setting {json.dumps(dict(zip(ok, combo)), default=str)} cannot "
                              f"run: {why}")
                     break
-        spec = _tasks.get(configured[m][0])
+    named = {configured[m][0] for m in params if m in configured} or {t for t, _ in configured.values()}
+    for t in sorted(named):               # the tasks it would rank: every one of them must declare it
+        spec = _tasks.get(t)
         mt = spec.metric(metric) if isinstance(metric, str) else None
         if mt is None or mt.better not in ("lower", "higher"):
             names = [x.name for x in spec.metrics if x.better in ("lower", "higher")]
             P.append(f"tune.metric: expected a metric of {spec.name} with a direction ({', '.join(names)}), "
-                     f"got {metric!r}")
+                     f"got {short(metric)}")
     if len(P) > n0:
         return None
     return TuneSpec(metric=metric, train=train, budget=budget, seed=seed, params=out_params, configured=configured)

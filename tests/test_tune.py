@@ -89,6 +89,15 @@ def test_tune_section_is_validated_with_key_paths():
     with pytest.raises(ConfigError) as e:
         load_config({**CFG, "tune": {k: v for k, v in CFG["tune"].items() if k != "train"}})
     assert str(e.value).count("train") == 1 and "tune.train: expected a non-empty list" in str(e.value), str(e.value)
+    # a review: the metric went unchecked when no params entry was good; a 4000-digit budget was echoed whole;
+    # a misspelt method had no suggestion
+    with pytest.raises(ConfigError) as e:
+        load_config({**CFG, "tune": {**CFG["tune"], "metric": "bogus_metric", "params": {}, "budget": 10 ** 4000}})
+    msg = str(e.value)
+    assert "tune.metric: expected a metric of smoothing" in msg and "bogus_metric" in msg and len(msg) < 2000, msg
+    with pytest.raises(ConfigError) as e:
+        load_config({**CFG, "tune": {**CFG["tune"], "params": {"scratch.implicitt": {"step": [1.0]}}}})
+    assert "did you mean scratch.implicit" in str(e.value), str(e.value)
 
 
 def test_sampled_settings_are_the_products_positions():
