@@ -777,6 +777,11 @@ def _tune(cfg: Config, ex, out_dir: Path, meta: dict, threads: int, resume: bool
     for case, row, _ in ex.run(todo):
         tfolder.append(case.task, row)
     choice = choose(cfg.tune, tfolder.frames())
+    for m, ch in choice.items():
+        if ch["train_score"] is None:     # no candidate scored: nothing was chosen from
+            print(f"shootout: warning: tuning: {m}: no training setting has a valid score (its training cases "
+                  f"failed, timed out or are invalid: see {out_dir / 'tune'}); it runs as configured",
+                  file=sys.stderr, flush=True)
     from .config import expand_cases
     tuned = [dataclasses.replace(c, threads=threads) for c in tuned_cases(cfg, cfg.tune, choice, expand_cases)]
     for m, ch in choice.items():

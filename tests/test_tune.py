@@ -358,3 +358,16 @@ def test_a_certified_bound_chooses_and_pairs_only_where_the_brackets_lie_apart()
               "hausdorff": a, "hausdorff_upper": b} for c, a, b in zip(c3, [1.0, 0.5, 0.6], [1.0, 1.0, 0.6])]
     # the lowest lower end (0.5) reaches the default; 0.6 certainly beats it: chosen (a review: nothing was)
     assert choose(three, {"simplification": pd.DataFrame(rows3)})["scratch.qem"]["chosen"] == c3[2]
+
+
+def test_a_tuning_whose_training_cases_all_failed_says_so(tmp_path, capsys):
+    """A review: with every training case an error row the run ended with exit 0 and no word;
+    only the report's tuning table read 'no score'."""
+    (tmp_path / "garbage.obj").write_text("this is not a mesh\n")
+    cfg = {**CFG, "meshes": ["bunny"], "tune": {**CFG["tune"], "train": [{"file": str(tmp_path / "garbage.obj")}],
+                                                "budget": 2}}
+    harness.run(cfg, out=tmp_path / "o", quiet=True, workers=1)
+    err = capsys.readouterr().err
+    assert "warning: tuning: scratch.implicit: no training setting has a valid score" in err, err
+    rec = json.loads((tmp_path / "o" / "run.json").read_text())["tune"]["methods"]["scratch.implicit"]
+    assert rec["chosen"] == {} and rec["train_score"] is None
