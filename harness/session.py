@@ -15,7 +15,7 @@ from pathlib import Path
 
 from . import tasks
 from .config import Config, load_config
-from .errors import RunInterrupted, ShootoutError, check_interrupt, problems_error
+from .errors import ConfigError, RunInterrupted, ShootoutError, check_interrupt, problems_error
 from .executors import EXECUTORS, make_executor
 from .mesh import write_ply
 from .provenance import code_hash, git_commit, git_dirty, machine_info, now_iso, package_versions, usable_cpus
@@ -190,6 +190,18 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
             P.append(f"{', '.join(given)}: a results: config scores files made elsewhere and runs no case; "
                      "drop these arguments")
         scored = scored_results(raw, config_or_path, P)
+    bad_config = None
+    if raw is None and not why and not isinstance(config_or_path, Config):
+        try:                             # the config's own problems join the arguments', as the CLI's do
+            config_or_path = load_config(config_or_path)
+        except ConfigError as exc:
+            bad_config = exc
+    if out is not None and isinstance(out, (str, os.PathLike)) and str(out).strip():
+        P += out_dir_problems(Path(out), resume)
+    if bad_config is not None:
+        if not P:
+            raise bad_config
+        P += [f"{bad_config.source}: {p}" for p in bad_config.problems]
     if P:
         raise problems_error(list(dict.fromkeys(P)))
     if raw is not None:                  # a results: config scores files made elsewhere (shootout eval)

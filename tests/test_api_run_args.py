@@ -185,3 +185,19 @@ def test_an_empty_config_says_so():
     with pytest.raises(ConfigError) as exc:
         load_config("\n# nothing\n")
     assert "the config is empty" in str(exc.value)
+
+
+def test_the_api_lists_the_configs_problems_with_the_arguments(tmp_path):
+    """A review: harness.run(bad config, workers=0) named the argument alone, and a bad out
+    (the file system root) hid nothing but came after the config's; the CLI lists them together."""
+    bad = {"name": "b", "meshes": ["nosuchmesh"], "tasks": {"smoothing": {"methods": ["scratch.taubin"]}}}
+    with pytest.raises(ShootoutError) as exc:
+        harness.run(bad, out=tmp_path / "o", workers=0)
+    msg = str(exc.value)
+    assert "--workers" in msg and "meshes[0]: unknown mesh" in msg, msg
+    (tmp_path / "afile").write_text("mine")
+    with pytest.raises(ShootoutError) as exc:
+        harness.run(bad, out=tmp_path / "afile")
+    msg = str(exc.value)
+    assert "afile" in msg and "meshes[0]: unknown mesh" in msg, msg
+    assert not (tmp_path / "o").exists() and (tmp_path / "afile").read_text() == "mine"
