@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import difflib
 import importlib
+import re
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -76,8 +77,11 @@ class Method:
 
     @property
     def summary(self) -> str:
-        """First line of the docstring."""
-        return self.doc.strip().splitlines()[0] if self.doc.strip() else ""
+        """The docstring's first sentence as one line (it may wrap over lines): up to the first
+        full stop followed by a capital or a quote, else the first paragraph."""
+        para = " ".join(self.doc.strip().split("\n\n", 1)[0].split())
+        m = re.match(r"(.+?[.!?])\s+(?=[A-Z`'\"(])", para)
+        return m.group(1) if m else para
 
     def unavailable_reason(self) -> str | None:
         """Why the method cannot run here (a required module fails to import), or None."""

@@ -668,3 +668,13 @@ def test_method_sources_name_each_methods_module_and_distribution(monkeypatch):
                        "tasks": {"smoothing": {"methods": ["scratch.explicit", "crashy.nan_smooth"]}}})
     got = method_sources(cfg)
     assert got["crashy.nan_smooth"] == {"module": "tests.plugins.crashy", "distribution": None, "version": None} and calls
+
+
+def test_a_methods_summary_is_its_first_sentence_whole():
+    """A review: `shootout methods` printed the docstring's first line, cut mid-sentence
+    ("... scipy's ``eigsh`` in")."""
+    import methods
+    s = methods.get("libigl.eigsh").summary
+    assert s.startswith("What a user would write") and s.endswith("with scipy's own sparse LU inside."), s
+    for m in methods.all_methods():
+        assert m.summary and "\n" not in m.summary, m.name
