@@ -204,7 +204,7 @@ def load_config(source, base_dir: Path | None = None, label: str = "<config>") -
         try:
             raw = yaml_input.load(source.read_text(), odd)
         except (yaml.YAMLError, UnicodeDecodeError) as exc:
-            raise ConfigError(label, [f"not valid YAML: {exc}".replace("\n", " ")]) from None
+            raise ConfigError(label, [_yaml_problem(exc, label)]) from None
     else:
         p = Path(str(source))
         if "\n" not in str(source) and p.suffix in (".yaml", ".yml", ".json"):
@@ -215,19 +215,24 @@ def load_config(source, base_dir: Path | None = None, label: str = "<config>") -
             try:
                 text = p.read_text()
             except UnicodeDecodeError as exc:
-                raise ConfigError(label, [f"not valid YAML: {exc}".replace("\n", " ")]) from None
+                raise ConfigError(label, [_yaml_problem(exc, label)]) from None
         else:
             text = str(source)
         try:
             raw = yaml_input.load(text, odd)
         except yaml.YAMLError as exc:
-            raise ConfigError(label, [f"not valid YAML: {exc}".replace("\n", " ")]) from None
+            raise ConfigError(label, [_yaml_problem(exc, label)]) from None
     odd = [f"not valid YAML: {o}" for o in odd]
     if raw is None:
         raise ConfigError(label, odd + ["the config is empty: expected a mapping with name, meshes and tasks"])
     if not isinstance(raw, dict):
         raise ConfigError(label, odd + [f"top level: expected a mapping, got {type(raw).__name__}"])
     return _validate(raw, label, (base_dir or Path.cwd()).resolve(), odd)
+
+
+def _yaml_problem(exc, label: str) -> str:
+    """A YAML error on one line, naming the config where the parser says "<unicode string>"."""
+    return f"not valid YAML: {exc}".replace("\n", " ").replace('"<unicode string>"', f'"{label}"')
 
 
 def _plain(x):

@@ -201,3 +201,14 @@ def test_the_api_lists_the_configs_problems_with_the_arguments(tmp_path):
     msg = str(exc.value)
     assert "afile" in msg and "meshes[0]: unknown mesh" in msg, msg
     assert not (tmp_path / "o").exists() and (tmp_path / "afile").read_text() == "mine"
+
+
+def test_a_yaml_error_names_the_config_file(tmp_path):
+    """A review: a YAML syntax error read 'in "<unicode string>", line 2' for a config file."""
+    from harness.config import load_config
+    from harness.errors import ConfigError
+    p = tmp_path / "bad.yaml"
+    p.write_text("name: x\nmeshes: [knight\n")
+    with pytest.raises(ConfigError) as exc:
+        load_config(p)
+    assert f'in "{p}", line 2' in str(exc.value) and "<unicode string>" not in str(exc.value), str(exc.value)
