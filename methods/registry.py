@@ -172,7 +172,12 @@ def load_plugins(modules) -> None:
 
 
 def all_methods(task: str | None = None) -> list[Method]:
-    """Every registered method (available or not), sorted by name."""
+    """Every registered method (available or not), sorted by name; of one task kind where
+    ``task`` names one (an unknown kind is a KeyError naming the known ones)."""
+    if task is not None and task not in _tasks.names():
+        close = difflib.get_close_matches(str(task), _tasks.names(), n=3, cutoff=0.5)
+        raise KeyError(f"unknown task {task!r}" + (f"; did you mean {', '.join(close)}?" if close else "")
+                       + f" (task kinds: {', '.join(_tasks.names())})")
     _load_builtins()
     return sorted((m for m in _REGISTRY.values() if task is None or m.task == task),
                   key=lambda m: m.name)

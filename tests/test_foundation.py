@@ -678,3 +678,11 @@ def test_a_methods_summary_is_its_first_sentence_whole():
     assert s.startswith("What a user would write") and s.endswith("with scipy's own sparse LU inside."), s
     for m in methods.all_methods():
         assert m.summary and "\n" not in m.summary, m.name
+
+
+def test_an_unknown_task_kind_is_refused_not_an_empty_list():
+    """A review: methods.available('smoothin') returned [] as if no method were registered."""
+    import methods
+    with pytest.raises(KeyError, match="unknown task 'smoothin'; did you mean smoothing"):
+        methods.available("smoothin")
+    assert "scratch.taubin" in methods.available("smoothing")
