@@ -251,7 +251,10 @@ def _validate(raw: dict, label: str, base_dir: Path, found=()) -> Config:
     methods = import_methods()
     P: list[str] = list(found)
 
-    _unknown_keys(raw, TOP_KEYS, "", P)
+    if "results" in raw and "tasks" in raw:    # a results: config scores files and runs no task: not both
+        P.append("results: a config either runs tasks (tasks:) or scores files made elsewhere (results:), "
+                 "not both; split it into two configs")
+    _unknown_keys({k: v for k, v in raw.items() if k != "results" or "tasks" not in raw}, TOP_KEYS, "", P)
 
     name = raw.get("name", Path(label).stem if label != "<config>" and Path(label).is_file() else "run")
     if name_problem(name):

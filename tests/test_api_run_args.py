@@ -212,3 +212,14 @@ def test_a_yaml_error_names_the_config_file(tmp_path):
     with pytest.raises(ConfigError) as exc:
         load_config(p)
     assert f'in "{p}", line 2' in str(exc.value) and "<unicode string>" not in str(exc.value), str(exc.value)
+
+
+def test_results_and_tasks_in_one_config_are_named_as_such():
+    """A review: 'results: unknown key (did you mean repeats?)', though results: is documented."""
+    from harness.config import load_config
+    from harness.errors import ConfigError
+    with pytest.raises(ConfigError) as exc:
+        load_config({"name": "x", "meshes": ["knight"], "results": [],
+                     "tasks": {"smoothing": {"methods": ["scratch.taubin"]}}})
+    assert "results: a config either runs tasks (tasks:) or scores files" in str(exc.value)
+    assert "unknown key" not in str(exc.value), str(exc.value)
