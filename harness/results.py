@@ -606,6 +606,8 @@ def check_output_file(path, flag: str, protect=(), run_dirs=(), kind: str | None
     overwritten input."""
     if path is None:
         return
+    if not str(path).strip():                    # Path("") is the current folder
+        raise ShootoutError(f"{flag}: an empty path; give a file name")
     p = Path(path)
     rp = _resolved(p, f"{flag} {path}")
     if p.is_dir():

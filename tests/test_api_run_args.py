@@ -223,3 +223,13 @@ def test_results_and_tasks_in_one_config_are_named_as_such():
                      "tasks": {"smoothing": {"methods": ["scratch.taubin"]}}})
     assert "results: a config either runs tasks (tasks:) or scores files" in str(exc.value)
     assert "unknown key" not in str(exc.value), str(exc.value)
+
+
+def test_an_empty_export_path_says_so(tmp_path, capsys):
+    """A review: --export-benchmark-json "" read ': is a folder; give a file name'."""
+    from harness.cli import main
+    cfg = tmp_path / "c.json"
+    cfg.write_text('{"name": "e", "meshes": ["knight"], "tasks": {"laplacian": {"methods": ["scratch.uniform"]}}}')
+    assert main(["run", str(cfg), "--out", str(tmp_path / "o"), "--export-benchmark-json", ""]) == 2
+    assert "--export-benchmark-json: an empty path; give a file name" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
