@@ -82,6 +82,20 @@ def evaluate(V, F, V_clean, F_clean, task: str = "smoothing", V_noisy=None, haus
         arrays[name] = a
     if task == "simplification" and F is None:
         P.append("F: a simplification result needs its faces")
+    in_range = {}
+    for f, v in (("F", "V"), ("F_clean", "V_clean")):
+        a, n = arrays.get(f), arrays.get(v)
+        in_range[f] = a is not None and n is not None and (not a.size or (a.min() >= 0 and a.max() < len(n)))
+        if a is not None and n is not None and not in_range[f]:
+            P.append(f"{f}: vertex indices out of range (from {int(a.min())} to {int(a.max())}; {v} has {len(n)} "
+                     "vertices)")
+    if in_range["F_clean"]:                      # over the vertices the clean faces use (a dropped one is repaired);
+        used = np.unique(arrays["F_clean"])      # the result's own may diverge: that is measured, not refused
+        for name in ("V_clean", "V_noisy"):
+            a = arrays.get(name)
+            if a is not None and len(a) == len(arrays["V_clean"]) and not np.isfinite(a[used]).all():
+                P.append(f"{name}: {int((~np.isfinite(a[used]).all(axis=1)).sum())} vertices with NaN or inf "
+                         "coordinates")
     if P:
         raise problems_error(P)
     V, F, V_clean, F_clean, V_noisy = (arrays.get(k) for k in ("V", "F", "V_clean", "F_clean", "V_noisy"))

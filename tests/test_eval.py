@@ -200,7 +200,7 @@ def test_evaluate_refuses_input_it_cannot_score_honestly():
     bad_noisy = src.noisy_V.copy()
     bad_noisy[3, 1] = np.nan
     for kwargs, needle in (({"F": (F + 1) % len(V)}, "other faces: a smoothing result must keep"),
-                           ({"F": F + 1000000}, "other faces: a smoothing result must keep"),
+                           ({"F": F + 1000000}, "F: vertex indices out of range"),
                            ({"F": None, "task": "simplification"}, "F: a simplification result needs its faces"),
                            ({"F": F + 0.5, "task": "simplification"}, "F: expected integer"),
                            ({"F": F, "V_noisy": bad_noisy}, "NaN or inf"),

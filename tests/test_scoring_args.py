@@ -61,3 +61,26 @@ def test_numpy_scalars_of_the_right_kind_are_taken(knight):
     assert got["target_faces"] == want["target_faces"] == len(F) // 2 and got["over_target"] is True
     assert harness.evaluate(V, F, V, F, task="simplification", target_faces=np.int32(10),
                             hausdorff_samples=200)["target_faces"] == 10
+
+
+def test_evaluate_lists_bad_coordinates_and_indices_with_the_other_problems():
+    """A review: NaN in V_noisy was named only once every other problem was fixed, and faces out
+    of range read 'result returned face indices out of range' instead of naming F."""
+    import numpy as np
+
+    import harness
+    from harness import datasets
+    from harness.errors import ShootoutError
+    m = datasets.load("knight").clean
+    Vn, Vc, F = m.V.copy(), m.V.copy(), m.F.copy()
+    Vn[3] = np.nan
+    Vc[5] = np.inf
+    F[0, 0] = 10 ** 6
+    with pytest.raises(ShootoutError) as exc:
+        harness.evaluate(m.V, F, Vc, m.F, task="smoothing", V_noisy=Vn, hausdorff_samples=-1)
+    msg = str(exc.value)
+    for needle in ("hausdorff_samples:", "F: vertex indices out of range", "V_clean: 1 vertices with NaN",
+                   "V_noisy: 1 vertices with NaN"):
+        assert needle in msg, msg
+    extra = np.vstack([m.V, [[np.nan] * 3]])           # a vertex no clean face uses is repaired away, not refused
+    assert harness.evaluate(m.V, m.F, extra, m.F, task="smoothing", V_noisy=extra)["dist_mean"] == 0.0
