@@ -178,10 +178,10 @@ def _cmd_methods(a) -> int:
     methods = import_methods()
     if str(Path.cwd()) not in sys.path:              # a plugin beside the caller, as for a config
         sys.path.append(str(Path.cwd()))
-    failed = import_plugins(a.plugin, first_only=True)
+    failed = import_plugins(a.plugin)
     if failed:
-        mod, why = next(iter(failed.items()))
-        raise ShootoutError(f"--plugin {mod}: cannot import it ({why})")
+        from .errors import problems_error
+        raise problems_error([f"--plugin {mod}: cannot import it ({why})" for mod, why in failed.items()])
     if not methods.all_methods(a.task):
         print(f"no method registered{' for task ' + a.task if a.task else ''} (a plugin's methods: --plugin MODULE)",
               file=sys.stderr)

@@ -39,10 +39,10 @@ def import_methods():
     return methods
 
 
-def import_plugins(modules, first_only: bool = False) -> dict:
+def import_plugins(modules) -> dict:
     """Import ``modules`` into the method registry, each tried first in another process
     (`import_problems`), and ``{module: why}`` for those that failed there or here
-    (`import_failure`), in their order; with ``first_only``, the first failure ends the imports."""
+    (`import_failure`), in their order."""
     methods = import_methods()
     found = import_problems(modules)
     failed: dict = {}
@@ -54,8 +54,6 @@ def import_plugins(modules, first_only: bool = False) -> dict:
             except (Exception, SystemExit) as exc:   # a user's module: its failure is the answer
                 found[mod] = import_failure(exc)
         failed[mod] = found[mod]
-        if first_only:
-            break
     return failed
 
 

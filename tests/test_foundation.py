@@ -619,9 +619,10 @@ def test_methods_lists_a_plugins_methods(tmp_path):
     r = subprocess.run([sys.executable, "-m", "harness.cli", "methods", "--plugin", "mylab_listed", "--task", "smoothing"],
                        cwd=tmp_path, capture_output=True, text=True, env=env, timeout=120)
     assert r.returncode == 0 and "mylab_listed.same" in r.stdout, r.stderr
-    r = subprocess.run([sys.executable, "-m", "harness.cli", "methods", "--plugin", "no_such_mod_zz"],
-                       cwd=tmp_path, capture_output=True, text=True, env=env, timeout=120)
+    r = subprocess.run([sys.executable, "-m", "harness.cli", "methods", "--plugin", "no_such_mod_zz", "--plugin",
+                        "no_such_mod_yy"], cwd=tmp_path, capture_output=True, text=True, env=env, timeout=120)
     assert r.returncode == 2 and "--plugin no_such_mod_zz: cannot import it" in r.stderr
+    assert "--plugin no_such_mod_yy: cannot import it" in r.stderr, r.stderr     # each one (a review)
 
 
 def test_an_entry_point_module_is_tried_in_another_process_before_it_is_imported(tmp_path):
