@@ -688,9 +688,11 @@ def _check_tasks(tasks, P: list, skip_unknown: bool = False, noise: dict | None 
                 P.append(f"{mat}: expected a method name or {{name: ..., params: ...}}, got {yaml_input.short(m)}")
                 continue
             try:
-                meth = methods.get(mname)
+                meth = methods.get(mname, task=task if task in TASKS else None)
             except KeyError as exc:
-                if not skip_unknown:      # a failed plugin already explains its missing methods
+                prefix = str(mname).split(".", 1)[0]
+                known = any(m.name.split(".", 1)[0] == prefix for m in methods.all_methods())
+                if not skip_unknown or known:   # a failed plugin explains the methods of a prefix no module registered
                     P.append(f"{mat}: {exc.args[0]}; see `shootout methods`")
                 continue
             if meth.task != task:

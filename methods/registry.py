@@ -188,13 +188,15 @@ def available(task: str | None = None) -> list[str]:
     return [m.name for m in all_methods(task) if m.is_available]
 
 
-def get(name: str) -> Method:
-    """The method called ``name``; KeyError naming the close matches when unknown."""
+def get(name: str, task: str | None = None) -> Method:
+    """The method called ``name``; KeyError naming the close matches when unknown (among the
+    methods of ``task`` where given, else among all)."""
     _load_builtins()
     try:
         return _REGISTRY[name]
     except KeyError:
-        close = difflib.get_close_matches(name, list(_REGISTRY), n=3, cutoff=0.5)
+        pool = [k for k, m in _REGISTRY.items() if task is None or m.task == task]
+        close = difflib.get_close_matches(str(name), pool, n=3, cutoff=0.5)
         hint = f"; did you mean {', '.join(close)}?" if close else ""
         eps = [f"{k}: {v}" for k, v in BROKEN.items()]
         if eps:                        # the method may live in a module that failed

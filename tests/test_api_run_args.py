@@ -233,3 +233,23 @@ def test_an_empty_export_path_says_so(tmp_path, capsys):
     assert main(["run", str(cfg), "--out", str(tmp_path / "o"), "--export-benchmark-json", ""]) == 2
     assert "--export-benchmark-json: an empty path; give a file name" in capsys.readouterr().err
     assert not (tmp_path / "o").exists()
+
+
+def test_a_misspelt_method_is_named_beside_a_plugin_that_failed_and_its_matches_are_of_its_task(tmp_path,
+                                                                                                 monkeypatch):
+    """A review: with one plugin failing, a typo in a method of a plugin that imported (or a
+    built-in's) went unreported; and 'scratch.taubn' was offered scratch.cotan, a Laplacian."""
+    from harness.config import load_config
+    from harness.errors import ConfigError
+    (tmp_path / "mylab_ok.py").write_text(
+        "from methods import register\nfrom harness.tasks.smoothing import SmoothingResult\n"
+        "@register('mylab_ok.wiggle', task='smoothing', library='mylab')\n"
+        "def w(V, F):\n    \"\"\"Returns its input.\"\"\"\n    return SmoothingResult(V=V.copy())\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    with pytest.raises(ConfigError) as exc:
+        load_config({"name": "p", "plugins": ["mylab_ok", "no_such_plugin_qq"], "meshes": ["knight"],
+                     "tasks": {"smoothing": {"methods": ["mylab_ok.wigle", "scratch.taubn", "qq.thing"]}}})
+    msg = str(exc.value)
+    assert "unknown method 'mylab_ok.wigle'; did you mean mylab_ok.wiggle" in msg, msg
+    assert "unknown method 'scratch.taubn'; did you mean scratch.taubin" in msg and "scratch.cotan" not in msg, msg
+    assert "qq.thing" not in msg                      # likely the failed plugin's: its failure explains it
