@@ -680,8 +680,8 @@ def test_a_methods_summary_is_its_first_sentence_whole():
     import methods
     s = methods.get("libigl.eigsh").summary
     assert s.startswith("What a user would write") and s.endswith("with scipy's own sparse LU inside."), s
-    for m in methods.all_methods():
-        assert m.summary and "\n" not in m.summary, m.name
+    for m in methods.all_methods():                  # (another test may register one without a docstring)
+        assert "\n" not in m.summary and (m.summary or not m.doc.strip()), m.name
 
 
 def test_an_unknown_task_kind_is_refused_not_an_empty_list():
