@@ -7,6 +7,7 @@ import errno
 import hashlib
 import json
 import os
+import re
 import secrets
 import statistics
 import sys
@@ -173,7 +174,8 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
     or None for ``results/<name>``. A ``results:`` config (scoring files made elsewhere) runs no
     case: it takes ``out`` and ``quiet`` only, as ``shootout run`` takes no other flag for it. Bad
     arguments are one `ShootoutError` listing each, before anything is written."""
-    P = run_args_problems(workers, timeout, executor, scheduler)
+    P = [re.sub(r"--(workers|timeout|executor|scheduler)\b", r"\1", p)      # arguments here, not flags
+         for p in run_args_problems(workers, timeout, executor, scheduler)]
     if out is not None and not isinstance(out, (str, os.PathLike)):
         P.append(f"out: expected a folder path, got {type(out).__name__} {out!r}")
     elif isinstance(out, str) and not out.strip():       # Path("") would be the current folder

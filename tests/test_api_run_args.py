@@ -194,7 +194,7 @@ def test_the_api_lists_the_configs_problems_with_the_arguments(tmp_path):
     with pytest.raises(ShootoutError) as exc:
         harness.run(bad, out=tmp_path / "o", workers=0)
     msg = str(exc.value)
-    assert "--workers" in msg and "meshes[0]: unknown mesh" in msg, msg
+    assert "workers: expected an integer" in msg and "--workers" not in msg and "meshes[0]: unknown mesh" in msg, msg
     (tmp_path / "afile").write_text("mine")
     with pytest.raises(ShootoutError) as exc:
         harness.run(bad, out=tmp_path / "afile")
