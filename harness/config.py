@@ -624,6 +624,8 @@ def _check_noise(noise, P: list, where: str = "noise") -> list[dict]:
         seeds = n.get("seeds", 1)
         if not _is_int(seeds) or not 1 <= seeds <= 1000:
             P.append(f"{at}.seeds: expected an integer in [1, 1000], got {yaml_input.short(seeds)}")
+        elif model == "none" and seeds != 1:
+            P.append(f"{at}.seeds: model none adds no noise, so every seed is the same input: drop seeds")
         entry["seeds"] = seeds if _is_int(seeds) else 1
         frac = n.get("fraction", 1.0)
         if "fraction" in n and model != "impulsive":

@@ -253,3 +253,14 @@ def test_a_misspelt_method_is_named_beside_a_plugin_that_failed_and_its_matches_
     assert "unknown method 'mylab_ok.wigle'; did you mean mylab_ok.wiggle" in msg, msg
     assert "unknown method 'scratch.taubn'; did you mean scratch.taubin" in msg and "scratch.cotan" not in msg, msg
     assert "qq.thing" not in msg                      # likely the failed plugin's: its failure explains it
+
+
+def test_seeds_on_the_noise_free_model_are_refused_as_its_levels_are():
+    """A review: seeds: 3 on {model: none} was ignored without a word."""
+    from harness.config import load_config
+    from harness.errors import ConfigError
+    with pytest.raises(ConfigError, match=r"noise\[0\]\.seeds: model none adds no noise"):
+        load_config({"name": "s", "meshes": ["knight"], "noise": [{"model": "none", "seeds": 3}],
+                     "tasks": {"smoothing": {"methods": ["scratch.taubin"]}}})
+    assert load_config({"name": "s", "meshes": ["knight"], "noise": [{"model": "none", "seeds": 1}],
+                        "tasks": {"smoothing": {"methods": ["scratch.taubin"]}}}).cases
