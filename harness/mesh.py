@@ -641,6 +641,8 @@ def validate(V, F, name: str = "", repair: bool = True, finite: bool = True) -> 
 
 def nonmanifold_vertices(F: np.ndarray, n: int) -> np.ndarray:
     """Indices of vertices whose incident faces form more than one edge-connected fan."""
+    if len(F) == 0:
+        return np.zeros(0, np.int64)
     if len(F) >= COMPILED_EDGES_FROM:
         from .core._edges_kernel import fan_counts
         return np.flatnonzero(fan_counts(np.ascontiguousarray(F, dtype=np.int64), int(n)) > 1)

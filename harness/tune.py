@@ -201,11 +201,16 @@ def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | 
                     P.append(f"{at}: a candidate setting {json.dumps(dict(zip(ok, combo)), default=str)} cannot "
                              f"run: {why}")
                     break
-    named = {configured[m][0] for m in params if m in configured} or {t for t, _ in configured.values()}
-    for t in sorted(named):               # the tasks it would rank: every one of them must declare it
-        spec = _tasks.get(t)
-        mt = spec.metric(metric) if isinstance(metric, str) else None
-        if mt is None or mt.better not in ("lower", "higher"):
+    def ranks(t) -> bool:
+        mt = _tasks.get(t).metric(metric) if isinstance(metric, str) else None
+        return mt is not None and mt.better in ("lower", "higher")
+    named = sorted({configured[m][0] for m in params if m in configured})
+    if not named:                         # no method named well: a metric of any task of the run will do
+        named = sorted({t for t, _ in configured.values()})
+        named = [] if any(ranks(t) for t in named) else named[:1]
+    for t in named:                       # the tasks it would rank: every one of them must declare it
+        if not ranks(t):
+            spec = _tasks.get(t)
             names = [x.name for x in spec.metrics if x.better in ("lower", "higher")]
             P.append(f"tune.metric: expected a metric of {spec.name} with a direction ({', '.join(names)}), "
                      f"got {short(metric)}")

@@ -78,9 +78,10 @@ class Method:
     @property
     def summary(self) -> str:
         """The docstring's first sentence as one line (it may wrap over lines): up to the first
-        full stop followed by a capital or a quote, else the first paragraph."""
+        full stop (not of "e.g.", "i.e.", "et al.", "vs.") followed by a capital or a quote, else the
+        first paragraph."""
         para = " ".join(self.doc.strip().split("\n\n", 1)[0].split())
-        m = re.match(r"(.+?[.!?])\s+(?=[A-Z`'\"(])", para)
+        m = re.match(r"(.+?(?<!\be\.g)(?<!\bi\.e)(?<!\bet al)(?<!\bvs)[.!?])\s+(?=[A-Z`'\"(])", para)
         return m.group(1) if m else para
 
     def unavailable_reason(self) -> str | None:

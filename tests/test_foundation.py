@@ -680,6 +680,7 @@ def test_a_methods_summary_is_its_first_sentence_whole():
     import methods
     s = methods.get("libigl.eigsh").summary
     assert s.startswith("What a user would write") and s.endswith("with scipy's own sparse LU inside."), s
+    assert methods.get("scratch.umbrella").summary.endswith("``D = 1/N_i``.")   # not cut at "i.e." (diff review)
     for m in methods.all_methods():                  # (another test may register one without a docstring)
         assert "\n" not in m.summary and (m.summary or not m.doc.strip()), m.name
 

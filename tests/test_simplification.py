@@ -460,3 +460,7 @@ def test_a_face_collapsed_onto_an_edge_is_counted_not_a_change_of_topology():
     r = evaluate(m.V, F2, m.V, m.F, task="simplification")
     assert r["zero_area_faces"] == 1 and r["manifold"] and not r["manifold_lost"] and not r["orientation_lost"]
     assert not r["topology_changed"] and r["boundary_loops_change"] == 0, r
+    # the diff review: an output whose every face has a repeated corner crashed topology (an IndexError row)
+    assert topology(m.V[:3], np.array([[0, 0, 1], [1, 1, 2]]))["n_edges"] == 0
+    r = evaluate(m.V[:3], np.array([[0, 0, 1], [1, 1, 2]]), m.V, m.F, task="simplification", target_faces=2)
+    assert r["zero_area_faces"] == 2 and r["manifold_lost"] is False and r["topology_changed"], r

@@ -98,6 +98,11 @@ def test_tune_section_is_validated_with_key_paths():
     with pytest.raises(ConfigError) as e:
         load_config({**CFG, "tune": {**CFG["tune"], "params": {"scratch.implicitt": {"step": [1.0]}}}})
     assert "did you mean scratch.implicit" in str(e.value), str(e.value)
+    both = {**CFG, "tasks": {**CFG["tasks"], "simplification": {"methods": ["scratch.qem"]}},
+            "tune": {**CFG["tune"], "params": {"scratch.taubn": {"iterations": [2]}}}}
+    with pytest.raises(ConfigError) as e:             # the diff review: dist_mean is smoothing's, not 'wrong'
+        load_config(both)
+    assert "tune.metric" not in str(e.value) and "scratch.taubn" in str(e.value), str(e.value)
 
 
 def test_sampled_settings_are_the_products_positions():
