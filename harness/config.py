@@ -236,8 +236,9 @@ def _yaml_problem(exc, label: str) -> str:
 
 
 def _plain(x):
-    """A config given from Python with numpy scalars (``np.int64(5)``, ``np.float32(0.3)``) as
-    the Python numbers YAML would give: equal settings, equal case ids, JSON a run can record."""
+    """A config given from Python with numpy scalars as the Python numbers they hold
+    (``np.int64(5)`` is 5, ``np.float64(0.3)`` 0.3: equal settings, equal case ids, JSON a run can
+    record; ``np.float32(0.3)`` is the float 0.30000001192092896 it holds)."""
     import numpy as np
     if isinstance(x, dict):
         return {_plain(k): _plain(v) for k, v in x.items()}

@@ -55,13 +55,127 @@ LEAF = 4
 COVER = 1.5          # the covering bound keeps Y's triangles with b_t up to COVER times the threshold
 
 
+SLIVER2 = 256.0
+"""``(|ab| |ac| / |ab x ac|)^2`` above which `_tri_dist2` measures in double-double arithmetic
+(`_tri_dist2_dd`): the angle at the first corner below about 3.6 degrees. Below it, the plane
+distance's error is at most about ``(3.5 * 16 + 2) eps |ap|`` (the normal's direction is known to
+``3.5 eps |ab||ac| / |ab x ac|``), which `harness.metrics.hausdorff.ROUND` covers."""
+
+
+@njit(cache=True, inline="always")
+def _ts(a, b):
+    """Knuth's two-sum: ``s + e == a + b`` exactly."""
+    s = a + b
+    z = s - a
+    return s, (a - (s - z)) + (b - z)
+
+
+@njit(cache=True, inline="always")
+def _tp(a, b):
+    """Dekker's two-product: ``p + e == a * b`` exactly (no overflow in the split)."""
+    p = a * b
+    c = 134217729.0 * a
+    ah = c - (c - a)
+    al = a - ah
+    c = 134217729.0 * b
+    bh = c - (c - b)
+    bl = b - bh
+    return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
+
+
+@njit(cache=True, inline="always")
+def _dd(h, e):
+    s = h + e
+    return s, e - (s - h)
+
+
+@njit(cache=True, inline="always")
+def _dmul(xh, xl, yh, yl):
+    p, e = _tp(xh, yh)
+    return _dd(p, e + (xh * yl + xl * yh))
+
+
+@njit(cache=True, inline="always")
+def _dsub(xh, xl, yh, yl):
+    s, e = _ts(xh, -yh)
+    return _dd(s, e + (xl - yl))
+
+
+@njit(cache=True, inline="always")
+def _dadd3(ah, al, bh, bl, ch, cl):
+    s, e = _ts(ah, bh)
+    s, e = _dd(s, e + (al + bl))
+    t, f = _ts(s, ch)
+    return _dd(t, f + (e + cl))
+
+
+@njit(cache=True, inline="always")
+def _ddiff(V, i, j):
+    """``V[i] - V[j]`` exactly, as three double-double pairs."""
+    xh, xl = _ts(V[i, 0], -V[j, 0])
+    yh, yl = _ts(V[i, 1], -V[j, 1])
+    zh, zl = _ts(V[i, 2], -V[j, 2])
+    return xh, xl, yh, yl, zh, zl
+
+
+@njit(cache=True, inline="always")
+def _dpdiff(px, py, pz, V, j):
+    xh, xl = _ts(px, -V[j, 0])
+    yh, yl = _ts(py, -V[j, 1])
+    zh, zl = _ts(pz, -V[j, 2])
+    return xh, xl, yh, yl, zh, zl
+
+
+@njit(cache=True, inline="always")
+def _dcross(u, v):
+    """``u x v`` of double-double 3-vectors (6-tuples hi, lo per component)."""
+    p1h, p1l = _dmul(u[2], u[3], v[4], v[5])
+    p2h, p2l = _dmul(u[4], u[5], v[2], v[3])
+    xh, xl = _dsub(p1h, p1l, p2h, p2l)
+    p1h, p1l = _dmul(u[4], u[5], v[0], v[1])
+    p2h, p2l = _dmul(u[0], u[1], v[4], v[5])
+    yh, yl = _dsub(p1h, p1l, p2h, p2l)
+    p1h, p1l = _dmul(u[0], u[1], v[2], v[3])
+    p2h, p2l = _dmul(u[2], u[3], v[0], v[1])
+    zh, zl = _dsub(p1h, p1l, p2h, p2l)
+    return xh, xl, yh, yl, zh, zl
+
+
+@njit(cache=True, inline="always")
+def _ddot(u, v):
+    """``u . v`` of double-double 3-vectors, its high part."""
+    p1h, p1l = _dmul(u[0], u[1], v[0], v[1])
+    p2h, p2l = _dmul(u[2], u[3], v[2], v[3])
+    p3h, p3l = _dmul(u[4], u[5], v[4], v[5])
+    return _dadd3(p1h, p1l, p2h, p2l, p3h, p3l)[0]
+
+
+@njit(cache=True)
+def _tri_dist2_dd(px, py, pz, V, a, b, c):
+    """`_tri_dist2` of a sliver, in double-double arithmetic: the differences exact, the normal
+    ``n = ab x ac``, the side tests ``n . (e x (p - e_0))`` of the three edges and ``ap . n`` to
+    about eps^2 relative. p over the inside: ``(ap . n)^2 / |n|^2``; else the nearest edge."""
+    ab, ac, bc = _ddiff(V, b, a), _ddiff(V, c, a), _ddiff(V, c, b)
+    ca = _ddiff(V, a, c)
+    ap, bp, cp = _dpdiff(px, py, pz, V, a), _dpdiff(px, py, pz, V, b), _dpdiff(px, py, pz, V, c)
+    n = _dcross(ab, ac)
+    ta = _ddot(n, _dcross(ab, ap))
+    tb = _ddot(n, _dcross(bc, bp))
+    tc = _ddot(n, _dcross(ca, cp))
+    if ta >= 0.0 and tb >= 0.0 and tc >= 0.0:
+        s = _ddot(ap, n)
+        return s * s / _ddot(n, n)
+    return min(_seg2(px, py, pz, V, a, b), _seg2(px, py, pz, V, b, c), _seg2(px, py, pz, V, c, a))
+
+
 @njit(cache=True, inline="always", error_model="numpy")
 def _tri_dist2(px, py, pz, V, a, b, c):
     """Squared distance from p to the closed triangle (V[a], V[b], V[c]) (Ericson's regions).
     Every difference is taken from p to a vertex (never from p to a point rebuilt in absolute
     coordinates, whose rounding grows with the distance from the origin), and a point over the
-    inside is at the distance to the plane, ``(ap . n)^2 / |n|^2`` (barycentric coordinates of a
-    sliver lose their digits to cancellation, its normal far fewer)."""
+    inside is at the distance to the plane, ``(ap . n)^2 / |n|^2`` (barycentric coordinates lose
+    their digits to cancellation). A sliver (`SLIVER2`) is measured in double-double arithmetic
+    (`_tri_dist2_dd`)."""
     ax, ay, az = V[a, 0], V[a, 1], V[a, 2]
     abx, aby, abz = V[b, 0] - ax, V[b, 1] - ay, V[b, 2] - az
     acx, acy, acz = V[c, 0] - ax, V[c, 1] - ay, V[c, 2] - az
@@ -69,6 +183,8 @@ def _tri_dist2(px, py, pz, V, a, b, c):
     nn = nx * nx + ny * ny + nz * nz
     if nn == 0.0:                                   # degenerate triangle: nearest of its edges
         return min(_seg2(px, py, pz, V, a, b), _seg2(px, py, pz, V, b, c), _seg2(px, py, pz, V, c, a))
+    if (abx * abx + aby * aby + abz * abz) * (acx * acx + acy * acy + acz * acz) > SLIVER2 * nn:
+        return _tri_dist2_dd(px, py, pz, V, a, b, c)  # a sliver: its normal needs more digits
     apx, apy, apz = px - ax, py - ay, pz - az
     d1 = abx * apx + aby * apy + abz * apz
     d2 = acx * apx + acy * apy + acz * apz

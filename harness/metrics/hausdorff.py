@@ -127,11 +127,24 @@ def _in_spatial_order(P: np.ndarray, Y: Surface, order: np.ndarray | None = None
     return d
 
 
-ROUND = 8 * float(np.finfo(np.float64).eps)
-"""The rounding allowance of a distance, times the largest coordinate magnitude of the two meshes:
-a point queried on a triangle is built in absolute coordinates (off the surface by a few units in
-the last place of its coordinates), and its distance is computed from differences to the nearest
-triangle's corners (`harness.metrics._bvh_kernel`)."""
+ROUND = 256 * float(np.finfo(np.float64).eps)
+"""The rounding allowance of a distance, times the largest coordinate magnitude of the vertices
+the two meshes' faces use (M): a point queried on a triangle is built in absolute coordinates (off
+the surface by about 3 eps M), and its distance to a triangle (`harness.metrics._bvh_kernel`) is
+measured from the corners, over the inside as the distance to the plane, whose normal's direction
+is known to about 3.5 eps times the condition ``|ab||ac| / |ab x ac|`` at most 16 (a sliver
+beyond it is measured in double-double arithmetic): at most about 58 eps |ap|, ``|ap|`` at most
+``2 sqrt(3) M``."""
+
+
+def _used_max(V, F) -> float:
+    """The largest coordinate magnitude of the vertices the faces ``F`` use (0 without faces)."""
+    F = np.asarray(F)
+    if not F.size:
+        return 0.0
+    used = np.zeros(len(V), dtype=bool)
+    used[F.ravel()] = True
+    return float(np.abs(V[used]).max(initial=0.0))
 
 
 def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_points: int = 1_000_000,
@@ -143,11 +156,13 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
     ``hausdorff``: the largest distance found (a lower bound), with ``hausdorff_upper`` the
     certified upper bound and ``hausdorff_gap = (upper - lower) / lower`` (0 when
     ``upper - lower <= atol``);
-    Both ends carry the rounding of the points queried: the lower end is the largest distance
-    found less ``r = ROUND * max |coordinate|`` (at least 0), the upper end the bound plus ``r``
-    (about 1.8e-15 for coordinates up to 1; 1.8e-10 at 1e5).
-    ``hausdorff_certified``: ``upper <= (1 + eps) lower + atol`` (``atol`` default ``1e-12``
-    times the larger bounding-box diagonal plus ``2 r``, for exact reconstructions) before the budget
+    Both ends carry the rounding of the points queried and of their distances: the lower end is
+    the largest distance found less ``r = ROUND * max |coordinate|`` (over the vertices the faces
+    use; at least 0), the upper end the bound plus ``r`` (about 5.7e-14 for coordinates up to 1,
+    5.7e-9 at 1e5); ``hausdorff_ab``/``_ba`` less ``r`` too.
+    ``hausdorff_certified``: the search closed, ``upper <= (1 + eps) lower + atol`` before the
+    ends are widened by ``r`` (``atol`` default ``1e-12`` times the larger bounding-box diagonal
+    plus ``2 r``, for exact reconstructions; the gap is 0 within ``atol + 2 r``) before the budget
     (``max_points`` distance queries per direction, ``max_seconds`` in all) ran out: the gap
     is at most ``eps``, except for a distance near rounding level, where ``atol`` may certify
     a bracket whose relative gap is larger (e.g. ``[1e-12, 2.4e-12]`` of the diagonal).
@@ -181,7 +196,7 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
     ``surface_dist_mean_se`` its standard error (``sqrt(se_ab^2 + se_ba^2) / 2``). Input units.
     """
     VA, VB = np.asarray(VA, dtype=np.float64), np.asarray(VB, dtype=np.float64)
-    rnd = ROUND * max(float(np.abs(VA).max(initial=0.0)), float(np.abs(VB).max(initial=0.0)))
+    rnd = ROUND * max(_used_max(VA, FA), _used_max(VB, FB))
     if atol is None:
         atol = 1e-12 * max(float(np.linalg.norm(np.ptp(VA, axis=0))), float(np.linalg.norm(np.ptp(VB, axis=0)))) + 2 * rnd
     deadline = time.perf_counter() + max_seconds
@@ -236,12 +251,13 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
     else:
         ab = a_to_b()
         ba = b_to_a(floor=ab["lower"])
-    lower = max(max(ab["lower"], ba["lower"]) - rnd, 0.0)        # the points queried carry their rounding
-    upper = max(ab["upper"], ba["upper"]) + rnd
-    gap = 0.0 if upper - lower <= atol else ((upper - lower) / lower if lower > 0 else float("inf"))
+    lo, up = max(ab["lower"], ba["lower"]), max(ab["upper"], ba["upper"])
+    certified = bool(up <= (1.0 + eps) * lo + atol)              # the search's own criterion
+    lower, upper = max(lo - rnd, 0.0), up + rnd                  # with the rounding of what it measured
+    gap = 0.0 if upper - lower <= atol + 2 * rnd else ((upper - lower) / lower if lower > 0 else float("inf"))
     out.update({"hausdorff": lower, "hausdorff_upper": upper, "hausdorff_gap": gap,
-                "hausdorff_certified": bool(upper <= (1.0 + eps) * lower + atol),
-                "hausdorff_ab": ab["lower"], "hausdorff_ba": ba["lower"],
+                "hausdorff_certified": certified,
+                "hausdorff_ab": max(ab["lower"] - rnd, 0.0), "hausdorff_ba": max(ba["lower"] - rnd, 0.0),
                 "hausdorff_points": ab["points"] + ba["points"]})
     if vertex_distances:
         out["vertex_distances_ab"] = ab["vertex_distances"]
