@@ -90,7 +90,8 @@ def evaluate(V, F, V_clean, F_clean, task: str = "smoothing", V_noisy=None, haus
             P.append(f"{f}: vertex indices out of range (from {int(a.min())} to {int(a.max())}; {v} has {len(n)} "
                      "vertices)")
     if in_range["F_clean"]:                      # over the vertices the clean faces use (a dropped one is repaired);
-        used = np.unique(arrays["F_clean"])      # the result's own may diverge: that is measured, not refused
+        used = np.zeros(len(arrays["V_clean"]), dtype=bool)   # the result's own may diverge: measured, not refused
+        used[arrays["F_clean"].ravel()] = True
         for name in ("V_clean", "V_noisy"):
             a = arrays.get(name)
             if a is not None and len(a) == len(arrays["V_clean"]) and not np.isfinite(a[used]).all():
