@@ -377,3 +377,23 @@ def test_a_sliver_or_a_mesh_far_from_the_origin_keeps_the_true_value_in_its_brac
         h = hausdorff(Vp + o, Fp, m.V + o, m.F, n_samples=500)
         assert h["hausdorff"] == 0.0 and h["hausdorff_certified"], h
         assert h["hausdorff_upper"] <= 3 * ROUND * np.abs(m.V + o).max(), h
+
+
+def test_a_triangle_with_exactly_collinear_corners_is_measured_by_its_edges():
+    """The second diff review: corners (x, 3x, z) are exactly collinear, but their rounded
+    differences' cross product is not 0, so the triangle took the double-double path, whose
+    exact normal is 0: 0 / 0 raised ZeroDivisionError in hausdorff."""
+    from harness.metrics._bvh_kernel import _seg2, _tri_dist2
+    V = np.array([[float.fromhex("0x1.01ec693f1ac50p-9"), float.fromhex("0x1.82e29ddea8278p-8"),
+                   -float.fromhex("0x1.94556bc2d0d6fp+0")],
+                  [float.fromhex("0x1.9f12f84e5eb40p-10"), float.fromhex("0x1.374e3a3ac7070p-8"),
+                   -float.fromhex("0x1.94556bc2d0d6fp+0")],
+                  [float.fromhex("0x1.8133286474ee0p+0"), float.fromhex("0x1.20e65e4b57b28p+2"),
+                   -float.fromhex("0x1.94556bc2d0d6fp+0")]])
+    p = V.mean(0) + np.array([0.0, 0.0, 0.3])
+    edges = min(_seg2.py_func(*p, V, i, j) for i, j in ((0, 1), (1, 2), (2, 0)))
+    assert _tri_dist2(p[0], p[1], p[2], V, 0, 1, 2) == pytest.approx(edges, rel=1e-12)
+    VA = np.r_[V, [V.mean(0) + [0.0, 0.0, 1.0]]]
+    FA = np.array([[0, 1, 2], [0, 1, 3], [1, 2, 3]])
+    h = hausdorff(VA, FA, VA + [0.0, 0.0, 0.01], FA, n_samples=100)       # a translated copy: H <= 0.01
+    assert h["hausdorff"] <= 0.01 * (1 + 1e-12) and h["hausdorff"] <= h["hausdorff_upper"] < 0.011, h

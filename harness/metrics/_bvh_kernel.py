@@ -72,7 +72,9 @@ def _ts(a, b):
 
 @njit(cache=True, inline="always")
 def _tp(a, b):
-    """Dekker's two-product: ``p + e == a * b`` exactly (no overflow in the split)."""
+    """Dekker's two-product: ``p + e == a * b`` exactly for |a|, |b| below about 1e300 (the
+    split overflows beyond) and products above about 1e-290 (the correction term is subnormal
+    below)."""
     p = a * b
     c = 134217729.0 * a
     ah = c - (c - a)
@@ -154,7 +156,9 @@ def _ddot(u, v):
 def _tri_dist2_dd(px, py, pz, V, a, b, c):
     """`_tri_dist2` of a sliver, in double-double arithmetic: the differences exact, the normal
     ``n = ab x ac``, the side tests ``n . (e x (p - e_0))`` of the three edges and ``ap . n`` to
-    about eps^2 relative. p over the inside: ``(ap . n)^2 / |n|^2``; else the nearest edge."""
+    about eps^2 relative. p over the inside: ``(ap . n)^2 / |n|^2``; else, or when the corners
+    are exactly collinear (``n`` is 0 though the rounded differences' cross product is not), the
+    nearest edge."""
     ab, ac, bc = _ddiff(V, b, a), _ddiff(V, c, a), _ddiff(V, c, b)
     ca = _ddiff(V, a, c)
     ap, bp, cp = _dpdiff(px, py, pz, V, a), _dpdiff(px, py, pz, V, b), _dpdiff(px, py, pz, V, c)
@@ -162,9 +166,10 @@ def _tri_dist2_dd(px, py, pz, V, a, b, c):
     ta = _ddot(n, _dcross(ab, ap))
     tb = _ddot(n, _dcross(bc, bp))
     tc = _ddot(n, _dcross(ca, cp))
-    if ta >= 0.0 and tb >= 0.0 and tc >= 0.0:
+    nn = _ddot(n, n)
+    if nn > 0.0 and ta >= 0.0 and tb >= 0.0 and tc >= 0.0:    # (nn 0: corners exactly collinear)
         s = _ddot(ap, n)
-        return s * s / _ddot(n, n)
+        return s * s / nn
     return min(_seg2(px, py, pz, V, a, b), _seg2(px, py, pz, V, b, c), _seg2(px, py, pz, V, c, a))
 
 

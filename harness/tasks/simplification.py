@@ -145,9 +145,10 @@ TASK = Task(
         Metric("hausdorff", "lower", "symmetric Hausdorff distance to the input surface, certified by branch and "
                "bound: the largest distance found, the true value at most hausdorff_upper", rank=True, upper="hausdorff_upper", **_LEN),
         Metric("hausdorff_gap", "info", "relative gap (upper - lower) / lower of the Hausdorff bracket, 0 when upper - "
-               "lower <= 1e-12 of the diagonal; certified: <= hausdorff_eps (default 1e-3), or the whole bracket within "
-               "lower + hausdorff_eps lower + 1e-12 of the diagonal (a distance near rounding level may then show a "
-               "larger gap); larger when the time or point budget ran out", rel=1.0, abs=1e-3),
+               "lower <= 1e-12 of the diagonal plus 4 r (r = 256 eps max|coordinate|, the rounding allowance both ends "
+               "carry); certified: <= hausdorff_eps (default 1e-3), or the whole bracket within lower + hausdorff_eps "
+               "lower + 1e-12 of the diagonal + 4 r (a distance near rounding level may then show a larger gap); larger "
+               "when the time or point budget ran out", rel=1.0, abs=1e-3),
         Metric("hausdorff_upper", "info", "certified upper bound of the Hausdorff distance", **_LEN),
         Metric("surface_dist_mean", "lower", "symmetric mean surface distance: average of the two one-sided "
                "area-weighted means, from hausdorff_samples random points per side", rank=True,
