@@ -155,7 +155,7 @@ def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_
 
     ``hausdorff``: the largest distance found (a lower bound), with ``hausdorff_upper`` the
     certified upper bound and ``hausdorff_gap = (upper - lower) / lower`` (0 when
-    ``upper - lower <= atol``);
+    ``upper - lower <= atol + 2 r``, ``r`` below);
     Both ends carry the rounding of the points queried and of their distances: the lower end is
     the largest distance found less ``r = ROUND * max |coordinate|`` (over the vertices the faces
     use; at least 0), the upper end the bound plus ``r`` (about 5.7e-14 for coordinates up to 1,
