@@ -19,6 +19,7 @@ import numpy as np
 from . import tasks
 from . import yaml_input
 from .config import eps_problem, name_problem, samples_problem
+from .core.geometry import referenced
 from .errors import ShootoutError, problems_error
 from .mesh import Mesh, file_sha1, missing_file_problem, read_mesh, validate
 from .provenance import code_hash, git_commit, git_dirty, machine_info, now_iso, package_versions
@@ -90,8 +91,7 @@ def evaluate(V, F, V_clean, F_clean, task: str = "smoothing", V_noisy=None, haus
             P.append(f"{f}: vertex indices out of range (from {int(a.min())} to {int(a.max())}; {v} has {len(n)} "
                      "vertices)")
     if in_range["F_clean"]:                      # over the vertices the clean faces use (a dropped one is repaired);
-        used = np.zeros(len(arrays["V_clean"]), dtype=bool)   # the result's own may diverge: measured, not refused
-        used[arrays["F_clean"].ravel()] = True
+        used = referenced(arrays["F_clean"], len(arrays["V_clean"]))   # the result's own may diverge: measured
         for name in ("V_clean", "V_noisy"):
             a = arrays.get(name)
             if a is not None and len(a) == len(arrays["V_clean"]) and not np.isfinite(a[used]).all():

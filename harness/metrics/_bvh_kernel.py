@@ -112,20 +112,18 @@ def _dadd3(ah, al, bh, bl, ch, cl):
 
 
 @njit(cache=True, inline="always")
-def _ddiff(V, i, j):
-    """``V[i] - V[j]`` exactly, as three double-double pairs."""
-    xh, xl = _ts(V[i, 0], -V[j, 0])
-    yh, yl = _ts(V[i, 1], -V[j, 1])
-    zh, zl = _ts(V[i, 2], -V[j, 2])
-    return xh, xl, yh, yl, zh, zl
-
-
-@njit(cache=True, inline="always")
 def _dpdiff(px, py, pz, V, j):
+    """``p - V[j]`` exactly, as three double-double pairs."""
     xh, xl = _ts(px, -V[j, 0])
     yh, yl = _ts(py, -V[j, 1])
     zh, zl = _ts(pz, -V[j, 2])
     return xh, xl, yh, yl, zh, zl
+
+
+@njit(cache=True, inline="always")
+def _ddiff(V, i, j):
+    """``V[i] - V[j]`` exactly (`_dpdiff` of the point ``V[i]``)."""
+    return _dpdiff(V[i, 0], V[i, 1], V[i, 2], V, j)
 
 
 @njit(cache=True, inline="always")

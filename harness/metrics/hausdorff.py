@@ -139,12 +139,7 @@ beyond it is measured in double-double arithmetic): at most about 58 eps |ap|, `
 
 def _used_max(V, F) -> float:
     """The largest coordinate magnitude of the vertices the faces ``F`` use (0 without faces)."""
-    F = np.asarray(F)
-    if not F.size:
-        return 0.0
-    used = np.zeros(len(V), dtype=bool)
-    used[F.ravel()] = True
-    return float(np.abs(V[used]).max(initial=0.0))
+    return float(np.abs(V[referenced(F, len(V))]).max(initial=0.0))
 
 
 def hausdorff(VA, FA, VB, FB, eps: float = 1e-3, atol: float | None = None, max_points: int = 1_000_000,
