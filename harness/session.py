@@ -220,7 +220,8 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
     chash = config_hash(cfg)
     threads = 1 if executor == "dask" else max(1, cpus // workers)
     cases = [dataclasses.replace(c, threads=threads) for c in cfg.cases]
-    problems = out_dir_problems(out_dir, resume)     # refused before the folder or its lock is made
+    # refused before the folder or its lock is made (a given out was checked with the config above)
+    problems = [] if out else out_dir_problems(out_dir, resume)
     try:
         check_output_file(export_benchmark_json, "export_benchmark_json", run_dirs=(out_dir,), kind="json")
     except ShootoutError as exc:
