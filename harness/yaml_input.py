@@ -124,11 +124,11 @@ def _key_value(k):
 
 
 def load(text: str, numbers: list | None = None):
-    """The document's data (safe types only); `yaml.YAMLError` for bombs, duplicate keys in a
-    mapping, syntax errors and values their tag cannot read (``!!int abc``), and for plain
-    numbers YAML 1.1 reads otherwise than they look, unless ``numbers`` is a list: then one
-    message each is appended to it and the document is read as YAML 1.1 reads it (the caller
-    lists them with its own problems)."""
+    """The document's data (safe types only); `yaml.YAMLError` for bombs, syntax errors and values
+    their tag cannot read (``!!int abc``), and for duplicate keys in a mapping and plain numbers
+    YAML 1.1 reads otherwise than they look, unless ``numbers`` is a list: then one message each
+    of those two is appended to it and the document is read as YAML 1.1 reads it (the last of
+    duplicate keys wins; the caller lists them with its own problems and uses nothing)."""
     loader = _Loader(text)
     try:
         node = loader.get_single_node()
@@ -137,9 +137,10 @@ def load(text: str, numbers: list | None = None):
         _expanded_size(node, {}, set())
         dup: list = []
         _duplicate_keys(node, dup, set(), _key_value)
-        if dup:
-            raise yaml.YAMLError("; ".join(dup) + ": each key may appear once in a mapping")
-        odd: list = []
+        dup = [f"{d}: each key may appear once in a mapping" for d in dup]
+        if dup and numbers is None:
+            raise yaml.YAMLError("; ".join(dup))
+        odd: list = dup
         _yaml11_numbers(node, odd, set())
         if odd and numbers is not None:
             numbers += odd

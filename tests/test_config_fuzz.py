@@ -248,6 +248,11 @@ def test_duplicate_keys_compare_as_loaded():
     assert yaml_input.load("=: 1\n") == {"=": 1}                  # as safe_load: the key check builds nothing
     with pytest.raises(yaml.YAMLError, match="could not determine a constructor for the tag '!foo'"):
         yaml_input.load("!foo extra: 1\n")
+    found: list = []                          # a config lists them with its other problems
+    assert yaml_input.load("a: 1\nb: 010\na: 2\n", found) == {"a": 2, "b": 8}
+    assert found == ["duplicate key 'a' at line 3 (first at line 1): each key may appear once in a mapping",
+                     "'010' at line 2 is octal in YAML 1.1 (it reads as 8); write the number you mean, or "
+                     "quote it for text"]
     with pytest.raises(yaml.YAMLError, match="cannot be read as its tag says"):     # was a ValueError traceback
         yaml_input.load("time_budget: !!int abc\n")
     assert yaml_input.load("x: &a {k: 1}\ny: *a\n<<: {z: 1}\n") == {"x": {"k": 1}, "y": {"k": 1}, "z": 1}

@@ -357,7 +357,8 @@ def test_resume_with_saved_meshes_keeps_cases_of_tasks_without_an_output_mesh(tm
 def test_grids_too_large_duplicate_keys_and_exiting_plugins_are_config_errors(tmp_path):
     """Each is exit 2 with the problem named and nothing written, quickly and in little memory:
     a 27M-setting parameter grid (it was built in memory before the case limit was checked), a
-    tune grid over the case limit, duplicate keys (the last silently won: a whole task lost), a
+    tune grid over the case limit, duplicate keys (the last silently won: a whole task lost; listed
+    with the config's other problems, which they hid), a
     plugin that calls sys.exit at import (exit 0 with nothing run), or os._exit(0) (the driver
     itself ended with exit 0), or crashes it (SIGSEGV: no message). A 10^12-setting tune product
     is sampled, never built."""
@@ -365,12 +366,14 @@ def test_grids_too_large_duplicate_keys_and_exiting_plugins_are_config_errors(tm
         "iterations": list(range(1, 301)), "step": [0.1 + i * 1e-3 for i in range(300)],
         "self_weight": [i * 1e-3 for i in range(300)]}}]}}}
     text = ("name: dup\nmeshes: [knight]\ntasks:\n  laplacian: {methods: [scratch.cotan]}\n"
-            "tasks:\n  smoothing: {methods: [scratch.taubin]}\nrepeats: 1\nrepeats: 2\n")
+            "tasks:\n  smoothing: {methods: [scratch.taubin]}\nrepeats: 1\nrepeats: 2\nhausdorff_samples: -1\n")
     (tmp_path / "exitplug.py").write_text("import sys\nsys.exit(0)\n")
     (tmp_path / "osexitplug.py").write_text("import os\nos._exit(0)\n")
     (tmp_path / "segvplug.py").write_text("import os, signal\nos.kill(os.getpid(), signal.SIGSEGV)\n")
     cases = {"big": (json.dumps(big), "27,000,000 settings"),
-             "dup": (text, "duplicate key 'tasks' at line 5 (first at line 3); duplicate key 'repeats'"),
+             "dup": (text, "duplicate key 'tasks' at line 5 (first at line 3): each key may appear once "
+                           "in a mapping\n  - not valid YAML: duplicate key 'repeats' at line 8 (first at line 7)"
+                           ": each key may appear once in a mapping\n  - hausdorff_samples: expected"),
              "plug": (json.dumps({**SMALL, "plugins": ["exitplug"]}), "called sys.exit(0) on import"),
              "osexit": (json.dumps({**SMALL, "plugins": ["osexitplug"]}),
                         "plugins[0]: cannot import 'osexitplug' (importing it ended the process (exit status 0))"),
