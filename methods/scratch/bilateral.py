@@ -32,7 +32,7 @@ def face_geometry(X: np.ndarray, F: np.ndarray):
 
 
 def mean_adjacent_centroid_distance(C: np.ndarray, F: np.ndarray) -> float:
-    """Mean distance between centroids of faces sharing an edge (Zheng et al.'s sigma_s)."""
+    """Mean distance between centroids of faces sharing an edge (Zheng et al.'s sigma_c)."""
     m = F.shape[0]
     E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
     fid = np.tile(np.arange(m), 3)
@@ -77,12 +77,13 @@ FIXED_BOUNDARY = Param("boundary", "fixed", choices=("fixed", "free"),
 
 @register("scratch.bilateral", task="smoothing", library="scratch",
           cite="Zheng, Fu, Au, Tai, Bilateral normal filtering for mesh denoising, IEEE TVCG 17(10), 2011",
-          params={"sigma_r": Param("sigma_r", 0.35, "float", low=1e-6, high=10.0,
-                                   doc="range (normal difference) Gaussian width: Zheng et al.'s sigma_s (their 0.35)"),
-                  "sigma_s": Param("sigma_s", 1.0, "float", low=1e-6, high=100.0,
-                                   doc="spatial Gaussian width in units of the mean "
-                                       "centroid distance of edge-adjacent faces: Zheng et al.'s "
-                                       "sigma_c multiple, not their sigma_s (that is sigma_r here)"),
+          params={"normal_sigma": Param("normal_sigma", 0.35, "float", low=1e-6, high=10.0,
+                                        doc="Gaussian width on normal differences: Zheng et al.'s sigma_s "
+                                            "(their 0.35)"),
+                  "spatial_multiple": Param("spatial_multiple", 1.0, "float", low=1e-6, high=100.0,
+                                            doc="spatial Gaussian width as a multiple of Zheng et al.'s "
+                                                "sigma_c, the mean centroid distance of edge-adjacent faces "
+                                                "(their 1)"),
                   "normal_iterations": Param("normal_iterations", 20, "int", low=0, high=1000,
                                              doc="normal filtering passes per iteration"),
                   "vertex_iterations": Param("vertex_iterations", 10, "int", low=0, high=1000,
@@ -91,7 +92,7 @@ FIXED_BOUNDARY = Param("boundary", "fixed", choices=("fixed", "free"),
                                       doc="outer iterations (filter normals, then fit); the "
                                           "paper's local scheme is 1"),
                   "neighbourhood": FACE_NEIGHBOURHOOD, "boundary": FIXED_BOUNDARY})
-def bilateral(V, F, *, sigma_r=0.35, sigma_s=1.0, normal_iterations=20, vertex_iterations=10,
+def bilateral(V, F, *, normal_sigma=0.35, spatial_multiple=1.0, normal_iterations=20, vertex_iterations=10,
               iterations=1, neighbourhood="vertex", boundary="fixed"):
     """Bilateral normal filtering (Zheng, Fu, Au, Tai, "Bilateral normal filtering for mesh
     denoising", IEEE TVCG 2011), local iterative scheme, as in the authors' reference code
@@ -102,12 +103,14 @@ def bilateral(V, F, *, sigma_r=0.35, sigma_s=1.0, normal_iterations=20, vertex_i
     ----------
     V : (n, 3) float64
     F : (m, 3) int64
-    sigma_r : float
-        Range kernel width on ``|n_i - n_j|`` (unit normals, so dimensionless; the paper's
+    normal_sigma : float
+        Kernel width on ``|n_i - n_j|`` (unit normals, so dimensionless; the paper's
         ``sigma_s``, 0.2-0.6: smaller keeps sharper features; reference default 0.35).
-    sigma_s : float
-        Spatial kernel width as a multiple of ``sigma_c``, the mean distance between
-        centroids of edge-adjacent faces (reference default 1).
+    spatial_multiple : float
+        Spatial kernel width as a multiple of the paper's ``sigma_c``, the mean distance
+        between centroids of edge-adjacent faces (reference default 1). The paper's names
+        are not used as parameter names: its ``sigma_s`` is the normal width, which the
+        image bilateral filter's convention would read as the spatial one.
     normal_iterations : int
         Normal filtering passes (reference default 20).
     vertex_iterations : int
@@ -130,8 +133,9 @@ def bilateral(V, F, *, sigma_r=0.35, sigma_s=1.0, normal_iterations=20, vertex_i
     Normal filter over ``N(i)``, which does not contain ``i`` itself (Jacobi iteration, areas
     ``A`` and centroids ``c`` of the input of the outer iteration)::
 
-        n_i <- normalize( sum_{j in N(i)} A_j W_s(|c_i - c_j|) W_r(|n_i - n_j|) n_j ),
-        W_s(x) = exp(-x^2 / (2 (sigma_s sigma_c)^2)),  W_r(x) = exp(-x^2 / (2 sigma_r^2)).
+        n_i <- normalize( sum_{j in N(i)} A_j W_c(|c_i - c_j|) W_s(|n_i - n_j|) n_j ),
+        W_c(x) = exp(-x^2 / (2 (spatial_multiple sigma_c)^2)),
+        W_s(x) = exp(-x^2 / (2 normal_sigma^2))          (the paper's W_c and W_s).
 
     A face whose weights all vanish (no neighbour) keeps its normal. Vertices are then moved
     to agree with the filtered normals by the iterative scheme of Sun, Rosin, Martin, Langbein
@@ -146,11 +150,11 @@ def bilateral(V, F, *, sigma_r=0.35, sigma_s=1.0, normal_iterations=20, vertex_i
     m = F.shape[0]
     for _ in range(iterations):
         N, A, C = face_geometry(X, F)
-        s = sigma_s * mean_adjacent_centroid_distance(C, F)
+        s = spatial_multiple * mean_adjacent_centroid_distance(C, F)
         ws = A[J] * np.exp(-np.sum((C[I] - C[J]) ** 2, axis=1) / (2.0 * s * s))
         Nf = N
         for _ in range(normal_iterations):
-            wr = np.exp(-np.sum((Nf[I] - Nf[J]) ** 2, axis=1) / (2.0 * sigma_r * sigma_r))
+            wr = np.exp(-np.sum((Nf[I] - Nf[J]) ** 2, axis=1) / (2.0 * normal_sigma * normal_sigma))
             S = sp.csr_matrix((ws * wr, (I, J)), shape=(m, m))
             acc = S @ Nf
             nrm = np.linalg.norm(acc, axis=1, keepdims=True)
