@@ -384,3 +384,72 @@ def test_a_direct_call_with_an_unreferenced_vertex_says_so():
         methods.get("scratch.heat").func(V, s.F, sources=np.array([0]))
     with pytest.raises(ValueError, match=f"1 vertices no face uses \\(first: \\[{len(s.V)}\\]\\)"):
         methods.get("scratch.spectrum").func(V, s.F, k=5)
+
+
+def test_rel_error_mean_carries_its_standard_error_over_the_sources(tmp_path):
+    """An outside review: ``rel_error_mean`` is a mean over a few random sources and printed
+    without an error bar, while on camelhead one source's mean ranged 0.008-0.016 and which of
+    two heat methods was better flipped with the source. Its standard error over the sources
+    (cluster sampling) is now a column: with equal counts per source it is the textbook
+    ``std(per-source means) / sqrt(k)``; through a run it is what the per-source errors,
+    recomputed here against the great circles, give; blank for one source. The sources are
+    fixed by the case, so compare (two runs of one case) does not widen its tolerance by it;
+    only the winners' ties use it."""
+    from harness.compare import rules_from_specs
+    from harness.tasks import get
+    from harness.tasks.geodesics import source_se
+    rng = np.random.default_rng(1)
+    vals = rng.random((5, 40))
+    assert source_se(vals, np.ones_like(vals, bool)) == pytest.approx(vals.mean(1).std(ddof=1) / np.sqrt(5), rel=1e-12)
+    assert source_se(vals[:1], np.ones((1, 40), bool)) is None
+
+    run({"name": "geo", "repeats": 1, "meshes": [{"procedural": "sphere", "subdivisions": 3}],
+         "noise": [{"model": "none"}],
+         "tasks": {"geodesics": {"methods": ["scratch.heat"], "params": {"sources": [1, 3]}}}},
+        out=tmp_path, quiet=True)
+    df = pd.read_csv(tmp_path / "geodesics.csv").set_index("params")
+    one = df[df.index.str.contains('"sources": 1')].iloc[0]
+    three = df[df.index.str.contains('"sources": 3')].iloc[0]
+    assert pd.isna(one["rel_error_mean_se"])
+    s = datasets.load({"procedural": "sphere", "subdivisions": 3})
+    V, F = s.clean.V, s.clean.F
+    D = methods.get("scratch.heat")(V, F, sources=3).D
+    h = mean_edge_length(V, F)
+    y, n = [], []
+    for i, sv in enumerate(source_vertices(len(V), 3, 0)):
+        ref = analytic(s.shape, V, V[sv])
+        far = ref > 3 * h
+        y.append((np.abs(D[i] - ref)[far] / ref[far]).sum())
+        n.append(far.sum())
+    y, n = np.array(y), np.array(n, float)
+    r = y.sum() / n.sum()
+    expect = np.sqrt(3 / 2 * ((y - r * n) ** 2).sum()) / n.sum()
+    assert three["rel_error_mean"] == pytest.approx(r, rel=1e-9)
+    assert three["rel_error_mean_se"] == pytest.approx(expect, rel=1e-6) and expect > 0
+    rule = rules_from_specs({"geodesics": get("geodesics").spec()})["geodesics"]["rel_error_mean"]
+    assert rule.se == ""
+    assert get("geodesics").spec()["metrics"][1]["se"] == "rel_error_mean_se"
+
+
+def test_an_exact_method_off_its_own_reference_is_measured_not_hidden(tmp_path):
+    """An outside review: libigl.exact_geodesic runs on the mesh as given, the reference on the
+    mesh scaled to a unit diagonal; on knight scaled by 1e-3 the library's absolute tolerances
+    put the method 2.3e-4 off the reference, yet the row was hidden as "0 by construction". Such
+    a row is now a measurement, ranked like any other; at knight's own scale it is still no
+    measurement (`equals_reference`)."""
+    from harness.mesh import write_obj
+    V, F = datasets.load("knight").clean.V, datasets.load("knight").clean.F
+    write_obj(tmp_path / "small.obj", V * 1e-3, F)
+    run({"name": "geo", "repeats": 1, "time_budget": 0, "meshes": [{"file": str(tmp_path / "small.obj")}, "knight"],
+         "noise": [{"model": "none"}], "tasks": {"geodesics": {"methods": ["libigl.exact_geodesic", "scratch.heat"],
+                                                                 "params": {"sources": 2}}}},
+        out=tmp_path / "out", quiet=True)
+    df = pd.read_csv(tmp_path / "out" / "geodesics.csv").set_index(["mesh", "method"])
+    small = df.loc[(df.index.get_level_values(0) != "knight")].xs("libigl.exact_geodesic", level=1).iloc[0]
+    own = df.loc[("knight", "libigl.exact_geodesic")]
+    assert 1e-6 < small["rel_error_max"] < 1e-2 and not small["equals_reference"], small
+    assert own["rel_error_max"] < 1e-12 and own["equals_reference"]
+    w = pd.read_csv(tmp_path / "out" / "winners.csv")
+    w = w[w.metric == "rel_error_mean"].set_index("mesh")
+    assert w.loc["knight", "best"] == "scratch.heat"
+    assert "libigl.exact_geodesic" in str(w.loc[w.index != "knight", "best"].iloc[0])

@@ -308,7 +308,7 @@ def test_the_reference_method_is_no_competitor_where_it_is_the_reference():
 
     from harness import tasks
     from harness.leaderboard import validity
-    df = pd.DataFrame([{"method": m, "status": "ok", "reference_exact": ex, "rel_error_mean": 0.0}
+    df = pd.DataFrame([{"method": m, "status": "ok", "reference_exact": ex, "equals_reference": ex, "rel_error_mean": 0.0}
                        for m, ex in (("libigl.exact_geodesic", True), ("libigl.exact_geodesic", False),
                                      ("scratch.heat", True), ("potpourri3d.exact", True),
                                      ("pygeodesic.exact", True), ("pygeodesic.exact", False))])
@@ -325,11 +325,12 @@ def test_the_reference_method_is_left_out_of_the_ranking_not_ranked_last():
     from harness import tasks
     spec = tasks.get("geodesics").spec()
     rows = []
-    for mesh, exact, vals in (("sphere", False, (0.001, 0.001, 0.05)), ("knight", True, (0.0, 0.002, 0.06)),
-                              ("woody", True, (0.0, 0.003, 0.07))):
+    for mesh, exact, vals in (("sphere", False, (0.001, 0.001, 0.05)), ("knight", True, (0.0, 1e-9, 0.06)),
+                              ("woody", True, (0.0, 3e-15, 0.07))):
         for m, v in zip(("libigl.exact_geodesic", "pygeodesic.exact", "scratch.heat"), vals):
             rows.append({"mesh": mesh, "noise_model": "none", "noise_level": None, "seed": None, "method": m,
-                         "params": "{}", "status": "ok", "reference_exact": exact, "rel_error_mean": v})
+                         "params": "{}", "status": "ok", "reference_exact": exact, "equals_reference": exact and v <= 1e-6,
+                         "rel_error_mean": v})
     df = pd.DataFrame(rows)
     lb = L.leaderboard({"geodesics": df}, {"geodesics": spec})
     lb = lb[lb.metric == "rel_error_mean"].set_index("method")

@@ -44,6 +44,10 @@ class Metric:
     ``bool`` or ``json`` (a JSON-encoded list). ``se``: for a sampled metric, the column of its
     standard error: two values also count as the same (compare, ties of the winners) while they
     differ by at most ``SE_Z`` = 3 times their combined standard error ``sqrt(se_a^2 + se_b^2)``.
+    ``se_runs``: whether that error is also a difference between two runs of one case (True: its
+    samples may differ, e.g. with ``hausdorff_samples``); False for an error over a sample the
+    case fixes (e.g. geodesics' seeded sources): compare then ignores it, and only the winners'
+    ties use it (another sample could name another winner).
     ``target``: for ``better="target"``, the column holding the count asked for; a result reaches
     it within `target_tolerance`, and compare counts a miss that grows beyond that. ``upper``: for
     a certified bound (``better="lower"``), the column of the upper end of its bracket (the value
@@ -60,6 +64,7 @@ class Metric:
     kind: str = "float"
     rank: bool = False          # offered as a ranking metric in the report
     se: str = ""                # the column of its standard error (a sampled metric), or ""
+    se_runs: bool = True        # the error may differ between two runs of one case (compare uses it)
     target: str = ""            # better="target": the column of the count asked for
     upper: str = ""             # a certified bracket's upper end (the value is its lower end)
 
@@ -72,6 +77,8 @@ class Metric:
                "rel": self.rel, "abs": self.abs, "kind": self.kind, "rank": self.rank}
         if self.se:
             out.update(se=self.se, se_z=SE_Z)
+            if not self.se_runs:
+                out["se_runs"] = False
         if self.target:
             out["target"] = self.target
         if self.upper:
