@@ -332,6 +332,11 @@ def saved_meshes(case: Case, task, inp: CaseInput, result) -> dict:
             f"{case.case_id}.ply": out}
 
 
+def _has_value(v) -> bool:
+    """Whether a measured value is there: not None and not NaN."""
+    return v is not None and not (isinstance(v, float) and v != v)
+
+
 def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> tuple[dict, dict]:
     """Run one case and measure it; never raises (failures become an error row).
 
@@ -427,6 +432,9 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
         row["status"] = "ok"
         notes = ["input repaired: " + "; ".join(inp.clean.repairs)] if inp.clean.repairs else []
         notes += ["input: " + n for n in inp.clean.input_notes]
+        if not any(_has_value(row.get(m.name)) for m in task.metrics if m.better not in ("info", "input")):
+            notes.append(f"no scored metric of the {task.name} task applies to this input: every column that "
+                         "ranks methods is blank (e.g. no analytic truth for a file mesh)")
         heard = list(dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in said
                                    if issubclass(w.category, (RuntimeWarning, UserWarning))))
         notes += [f"the method warned: {m}" for m in heard[:3]]

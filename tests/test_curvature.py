@@ -279,3 +279,19 @@ def test_libigl_principal_curvature_refuses_a_radius_libigl_would_change():
     with pytest.raises(ConfigError, match="radius"):
         load_config({"meshes": ["knight"], "tasks": {"curvature": {"methods": [
             {"name": "libigl.principal_curvature", "params": {"radius": 1}}]}}})
+
+
+def test_a_case_that_measures_nothing_says_so(tmp_path):
+    """An outside review: curvature on an open file mesh (no analytic truth, no Gauss-Bonnet) was
+    an ok row with every metric blank and not a word why. Such a row now says that no scored
+    metric applies; a row with one (the procedural sphere) says nothing of the kind."""
+    from harness import run
+    run({"name": "c", "repeats": 1, "time_budget": 0, "noise": [{"model": "none"}],
+         "meshes": ["woody", {"procedural": "sphere", "subdivisions": 2}],
+         "tasks": {"curvature": {"methods": ["scratch.angle_defect"]}}}, out=tmp_path, quiet=True)
+    import pandas as pd
+    df = pd.read_csv(tmp_path / "curvature.csv").set_index("mesh")
+    assert (df["status"] == "ok").all()
+    assert "no scored metric of the curvature task applies to this input" in df.loc["woody", "error"]
+    sphere = df.loc[df.index != "woody"].iloc[0]
+    assert "no scored metric" not in str(sphere["error"]) and sphere["K_rel_l2"] >= 0
