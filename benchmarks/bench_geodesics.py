@@ -4,8 +4,8 @@ geometry-central's (potpourri3d) heat methods, precomputation and per-source cos
 Run:  .venv/bin/python benchmarks/bench_geodesics.py [--subdivisions 7,8] [--pairs 3] [--sources 4] [--threads 1]
 
 Meshes: icosphere subdivisions 7 (327,680 faces) and 8 (1,310,720 faces). All three are run in
-one process, alternating (scratch, libigl, potpourri3d) per round, after a warm-up on a small
-mesh and at each size; each prints the median over rounds of its precomputation time and
+one process, alternating (scratch, libigl, potpourri3d) per round, after a warm-up of each at
+each size (one source: the same code path as the timed calls' several); each prints the median over rounds of its precomputation time and
 per-source time (each method's own split), the min-max of the per-round ratios to scratch.heat,
 how far its distances are from scratch.heat's (libigl's must agree to 1e-8: MISMATCH and exit 1
 otherwise; potpourri3d differs: geometry-central solves its Poisson step with ``L + 1e-6 I``, a

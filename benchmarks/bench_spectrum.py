@@ -12,7 +12,8 @@ cotan W with the Voronoi mass, and spectral smoothing built on them. Routes:
 
 Run:  .venv/bin/python benchmarks/bench_spectrum.py [--k 200] [--pairs 3]
 
-The routes alternate in one process after a warm-up on a small mesh, with ``--threads`` math
+The routes alternate in one process after a warm-up of each on armadillo at the timed ``k``
+(the first call at a size was up to 1.6x slower), with ``--threads`` math
 threads each; per round the ratios are formed and their median, min and max printed with the
 load average and the thread counts; the eigenvalues of the routes must agree (relative 1e-8:
 MISMATCH and exit 1 otherwise).
@@ -66,12 +67,10 @@ def main(argv=None) -> int:
         "spectral": lambda W, M, V, F, k: spectral(V, F, k, "auto"),
         "spectral_old": lambda W, M, V, F, k: spectral(V, F, k, "shift_invert"),
     }
-    Vs, Fs = datasets.icosphere(3)
-    Ws, Ms = operator_and_mass(Vs, Fs, "cotan", "voronoi")
-    for f in routes.values():
-        f(Ws, Ms, Vs, Fs, 120)
     m = datasets.load("armadillo").clean
     W, M = operator_and_mass(m.V, m.F, "cotan", "voronoi")
+    for f in routes.values():                    # warm-up: each route once at the timed size and k
+        f(W, M, m.V, m.F, a.k)
     before = limit_threads(a.threads)            # again: the warm-up and the loading loaded more libraries
     T = {r: [] for r in routes}
     C = {r: [] for r in routes}
