@@ -354,7 +354,7 @@ def test_meshlab_geodesic_refuses_a_source_with_a_twin_vertex():
     D = geo.func(V2, F2, sources=np.array([1])).D
     assert D[0, 1] == 0 and D.max() > 0
     V3 = V2.copy()
-    V3[copy[5]] += 1e-12                          # a near twin: the same point in single precision (a review)
+    V3[copy[5]] += 1e-12                          # a near twin, within the adapter's margin (a review)
     with pytest.raises(ValueError, match="source vertex 5 shares its position"):
         geo.func(V3, F2, sources=np.array([5]))
 

@@ -36,7 +36,11 @@ def gaussian_curvature(V, F):
           params={"radius": Param("radius", 5, "int", low=2, high=100,
                                   doc="neighbourhood: the k-ring of each vertex, k = radius (igl's radius, useKring)")})
 def principal_curvature(V, F, *, radius=5):
-    """``igl.principal_curvature(V, F, radius)`` values (module docstring)."""
+    """``igl.principal_curvature(V, F, radius)`` values (module docstring).
+
+    A quadric fitted over the ``radius``-ring, as `scratch.quadric_fit` with ``rings = radius``
+    (same median H on an icosphere to 4 digits; its docstring); the default neighbourhoods
+    differ (5 here, 2 rings there)."""
     import igl
     _, _, pv1, pv2, bad = igl.principal_curvature(V, F, int(radius))
     pv1, pv2 = np.asarray(pv1, dtype=np.float64), np.asarray(pv2, dtype=np.float64)

@@ -128,6 +128,13 @@ def _fit(N: np.ndarray, D: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np
 def quadric_fit(V, F, *, rings=2):
     """Principal curvatures from a local quadric fit over the ``rings``-ring (module docstring).
 
+    ``libigl.principal_curvature`` fits a quadric over the k-ring too: at matched neighbourhoods
+    (its ``radius`` = ``rings``) the two give the same median H on an icosphere to 4 digits (3
+    subdivisions: 1.0206 at 2 rings, 1.1139 at 5) and differ by at most 1.6e-3 in k1 on a torus at
+    2 rings. The defaults differ (2 rings here, radius 5 there): default rows compare
+    neighbourhood sizes as much as implementations (``configs/curvature.yaml`` runs both at 2
+    and 5).
+
     A vertex with fewer than 5 neighbours in its ``rings``-ring (too few for the fit) gets the
     fit of the ring widened one step at a time until it has them. Precondition: every vertex in
     a face has 5 other vertices in its connected component (a smaller component, e.g. a lone
