@@ -291,3 +291,28 @@ def test_zero_area_faces_screen_keeps_every_degenerate_face():
         F_bad[-1, 2] = bad
         with pytest.raises(IndexError, match="out of bounds"):
             g.zero_area_faces(V, F_bad)
+
+
+def test_a_mass_matrix_must_be_diagonal():
+    """The task takes a lumped mass: an M with a nonzero entry off the diagonal is refused (also
+    when stored as duplicates that do not cancel); stored zeros off the diagonal, or duplicates
+    that cancel there, are a diagonal M."""
+    from harness.errors import MethodFailed
+    from harness.tasks import get
+    from harness.tasks.laplacian import LaplacianResult
+    task = get("laplacian")
+    V = np.zeros((3, 3))
+    F = np.array([[0, 1, 2]])
+    W = sp.csr_matrix(np.array([[-2.0, 1, 1], [1, -2, 1], [1, 1, -2]]))
+
+    def check(M):
+        return task.validate_result("m", LaplacianResult(W=W, M=M), V, F)
+    check(sp.diags([1.0, 2, 3]).tocsr())
+    check(sp.csr_matrix((np.array([1.0, 0.0, 2, 3]), np.array([0, 1, 1, 2]), np.array([0, 2, 3, 4])), shape=(3, 3)))
+    check(sp.csr_matrix((np.array([1.0, 0.5, -0.5, 2, 3]), np.array([0, 1, 1, 1, 2]), np.array([0, 3, 4, 5])),
+                        shape=(3, 3)))                      # 0.5 - 0.5 off the diagonal: 0
+    for M in (sp.csr_matrix(np.array([[1.0, 0.1, 0], [0.1, 2, 0], [0, 0, 3]])),
+              sp.csr_matrix((np.array([1.0, 0.5, 0.5, 2, 3]), np.array([0, 1, 1, 1, 2]), np.array([0, 3, 4, 5])),
+                            shape=(3, 3))):
+        with pytest.raises(MethodFailed, match="non-diagonal M"):
+            check(M)
