@@ -26,9 +26,14 @@ def oriented_manifold(V, F, name) -> None:
 def qslim(V, F, *, target_faces):
     """libigl's QSlim (Garland & Heckbert 1997) edge collapse.
 
-    Per-vertex quadrics from the incident face planes; edge cost = quadric error at the
-    optimal placement (minimiser of the summed quadric); a heap with lazy invalidation;
-    collapses that would break the link condition are skipped.
+    Per-vertex quadrics from the incident face planes in the formulation of Garland &
+    Heckbert's follow-up, "Simplifying surfaces with color and texture using quadric error
+    metrics" (1998; libigl's ``per_vertex_point_to_plane_quadrics``), with the boundary closed by
+    faces to points at infinity (``connect_boundary_to_infinity``), which give boundary edges
+    quadrics of their own (a boundary-preserving term, fixed: no weight to set, unlike
+    ``scratch.qem``'s ``boundary_weight`` or MeshLab's ``preserve_boundary``); edge cost =
+    quadric error at the optimal placement (minimiser of the summed quadric); a heap with lazy
+    invalidation; collapses that would break the link condition are skipped.
 
     Parameters
     ----------

@@ -295,12 +295,16 @@ def tufted(V, F, *, mass="barycentric", mollify_factor=1e-5):
     -----
     Each face is doubled, sides are glued around every edge in angular order, and the closed
     cover is flipped to intrinsic Delaunay; weights and masses are halved. POS, SYM and PSD hold;
-    LOC does not. LIN holds at interior vertices of a planar mesh, open or closed, as long as
-    the lengths are the mesh's own: mollification adds ``delta = max(0, max_f (eps - (l_i + l_j -
-    l_k)))``, ``eps = mollify_factor * mean edge length``, to every length, which is 0 unless some
-    triangle is that close to degenerate (then the LIN error is of order ``delta``); on both
-    planar test meshes with the default factor ``lin_error`` is about 1e-16. A flip across the
-    fold where an open mesh's two sheets are glued could break it next to the boundary.
+    LOC does not. LIN holds at interior vertices of a planar mesh as long as the lengths are the
+    mesh's own and no flip crosses the fold where an open mesh's two sheets are glued.
+    Mollification adds ``delta = max(0, max_f (eps - (l_i + l_j - l_k)))``, ``eps =
+    mollify_factor * mean edge length``, to every length, which is 0 unless some triangle is that
+    close to degenerate, and then the LIN error is of order ``delta`` (the procedural
+    ``plane_nondelaunay``, whose thinnest triangle has a slack of 5.5e-6 mean edges: ``lin_error``
+    2.1e-6 at the default factor, 9e-17 at 0; ``plane_delaunay``: 1e-16). On woody 5 of 575
+    interior vertices, next to the boundary, fail at any factor (``lin_error`` 1.7e-3): the
+    cover's flips cross the fold there. Sharp & Crane's ``robust_laplacian`` gives the same
+    values.
     Unreferenced vertices get zero rows.
     """
     from methods.scratch.tufted import tufted_laplacian
