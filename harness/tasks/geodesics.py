@@ -288,9 +288,10 @@ def _zero_at_source(method, V, F):
 _E = dict(rel=0.01, abs=1e-9)
 TASK = Task(
     name="geodesics", title="Geodesic distance", result_type=GeodesicResult,
-    intro="Geodesic distance from source vertices against the analytic distance (procedural surfaces) or the exact "
-          "polyhedral distance (libigl exact_geodesic) elsewhere; relative errors exclude 3 mean edge lengths "
-          "around each source.",
+    intro="Geodesic distance from source vertices against the analytic distance (clean procedural surfaces) or the "
+          "exact polyhedral distance on the mesh given (libigl exact_geodesic: file meshes, and every noisy input, so "
+          "a procedural mesh's noise-free errors and its noisy ones are against different references: the column "
+          "reference_exact says which); relative errors exclude 3 mean edge lengths around each source.",
     metrics=(
         Metric("reference_exact", "info", "reference: exact polyhedral distance (true) or the analytic surface distance "
                "(false)", kind="bool"),
