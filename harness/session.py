@@ -310,20 +310,28 @@ def scored_results(raw: tuple, source, problems: list) -> tuple | None:
     from .errors import ConfigError
     from .scoring import results_config
     given = str(source) if isinstance(source, (str, Path)) else ""
+    label = given if given and "\n" not in given and Path(given).is_file() else "<config>"
+    found = [f"not valid YAML: {o}" for o in raw[2]]         # duplicate keys, numbers YAML 1.1 misreads
     try:
-        return results_config(raw[0], raw[1], given if given and "\n" not in given and Path(given).is_file()
-                              else "<config>")
+        got = results_config(raw[0], raw[1], label)
     except ConfigError as exc:
-        if not problems:
-            raise
-        problems += [f"{exc.source}: {p}" for p in exc.problems]
-        return None
+        label, found = exc.source, found + list(exc.problems)
+    else:
+        if not found:
+            return got
+    if not problems:
+        raise ConfigError(label, found)
+    problems += [f"{label}: {p}" for p in found]
+    return None
 
 
 def _results_config(source):
-    """``(raw, base_dir)`` when ``source`` is a config with a top-level ``results:`` key, else None."""
+    """``(raw, base_dir, yaml_problems)`` when ``source`` is a config with a top-level ``results:``
+    key, else None; ``yaml_problems``: its duplicate keys and numbers YAML 1.1 reads otherwise
+    than they look (`harness.yaml_input.load`), to be listed with its other problems."""
     if isinstance(source, Config):
         return None
+    odd: list = []
     try:
         if isinstance(source, dict):
             raw, base = source, Path.cwd()
@@ -331,12 +339,12 @@ def _results_config(source):
             from . import yaml_input
             p = Path(str(source))
             if "\n" not in str(source) and p.suffix in (".yaml", ".yml", ".json") and p.is_file():
-                raw, base = yaml_input.load(p.read_text()), p.resolve().parent
+                raw, base = yaml_input.load(p.read_text(), odd), p.resolve().parent
             else:
-                raw, base = yaml_input.load(str(source)), Path.cwd()
+                raw, base = yaml_input.load(str(source), odd), Path.cwd()
     except Exception:  # noqa: BLE001 - load_config reports what is wrong with it
         return None
-    return (raw, base) if isinstance(raw, dict) and "results" in raw and "tasks" not in raw else None
+    return (raw, base, odd) if isinstance(raw, dict) and "results" in raw and "tasks" not in raw else None
 
 
 def _inside(path, folder) -> bool:

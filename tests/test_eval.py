@@ -392,3 +392,21 @@ def test_results_sharing_a_file_name_are_labelled_by_their_folders_in_any_order(
     assert default_labels(["x/a/r.obj", "y/a/r.obj", "z/q.ply"]) == ["x/a/r", "y/a/r", "q"]
     assert default_labels(["x/r.obj", "x/r.obj"]) == ["r", "r"]            # one file twice: one label
     assert default_labels(["t/out.obj", "t/out.ply"]) == ["out.obj", "out.ply"]   # only the extension differs
+
+
+def test_a_results_config_lists_a_duplicate_key_with_its_other_problems(tmp_path, capsys):
+    """A diff review: a duplicate key in a results: config made it read as a tasks config, whose
+    problems (no meshes, no tasks, an unknown key results) were listed beside the duplicate;
+    an octal number did the same. Now the duplicate and the results config's own problems are
+    listed, and nothing else; exit 2, nothing written."""
+    cfg = tmp_path / "res.yaml"
+    cfg.write_text("name: a\nname: b\nhausdorff_samples: 010\nresults:\n"
+                   f"  - {{file: {PAIR / 'Noisy.obj'}, clean: {PAIR / 'Original.obj'}, task: smoothing, bogus: 1}}\n")
+    assert cli(["run", str(cfg), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "duplicate key 'name' at line 2" in err and "'010' at line 3 is octal" in err, err
+    assert "results[0].bogus: unknown key" in err and "3 problem(s)" in err, err
+    assert "meshes" not in err and "tasks" not in err, err
+    assert not (tmp_path / "out").exists()
+    with pytest.raises(ConfigError, match="duplicate key 'name'"):
+        harness.run(cfg.read_text(), out=tmp_path / "out2")
