@@ -129,7 +129,7 @@ def _rule(m: dict) -> Rule | None:
     from .tasks.base import BETTER
     try:
         r = Rule(m.get("better", "info"), float(m.get("rel", 0.01)), float(m.get("abs", 0.0)),
-                 str(m.get("se") or "") if m.get("se_runs", True) is not False else "",   # a fixed sample's error
+                 "" if m.get("se_shared") is True else str(m.get("se") or ""),   # a shared sample: paired, exact
                  float(m.get("se_z", 3.0)), str(m.get("target") or ""),
                  str(m.get("upper") or ""))
     except (AttributeError, TypeError, ValueError):

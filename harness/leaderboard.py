@@ -79,8 +79,9 @@ def _with_current_missing(spec: dict, rule: dict) -> dict:
         now = tasks.get((spec or {}).get("name") or "").spec()["invalid_when"]
     except KeyError:
         return rule
-    same = ("column", "op", "value", "method", "than")
-    match = next((r for r in now if all(r.get(k) == rule.get(k) for k in same)), None)
+    same = ("op", "value", "method", "than")
+    match = next((r for r in now if rule.get("column") in (r.get("column"), r.get("was"))
+                  and all(r.get(k) == rule.get(k) for k in same)), None)
     return {**rule, "missing": bool(match and match.get("missing"))}
 
 
@@ -256,14 +257,22 @@ def _cells(spec: dict, df: pd.DataFrame, axis_params=()) -> pd.DataFrame:
     return d
 
 
-def _mean_se(spec: dict, df: pd.DataFrame, metric: str, axis_params=(), cells=None) -> pd.DataFrame | None:
+def _mean_se(spec: dict, df: pd.DataFrame, metric: str, axis_params=(), cells=None,
+             ties: bool = True) -> pd.DataFrame | None:
     """For a sampled metric (a declared ``se`` column): cells x variants of ``se_z`` times the
-    standard error of the metric's mean over the cell's n seeds, ``sqrt(mean(se^2) / n)``; else None."""
+    standard error of the metric's mean over the cell's n seeds, ``sqrt(mean(se^2) / n)``, or, for
+    an error over a sample the seeds share (``se_shared``), the mean of the seeds' errors (its
+    upper bound); else None. ``ties``: for a tie tolerance, which a shared sample's error is not
+    (None then: the variants' comparison on the one sample is paired and exact)."""
     m = next((m for m in spec.get("metrics", []) if m.get("name") == metric), {})
     col = m.get("se")
-    if not col or col not in df:
+    shared = m.get("se_shared") is True
+    if not col or col not in df or (ties and shared):
         return None
     d = (_cells(spec, df, axis_params) if cells is None else cells).copy()
+    if shared:
+        d["_se"] = pd.to_numeric(d[col], errors="coerce")
+        return float(m.get("se_z", 3.0)) * cell_values(spec, d, "_se", axis_params, d)[0]
     d["_se2"] = pd.to_numeric(d[col], errors="coerce") ** 2
     mean_sq, _ = cell_values(spec, d, "_se2", axis_params, d)
     n = _cell_seeds(d).reindex(mean_sq.index).to_numpy(dtype=np.float64)[:, None]
@@ -412,10 +421,11 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
             vals, inval = cell_values(spec, df, m["name"], axis, cells)
             applies = _applies(cells, m["name"], vals.index) if cells is not None else None
             per_seed = seed_values(spec, df, m["name"], axis, cells)
-            se_col = m.get("se")                  # a sampled metric: its standard error per seed
-            per_seed_se = (seed_values(spec, df, se_col, axis, cells) if se_col and se_col in df else None)
+            se_col = m.get("se")                  # a sampled metric: its standard error per seed (ties)
+            per_seed_se = (seed_values(spec, df, se_col, axis, cells)
+                           if se_col and se_col in df and m.get("se_shared") is not True else None)
             se_z = float(m.get("se_z", 3.0))
-            errs = _mean_se(spec, df, m["name"], axis, cells)           # se_z x the standard error of each mean
+            errs = _mean_se(spec, df, m["name"], axis, cells, ties=False)   # se_z x each mean's error (printed)
             d = bracket_rows(spec, df, m["name"], m["better"], axis, cells)         # a certified bound's upper ends
             tops = None if d is None else cell_values(spec, d, "_top", axis, d)[0]
             seed_tops = None if d is None else seed_values(spec, d, "_top", axis, d)
@@ -547,7 +557,19 @@ def _val(x, upper=None, se=None) -> str:
     return text
 
 
-def winners_markdown(w: pd.DataFrame) -> str:
+SHARED_SE_NOTE = ("± its standard error over the sample every method of the cell shares (e.g. the sources: another "
+                  "sample could move the values; the methods compare on this one, so ties ignore it), over seeds the "
+                  "mean of theirs")
+
+
+def _shared_se(specs: dict | None, task: str, metric: str) -> bool:
+    """Whether ``metric`` of ``task`` declares an error over a shared sample (``se_shared``)."""
+    m = next((m for m in ((specs or {}).get(task) or {}).get("metrics", []) if m.get("name") == metric), {})
+    return m.get("se_shared") is True
+
+
+def winners_markdown(w: pd.DataFrame, specs: dict | None = None) -> str:
+    """winners.md from `winners`' frame; ``specs`` (the tasks' declarations) word the captions."""
     out = []
     for (task, metric), g in w.groupby(["task", "metric"], sort=False):
         inp = g["input_value"].notna().any()          # the input's own value, where the task measures it
@@ -564,7 +586,8 @@ def winners_markdown(w: pd.DataFrame) -> str:
             out.append(f"\n{metric}: the lower end of a certified bracket; [lower, upper] where the two differ "
                        "at 4 digits (means over seeds).")
         if _carries(g, "se"):
-            out.append(f"\n{metric}: a sampled estimate ± its standard error (of the mean over seeds).")
+            out.append(f"\n{metric}: {SHARED_SE_NOTE}." if _shared_se(specs, task, metric) else
+                       f"\n{metric}: a sampled estimate ± its standard error (of the mean over seeds).")
         if inp:
             out.append(f"\ninput: {metric} of the case's input itself; a result worse than it made the input worse.")
         out.append(_seeds_note(g))
@@ -600,7 +623,8 @@ def _tex_val(r, which: str) -> str:
     return _val(v, getattr(r, f"{which}_upper", None), getattr(r, f"{which}_se", None)).replace(" ± ", r" $\pm$ ")
 
 
-def winners_latex(w: pd.DataFrame) -> str:
+def winners_latex(w: pd.DataFrame, specs: dict | None = None) -> str:
+    """winners.tex from `winners`' frame; ``specs`` (the tasks' declarations) word the captions."""
     out = ["% mesh-shootout winners per cell; needs \\usepackage{booktabs} and \\usepackage{graphicx}"]
     for (task, metric), g in w.groupby(["task", "metric"], sort=False):
         inp = g["input_value"].notna().any()          # the input's own value, where the task measures it
@@ -615,7 +639,9 @@ def winners_latex(w: pd.DataFrame) -> str:
         if _carries(g, "upper"):
             said += "; values are the lower ends of certified brackets, [lower, upper] where the two differ at 4 digits"
         if _carries(g, "se"):
-            said += r"; sampled estimates $\pm$ their standard errors"
+            said += (r"; values $\pm$ their standard errors over the sample every method of the cell shares "
+                     r"(ties ignore them)" if _shared_se(specs, task, metric) else
+                     r"; sampled estimates $\pm$ their standard errors")
         out += [r"\bottomrule", r"\end{tabular}}",
                 f"\\caption{{{_tex(task)}: best valid method per cell by \\texttt{{{_tex(metric)}}} ({g.iloc[0].better} is "
                 f"better); invalid results excluded{said}.}}", r"\end{table}", ""]
@@ -874,6 +900,6 @@ def write(run_dir, frames: dict, specs: dict) -> pd.DataFrame:
     w = winners(frames, specs)
     for name, text in (("leaderboard.csv", lb.to_csv(index=False)), ("leaderboard.md", to_markdown(lb) or none),
                        ("leaderboard.tex", to_latex(lb)), ("winners.csv", w.to_csv(index=False)),
-                       ("winners.md", winners_markdown(w) or none), ("winners.tex", winners_latex(w))):
+                       ("winners.md", winners_markdown(w, specs) or none), ("winners.tex", winners_latex(w, specs))):
         atomic_write(d / name, lambda fh, text=text: fh.write(text))      # never a half-written table
     return lb

@@ -432,7 +432,8 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
         row["status"] = "ok"
         notes = ["input repaired: " + "; ".join(inp.clean.repairs)] if inp.clean.repairs else []
         notes += ["input: " + n for n in inp.clean.input_notes]
-        if not any(_has_value(row.get(m.name)) for m in task.metrics if m.better not in ("info", "input")):
+        scored = [m.name for m in task.metrics if m.better not in ("info", "input")]
+        if scored and not any(_has_value(row.get(c)) for c in scored):
             notes.append(f"no scored metric of the {task.name} task applies to this input: every column that "
                          "ranks methods is blank (e.g. no analytic truth for a file mesh)")
         heard = list(dict.fromkeys(f"{w.category.__name__}: {w.message}" for w in said

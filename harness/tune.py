@@ -256,7 +256,7 @@ def choose(tune: TuneSpec, frames: dict) -> dict:
             bad = (validity(tasks.get(task).spec(), sel) != "").any() or sel.empty
             val = sel[tune.metric].astype(float).mean() if not sel.empty else math.nan
             scores.append(math.inf if bad or not math.isfinite(val) else sign * val)
-            errs.append(mean_se(sel, mt.se))
+            errs.append(mean_se(sel, "" if mt.se_shared else mt.se))    # a shared sample: paired, no tie by it
             tops.append(float(row_tops(sel, tune.metric, mt.upper).mean()) if bracket and not sel.empty else scores[-1])
         best = int(np.argmin(scores)) if scores else 0
         if best and math.isfinite(scores[0]):     # as configured stays unless beaten beyond the tolerance

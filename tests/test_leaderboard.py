@@ -356,6 +356,13 @@ def test_the_reference_method_is_left_out_of_the_ranking_not_ranked_last():
     old = {**spec, "invalid_when": [{k: v for k, v in r.items() if k != "missing"} for r in spec["invalid_when"]]}
     lb_old = L.leaderboard({"geodesics": df}, {"geodesics": old})            # a run.json written before the key
     assert "libigl.exact_geodesic" not in set(lb_old["method"])
+    # a run.json written before the key had these rules on reference_exact (a diff review: matched
+    # by column only, they lost "missing" and the exact methods were ranked last)
+    oldest = {**spec, "invalid_when": [{"column": "reference_exact", "op": "==", "value": True, "than": None,
+                                        "why": r["why"], "method": r["method"]} for r in spec["invalid_when"]]}
+    lb_oldest = L.leaderboard({"geodesics": df.drop(columns="equals_reference")}, {"geodesics": oldest})
+    assert not {"libigl.exact_geodesic", "pygeodesic.exact"} & set(lb_oldest["method"]), lb_oldest
+    assert (lb_oldest["invalid_cells"] == 0).all()
 
 
 def test_a_winner_must_be_better_on_every_seed_or_it_ties():

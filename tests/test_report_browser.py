@@ -715,3 +715,26 @@ def test_a_cell_where_the_metric_does_not_apply_says_no_valid_result_neither_on_
     assert main(["report", str(tmp_path)]) == 0
     got = best()
     assert any(r.startswith("sphere") and "no valid result" in r for r in got), got
+
+
+def test_a_shared_sample_error_is_shown_and_ties_nothing_in_the_report(tmp_path):
+    """Geodesics' rel_error_mean is over sources every method and seed of a cell shares: the page
+    prints it with its ± (over seeds the mean of the seeds' errors, as winners.md) and its best
+    table ties on the paired values alone, as winners.csv (a diff review: 3 x the unpaired error
+    tied t_factor 1 with 2, worse on each of 6 sources)."""
+    import pandas as pd
+
+    import harness
+    harness.run({"name": "geo", "repeats": 1, "time_budget": 0, "meshes": ["bunny"],
+                 "noise": [{"model": "gaussian_normal", "levels": [0.1], "seeds": 2}],
+                 "tasks": {"geodesics": {"params": {"sources": 6}, "methods": [
+                     {"name": "scratch.heat", "params": {"laplacian": "intrinsic_delaunay", "t_factor": [1.0, 2.0]}}]}}},
+                out=tmp_path, quiet=True, workers=1)
+    got = page_value(tmp_path / "report.html", """(() => ({
+        best: [...document.querySelectorAll('#plots-geodesics table.best tr')].slice(1).map(r => r.textContent),
+        notes: [...document.querySelectorAll('#plots-geodesics p.caption')].map(p => p.textContent).join(' | ')}))()""")
+    win = pd.read_csv(tmp_path / "winners.csv")
+    win = win[win.metric == "rel_error_mean"].iloc[0]
+    assert len(got["best"]) == 1 and "t_factor=1.0" in got["best"][0] and "tied" not in got["best"][0], got
+    assert "± " + f"{win.value_se:.2g}" in got["best"][0], (got, win.value_se)
+    assert "over the sample every method of the cell shares" in got["notes"], got

@@ -299,10 +299,13 @@
   // a value within max(rel * |best|, abs) of the best ties with it
   // ([2], [3]: a sampled metric's standard-error column and how many combined standard errors tie on a seed)
   // ([4]: a certified bound's bracket upper-end column, e.g. hausdorff_upper for hausdorff)
+  // ([5], [6]: the standard-error column printed as the value's ±, and whether its sample is one every
+  // variant and seed of a cell shares (se_shared: then [2] is empty, as ties on a shared sample are paired))
   function tolOf(spec, key) {
     var m = ((spec || {}).metrics || []).filter(function (x) { return x.name === key; })[0];
-    return [m && isNum(m.rel) ? m.rel : 0.01, m && isNum(m.abs) ? m.abs : 0, (m && m.se) || '',
-      m && isNum(m.se_z) ? m.se_z : 3, (m && m.better === 'lower' && m.upper) || ''];
+    var shared = !!(m && m.se_shared === true);
+    return [m && isNum(m.rel) ? m.rel : 0.01, m && isNum(m.abs) ? m.abs : 0, (m && !shared && m.se) || '',
+      m && isNum(m.se_z) ? m.se_z : 3, (m && m.better === 'lower' && m.upper) || '', (m && m.se) || '', shared];
   }
   // a ties with best; with reach (best's bracket upper end, `bracketTop`), when a lies within the
   // tolerance of it: brackets that overlap tie, as compare and winners.csv judge them
@@ -324,16 +327,16 @@
   // variant v's mean value over a cell's rows as printed (d significant digits): [lower, upper] for a
   // certified bound whose mean bracket ends differ at those digits (tol[4], e.g. hausdorff_upper), the
   // value ± the standard error of the mean over seeds, sqrt(sum se^2) / n, for a sampled metric
-  // (tol[2]), else the value; as winners.md prints it
+  // (tol[5]; over a shared sample, tol[6], the mean of the seeds' errors), else the value; as winners.md prints it
   function valueText(rows, v, key, tol, d) {
     var rs = rows.filter(function (r) { return r._variant === v && isNum(r[key]); });
     if (!rs.length) return '';
     var txt = fmt(mean(rs.map(function (r) { return r[key]; })), d);
     var up = bracketTop(rows, v, key, tol, true);
     if (isNum(up) && fmt(up, d) !== txt) return '[' + txt + ', ' + fmt(up, d) + ']';
-    var es = tol[2] ? rs.map(function (r) { return r[tol[2]]; }) : [];
+    var es = tol[5] ? rs.map(function (r) { return r[tol[5]]; }) : [];
     if (es.length && es.every(isNum)) {
-      return txt + ' ± ' + fmt(Math.sqrt(es.reduce(function (a, e) { return a + e * e; }, 0)) / es.length, 2);
+      return txt + ' ± ' + fmt(tol[6] ? mean(es) : Math.sqrt(es.reduce(function (a, e) { return a + e * e; }, 0)) / es.length, 2);
     }
     return txt;
   }
@@ -341,7 +344,10 @@
   function valueNote(key, tol) {
     if (tol[4]) return el('p', {'class': 'caption', text: key + ': the lower end of a certified bracket; [lower, upper] ' +
       'where the two differ at 4 digits (means over seeds).'});
-    if (tol[2]) return el('p', {'class': 'caption', text: key + ': a sampled estimate ± its standard error (of the mean over seeds).'});
+    if (tol[6]) return el('p', {'class': 'caption', text: key + ': ± its standard error over the sample every method of the ' +
+      'cell shares (e.g. the sources: another sample could move the values; the methods compare on this one, so ties ' +
+      'ignore it), over seeds the mean of theirs.'});
+    if (tol[5]) return el('p', {'class': 'caption', text: key + ': a sampled estimate ± its standard error (of the mean over seeds).'});
     return el('span');
   }
   // with several seeds, a variant ties with the best unless the best is better beyond the tolerance on

@@ -43,11 +43,13 @@ class Metric:
     bounding-box diagonal), ``deg``, ``s``, ``MiB`` or empty. ``kind``: ``float``, ``int``,
     ``bool`` or ``json`` (a JSON-encoded list). ``se``: for a sampled metric, the column of its
     standard error: two values also count as the same (compare, ties of the winners) while they
-    differ by at most ``SE_Z`` = 3 times their combined standard error ``sqrt(se_a^2 + se_b^2)``.
-    ``se_runs``: whether that error is also a difference between two runs of one case (True: its
-    samples may differ, e.g. with ``hausdorff_samples``); False for an error over a sample the
-    case fixes (e.g. geodesics' seeded sources): compare then ignores it, and only the winners'
-    ties use it (another sample could name another winner).
+    differ by at most ``SE_Z`` = 3 times their combined standard error ``sqrt(se_a^2 + se_b^2)``,
+    and the winners print the value ``± se``. ``se_shared``: the error is over a sample the case
+    fixes and every variant of a cell and every seed shares (geodesics' seeded sources):
+    comparisons on one sample are paired and exact, so compare, the ties of the winners and the
+    leaderboard, and tune ignore it; it is printed as the value's ``±`` alone, over seeds the mean
+    of theirs (an upper bound of the mean's error, equal to it when the seeds' errors move
+    together, as on a shared sample).
     ``target``: for ``better="target"``, the column holding the count asked for; a result reaches
     it within `target_tolerance`, and compare counts a miss that grows beyond that. ``upper``: for
     a certified bound (``better="lower"``), the column of the upper end of its bracket (the value
@@ -64,7 +66,7 @@ class Metric:
     kind: str = "float"
     rank: bool = False          # offered as a ranking metric in the report
     se: str = ""                # the column of its standard error (a sampled metric), or ""
-    se_runs: bool = True        # the error may differ between two runs of one case (compare uses it)
+    se_shared: bool = False     # the error is over a sample every variant and seed of a cell shares
     target: str = ""            # better="target": the column of the count asked for
     upper: str = ""             # a certified bracket's upper end (the value is its lower end)
 
@@ -77,8 +79,8 @@ class Metric:
                "rel": self.rel, "abs": self.abs, "kind": self.kind, "rank": self.rank}
         if self.se:
             out.update(se=self.se, se_z=SE_Z)
-            if not self.se_runs:
-                out["se_runs"] = False
+            if self.se_shared:
+                out["se_shared"] = True
         if self.target:
             out["target"] = self.target
         if self.upper:
@@ -96,7 +98,9 @@ class Invalid:
     never match. ``missing``: the
     matching rows are no measurement of the method at all (the reference scored against itself):
     rankings leave the method out instead of ranking it last (`harness.leaderboard.not_measured`);
-    the report still hides them as invalid."""
+    the report still hides them as invalid. ``was``: the column an earlier version's rule had in
+    place of ``column`` (a run.json from before ``missing`` existed is read with this rule's
+    ``missing`` then)."""
 
     column: str
     op: str
@@ -105,10 +109,14 @@ class Invalid:
     than: str | None = None
     method: str | None = None
     missing: bool = False
+    was: str | None = None
 
     def spec(self) -> dict:
-        return {"column": self.column, "op": self.op, "value": self.value, "than": self.than, "why": self.why,
-                "method": self.method, "missing": self.missing}
+        out = {"column": self.column, "op": self.op, "value": self.value, "than": self.than, "why": self.why,
+               "method": self.method, "missing": self.missing}
+        if self.was:
+            out["was"] = self.was
+        return out
 
 
 def rule_ok(r) -> bool:

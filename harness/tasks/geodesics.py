@@ -296,10 +296,11 @@ TASK = Task(
         Metric("reference_exact", "info", "reference: exact polyhedral distance (true) or the analytic surface distance "
                "(false)", kind="bool"),
         Metric("rel_error_mean", "lower", "mean |D - D*| / D* (outside 3 mean edge lengths of the source)", rank=True,
-               se="rel_error_mean_se", se_runs=False, **_E),
+               se="rel_error_mean_se", se_shared=True, **_E),
         Metric("rel_error_mean_se", "info", "standard error of rel_error_mean over the choice of sources (the sources a "
-               "random sample of the mesh's vertices; blank for one source: another source could name another "
-               "winner, so winners tie within 3 combined standard errors)", **_E),
+               "random sample of the mesh's vertices; blank for one source): how far the value could move with other "
+               "sources. Every method of a cell has the same sources, so their comparison is paired and ties ignore it",
+               **_E),
         Metric("equals_reference", "info", "the result is the exact polyhedral reference's, to 1e-6 relative "
                "(rel_error_max): for the reference's own code, no measurement of it", kind="bool"),
         Metric("rel_error_max", "lower", "max |D - D*| / D* (outside 3 mean edge lengths of the source)", **_E),
@@ -323,8 +324,8 @@ TASK = Task(
     # on the mesh as given, and the library's absolute tolerances make the two differ on a mesh
     # in small units (knight scaled by 1e-3: 2.3e-4), an error of the method's to rank.
     invalid_when=(Invalid("equals_reference", "==", "is the reference itself (0 by construction)", value=True,
-                          method="libigl.exact_geodesic", missing=True),
+                          method="libigl.exact_geodesic", missing=True, was="reference_exact"),
                   # pygeodesic wraps the same C++ code (Kirsanov's geodesic library) as libigl's
                   Invalid("equals_reference", "==", "runs the reference's own code (Kirsanov's geodesic library, "
                           "which libigl's exact_geodesic wraps too): 0 by construction", value=True,
-                          method="pygeodesic.exact", missing=True)))
+                          method="pygeodesic.exact", missing=True, was="reference_exact")))
