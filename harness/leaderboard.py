@@ -407,8 +407,8 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
     measures it (``input_<metric>``, e.g. smoothing's noisy input), else blank. For a certified
     bound (``hausdorff``), ``value`` is the mean lower end of the brackets and ``value_upper`` the
     mean upper end; for a sampled metric (``surface_dist_mean``), ``value_se`` is the standard
-    error of the mean over seeds, ``sqrt(sum se_i^2) / n`` (`_mean_se` over ``se_z``); the same
-    for the runner-up; blank otherwise."""
+    error of the mean over seeds, ``sqrt(sum se_i^2) / n`` (`_mean_se` over ``se_z``; over a sample
+    the seeds share, ``se_shared``, the mean of theirs); the same for the runner-up; blank otherwise."""
     rows = []
     for task, df in frames.items():
         spec = specs.get(task) or {}
