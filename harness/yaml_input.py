@@ -114,6 +114,31 @@ def _yaml11_numbers(node, out: list, done: set) -> None:
             _yaml11_numbers(v, out, done)
 
 
+_PLAIN = {yaml.ScalarNode: "tag:yaml.org,2002:str", yaml.SequenceNode: "tag:yaml.org,2002:seq",
+          yaml.MappingNode: "tag:yaml.org,2002:map"}
+
+
+def _unknown_tags(node, out: list, done: set) -> None:
+    """Messages for nodes whose tag no safe constructor reads (``!!python/object:os.system``,
+    ``!foo``), each node retagged as the plain text, list or mapping it is, so the document can
+    still be built and checked for its other problems (nothing of it is used: they are listed)."""
+    if id(node) in done:
+        return
+    done.add(id(node))
+    known = _Loader.yaml_constructors
+    if node.tag not in known and not any(node.tag.startswith(p) for p in _Loader.yaml_multi_constructors):
+        out.append(f"the tag {node.tag.replace('tag:yaml.org,2002:', '!!')!r} at line {node.start_mark.line + 1} is "
+                   "refused: configs take plain values only")
+        node.tag = _PLAIN[type(node)]
+    if isinstance(node, yaml.SequenceNode):
+        for v in node.value:
+            _unknown_tags(v, out, done)
+    elif isinstance(node, yaml.MappingNode):
+        for k, v in node.value:
+            _unknown_tags(k, out, done)
+            _unknown_tags(v, out, done)
+
+
 def _key_value(k):
     """What a scalar key loads as, built on a throwaway constructor (a failure leaves no state
     in the document's own loader); a ``=`` key (the value tag) is the string ``=``, as the
@@ -125,10 +150,12 @@ def _key_value(k):
 
 def load(text: str, numbers: list | None = None):
     """The document's data (safe types only); `yaml.YAMLError` for bombs, syntax errors and values
-    their tag cannot read (``!!int abc``), and for duplicate keys in a mapping and plain numbers
-    YAML 1.1 reads otherwise than they look, unless ``numbers`` is a list: then one message each
-    of those two is appended to it and the document is read as YAML 1.1 reads it (the last of
-    duplicate keys wins; the caller lists them with its own problems and uses nothing)."""
+    their tag cannot read (``!!int abc``), and for duplicate keys in a mapping, plain numbers
+    YAML 1.1 reads otherwise than they look and tags no safe constructor reads (``!!python/...``),
+    unless ``numbers`` is a list: then one message each of those three is appended to it and the
+    document is read as YAML 1.1 reads it (the last of duplicate keys wins, an unknown tag's node
+    is plain text, list or mapping; the caller lists them with its own problems and uses
+    nothing)."""
     loader = _Loader(text)
     try:
         node = loader.get_single_node()
@@ -141,6 +168,8 @@ def load(text: str, numbers: list | None = None):
         if dup and numbers is None:
             raise yaml.YAMLError("; ".join(dup))
         odd: list = dup
+        if numbers is not None:
+            _unknown_tags(node, odd, set())
         _yaml11_numbers(node, odd, set())
         if odd and numbers is not None:
             numbers += odd

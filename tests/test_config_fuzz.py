@@ -248,6 +248,10 @@ def test_duplicate_keys_compare_as_loaded():
     assert yaml_input.load("=: 1\n") == {"=": 1}                  # as safe_load: the key check builds nothing
     with pytest.raises(yaml.YAMLError, match="could not determine a constructor for the tag '!foo'"):
         yaml_input.load("!foo extra: 1\n")
+    found = []                                # an unknown tag too, its node read as plain data
+    assert yaml_input.load("a: !!python/object:os.system x\nb: !foo [1]\n", found) == {"a": "x", "b": [1]}
+    assert found == ["the tag '!!python/object:os.system' at line 1 is refused: configs take plain values only",
+                     "the tag '!foo' at line 2 is refused: configs take plain values only"]
     found: list = []                          # a config lists them with its other problems
     assert yaml_input.load("a: 1\nb: 010\na: 2\n", found) == {"a": 2, "b": 8}
     assert found == ["duplicate key 'a' at line 3 (first at line 1): each key may appear once in a mapping",

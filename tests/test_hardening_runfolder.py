@@ -366,14 +366,16 @@ def test_grids_too_large_duplicate_keys_and_exiting_plugins_are_config_errors(tm
         "iterations": list(range(1, 301)), "step": [0.1 + i * 1e-3 for i in range(300)],
         "self_weight": [i * 1e-3 for i in range(300)]}}]}}}
     text = ("name: dup\nmeshes: [knight]\ntasks:\n  laplacian: {methods: [scratch.cotan]}\n"
-            "tasks:\n  smoothing: {methods: [scratch.taubin]}\nrepeats: 1\nrepeats: 2\nhausdorff_samples: -1\n")
+            "tasks:\n  smoothing: {methods: [scratch.taubin]}\nrepeats: 1\nrepeats: 2\nhausdorff_samples: -1\n"
+            "seed: !!python/object/apply:os.system [echo hi]\n")
     (tmp_path / "exitplug.py").write_text("import sys\nsys.exit(0)\n")
     (tmp_path / "osexitplug.py").write_text("import os\nos._exit(0)\n")
     (tmp_path / "segvplug.py").write_text("import os, signal\nos.kill(os.getpid(), signal.SIGSEGV)\n")
     cases = {"big": (json.dumps(big), "27,000,000 settings"),
              "dup": (text, "duplicate key 'tasks' at line 5 (first at line 3): each key may appear once "
                            "in a mapping\n  - not valid YAML: duplicate key 'repeats' at line 8 (first at line 7)"
-                           ": each key may appear once in a mapping\n  - hausdorff_samples: expected"),
+                           ": each key may appear once in a mapping\n  - not valid YAML: the tag "
+                           "'!!python/object/apply:os.system' at line 10 is refused: configs take plain values only"),
              "plug": (json.dumps({**SMALL, "plugins": ["exitplug"]}), "called sys.exit(0) on import"),
              "osexit": (json.dumps({**SMALL, "plugins": ["osexitplug"]}),
                         "plugins[0]: cannot import 'osexitplug' (importing it ended the process (exit status 0))"),
@@ -384,6 +386,7 @@ def test_grids_too_large_duplicate_keys_and_exiting_plugins_are_config_errors(tm
         r = cli(["run", tmp_path / f"{name}.yaml", "--out", tmp_path / name], cwd=tmp_path,
                 PYTHONPATH=f"{ROOT}:{tmp_path}")
         assert r.returncode == 2 and needle in r.stderr, (name, r.stderr)
+        assert name != "dup" or "hausdorff_samples: expected" in r.stderr, r.stderr     # and the config's others
         assert not (tmp_path / name).exists()
     from harness.config import load_config
     from harness.errors import ConfigError
