@@ -113,6 +113,9 @@ def _rule_hits(spec: dict, df: pd.DataFrame, why: pd.Series):
     for rule in rules:
         rule = _with_current_missing(spec, rule)
         col = rule.get("column")
+        if col not in df and rule.get("was") in df:      # a CSV from before the column: the rule's old one
+            rule = {**rule, "column": rule["was"]}
+            col = rule["column"]
         if col not in df:
             continue
         if rule.get("than"):
@@ -563,8 +566,16 @@ SHARED_SE_NOTE = ("± its standard error over the sample every method of the cel
 
 
 def _shared_se(specs: dict | None, task: str, metric: str) -> bool:
-    """Whether ``metric`` of ``task`` declares an error over a shared sample (``se_shared``)."""
-    m = next((m for m in ((specs or {}).get(task) or {}).get("metrics", []) if m.get("name") == metric), {})
+    """Whether ``metric`` of ``task`` declares an error over a shared sample (``se_shared``), by
+    ``specs`` or else the installed task kind."""
+    spec = (specs or {}).get(task)
+    if spec is None:
+        from . import tasks
+        try:
+            spec = tasks.get(task).spec()
+        except KeyError:
+            spec = {}
+    m = next((m for m in spec.get("metrics", []) if m.get("name") == metric), {})
     return m.get("se_shared") is True
 
 
@@ -640,7 +651,7 @@ def winners_latex(w: pd.DataFrame, specs: dict | None = None) -> str:
             said += "; values are the lower ends of certified brackets, [lower, upper] where the two differ at 4 digits"
         if _carries(g, "se"):
             said += (r"; values $\pm$ their standard errors over the sample every method of the cell shares "
-                     r"(ties ignore them)" if _shared_se(specs, task, metric) else
+                     r"(ties ignore them; over seeds the mean of theirs)" if _shared_se(specs, task, metric) else
                      r"; sampled estimates $\pm$ their standard errors")
         out += [r"\bottomrule", r"\end{tabular}}",
                 f"\\caption{{{_tex(task)}: best valid method per cell by \\texttt{{{_tex(metric)}}} ({g.iloc[0].better} is "

@@ -183,6 +183,8 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
     why = _config_problem(config_or_path)
     if why:
         P.append(why)
+    if out is not None and isinstance(out, (str, os.PathLike)) and str(out).strip():
+        P += out_dir_problems(Path(out), resume)      # before a results: config's problems, which join them
     raw = None if why else _results_config(config_or_path)
     if raw is not None:
         given = [k for k, on in (("resume", resume), ("timeout", timeout is not None), ("executor", executor != "local"),
@@ -198,8 +200,6 @@ def run(config_or_path, out=None, workers=None, executor="local", scheduler=None
             config_or_path = load_config(config_or_path)
         except ConfigError as exc:
             bad_config = exc
-    if out is not None and isinstance(out, (str, os.PathLike)) and str(out).strip():
-        P += out_dir_problems(Path(out), resume)
     if bad_config is not None:
         if not P:
             raise bad_config

@@ -410,3 +410,14 @@ def test_a_results_config_lists_a_duplicate_key_with_its_other_problems(tmp_path
     assert not (tmp_path / "out").exists()
     with pytest.raises(ConfigError, match="duplicate key 'name'"):
         harness.run(cfg.read_text(), out=tmp_path / "out2")
+
+
+def test_a_results_config_from_python_lists_its_out_problem_too(tmp_path):
+    """A diff review: harness.run on a results: config with a problem of its own raised that
+    problem alone, without the out folder's (the CLI listed both)."""
+    cfg = tmp_path / "res.yaml"
+    cfg.write_text("name: a\nname: b\nresults:\n"
+                   f"  - {{file: {PAIR / 'Noisy.obj'}, clean: {PAIR / 'Original.obj'}, task: smoothing}}\n")
+    with pytest.raises(harness.errors.ShootoutError) as err:
+        harness.run(cfg.read_text(), out=str(cfg))
+    assert "duplicate key 'name'" in str(err.value) and "not a folder" in str(err.value), str(err.value)

@@ -481,6 +481,10 @@ def test_a_shared_sample_error_is_printed_not_used_for_ties(tmp_path):
             < 3 * np.hypot(one["rel_error_mean_se"].mean(), two["rel_error_mean_se"].mean()))   # unpaired: a tie
     md = (tmp_path / "a" / "winners.md").read_text()
     assert "± its standard error over the sample every method of the cell shares" in md, md
+    from harness.leaderboard import winners_latex, winners_markdown       # without specs: the installed kind's
+    frame = pd.read_csv(tmp_path / "a" / "winners.csv")
+    assert "over the sample every method of the cell shares" in winners_markdown(frame)
+    assert "over seeds the mean of theirs" in winners_latex(frame)
 
     run({"name": "t", "repeats": 1, "time_budget": 0, "meshes": ["knight"], "noise": [{"model": "none"}],
          "tasks": {"geodesics": {"params": {"sources": 6}, "methods": [
@@ -489,3 +493,19 @@ def test_a_shared_sample_error_is_printed_not_used_for_ties(tmp_path):
                   "params": {"scratch.heat": {"t_factor": [2.0, 1.0]}}}}, out=tmp_path / "t", quiet=True)
     chosen = _json.loads((tmp_path / "t" / "run.json").read_text())["tune"]["methods"]["scratch.heat"]
     assert chosen["chosen"] == {"t_factor": 1.0} and chosen["train_score"] < chosen["default_train_score"], chosen
+
+
+def test_an_exact_method_on_a_mesh_too_small_for_relative_errors_is_still_no_measurement(tmp_path):
+    """A diff review: on an icosahedron no vertex lies 3 mean edge lengths from a source, so the
+    relative errors are blank; equals_reference was then False and the exact methods, 0 by
+    construction (abs_error_mean 4e-17), were named best by abs_error_mean. Without relative
+    errors the largest absolute error decides, against the diagonal."""
+    run({"name": "g", "repeats": 1, "time_budget": 0, "meshes": [{"procedural": "sphere", "subdivisions": 0}],
+         "noise": [{"model": "gaussian_normal", "levels": [0.3]}],
+         "tasks": {"geodesics": {"params": {"sources": 2},
+                                 "methods": ["libigl.exact_geodesic", "pygeodesic.exact", "scratch.heat"]}}},
+        out=tmp_path, quiet=True)
+    df = pd.read_csv(tmp_path / "geodesics.csv").set_index("method")
+    assert df["rel_error_mean"].isna().all() and df["reference_exact"].all()
+    assert df.loc["libigl.exact_geodesic", "equals_reference"] and df.loc["pygeodesic.exact", "equals_reference"]
+    assert not df.loc["scratch.heat", "equals_reference"]

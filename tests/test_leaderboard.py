@@ -363,6 +363,10 @@ def test_the_reference_method_is_left_out_of_the_ranking_not_ranked_last():
     lb_oldest = L.leaderboard({"geodesics": df.drop(columns="equals_reference")}, {"geodesics": oldest})
     assert not {"libigl.exact_geodesic", "pygeodesic.exact"} & set(lb_oldest["method"]), lb_oldest
     assert (lb_oldest["invalid_cells"] == 0).all()
+    # and with no rules recorded at all, the installed rules read such a CSV by their old column
+    norules = {k: v for k, v in spec.items() if k != "invalid_when"}
+    lb_none = L.leaderboard({"geodesics": df.drop(columns="equals_reference")}, {"geodesics": norules})
+    assert not {"libigl.exact_geodesic", "pygeodesic.exact"} & set(lb_none["method"]), lb_none
 
 
 def test_a_winner_must_be_better_on_every_seed_or_it_ties():
