@@ -217,22 +217,25 @@ def test_adapters_return_compacted_valid_meshes(method, name):
     assert within_target(len(r.F), int(round(0.25 * len(F)))), (method, len(r.F))
 
 
-def test_the_task_drops_unreferenced_vertices_untimed():
-    """An adapter returns what its library gives (meshoptimizer keeps every input position); the
-    task's validation, outside the timed call, drops the vertices no face uses and keeps the
-    others in order, so the measured and saved mesh is the same as if the adapter had done it."""
-    m = methods.get("meshoptimizer.qem")
-    if not m.is_available:
-        pytest.skip(m.unavailable_reason())
+def test_every_simplifier_returns_a_compact_mesh_from_its_timed_call():
+    """Every library but two returns a compact mesh, its compaction inside its timed call;
+    meshoptimizer keeps every input position and scratch.qem kept the collapsed vertices, and the
+    task's untimed validation dropped them (a timing review: 0.7 ms of 18 ms, 3.8%, left out of
+    meshoptimizer's time at 86k faces). Both adapters now compact in their call; meshoptimizer's
+    vertices are the input positions of those its faces use, in order."""
     V, F = mesh("knight")
-    run, finish = m.bind(V, F, target_ratio=0.25)
-    raw = run()
-    assert raw.V.shape == V.shape and not compacted(raw.V, raw.F)
-    Fr = np.asarray(raw.F, dtype=np.int64)
-    kept = np.unique(Fr)
-    r = finish(raw)
-    assert compacted(r.V, r.F) and r.F.dtype == np.int64
-    assert np.array_equal(r.V, V[kept]) and np.array_equal(kept[r.F], Fr)
+    for name in ("meshoptimizer.qem", "scratch.qem"):
+        m = methods.get(name)
+        if not m.is_available:
+            continue
+        run, finish = m.bind(V.copy(), F.copy(), target_ratio=0.25)
+        raw = run()
+        assert compacted(raw.V, raw.F), name
+        r = finish(raw)
+        assert np.array_equal(r.V, raw.V) and np.array_equal(r.F, raw.F), name
+    raw = methods.get("meshoptimizer.qem").bind(V.copy(), F.copy(), target_ratio=0.25)[0]()
+    kept = (raw.V[:, None, :] == V[None, :, :]).all(axis=2).argmax(axis=1)
+    assert np.array_equal(V[kept], raw.V) and (np.diff(kept) > 0).all()
 
 
 def test_pygel_translates_face_target_to_vertices():

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..errors import MethodFailed
 
@@ -222,14 +223,34 @@ class Task:
                 "order": self.order}
 
 
+def assembled_sparse(what: str, A, n: int):
+    """``A`` (a method's sparse matrix) as float64 CSR of shape (n, n); `MethodFailed` for anything
+    but a CSR, CSC or DIA (``scipy.sparse.diags``) matrix: a dense array, COO triplets or another
+    format is refused, as assembling it is the method's work, which converting it here would leave
+    out of its timed call; and for another shape or dtype. The conversions done here are linear
+    in the stored entries (libigl returns CSC)."""
+    if not (sp.issparse(A) and A.format in ("csr", "csc", "dia")):
+        raise MethodFailed(f"returned {what} as {type(A).__name__}"
+                           + (f" ({A.format})" if sp.issparse(A) else "")
+                           + ", expected a scipy sparse CSR or CSC matrix, or DIA (assembled: building it is "
+                           "the method's work)")
+    if A.dtype.kind != "f":
+        raise MethodFailed(f"returned {what} of dtype {A.dtype}, expected float64")
+    if A.shape != (n, n):
+        raise MethodFailed(f"returned {what} of shape {A.shape}, expected ({n}, {n})")
+    return sp.csr_matrix(A).astype(np.float64, copy=False)
+
+
 def float_array(name: str, what: str, X, shape: tuple) -> np.ndarray:
     """``X`` as float64 of ``shape`` (``-1`` = any length); `MethodFailed` naming what came back.
 
-    Refuses complex, boolean, string and object arrays instead of converting them.
+    Refuses complex, boolean, string and object arrays instead of converting them, and anything
+    but a numpy array without touching it (a lazy array computed on conversion would do the
+    method's work outside its timed call).
     """
-    A = np.asarray(X) if not isinstance(X, np.ndarray) else X
     if not isinstance(X, np.ndarray):
         raise MethodFailed(f"{name} returned {what} as {type(X).__name__}, expected a float64 numpy array")
+    A = X
     if A.dtype.kind != "f":
         raise MethodFailed(f"{name} returned {what} of dtype {A.dtype}, expected float64")
     if A.ndim != len(shape) or any(s != -1 and s != a for s, a in zip(shape, A.shape)):

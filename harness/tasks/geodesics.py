@@ -80,8 +80,8 @@ def prepare(params: dict, V, F) -> dict:
 
 
 def _check(result: GeodesicResult, V, F):
-    D = np.asarray(result.D)
-    if D.ndim == 1:
+    D = result.D                       # a numpy array, untouched until checked (`float_array`)
+    if isinstance(D, np.ndarray) and D.ndim == 1:
         D = D[None, :]
     result.D = float_array("", "D", D, (-1, V.shape[0]))
     bad = np.isnan(result.D) | (result.D == -np.inf)

@@ -11,7 +11,7 @@ import scipy.sparse as sp
 
 from ..errors import MethodFailed
 from ..metrics.laplacian_properties import laplacian_properties
-from .base import Metric, Task
+from .base import Metric, Task, assembled_sparse
 
 
 @dataclass
@@ -33,14 +33,7 @@ def _check(result: LaplacianResult, V, F):
         A = getattr(result, what)
         if A is None and what == "M":
             continue
-        if not (sp.issparse(A) or isinstance(A, np.ndarray)):
-            raise MethodFailed(f"returned {what} as {type(A).__name__}, expected a scipy sparse matrix")
-        A = sp.csr_matrix(A)
-        if A.dtype.kind != "f":
-            raise MethodFailed(f"returned {what} of dtype {A.dtype}, expected float64")
-        if A.shape != (n, n):
-            raise MethodFailed(f"returned {what} of shape {A.shape}, expected ({n}, {n})")
-        A = A.astype(np.float64, copy=False)
+        A = assembled_sparse(what, A, n)
         if not np.isfinite(A.data).all():      # NaN weights would pass as NaN metrics
             k = int((~np.isfinite(A.data)).sum())
             raise MethodFailed(f"returned {what} with {k} non-finite (NaN or inf) entries")

@@ -41,7 +41,7 @@ import scipy.sparse as sp
 from ..core.params import Param
 from ..errors import MethodFailed
 from ..metrics.hks import heat_kernel_signature, hks_times, sphere_hks
-from .base import Invalid, Metric, Task, float_array
+from .base import Invalid, Metric, Task, assembled_sparse, float_array
 
 PARAMS = {"k": Param("k", 20, "int", low=1, high=2000, doc="number of smallest eigenpairs")}
 
@@ -73,17 +73,12 @@ def _check(result: SpectrumResult, V, F):
         raise MethodFailed(f"returned eigenvalues out of ascending order ({lam[i]:.6g} before {lam[i + 1]:.6g})")
     order = np.argsort(lam, kind="stable")
     result.values = lam[order]
-    if result.vectors is not None and np.ndim(result.vectors) == 2 and np.shape(result.vectors)[1] == lam.size:
-        result.vectors = np.asarray(result.vectors)[:, order]
     if result.vectors is not None:
-        result.vectors = float_array("", "vectors", result.vectors, (n, len(result.values)))
+        result.vectors = float_array("", "vectors", result.vectors, (n, len(result.values)))[:, order]
     for what in ("W", "M"):
         A = getattr(result, what)
         if A is not None:
-            A = sp.csr_matrix(A)
-            if A.shape != (n, n):
-                raise MethodFailed(f"returned {what} of shape {A.shape}, expected ({n}, {n})")
-            setattr(result, what, A.astype(np.float64))
+            setattr(result, what, assembled_sparse(what, A, n))
     if result.W is not None:
         d = result.W.diagonal()
         if d.size and (d > 1e-12 * np.abs(d).max()).any():

@@ -25,3 +25,21 @@ def until(V, F):
     while release and not os.path.exists(release) and time.monotonic() < deadline:
         time.sleep(0.02)
     return SmoothingResult(V=V.copy())
+
+
+_CALLED = []
+
+
+@register("slowdown.cold", task="smoothing", library="slowdown", params={"cold_ms": 1500.0, "ms": 2.0})
+def cold(V, F, *, cold_ms=1500.0, ms=2.0):
+    """Identity smoothing that sleeps ``cold_ms`` milliseconds on its first call in a process (a
+    first-call cost such as a compile), ``ms`` on every later one."""
+    time.sleep((ms if _CALLED else cold_ms) / 1000.0)
+    _CALLED.append(1)
+    return SmoothingResult(V=V.copy())
+
+
+@register("slowdown.identity", task="smoothing", library="slowdown")
+def identity(V, F):
+    """Its input, as is: a timed call of a microsecond, the harness's untimed work around it larger."""
+    return SmoothingResult(V=V)
