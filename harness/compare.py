@@ -49,7 +49,9 @@ refused:
 
   Load from other processes slows every sample, the fastest included. ``others_cpu`` is how
   many cores other processes (with several workers, the case's siblings too) kept busy from
-  the cold call to the last sample, blank for windows under 0.2 s; ``threads_busy`` how many
+  the first sample to the last (from the cold call in runs before 2026-11-27), blank for
+  windows under 0.2 s, so runs with ``time_budget: 0`` and millisecond cases often have no
+  load check; ``threads_busy`` how many
   threads of the case ran (`threads_used`). A wall-time regression (improvement) of B (A) is
   inconclusive when (threads ``t``, the slower run's load ``o``, the CPU time ratio ``c``):
   - ``t`` > 1 and ``t + o`` exceeds the cores by ``BUSY_CORES`` (0.5) or more: threads waiting

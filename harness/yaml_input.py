@@ -114,6 +114,7 @@ def _yaml11_numbers(node, out: list, done: set) -> None:
             _yaml11_numbers(v, out, done)
 
 
+_BUILT_WITH_MAPPING = ("tag:yaml.org,2002:merge", "tag:yaml.org,2002:value")   # `<<` and `=` keys: no constructor
 _PLAIN = {yaml.ScalarNode: "tag:yaml.org,2002:str", yaml.SequenceNode: "tag:yaml.org,2002:seq",
           yaml.MappingNode: "tag:yaml.org,2002:map"}
 
@@ -126,7 +127,8 @@ def _unknown_tags(node, out: list, done: set) -> None:
         return
     done.add(id(node))
     known = _Loader.yaml_constructors
-    if node.tag not in known and not any(node.tag.startswith(p) for p in _Loader.yaml_multi_constructors):
+    if (node.tag not in known and node.tag not in _BUILT_WITH_MAPPING
+            and not any(node.tag.startswith(p) for p in _Loader.yaml_multi_constructors)):
         out.append(f"the tag {node.tag.replace('tag:yaml.org,2002:', '!!')!r} at line {node.start_mark.line + 1} is "
                    "refused: configs take plain values only")
         node.tag = _PLAIN[type(node)]

@@ -248,6 +248,10 @@ def test_duplicate_keys_compare_as_loaded():
     assert yaml_input.load("=: 1\n") == {"=": 1}                  # as safe_load: the key check builds nothing
     with pytest.raises(yaml.YAMLError, match="could not determine a constructor for the tag '!foo'"):
         yaml_input.load("!foo extra: 1\n")
+    found = []                                # merge keys and `=` are YAML's own, not refused tags
+    assert yaml_input.load("b: &b {a: 1}\nx: {<<: *b, c: 2}\n=: 3\n", found) == {"b": {"a": 1}, "x": {"a": 1, "c": 2},
+                                                                                 "=": 3}
+    assert found == [], found
     found = []                                # an unknown tag too, its node read as plain data
     assert yaml_input.load("a: !!python/object:os.system x\nb: !foo [1]\n", found) == {"a": "x", "b": [1]}
     assert found == ["the tag '!!python/object:os.system' at line 1 is refused: configs take plain values only",

@@ -74,7 +74,7 @@ def _check(result: SpectrumResult, V, F):
     order = np.argsort(lam, kind="stable")
     result.values = lam[order]
     if result.vectors is not None:
-        result.vectors = float_array("", "vectors", result.vectors, (n, len(result.values)))[:, order]
+        result.vectors = np.ascontiguousarray(float_array("", "vectors", result.vectors, (n, len(result.values)))[:, order])
     for what in ("W", "M"):
         A = getattr(result, what)
         if A is not None:

@@ -206,9 +206,9 @@ def qem(V, F, *, target_faces, preserve_boundary=False, boundary_weight=100.0,
     Returns
     -------
     SimplificationResult
-        ``V`` the vertices the surviving faces use, at their final positions, in input order
-        (compact, in the timed call, as the libraries' outputs are), ``F`` (l, 3) the surviving
-        faces, orientation of the input.
+        ``V`` the vertices the surviving faces use, at their final positions, in the adapter's
+        Morton (spatial) order (compact, in the timed call, as the libraries' outputs are),
+        ``F`` (l, 3) the surviving faces, orientation of the input.
 
     Notes
     -----
