@@ -90,28 +90,35 @@ def _duplicate_keys(node, out: list, done: set, construct) -> None:
 _INT, _FLOAT = "tag:yaml.org,2002:int", "tag:yaml.org,2002:float"
 
 
-def _yaml11_numbers(node, out: list, done: set) -> None:
+def _nodes(node):
+    """Every node of the document once (an alias is the node it names), in document order: a
+    mapping's keys and values, a sequence's items, each before what it holds."""
+    done, stack = set(), [node]
+    while stack:
+        n = stack.pop()
+        if id(n) in done:
+            continue
+        done.add(id(n))
+        yield n
+        if isinstance(n, yaml.SequenceNode):
+            stack.extend(reversed(n.value))
+        elif isinstance(n, yaml.MappingNode):
+            for k, v in reversed(n.value):
+                stack.extend((v, k))
+
+
+def _yaml11_numbers(node, out: list) -> None:
     """Messages for plain numbers YAML 1.1 reads otherwise than they look: a leading zero is
     octal (``010`` is 8) and colons are base 60 (``1:30`` is 90)."""
-    if id(node) in done:
-        return
-    done.add(id(node))
-    if isinstance(node, yaml.ScalarNode):
-        if node.style is None and node.tag in (_INT, _FLOAT):
-            t = node.value.lstrip("+-").replace("_", "")
-            why = ("is octal" if node.tag == _INT and len(t) > 1 and t[0] == "0" and t.isdigit()
+    for n in _nodes(node):
+        if isinstance(n, yaml.ScalarNode) and n.style is None and n.tag in (_INT, _FLOAT):
+            t = n.value.lstrip("+-").replace("_", "")
+            why = ("is octal" if n.tag == _INT and len(t) > 1 and t[0] == "0" and t.isdigit()
                    else "is base 60" if ":" in t else None)
             if why:
-                value = yaml.constructor.SafeConstructor().construct_object(node)
-                out.append(f"{node.value!r} at line {node.start_mark.line + 1} {why} in YAML 1.1 (it reads as "
+                value = yaml.constructor.SafeConstructor().construct_object(n)
+                out.append(f"{n.value!r} at line {n.start_mark.line + 1} {why} in YAML 1.1 (it reads as "
                            f"{value}); write the number you mean, or quote it for text")
-    elif isinstance(node, yaml.SequenceNode):
-        for v in node.value:
-            _yaml11_numbers(v, out, done)
-    elif isinstance(node, yaml.MappingNode):
-        for k, v in node.value:
-            _yaml11_numbers(k, out, done)
-            _yaml11_numbers(v, out, done)
 
 
 _BUILT_WITH_MAPPING = ("tag:yaml.org,2002:merge", "tag:yaml.org,2002:value")   # `<<` and `=` keys: no constructor
@@ -119,26 +126,17 @@ _PLAIN = {yaml.ScalarNode: "tag:yaml.org,2002:str", yaml.SequenceNode: "tag:yaml
           yaml.MappingNode: "tag:yaml.org,2002:map"}
 
 
-def _unknown_tags(node, out: list, done: set) -> None:
+def _unknown_tags(node, out: list) -> None:
     """Messages for nodes whose tag no safe constructor reads (``!!python/object:os.system``,
     ``!foo``), each node retagged as the plain text, list or mapping it is, so the document can
     still be built and checked for its other problems (nothing of it is used: they are listed)."""
-    if id(node) in done:
-        return
-    done.add(id(node))
     known = _Loader.yaml_constructors
-    if (node.tag not in known and node.tag not in _BUILT_WITH_MAPPING
-            and not any(node.tag.startswith(p) for p in _Loader.yaml_multi_constructors)):
-        out.append(f"the tag {node.tag.replace('tag:yaml.org,2002:', '!!')!r} at line {node.start_mark.line + 1} is "
-                   "refused: configs take plain values only")
-        node.tag = _PLAIN[type(node)]
-    if isinstance(node, yaml.SequenceNode):
-        for v in node.value:
-            _unknown_tags(v, out, done)
-    elif isinstance(node, yaml.MappingNode):
-        for k, v in node.value:
-            _unknown_tags(k, out, done)
-            _unknown_tags(v, out, done)
+    for n in _nodes(node):
+        if (n.tag not in known and n.tag not in _BUILT_WITH_MAPPING
+                and not any(n.tag.startswith(p) for p in _Loader.yaml_multi_constructors)):
+            out.append(f"the tag {n.tag.replace('tag:yaml.org,2002:', '!!')!r} at line {n.start_mark.line + 1} is "
+                       "refused: configs take plain values only")
+            n.tag = _PLAIN[type(n)]
 
 
 def _key_value(k):
@@ -171,8 +169,8 @@ def load(text: str, numbers: list | None = None):
             raise yaml.YAMLError("; ".join(dup))
         odd: list = dup
         if numbers is not None:
-            _unknown_tags(node, odd, set())
-        _yaml11_numbers(node, odd, set())
+            _unknown_tags(node, odd)
+        _yaml11_numbers(node, odd)
         if odd and numbers is not None:
             numbers += odd
         elif odd:
