@@ -69,15 +69,23 @@ def validity(spec: dict, df: pd.DataFrame, measured: bool = False) -> pd.Series:
     return why
 
 
+def _installed_spec(name) -> dict:
+    """The declaration of the installed task kind ``name`` (`harness.tasks.base.Task.spec`), or
+    {} when no such kind is installed."""
+    from . import tasks
+    try:
+        return tasks.get(name or "").spec()
+    except KeyError:
+        return {}
+
+
 def _with_current_missing(spec: dict, rule: dict) -> dict:
     """``rule`` with ``missing`` as the task declares it now, where a run.json written before
     rules had the key recorded it without (the same column, operator, value and method)."""
     if not isinstance(rule, dict) or "missing" in rule:
         return rule
-    from . import tasks
-    try:
-        now = tasks.get((spec or {}).get("name") or "").spec()["invalid_when"]
-    except KeyError:
+    now = _installed_spec((spec or {}).get("name")).get("invalid_when")
+    if now is None:
         return rule
     same = ("op", "value", "method", "than")
     match = next((r for r in now if rule.get("column") in (r.get("column"), r.get("was"))
@@ -105,11 +113,7 @@ def _rule_hits(spec: dict, df: pd.DataFrame, why: pd.Series):
     why[~ok] = "status " + df.loc[~ok, "status"].astype(str)
     rules = (spec or {}).get("invalid_when")
     if rules is None:                        # a run folder written before tasks declared their rules
-        from . import tasks
-        try:
-            rules = tasks.get((spec or {}).get("name") or "").spec()["invalid_when"]
-        except KeyError:
-            rules = []
+        rules = _installed_spec((spec or {}).get("name")).get("invalid_when", [])
     for rule in rules:
         rule = _with_current_missing(spec, rule)
         col = rule.get("column")
@@ -570,11 +574,7 @@ def _shared_se(specs: dict | None, task: str, metric: str) -> bool:
     ``specs`` or else the installed task kind."""
     spec = (specs or {}).get(task)
     if spec is None:
-        from . import tasks
-        try:
-            spec = tasks.get(task).spec()
-        except KeyError:
-            spec = {}
+        spec = _installed_spec(task)
     m = next((m for m in spec.get("metrics", []) if m.get("name") == metric), {})
     return m.get("se_shared") is True
 
