@@ -250,10 +250,9 @@ def float_array(name: str, what: str, X, shape: tuple) -> np.ndarray:
     """
     if not isinstance(X, np.ndarray):
         raise MethodFailed(f"{name} returned {what} as {type(X).__name__}, expected a float64 numpy array")
-    A = X
-    if A.dtype.kind != "f":
-        raise MethodFailed(f"{name} returned {what} of dtype {A.dtype}, expected float64")
-    if A.ndim != len(shape) or any(s != -1 and s != a for s, a in zip(shape, A.shape)):
+    if X.dtype.kind != "f":
+        raise MethodFailed(f"{name} returned {what} of dtype {X.dtype}, expected float64")
+    if X.ndim != len(shape) or any(s != -1 and s != a for s, a in zip(shape, X.shape)):
         want = "(" + ", ".join("k" if s == -1 else str(s) for s in shape) + ")"
-        raise MethodFailed(f"{name} returned {what} of shape {A.shape}, expected {want}")
-    return np.ascontiguousarray(A, dtype=np.float64)
+        raise MethodFailed(f"{name} returned {what} of shape {X.shape}, expected {want}")
+    return np.ascontiguousarray(X, dtype=np.float64)
