@@ -148,6 +148,7 @@ class Method:
                 full[k] = v = v.item()
             if p.kind == "float" and isinstance(v, int) and not isinstance(v, bool):
                 full[k] = float(v)
+            full[k] = p.normalised(full[k])
         return full
 
     def bind(self, V, F, **params) -> tuple[Callable[[], object], Callable[[object], object]]:

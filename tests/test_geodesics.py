@@ -509,3 +509,47 @@ def test_an_exact_method_on_a_mesh_too_small_for_relative_errors_is_still_no_mea
     assert df["rel_error_mean"].isna().all() and df["reference_exact"].all()
     assert df.loc["libigl.exact_geodesic", "equals_reference"] and df.loc["pygeodesic.exact", "equals_reference"]
     assert not df.loc["scratch.heat", "equals_reference"]
+
+
+def test_sources_given_as_vertices(tmp_path):
+    """The issue asks for sources as a count (a seeded choice) or given in the config: given as
+    ``{vertices: [...]}`` (a mapping: a list of values is a sweep), they are the rows of ``D`` in
+    their order, score exactly as the same vertices chosen by count, and carry no error over the
+    choice of sources (no random sample); a bad form is a config problem with its key path, an
+    index the mesh does not have the case's error row."""
+    from harness.errors import ConfigError
+    s = datasets.load({"procedural": "sphere", "subdivisions": 3})
+    V, F = s.clean.V, s.clean.F
+    chosen = source_vertices(len(V), 3, 0)
+    D = methods.get("scratch.heat")(V, F, sources={"vertices": chosen[::-1].tolist()}).D
+    D_arr = methods.get("scratch.heat")(V, F, sources={"vertices": chosen[::-1]}).D     # from Python: an array
+    assert np.array_equal(D, methods.get("scratch.heat")(V, F, sources=3).D[::-1]) and np.array_equal(D, D_arr)
+
+    cfg = {"name": "g", "repeats": 1, "time_budget": 0, "meshes": [{"procedural": "sphere", "subdivisions": 3}],
+           "noise": [{"model": "none"}],
+           "tasks": {"geodesics": {"methods": ["scratch.heat"],
+                                   "params": {"sources": [3, {"vertices": chosen.tolist()}, {"vertices": [1, 10 ** 6]}]}}}}
+    run(cfg, out=tmp_path / "o", quiet=True)
+    df = pd.read_csv(tmp_path / "o" / "geodesics.csv")
+    by_count = df[df["params"].str.contains('"sources": 3')].iloc[0]
+    given = df[df["params"].str.contains(f'"vertices": {chosen.tolist()}', regex=False)].iloc[0]
+    far = df[df["params"].str.contains("1000000")].iloc[0]
+    assert given["status"] == by_count["status"] == "ok"
+    assert given["rel_error_mean"] == by_count["rel_error_mean"] and given["rel_error_max"] == by_count["rel_error_max"]
+    assert by_count["rel_error_mean_se"] > 0 and pd.isna(given["rel_error_mean_se"])
+    assert far["status"] == "error" and "source vertex 1000000 is not a vertex of this mesh" in far["error"]
+
+    bad = {**cfg, "tasks": {"geodesics": {"methods": ["scratch.heat",
+                                                      {"name": "libigl.heat", "params": {"sources": {"verts": [1]}}}],
+                                          "params": {"sources": [{"vertices": []}, {"vertices": [-1]},
+                                                                 {"vertices": [4, 4]}, {"vertices": [1.5]},
+                                                                 {"vertices": list(range(65))}]}}}}
+    with pytest.raises(ConfigError) as e:
+        run(bad, out=tmp_path / "bad", quiet=True)
+    msg = str(e.value)
+    assert not (tmp_path / "bad").exists()
+    for needle in ("tasks.geodesics.methods[1].params.sources: parameter 'sources': expected a count of sources",
+                   "vertices: expected a non-empty list of vertex indices (ints), got []",
+                   "a vertex index is >= 0, got -1", "[4] given more than once",
+                   "got [1.5]", "at most 64 sources, got 65"):
+        assert needle in msg, msg

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -18,7 +18,9 @@ class Param:
 
     ``kind`` is one of ``int``, ``float``, ``bool``, ``str``; ``low``/``high`` are inclusive
     bounds for numbers, ``choices`` the allowed values of a string. ``default=None`` with
-    ``optional=True`` means "not given".
+    ``optional=True`` means "not given". ``alt``: another accepted form of a value that is not
+    of ``kind`` (a mapping, never a list: a list of values is a sweep), as
+    ``alt(value) -> (normalised JSON-ready value, None)`` or ``(None, why not)``.
     """
 
     name: str
@@ -29,6 +31,7 @@ class Param:
     choices: tuple | None = None
     doc: str = ""
     optional: bool = False
+    alt: Callable[[Any], tuple] | None = None
 
     def __post_init__(self):
         if not self.kind:
@@ -54,6 +57,8 @@ class Param:
             ok = isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
         else:
             ok = isinstance(value, str)
+        if not ok and self.alt is not None:
+            return self.alt(value)[1]
         if not ok:
             return f"expected {k}, got {type(value).__name__} {value!r}"
         if k in ("int", "float"):
@@ -66,6 +71,13 @@ class Param:
         if self.choices is not None and value not in self.choices:
             return f"must be one of {list(self.choices)}, got {value!r}"
         return None
+
+    def normalised(self, value):
+        """``value`` in its ``alt`` form's normal form where it is one, else unchanged."""
+        if self.alt is None or value is None:
+            return value
+        v, why = self.alt(value)
+        return value if why else v
 
     def describe(self) -> str:
         s = f"{self.name}={self.default!r}"

@@ -2,7 +2,9 @@
 
 A method returns ``D`` (k, n): the distance (input length units) from each of the k source
 vertices to every vertex. Sources are the task's shared parameters: ``sources`` vertices chosen
-with ``source_seed`` (`source_vertices`; the same for every method on a mesh).
+with ``source_seed`` (`source_vertices`; the same for every method on a mesh), or the vertices
+given as ``sources: {vertices: [i, j, ...]}`` (`case_sources`; an index the mesh does not have
+fails the case; ``source_seed`` is then unused).
 
 Reference (``reference_exact``): on procedural meshes the analytic geodesic distance of the
 surface the mesh samples (sphere: great-circle ``r arccos(x . s / r^2)``; planes (the unit
@@ -15,9 +17,9 @@ Columns: ``rel_error_mean`` / ``rel_error_max`` = mean / max over sources and ve
 ``|D - D*| / D*`` over vertices farther than ``EXCLUDE = 3`` mean edge lengths from the source
 (near the source relative errors of every method blow up and say nothing);
 ``rel_error_mean_se`` its standard error over the choice of sources (`source_se`; blank for one
-source: on camelhead one source's mean ranged 0.008-0.016 over 8 sources, and which of two heat
-methods was better flipped with the source); ``abs_error_mean`` the
-mean ``|D - D*|`` over all vertices as a fraction of the diagonal; ``gradient_error`` the
+source, and for sources given, which are no random sample: on camelhead one source's mean ranged
+0.008-0.016 over 8 sources, and which of two heat methods was better flipped with the source);
+``abs_error_mean`` the mean ``|D - D*|`` over all vertices as a fraction of the diagonal; ``gradient_error`` the
 area-weighted mean over faces (outside the excluded disc) of ``| |grad D| - 1 |``, informative only:
 the exact distance has unit gradient almost everywhere, but its linear interpolant on the mesh
 does not (0.03 on bunny), so a lower value is not a better distance; ``symmetry_error`` (two or more sources) the max
@@ -49,8 +51,35 @@ EXCLUDE = 3.0
 SAME_AS_REFERENCE = 1e-6       # rel_error_max at or below which a result is the exact reference's own
                                # (no vertex far from the sources: the largest error over the diagonal)
 
+MAX_SOURCES = 64
+
+
+def _given_sources(value) -> tuple:
+    """``sources`` given as ``{vertices: [i, j, ...]}`` (a list, or from Python a 1-D integer
+    array): distinct vertex indices (at most ``MAX_SOURCES``), in the order given (the rows of
+    ``D``)."""
+    from ..yaml_input import short
+    if not (isinstance(value, dict) and list(value) == ["vertices"]):
+        return None, f"expected a count of sources (int) or {{vertices: [vertex indices]}}, got {short(value)}"
+    vs = value["vertices"]
+    if isinstance(vs, np.ndarray) and vs.ndim == 1 and vs.dtype.kind in "iu":
+        vs = vs.tolist()
+    if not (isinstance(vs, (list, tuple)) and vs
+            and all(isinstance(v, (int, np.integer)) and not isinstance(v, (bool, np.bool_)) for v in vs)):
+        return None, f"vertices: expected a non-empty list of vertex indices (ints), got {short(vs)}"
+    ids = [int(v) for v in vs]
+    if min(ids) < 0:
+        return None, f"vertices: a vertex index is >= 0, got {min(ids)}"
+    if len(set(ids)) != len(ids):
+        return None, f"vertices: {sorted({v for v in ids if ids.count(v) > 1})[:5]} given more than once"
+    if len(ids) > MAX_SOURCES:
+        return None, f"vertices: at most {MAX_SOURCES} sources, got {len(ids)}"
+    return {"vertices": ids}, None
+
+
 PARAMS = {
-    "sources": Param("sources", 1, "int", low=1, high=64, doc="number of source vertices (seeded choice)"),
+    "sources": Param("sources", 1, "int", low=1, high=MAX_SOURCES, alt=_given_sources,
+                     doc="number of source vertices (seeded choice), or {vertices: [indices]} given"),
     "source_seed": Param("source_seed", 0, "int", low=0, high=2**31 - 1, doc="seed of the source choice"),
 }
 
@@ -72,10 +101,24 @@ def source_vertices(n: int, count: int, seed: int) -> np.ndarray:
     return np.sort(rng.choice(int(n), size=min(int(count), int(n)), replace=False)).astype(np.int64)
 
 
+def case_sources(n: int, params: dict) -> np.ndarray:
+    """The case's source vertices on a mesh of ``n`` vertices: those given (``{vertices: [...]}``,
+    in their order; `MethodFailed` for an index that is not a vertex of the mesh), else
+    `source_vertices` of the count and ``source_seed``."""
+    given = params["sources"]
+    if isinstance(given, dict):
+        ids = np.asarray(given["vertices"], dtype=np.int64)
+        if ids.max() >= n:
+            raise MethodFailed(f"source vertex {int(ids.max())} is not a vertex of this mesh ({n} vertices)")
+        return ids
+    return source_vertices(n, given, params["source_seed"])
+
+
 def prepare(params: dict, V, F) -> dict:
     """The adapter receives ``sources`` as an int64 array of vertex indices."""
     p = dict(params)
-    p["sources"] = source_vertices(len(V), p.pop("sources"), p.pop("source_seed"))
+    p["sources"] = case_sources(len(V), p)
+    p.pop("source_seed")
     return p
 
 
@@ -196,7 +239,7 @@ def source_se(values: np.ndarray, keep: np.ndarray) -> float | None:
 def measure(inp, result, params) -> dict:
     from ..core.geometry import double_areas, mean_edge_length
     V, F = inp.V, inp.F
-    src = source_vertices(len(V), params["sources"], params["source_seed"])
+    src = case_sources(len(V), params)
     D = result.D
     if D.shape[0] != len(src):
         raise MethodFailed(f"returned {D.shape[0]} distance rows for {len(src)} source(s)")
@@ -221,7 +264,9 @@ def measure(inp, result, params) -> dict:
     rel = err[far] / ref[far]
     row = {"reference_exact": exact, "precompute_s": result.precompute_s, "per_source_s": result.per_source_s,
            "rel_error_mean": float(rel.mean()) if rel.size else None,
-           "rel_error_mean_se": source_se(np.where(far, err, 0.0) / np.where(far, ref, 1.0), far),
+           # sources given by the user are no random sample: no error over their choice
+           "rel_error_mean_se": (None if isinstance(params["sources"], dict) else
+                                 source_se(np.where(far, err, 0.0) / np.where(far, ref, 1.0), far)),
            "rel_error_max": float(rel.max()) if rel.size else None,
            "abs_error_mean": float(err[reach].mean() / inp.diag),
            # the reference's own code gives its own answer: no measurement of it (`invalid_when`)
