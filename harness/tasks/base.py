@@ -42,7 +42,7 @@ class Metric:
     case's input, not the result). ``rel``/``abs``: the compare tolerance, a change counts when
     it exceeds ``max(rel * |a|, abs)``. ``unit``: ``diag`` (fraction of the clean mesh's
     bounding-box diagonal), ``deg``, ``s``, ``MiB`` or empty. ``kind``: ``float``, ``int``,
-    ``bool`` or ``json`` (a JSON-encoded list). ``se``: for a sampled metric, the column of its
+    ``bool``, ``str`` (a name, for ``info``) or ``json`` (a JSON-encoded list). ``se``: for a sampled metric, the column of its
     standard error: two values also count as the same (compare, ties of the winners) while they
     differ by at most ``SE_Z`` = 3 times their combined standard error ``sqrt(se_a^2 + se_b^2)``,
     and the winners print the value ``± se``. ``se_shared``: the error is over a sample the case

@@ -12,6 +12,7 @@ square, convex): Euclidean; open cylinder: ``sqrt((r dtheta)^2 + dz^2)`` unrolle
 otherwise the exact polyhedral distance on the mesh (libigl ``exact_geodesic``, the
 Mitchell-Mount-Papadimitriou algorithm of Surazhsky et al. 2005, run on the mesh centred and
 scaled to a unit bounding-box diagonal, then scaled back: its tolerances are absolute), ``True``.
+``reference`` names it: ``analytic`` or ``libigl.exact_geodesic``.
 
 Columns: ``rel_error_mean`` / ``rel_error_max`` = mean / max over sources and vertices of
 ``|D - D*| / D*`` over vertices farther than ``EXCLUDE = 3`` mean edge lengths from the source
@@ -48,6 +49,7 @@ from ..errors import MethodFailed
 from .base import Invalid, Metric, Task, float_array
 
 EXCLUDE = 3.0
+EXACT_METHOD = "libigl.exact_geodesic"    # the reference where no analytic distance is known
 SAME_AS_REFERENCE = 1e-6       # rel_error_max at or below which a result is the exact reference's own
                                # (no vertex far from the sources: the largest error over the diagonal)
 
@@ -262,7 +264,7 @@ def measure(inp, result, params) -> dict:
     far = reach & (ref > EXCLUDE * h)
     err = np.abs(np.where(reach, D, 0.0) - ref)
     rel = err[far] / ref[far]
-    row = {"reference_exact": exact, "precompute_s": result.precompute_s, "per_source_s": result.per_source_s,
+    row = {"reference_exact": exact, "reference": EXACT_METHOD if exact else "analytic", "precompute_s": result.precompute_s, "per_source_s": result.per_source_s,
            "rel_error_mean": float(rel.mean()) if rel.size else None,
            # sources given by the user are no random sample: no error over their choice
            "rel_error_mean_se": (None if isinstance(params["sources"], dict) else
@@ -342,6 +344,9 @@ TASK = Task(
     metrics=(
         Metric("reference_exact", "info", "reference: exact polyhedral distance (true) or the analytic surface distance "
                "(false)", kind="bool"),
+        Metric("reference", "info", "what the errors are measured against: analytic (the distance on the surface a "
+               f"clean procedural mesh samples) or {EXACT_METHOD} (the exact polyhedral distance on the mesh given)",
+               kind="str"),
         Metric("rel_error_mean", "lower", "mean |D - D*| / D* (outside 3 mean edge lengths of the source)", rank=True,
                se="rel_error_mean_se", se_shared=True, **_E),
         Metric("rel_error_mean_se", "info", "standard error of rel_error_mean over the choice of sources (the sources a "
@@ -371,7 +376,7 @@ TASK = Task(
     # on the mesh as given, and the library's absolute tolerances make the two differ on a mesh
     # in small units (knight scaled by 1e-3: 2.3e-4), an error of the method's to rank.
     invalid_when=(Invalid("equals_reference", "==", "is the reference itself (0 by construction)", value=True,
-                          method="libigl.exact_geodesic", missing=True, was="reference_exact"),
+                          method=EXACT_METHOD, missing=True, was="reference_exact"),
                   # pygeodesic wraps the same C++ code (Kirsanov's geodesic library) as libigl's
                   Invalid("equals_reference", "==", "runs the reference's own code (Kirsanov's geodesic library, "
                           "which libigl's exact_geodesic wraps too): 0 by construction", value=True,
