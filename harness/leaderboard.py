@@ -401,7 +401,8 @@ def cell_ranks(spec: dict, df: pd.DataFrame, metric: str, better: str, axis_para
 
 WINNER_COLUMNS = ["task", "metric", "better", "mesh", "noise_model", "noise_level", "setting", "best", "value",
                   "tied_with_best", "runner_up", "runner_up_value", "tied_with_runner_up", "input_value", "variants",
-                  "invalid_excluded", "seeds", "value_upper", "value_se", "runner_up_upper", "runner_up_se"]
+                  "invalid_excluded", "seeds", "value_upper", "value_se", "runner_up_upper", "runner_up_se",
+                  "not_measured"]
 
 
 def winners(frames: dict, specs: dict) -> pd.DataFrame:
@@ -422,6 +423,8 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
         axis = spec.get("axis_params") or ()
         cells = _cells(spec, df, axis) if len(df) else None       # once per task, for every metric
         n_seeds = {} if cells is None else _cell_seeds(cells).to_dict()      # the noise draws each cell's rows have
+        gone = ({} if cells is None else cells[cells["_unmeasured"].astype(bool) & (cells["status"] == "ok")]
+                .groupby("_cell")["_variant"].agg(lambda v: ", ".join(sorted(set(map(str, v))))).to_dict())
         for m in ranking_metrics(spec):
             if m["name"] not in df or not len(df):
                 continue
@@ -454,7 +457,7 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
                                      "tied_with_runner_up": "", "input_value": iv,
                                      "variants": int(v.notna().sum()), "invalid_excluded": int(inval.loc[cell].sum()),
                                      "seeds": int(n_seeds.get(cell, 1)), "value_upper": None, "value_se": None,
-                                     "runner_up_upper": None, "runner_up_se": None})
+                                     "runner_up_upper": None, "runner_up_se": None, "not_measured": gone.get(cell, "")})
                     continue
                 order = ok.sort_values(ascending=m["better"] == "lower", kind="stable")
                 sign = -1.0 if m["better"] == "higher" else 1.0
@@ -480,7 +483,7 @@ def winners(frames: dict, specs: dict) -> pd.DataFrame:
                              "tied_with_runner_up": ", ".join(str(x) for x in second),
                              "runner_up_value": float(rest.iloc[0]) if len(rest) else None, "input_value": iv,
                              "variants": int(v.notna().sum()), "invalid_excluded": int(inval.loc[cell].sum()),
-                             "seeds": int(n_seeds.get(cell, 1))})
+                             "seeds": int(n_seeds.get(cell, 1)), "not_measured": gone.get(cell, "")})
     return pd.DataFrame(rows, columns=WINNER_COLUMNS)
 
 
@@ -601,9 +604,23 @@ def winners_markdown(w: pd.DataFrame, specs: dict | None = None) -> str:
                        f"\n{metric}: a sampled estimate ± its standard error (of the mean over seeds).")
         if inp:
             out.append(f"\ninput: {metric} of the case's input itself; a result worse than it made the input worse.")
+        out.append(_not_measured_note(g))
         out.append(_seeds_note(g))
         out.append("")
     return "\n".join(out)
+
+
+def _not_measured_note(g: pd.DataFrame) -> str:
+    """The variants left out of cells as no measurement there (`not_measured`), named, with in how
+    many of the cells: neither among the variants nor the invalid ones."""
+    if "not_measured" not in g:
+        return ""
+    names = [n for s in g["not_measured"] if isinstance(s, str) for n in s.split(", ") if n]   # blank: NaN from a CSV
+    if not names:
+        return ""
+    counts = pd.Series(names).value_counts(sort=False)
+    said = "; ".join(f"{k} ({v} of {len(g)} cells)" for k, v in counts.items())
+    return f"\nLeft out as no measurement of the method (the task's rules: e.g. the reference scored against itself): {said}."
 
 
 def _seeds_note(g: pd.DataFrame) -> str:
@@ -653,6 +670,9 @@ def winners_latex(w: pd.DataFrame, specs: dict | None = None) -> str:
             said += (r"; values $\pm$ their standard errors over the sample every method of the cell shares "
                      r"(ties ignore them; over seeds the mean of theirs)" if _shared_se(specs, task, metric) else
                      r"; sampled estimates $\pm$ their standard errors")
+        gone = _not_measured_note(g).strip()
+        if gone:
+            said += "; " + _tex(gone[0].lower() + gone[1:].rstrip("."))
         out += [r"\bottomrule", r"\end{tabular}}",
                 f"\\caption{{{_tex(task)}: best valid method per cell by \\texttt{{{_tex(metric)}}} ({g.iloc[0].better} is "
                 f"better); invalid results excluded{said}.}}", r"\end{table}", ""]

@@ -351,6 +351,12 @@ def test_the_reference_method_is_left_out_of_the_ranking_not_ranked_last():
     w = w[w.metric == "rel_error_mean"].set_index("mesh")
     assert w.loc["knight", "best"] == "scratch.heat" and w.loc["knight", "invalid_excluded"] == 0
     assert w.loc["knight", "variants"] == 1
+    # named, not only left out of `variants` (a review: the winners said nothing of them)
+    assert w.loc["knight", "not_measured"] == "libigl.exact_geodesic, pygeodesic.exact"
+    assert w.loc["sphere", "not_measured"] == ""
+    assert ("Left out as no measurement of the method (the task's rules: e.g. the reference scored against "
+            "itself): libigl.exact_geodesic (2 of 3 cells); pygeodesic.exact (2 of 3 cells).") in L.winners_markdown(w.reset_index())
+    assert "left out as no measurement" in L.winners_latex(w.reset_index())
     assert w.loc["sphere", "best"] in ("libigl.exact_geodesic", "pygeodesic.exact")
     assert L.validity(spec, df).iloc[3] == "is the reference itself (0 by construction)"   # the report hides it
     old = {**spec, "invalid_when": [{k: v for k, v in r.items() if k != "missing"} for r in spec["invalid_when"]]}
