@@ -129,9 +129,10 @@ def test_cylinder_and_saddle_truths_are_matched_by_fine_estimates():
 
 def test_the_task_runs_through_the_pipeline(tmp_path):
     """A config with only the curvature task: one row per (mesh, method), errors on procedural
-    meshes, Gauss-Bonnet on closed ones (with the harness's areas: the same angle defect scores the
-    same whether or not a method returns the areas it divided by; with those it was 0 by
-    construction), a report built from the declared metrics."""
+    meshes, Gauss-Bonnet on closed ones (the issue's total curvature, with the areas a method
+    divided by: to 1e-10 for an angle defect; and with the harness's areas, where the same angle
+    defect scores the same whether or not a method returns its areas), a report built from the
+    declared metrics."""
     run({"name": "curv", "repeats": 1, "meshes": [{"procedural": "sphere", "subdivisions": 3}, "knight",
                                                     {"procedural": "saddle", "n_points": 800}],
          "noise": [{"model": "none"}],
@@ -141,10 +142,14 @@ def test_the_task_runs_through_the_pipeline(tmp_path):
     sphere = df[df["mesh"].str.startswith("sphere")].set_index("method")
     assert sphere.loc["scratch.angle_defect", "K_rel_l2"] < 0.05 and np.isnan(sphere.loc["scratch.angle_defect", "H_rel_l2"])
     knight = df[df["mesh"] == "knight"].set_index("method")
-    for t in (sphere, knight):      # one angle defect: one Gauss-Bonnet error, returned areas or not
-        gb = t.loc[["scratch.angle_defect", "libigl.gaussian_curvature", "meshlab.discrete_curvature"], "gauss_bonnet_error"]
+    for t in (sphere, knight):      # one angle defect: one barycentric Gauss-Bonnet error, returned areas or not
+        gb = t.loc[["scratch.angle_defect", "libigl.gaussian_curvature", "meshlab.discrete_curvature"],
+                   "gauss_bonnet_error_barycentric"]
         ref = gb["scratch.angle_defect"]                 # MeshLab's computation: single-precision rounding
         assert ref > 0 and (np.abs(gb - ref) <= 1e-5 + 1e-3 * ref).all(), gb
+        # with their own areas (the issue's "Gauss-Bonnet holds to 1e-10 on every closed mesh")
+        assert (t.loc[["scratch.angle_defect", "libigl.gaussian_curvature"], "gauss_bonnet_error"] <= 1e-10).all()
+    assert knight.loc["scratch.angle_defect", "gauss_bonnet_error_barycentric"] > 1       # Voronoi vs barycentric
     assert np.isnan(knight.loc["scratch.cotan_mean", "H_rel_l2"])          # no analytic truth for a file
     saddle = df[df["mesh"].str.startswith("saddle")].set_index("method")
     assert saddle.loc["scratch.quadric_fit", "K_boundary_max"] >= 0 and np.isnan(saddle.loc["scratch.quadric_fit", "gauss_bonnet_error"])
