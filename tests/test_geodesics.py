@@ -526,11 +526,13 @@ def test_sources_given_as_vertices(tmp_path):
     D = methods.get("scratch.heat")(V, F, sources={"vertices": chosen[::-1].tolist()}).D
     D_arr = methods.get("scratch.heat")(V, F, sources={"vertices": chosen[::-1]}).D     # from Python: an array
     assert np.array_equal(D, methods.get("scratch.heat")(V, F, sources=3).D[::-1]) and np.array_equal(D, D_arr)
+    for bare in (chosen[::-1], chosen[::-1].tolist(), tuple(chosen[::-1].tolist())):    # the list itself, from Python
+        assert np.array_equal(D, methods.get("scratch.heat")(V, F, sources=bare).D)
 
     cfg = {"name": "g", "repeats": 1, "time_budget": 0, "meshes": [{"procedural": "sphere", "subdivisions": 3}],
            "noise": [{"model": "none"}],
            "tasks": {"geodesics": {"methods": ["scratch.heat"],
-                                   "params": {"sources": [3, {"vertices": chosen.tolist()}, {"vertices": [1, 10 ** 6]}]}}}}
+                                   "params": {"sources": [3, {"vertices": chosen.tolist()}, [1, 10 ** 6]]}}}}
     run(cfg, out=tmp_path / "o", quiet=True)
     df = pd.read_csv(tmp_path / "o" / "geodesics.csv")
     by_count = df[df["params"].str.contains('"sources": 3')].iloc[0]

@@ -58,9 +58,12 @@ MAX_SOURCES = 64
 
 def _given_sources(value) -> tuple:
     """``sources`` given as ``{vertices: [i, j, ...]}`` (a list, or from Python a 1-D integer
-    array): distinct vertex indices (at most ``MAX_SOURCES``), in the order given (the rows of
-    ``D``)."""
+    array), or as the list itself (from Python, or in a config as one value of a sweep,
+    ``[[i, j]]``: a list of values is a sweep): distinct vertex indices (at most ``MAX_SOURCES``),
+    in the order given (the rows of ``D``); normalised to ``{vertices: [...]}``."""
     from ..yaml_input import short
+    if isinstance(value, (list, tuple, np.ndarray)):       # from Python, or one value of a sweep: [[i, j]]
+        value = {"vertices": value}
     if not (isinstance(value, dict) and list(value) == ["vertices"]):
         return None, f"expected a count of sources (int) or {{vertices: [vertex indices]}}, got {short(value)}"
     vs = value["vertices"]
