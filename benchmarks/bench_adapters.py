@@ -207,6 +207,17 @@ def _ml_geodesic(ms, pm, V, F, p):
     return ms.current_mesh().vertex_scalar_array()
 
 
+def p_ml_heat_geodesic(V, F, p):
+    import pymeshlab
+    mark = np.zeros(len(V))
+    mark[p.source] = 1.0
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(vertex_matrix=V, face_matrix=F, v_scalar_array=mark))
+    ms.compute_selection_by_condition_per_vertex(condselect="q > 0.5")
+    ms.compute_scalar_by_heat_geodesic_distance_from_selection_per_vertex(m=1.0)
+    return ms.current_mesh().vertex_scalar_array()
+
+
 p_ml_discrete_curvature = _meshlab(_ml_discrete)
 p_ml_principal_curvature = _meshlab(_ml_principal)
 p_ml_geodesic = _meshlab(_ml_geodesic)
@@ -389,6 +400,7 @@ CASES = {
     "meshlab.discrete_curvature": (p_ml_discrete_curvature, c_KH, EXACT, None, ""),
     "meshlab.principal_curvature": (p_ml_principal_curvature, c_k12, EXACT, None, ""),
     "meshlab.geodesic": (p_ml_geodesic, c_geo, EXACT, None, ""),
+    "meshlab.heat_geodesic": (p_ml_heat_geodesic, c_geo, EXACT, None, ""),
     "libigl.cotan": (p_cotan, c_laplacian, EXACT, None, ""),
     "libigl.intrinsic_delaunay": (p_intrinsic_delaunay, c_laplacian, EXACT, None, ""),
     "libigl.gaussian_curvature": (p_gaussian_curvature, c_K, EXACT, None, ""),
