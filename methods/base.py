@@ -52,6 +52,11 @@ def check_arrays(V, F) -> tuple[np.ndarray, np.ndarray]:
 
 # Python-friendly spellings of parameter names that are keywords or clash in Python
 ALIASES = {"lam": "lambda"}
+# names a library's adapter once took for a concept that has one name across adapters: refused,
+# naming the one to give (a config written for the old name must not run another setting)
+RENAMED = {"agg": "aggressiveness", "preserve_border": "preserve_boundary", "lock_border": "preserve_boundary",
+           "sigma_r": "normal_sigma", "sigma_s": "spatial_multiple", "fit_iterations": "vertex_iterations",
+           "cotangentweight": "weights"}
 
 
 @dataclass(frozen=True)
@@ -105,6 +110,8 @@ class Method:
             if k not in self.params:
                 close = difflib.get_close_matches(str(k), list(self.params), n=3)
                 hint = f" (did you mean {', '.join(close)}?)" if close else ""
+                if RENAMED.get(k) in self.params:
+                    hint = f" (renamed: give {RENAMED[k]}, the name every adapter uses)"
                 known = ", ".join(self.params) or "none"
                 out.append(f"unknown parameter {k!r}{hint}; {self.name} takes: {known}")
                 continue

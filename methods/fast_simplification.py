@@ -15,20 +15,20 @@ from methods import Param, SimplificationResult, register
     task="simplification",
     library="fast-simplification",
     params={
-        "agg": Param("agg", 7.0, "float", low=0.0, high=20.0,
+        "aggressiveness": Param("aggressiveness", 7.0, "float", low=0.0, high=20.0,
                      doc="aggressiveness of FQMS's error threshold schedule "
                          "(0 = most accurate/slowest, 10 = fast/coarse; library default 7)"),
-        "preserve_border": Param("preserve_border", False,
-                                 doc="forbid collapses of edges touching an open boundary"),
+        "preserve_boundary": Param("preserve_boundary", False,
+                                   doc="forbid collapses of edges touching an open boundary"),
     },
     requires=("fast_simplification",),
 )
-def qem(V, F, *, target_faces, agg=7.0, preserve_border=False):
+def qem(V, F, *, target_faces, aggressiveness=7.0, preserve_boundary=False):
     """Quadric-error decimation with fast-simplification (FQMS).
 
     FQMS (Forstmann) uses Garland-Heckbert quadrics ``Q = sum_f n n^T`` (unweighted face
     planes) but, instead of a global priority queue, sweeps all edges repeatedly and collapses
-    every edge whose error is below a threshold ``1e-9 * (iteration + 3) ** agg``
+    every edge whose error is below a threshold ``1e-9 * (iteration + 3) ** aggressiveness``
     (per iteration), which is fast but not error-ordered.
 
     Parameters
@@ -37,10 +37,10 @@ def qem(V, F, *, target_faces, agg=7.0, preserve_border=False):
     F : (m, 3) int64 array
     target_faces : int
         Passed as ``target_count``.
-    agg : float
-        Aggressiveness (see above).
-    preserve_border : bool
-        Forbid collapses touching border vertices.
+    aggressiveness : float
+        The threshold schedule's exponent (see above; the library's ``agg``).
+    preserve_boundary : bool
+        Forbid collapses touching border vertices (the library's ``preserve_border``).
 
     Returns
     -------
@@ -50,5 +50,5 @@ def qem(V, F, *, target_faces, agg=7.0, preserve_border=False):
     import fast_simplification
 
     Vo, Fo = fast_simplification.simplify(V, F.astype(np.int32), target_count=int(target_faces),
-                                          agg=float(agg), preserve_border=bool(preserve_border))
+                                          agg=float(aggressiveness), preserve_border=bool(preserve_boundary))
     return SimplificationResult(V=Vo, F=Fo)

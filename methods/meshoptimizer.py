@@ -19,13 +19,14 @@ from methods import Param, SimplificationResult, register
           cite="A. Kapoulkine, meshoptimizer (simplifier.cpp)",
           params={"target_error": Param("target_error", 1.0, "float", low=0.0, high=1.0,
                                         doc="relative error limit (fraction of the mesh extent)"),
-                  "lock_border": Param("lock_border", False, "bool", doc="SIMPLIFY_LOCK_BORDER: keep border vertices")})
-def qem(V, F, *, target_faces, target_error=1.0, lock_border=False):
+                  "preserve_boundary": Param("preserve_boundary", False, "bool",
+                                             doc="keep border vertices (the library's SIMPLIFY_LOCK_BORDER)")})
+def qem(V, F, *, target_faces, target_error=1.0, preserve_boundary=False):
     """``meshoptimizer.simplify`` to ``target_faces`` (module docstring)."""
     import meshoptimizer as mo
     idx = np.ascontiguousarray(F, dtype=np.uint32).ravel()
     dest = np.zeros_like(idx)
-    opts = mo.SIMPLIFY_LOCK_BORDER if lock_border else 0
+    opts = mo.SIMPLIFY_LOCK_BORDER if preserve_boundary else 0
     count = mo.simplify(dest, idx, np.ascontiguousarray(V, dtype=np.float32), target_index_count=3 * int(target_faces),
                         target_error=float(target_error), options=opts)
     from harness.core.geometry import compact

@@ -312,7 +312,7 @@ def test_over_target_component_loss_and_inherited_nonmanifold_are_judged(tmp_pat
     run({"name": "s", "meshes": [{"file": str(tmp_path / "two.obj")}, "woody"], "noise": [{"model": "none"}],
          "time_budget": 0,
          "tasks": {"simplification": {"methods": ["scratch.qem", "fast_simplification.qem",
-                                                  {"name": "meshoptimizer.qem", "params": {"lock_border": True}}],
+                                                  {"name": "meshoptimizer.qem", "params": {"preserve_boundary": True}}],
                                       "params": {"target_ratio": [0.1, 0.02]}}}}, out=tmp_path / "r", quiet=True)
     import pandas as pd
     df = pd.read_csv(tmp_path / "r" / "simplification.csv")
@@ -467,3 +467,21 @@ def test_a_face_collapsed_onto_an_edge_is_counted_not_a_change_of_topology():
     assert topology(m.V[:3], np.array([[0, 0, 1], [1, 1, 2]]))["n_edges"] == 0
     r = evaluate(m.V[:3], np.array([[0, 0, 1], [1, 1, 2]]), m.V, m.F, task="simplification", target_faces=2)
     assert r["zero_area_faces"] == 2 and r["manifold_lost"] is False and r["topology_changed"], r
+
+
+def test_one_name_per_concept_across_the_simplifiers():
+    """The architecture issue: one vocabulary, each library's spelling mapped inside its adapter.
+    fast-simplification took ``agg`` / ``preserve_border`` and meshoptimizer ``lock_border`` where
+    the other simplifiers take ``aggressiveness`` / ``preserve_boundary``; the old names are
+    refused naming the new one (never run as another setting), and the new ones reach the library."""
+    V, F = mesh("woody")
+    for name in ("scratch.qem", "pyfqmr.qem", "fast_simplification.qem", "meshoptimizer.qem"):
+        assert "preserve_boundary" in methods.get(name).params, name
+    for name, old in (("fast_simplification.qem", "agg"), ("fast_simplification.qem", "preserve_border"),
+                      ("meshoptimizer.qem", "lock_border")):
+        with pytest.raises(ValueError, match="renamed: give (aggressiveness|preserve_boundary)"):
+            methods.get(name)(V, F, target_faces=200, **{old: 1})
+    for name in ("fast_simplification.qem", "meshoptimizer.qem"):     # the border kept: more faces left
+        free = methods.get(name)(V, F, target_faces=len(F) // 20)
+        kept = methods.get(name)(V, F, target_faces=len(F) // 20, preserve_boundary=True)
+        assert len(kept.F) > len(free.F), name

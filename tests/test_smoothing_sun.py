@@ -138,7 +138,7 @@ def test_meshlab_two_steps_is_vcgs_one_sided_pass(meshes, mesh):
     ts = methods.get("meshlab.two_steps")
     d = _diag(V)
     for it, thr, nn, fit in ((1, 60.0, 1, 1), (3, 60.0, 20, 20)):
-        got = ts(V, F, iterations=it, normal_threshold_deg=thr, normal_iterations=nn, fit_iterations=fit).V
+        got = ts(V, F, iterations=it, normal_threshold_deg=thr, normal_iterations=nn, vertex_iterations=fit).V
         assert np.abs(got - vcg_two_steps(V, F, it, thr, nn, fit)).max() <= 1e-9 * d
     back = ts(V, F[::-1].copy()).V
     assert np.abs(back - ts(V, F).V).max() >= 1e-5 * d

@@ -44,7 +44,7 @@ uniform sums count each neighbour twice and cotangent sums give ``cot a + cot b`
     2007 (`scratch.sun`): ``iterations`` times, unit face normals, then ``normal_iterations``
     Jacobi passes ``n_f <- normalize(sum_g w_fg n_g)``, ``w_fg = (c - T)^2`` where
     ``c = clamp(n_f . n_g, 1e-4, 1) >= T``, ``T = max(cos(normal_threshold_deg), 0)`` (no area
-    weights; 0 degrees moves nothing, 90 or more are all alike), then ``fit_iterations`` passes
+    weights; 0 degrees moves nothing, 90 or more are all alike), then ``vertex_iterations`` passes
     ``x_i += 1/|F_i| sum_f n_f (n_f . (c_f - x_i))`` (boundary not fixed). Unlike Sun et al.,
     VCG's normal pass walks each vertex's face list from the face itself, and the lists run
     in decreasing face index, so a face averages only with the vertex-adjacent faces of a
@@ -114,11 +114,12 @@ _ITER = Param("iterations", 10, "int", low=0, high=100000,
 
 @register("meshlab.laplacian", task="smoothing", library="pymeshlab", requires=("pymeshlab",),
           params={"iterations": _ITER,
-                  "cotangentweight": Param("cotangentweight", True,
-                                           doc="cotangent edge weights (else uniform)"),
+                  "weights": Param("weights", "cotan", choices=("cotan", "uniform"),
+                                   doc="edge weights (MeshLab's cotangentweight true / false)"),
                   "boundary": Param("boundary", True,
-                                    doc="smooth boundary vertices along the boundary")})
-def laplacian(V, F, *, iterations=10, cotangentweight=True, boundary=True):
+                                    doc="smooth boundary vertices along the boundary (our boundary: curve when "
+                                        "true; false is VCG's own, none of ours)")})
+def laplacian(V, F, *, iterations=10, weights="cotan", boundary=True):
     """MeshLab classic Laplacian smoothing (``apply_coord_laplacian_smoothing``).
 
     ``x' = (x + sum_j w_ij x_j) / (1 + sum_j w_ij)`` (module docstring); the vertex itself is
@@ -127,7 +128,7 @@ def laplacian(V, F, *, iterations=10, cotangentweight=True, boundary=True):
     ms = _meshset(V, F)
     if iterations > 0:
         ms.apply_coord_laplacian_smoothing(stepsmoothnum=int(iterations),
-                                           cotangentweight=bool(cotangentweight),
+                                           cotangentweight=weights == "cotan",
                                            boundary=bool(boundary), selected=False)
     return SmoothingResult(V=_result(V, ms))
 
@@ -175,10 +176,10 @@ def hc(V, F, *, iterations=1):
                                                 low=0.0, high=180.0, doc="normalthr"),
                   "normal_iterations": Param("normal_iterations", 20, "int", low=0,
                                              high=10000, doc="stepnormalnum"),
-                  "fit_iterations": Param("fit_iterations", 20, "int", low=0, high=10000,
+                  "vertex_iterations": Param("vertex_iterations", 20, "int", low=0, high=10000,
                                           doc="stepfitnum")})
 def two_steps(V, F, *, iterations=3, normal_threshold_deg=60.0, normal_iterations=20,
-              fit_iterations=20):
+              vertex_iterations=20):
     """MeshLab's two-step smoothing: Sun et al. 2007's normal filtering and vertex fitting, with
     VCG's one-sided face neighbourhood (module docstring), so its result depends on the order
     of the faces; `scratch.sun` is the published method.
@@ -192,7 +193,7 @@ def two_steps(V, F, *, iterations=3, normal_threshold_deg=60.0, normal_iteration
         ms.apply_coord_two_steps_smoothing(stepsmoothnum=int(iterations),
                                            normalthr=float(normal_threshold_deg),
                                            stepnormalnum=int(normal_iterations),
-                                           stepfitnum=int(fit_iterations), selected=False)
+                                           stepfitnum=int(vertex_iterations), selected=False)
     return SmoothingResult(V=_result(V, ms))
 
 
