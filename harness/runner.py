@@ -24,11 +24,11 @@ Timing protocol (the method call alone; metrics are not timed):
    the previous sample's result is freed, and freed heap memory is returned to the OS (glibc's
    ``malloc_trim``; other allocators' pools, e.g. MKL's, keep theirs), so every sample pays
    for the heap memory it touches (otherwise only the first sample, trimmed for the memory
-   measurement, would, 1.0-1.24x slower than the rest at 86k faces);
+   measurement, would, and run slower than the rest);
    each sample's process CPU time (all threads of the process) is kept too (``cpu_times``,
    median ``time_cpu_s``), ``others_cpu`` is the number of cores other processes kept busy
-   on average from the cold call to the last sample (``/proc/stat``, steal included, minus this
-   process; blank off Linux and for windows under 0.2 s), and ``threads_busy`` the number of
+   on average over the sampled calls (the cold call left out; ``/proc/stat``, steal included,
+   minus this process; blank off Linux and for windows under 0.2 s), and ``threads_busy`` the number of
    this process's threads that ran for 5% of that window and 2 clock ticks or more (blank
    under 0.05 s; `threads_busy`; a BLAS pool spinning while it waits counts): ``shootout compare`` does not call a wall-time change a
    regression when the load explains it (`harness.compare`);

@@ -53,9 +53,10 @@ import scipy.sparse.linalg as sla
 SOLVERS = ("cholmod", "pypardiso", "scipy", "qdldl", "cholespy")
 # Fastest first, from benchmarks/bench_implicit.py (2 cores). Small systems (up to
 # AUTO_SMALL_MAX_N vertices): the single-threaded LDL^T of QDLDL has no start-up cost (PARDISO's
-# first call loads MKL, ~3 s, in every fresh process). Above, QDLDL's AMD fill decides and
-# depends on the mesh (43k vertices: 95 ms on armadillo, 300 ms on an icosphere, where PARDISO
-# takes 109-133 ms), so PARDISO, whose time varies less, is chosen.
+# first call loads MKL in every fresh process). Above, QDLDL's AMD fill decides and depends on
+# the mesh (an icosphere fills far more than armadillo at the same size: benchmarks/bench_implicit.py
+# times every backend),
+# so PARDISO, whose time varies less, is chosen.
 # Large systems: supernodal, multithreaded factorizations win; a scikit-sparse built on the
 # OS SuiteSparse (Debian 5.12, its BLAS) measured 4x slower than PARDISO at 1.3M faces.
 AUTO_SMALL = ("qdldl", "scipy")

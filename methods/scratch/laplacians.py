@@ -130,7 +130,7 @@ def cotan(V, F, *, mass="voronoi"):
     `operators.mass_matrix`); from there on, one compiled assembly that writes the CSR rows and
     the Voronoi areas directly (`operators.cotan_laplacian`; benchmarks/bench_laplacian.py
     compares it with libigl). Both agree to ~1e-15 relative. The threshold keeps the one-off
-    numba compilation (~3 s on a cold cache) away from small meshes.
+    numba compilation away from small meshes.
     """
     m = F.shape[0]
     if m >= FAST_MIN_FACES and 6 * m + V.shape[0] < 2**31 - 1:

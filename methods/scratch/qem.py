@@ -212,9 +212,8 @@ def qem(V, F, *, target_faces, preserve_boundary=False, boundary_weight=100.0,
 
     Notes
     -----
-    The collapse loop is compiled by numba on the first call in a fresh environment (about
-    9 s of CPU, 10-20 s wall on the shared 2-core test machine) and cached on disk next to the
-    module; later processes load it in about 0.3-0.5 s on their first call.
+    The collapse loop is compiled by numba on the first call in a fresh environment and cached
+    on disk next to the module; later processes load it from there on their first call.
 
     References
     ----------

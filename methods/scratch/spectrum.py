@@ -75,7 +75,7 @@ SOLVE_HEAVY = ("cholespy", "qdldl", "scipy")
 def many_solves_solver() -> str:
     """The backend ``auto`` means for ARPACK's OPinv: hundreds of single-vector solves per
     factorization make the per-solve cost decide, and there CHOLMOD (cholespy) and QDLDL beat
-    PARDISO's multi-threaded solve (on the 86k-face armadillo: 1.5 and 1.8 ms against 6 ms)."""
+    PARDISO's multi-threaded solve (the figures: benchmarks/HISTORY.md)."""
     from harness.core.solvers import installed_solvers
     have = installed_solvers()
     return next((s for s in SOLVE_HEAVY if s in have), "auto")
