@@ -921,16 +921,43 @@ def no_ranking_text(frames: dict, specs: dict) -> str:
     return f"No ranking: {'; '.join(why) or 'no results'}."
 
 
+def settings_note(tune) -> str:
+    """What the ranked variants are: the settings the config gave (defaults where it gave none),
+    not each method at its best, and which ones ``tune:`` chose (``tune``: run.json's ``tune``)."""
+    chosen = []
+    if isinstance(tune, dict) and isinstance(tune.get("methods"), dict):
+        for m, ch in tune["methods"].items():
+            picked = ch.get("chosen") if isinstance(ch, dict) else None
+            if isinstance(picked, dict) and picked:
+                chosen.append(f"{m} {label_text('', picked, sorted(picked)).strip()}")
+    said = ("Each method is ranked at the parameters the config gave it, its defaults where it gave none: a "
+            "ranking of these settings, not of each method at its best.")
+    if chosen:
+        said += (" Tuned on the training meshes (`tune:`), each a variant of its own beside the configured one: "
+                 + "; ".join(chosen) + ".")
+    else:
+        said += " Nothing was tuned (`tune:` chooses parameters on training meshes)."
+    return said
+
+
 def write(run_dir, frames: dict, specs: dict) -> pd.DataFrame:
-    """``leaderboard.csv|md|tex`` and ``winners.csv|md|tex`` in the run folder."""
+    """``leaderboard.csv|md|tex`` and ``winners.csv|md|tex`` in the run folder; the ``.md`` files
+    open with `settings_note`."""
     from pathlib import Path
     lb = leaderboard(frames, specs)
     d = Path(run_dir)
     from .results import atomic_write
     none = no_ranking_text(frames, specs) + " See report.html.\n"
     w = winners(frames, specs)
-    for name, text in (("leaderboard.csv", lb.to_csv(index=False)), ("leaderboard.md", to_markdown(lb) or none),
+    try:
+        import json
+        tune = json.loads((d / "run.json").read_text(encoding="utf-8")).get("tune")
+    except (OSError, ValueError, AttributeError):
+        tune = None
+    note = settings_note(tune) + "\n\n"
+    lb_md, w_md = to_markdown(lb), winners_markdown(w, specs)
+    for name, text in (("leaderboard.csv", lb.to_csv(index=False)), ("leaderboard.md", note + lb_md if lb_md else none),
                        ("leaderboard.tex", to_latex(lb)), ("winners.csv", w.to_csv(index=False)),
-                       ("winners.md", winners_markdown(w, specs) or none), ("winners.tex", winners_latex(w, specs))):
+                       ("winners.md", note + w_md if w_md else none), ("winners.tex", winners_latex(w, specs))):
         atomic_write(d / name, lambda fh, text=text: fh.write(text))      # never a half-written table
     return lb

@@ -381,3 +381,18 @@ def test_a_tuning_whose_training_cases_all_failed_says_so(tmp_path, capsys):
     assert "warning: tuning: scratch.implicit: no training setting has a valid score" in err, err
     rec = json.loads((tmp_path / "o" / "run.json").read_text())["tune"]["methods"]["scratch.implicit"]
     assert rec["chosen"] == {} and rec["train_score"] is None
+
+
+def test_the_rankings_say_what_settings_they_rank(tmp_path):
+    """The rankings issue: ranking methods on defaults stays possible but is labelled as such;
+    the leaderboard and winners (.md, the report) said nothing of it, tuned or not."""
+    harness.run({k: v for k, v in CFG.items() if k != "tune"} | {"meshes": ["bunny"]}, out=tmp_path / "plain", quiet=True)
+    for f in ("leaderboard.md", "winners.md", "report.html"):
+        text = (tmp_path / "plain" / f).read_text()
+        assert "ranked at the parameters the config gave it, its defaults where it gave none" in text, f
+        assert "Nothing was tuned" in text, f
+    from harness.leaderboard import settings_note
+    tuned = settings_note({"methods": {"scratch.implicit": {"chosen": {"step": 0.1, "iterations": 2}},
+                                       "scratch.taubin": {"chosen": {}}}})
+    assert "Tuned on the training meshes (`tune:`), each a variant of its own beside the configured one: " \
+           "scratch.implicit iterations=2 step=0.1." in tuned, tuned

@@ -21,7 +21,7 @@ from pathlib import Path
 
 from .. import tasks as _tasks
 from ..leaderboard import (LEFT_OUT, friedman_p_text, label_text, leaderboard, no_ranking_text, not_measured,
-                           setting_text, validity)
+                           setting_text, settings_note, validity)
 from ..results import REPORT_FILES, RunFolder, recorded_specs, with_not_run
 from ..schema import scalar as _clean
 from ..schema import text
@@ -414,6 +414,7 @@ def render(run_dir) -> str:
             "critical difference (Demšar 2006): methods joined by a bar do not differ significantly (α = 0.05). "
             "Invalid results (diverged, worse than the noisy input, over the face target, made non-manifold or topology-changing) rank last in "
             "their cell; cells with a missing result are left out; values closer than the metric's compare tolerance tie. "
+            f"{'' if meta.get('kind') == 'eval' else _esc(settings_note(meta.get('tune')))} "
             f"{_leaderboard_files_text(run_dir)}</p>"
             "<div id='leaderboard-body'></div></section>",
             *[_task_section(t, specs[t], frames) for t in order],
