@@ -181,6 +181,7 @@ def check_report_in_browser(report: Path, screenshot: Path | None = None, timeou
                     matrixRows: document.querySelectorAll('table.propmatrix tr').length,
                     cdDiagrams: document.querySelectorAll('#leaderboard svg.cd').length,
                     svgLinks: document.querySelectorAll('.panel a.svgdl').length,
+                    cdLinks: document.querySelectorAll('#leaderboard .cdbox a.svgdl').length,
                     panels: document.querySelectorAll('.panel').length,
                     cdLabels: Array.from(document.querySelectorAll('#leaderboard svg.cd text')).map(function (t) { return t.textContent; }),
                     cdCliques: document.querySelectorAll('#leaderboard svg.cd line.clique').length,
@@ -274,6 +275,7 @@ def test_report_opens_offline_without_errors(tiny_report, tmp_path):
     assert s["matrixRows"] == 3          # header + scratch.cotan + scratch.uniform
     # the critical-difference diagram of every smoothing ranking metric (2 variants of scratch.explicit)
     assert s["svgLinks"] == s["panels"] > 0                 # every plot downloads as SVG
+    assert s["cdLinks"] == s["cdDiagrams"]                  # the critical-difference diagrams too
     assert s["cdDiagrams"] >= 4 and any("scratch.explicit iterations=2" in t for t in s["cdLabels"]), s["cdLabels"]
     assert s["tables"] == [12, 12, 12]   # 2 meshes x 3 noise settings x 2 methods/params
     # 3D views: best and worst per task, each with 3 canvases that really got pixels

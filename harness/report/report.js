@@ -1122,7 +1122,11 @@
       var card = el('div', {'class': 'lb'});
       card.appendChild(el('h4', {text: g.task + ': ' + g.metric + ' (' + g.better + ' is better), ' + g.cells + (g.cells === 1 ? ' cell' : ' cells') + ', Friedman ' +
         (g.p_text || 'p = —')}));
-      if (g.methods.length >= 2) card.appendChild(cdDiagram(g));
+      if (g.methods.length >= 2) {
+        var cd = cdDiagram(g);
+        cd.setAttribute('data-name', ('cd ' + g.task + ' ' + g.metric).replace(/[^A-Za-z0-9._-]+/g, '_'));
+        card.appendChild(el('div', {'class': 'cdbox'}, [cd, svgDownload(cd)]));   // every plot downloads as SVG
+      }
       var t = el('table', {'class': 'best'});
       t.innerHTML = '<tr><th>method</th><th>mean rank</th><th>missing cells</th><th>invalid cells</th></tr>' +
         g.methods.map(function (m) { return '<tr><td>' + esc(m.method) + '</td><td class="num">' + m.mean_rank.toFixed(2) +
