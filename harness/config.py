@@ -701,8 +701,10 @@ def _check_tasks(tasks, P: list, skip_unknown: bool = False, noise: dict | None 
             if meth.task != task:
                 P.append(f"{mat}: {mname} is a {meth.task} method, not {task}")
                 continue
+            own, both = meth.canonical(own)              # a library's own spelling under the shared name
             params = {**shared, **own}
             n_before = len(P)
+            P.extend(f"{mat}.params: {b}" for b in both)
             for k, v in params.items():
                 src = f"{mat}.params.{k}" if k in own else f"{at}.params.{k}"
                 values = v if isinstance(v, list) else [v]

@@ -51,12 +51,15 @@ def check_arrays(V, F) -> tuple[np.ndarray, np.ndarray]:
 
 
 # Python-friendly spellings of parameter names that are keywords or clash in Python
-ALIASES = {"lam": "lambda"}
-# names a library's adapter once took for a concept that has one name across adapters: refused,
-# naming the one to give (a config written for the old name must not run another setting)
-RENAMED = {"agg": "aggressiveness", "preserve_border": "preserve_boundary", "lock_border": "preserve_boundary",
-           "sigma_r": "normal_sigma", "sigma_s": "spatial_multiple", "fit_iterations": "vertex_iterations",
-           "cotangentweight": "weights"}
+# other names of a declared parameter, accepted from Python and in configs and recorded under the
+# declared one: a Python keyword (lambda), and a library's own spelling of a concept that has one
+# name across adapters (fast-simplification's agg and preserve_border, meshoptimizer's lock_border,
+# MeshLab's fit_iterations for Sun et al.'s vertex iterations)
+ALIASES = {"lam": "lambda", "agg": "aggressiveness", "preserve_border": "preserve_boundary",
+           "lock_border": "preserve_boundary", "fit_iterations": "vertex_iterations"}
+# names an adapter once took with another meaning: refused, naming the one to give (a config
+# written for the old name must not run another setting)
+RENAMED = {"sigma_r": "normal_sigma", "sigma_s": "spatial_multiple"}
 
 
 @dataclass(frozen=True)
@@ -111,7 +114,7 @@ class Method:
                 close = difflib.get_close_matches(str(k), list(self.params), n=3)
                 hint = f" (did you mean {', '.join(close)}?)" if close else ""
                 if RENAMED.get(k) in self.params:
-                    hint = f" (renamed: give {RENAMED[k]}, the name every adapter uses)"
+                    hint = f" (renamed, with another meaning than before: give {RENAMED[k]})"
                 known = ", ".join(self.params) or "none"
                 out.append(f"unknown parameter {k!r}{hint}; {self.name} takes: {known}")
                 continue
@@ -130,11 +133,17 @@ class Method:
         except Exception as exc:  # noqa: BLE001 - a plugin's check that fails refuses the setting, naming why
             return f"its setting_check failed on this setting ({type(exc).__name__}: {exc})"
 
+    def canonical(self, params: dict) -> tuple[dict, list[str]]:
+        """``params`` with each alias (`ALIASES`) of a declared parameter under the declared name,
+        and the problems of an alias given beside the name it stands for."""
+        alias = lambda k: ALIASES.get(k) in self.params and k not in self.params   # noqa: E731
+        both = [f"{k} and {ALIASES[k]}: the same parameter given twice" for k in params
+                if alias(k) and ALIASES[k] in params]
+        return {ALIASES[k] if alias(k) else k: v for k, v in params.items()}, both
+
     def resolve_params(self, params: dict) -> dict:
         """Defaults filled in and values checked; raises ValueError listing every problem."""
-        both = [f"{a} and {n}: the same parameter given twice" for a, n in ALIASES.items()
-                if a in params and n in params and n in self.params]
-        params = {ALIASES.get(k, k) if ALIASES.get(k) in self.params else k: v for k, v in params.items()}
+        params, both = self.canonical(params)
         problems = both + self.param_problems(params)
         if not problems:
             why = self.setting_problem(params)

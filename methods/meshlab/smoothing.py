@@ -114,12 +114,12 @@ _ITER = Param("iterations", 10, "int", low=0, high=100000,
 
 @register("meshlab.laplacian", task="smoothing", library="pymeshlab", requires=("pymeshlab",),
           params={"iterations": _ITER,
-                  "weights": Param("weights", "cotan", choices=("cotan", "uniform"),
-                                   doc="edge weights (MeshLab's cotangentweight true / false)"),
+                  "cotangentweight": Param("cotangentweight", True,
+                                           doc="cotangent edge weights (else uniform)"),
                   "boundary": Param("boundary", True,
                                     doc="smooth boundary vertices along the boundary (our boundary: curve when "
                                         "true; false is VCG's own, none of ours)")})
-def laplacian(V, F, *, iterations=10, weights="cotan", boundary=True):
+def laplacian(V, F, *, iterations=10, cotangentweight=True, boundary=True):
     """MeshLab classic Laplacian smoothing (``apply_coord_laplacian_smoothing``).
 
     ``x' = (x + sum_j w_ij x_j) / (1 + sum_j w_ij)`` (module docstring); the vertex itself is
@@ -128,7 +128,7 @@ def laplacian(V, F, *, iterations=10, weights="cotan", boundary=True):
     ms = _meshset(V, F)
     if iterations > 0:
         ms.apply_coord_laplacian_smoothing(stepsmoothnum=int(iterations),
-                                           cotangentweight=weights == "cotan",
+                                           cotangentweight=bool(cotangentweight),
                                            boundary=bool(boundary), selected=False)
     return SmoothingResult(V=_result(V, ms))
 
