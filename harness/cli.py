@@ -66,8 +66,9 @@ def _parser() -> argparse.ArgumentParser:
     ev.add_argument("--out", required=True, help="run folder to write")
     ev.add_argument("--task", choices=["smoothing", "simplification"],
                     help="default: smoothing when a result has the clean mesh's vertex and face counts, else simplification")
-    ev.add_argument("--label", action="extend", nargs="+", metavar="NAME",
-                    help="method label of each result, in order (--label a b, or --label a --label b; default: file stem)")
+    ev.add_argument("--label", action="append", metavar="NAME",
+                    help="method label of each result, in order, one per --label (--label a --label b: one name "
+                         "each, so a result file after it is never read as a label; default: file stem)")
     ev.add_argument("--hausdorff-samples", type=_number(int), default=20000, help="area samples per side (as in a config)")
     ev.add_argument("--hausdorff-eps", type=_number(float), default=1e-3, metavar="EPS",
                     help="relative gap the certified Hausdorff distance aims for (as in a config; default 1e-3)")
