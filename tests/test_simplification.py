@@ -504,3 +504,24 @@ def test_one_name_per_concept_across_the_simplifiers(tmp_path):
     cfg["tasks"]["simplification"]["methods"][0]["params"]["aggressiveness"] = 5.0
     with pytest.raises(ConfigError, match="agg and aggressiveness: the same parameter given twice"):
         run(cfg, out=tmp_path / "bad", quiet=True)
+
+
+def test_dist_mean_of_the_contract_is_the_result_vertices_distance(tmp_path):
+    """The contract lists dist_mean among simplification's columns (it became surface_dist_mean
+    and went missing): the mean over the result's vertices of their exact distance to the input
+    surface, over the diagonal; 0 for meshoptimizer, which keeps input positions, so it ranks nothing."""
+    from harness import run
+    from harness.metrics.surface_distance import point_surface_distance
+    from harness.tasks import get
+    run({"name": "d", "time_budget": 0, "hausdorff_samples": 500, "meshes": ["knight"], "noise": [{"model": "none"}],
+         "tasks": {"simplification": {"methods": ["scratch.qem", "meshoptimizer.qem"], "params": {"target_ratio": 0.3}}}},
+        out=tmp_path, quiet=True)
+    import pandas as pd
+    df = pd.read_csv(tmp_path / "simplification.csv").set_index("method")
+    V, F = mesh("knight")
+    r = methods.get("scratch.qem")(V, F, target_faces=int(df.loc["scratch.qem", "target_faces"]))
+    diag = np.linalg.norm(V.max(0) - V.min(0))
+    want = point_surface_distance(r.V, V, F).mean() / diag
+    assert df.loc["scratch.qem", "dist_mean"] == pytest.approx(want, rel=1e-9) and want > 0
+    assert df.loc["meshoptimizer.qem", "dist_mean"] <= 1e-12
+    assert get("simplification").metric("dist_mean").better == "info"
