@@ -39,6 +39,43 @@ _Loader.add_implicit_resolver(
     list("-+0123456789."))
 
 
+def _too_big(text: str) -> None:
+    """`yaml.YAMLError` when the document holds, aliases expanded, more than ``MAX_NODES`` values,
+    counted on libyaml's event stream (C speed) before any Python node is built: a long plain
+    list is refused in seconds, with a message that says whether aliases made it so."""
+    loader = getattr(yaml, "CSafeLoader", None)
+    if loader is None:
+        return                      # no libyaml: the node walk (`_expanded_size`) bounds it
+    size: dict = {}                 # anchor -> its expanded size
+    stack = [[0, None]]             # open collections: [values so far, anchor]
+    total, aliases = 0, 0
+    try:
+        for ev in yaml.parse(text, Loader=loader):
+            if isinstance(ev, (yaml.SequenceStartEvent, yaml.MappingStartEvent)):
+                stack.append([1, ev.anchor])
+                continue
+            if isinstance(ev, (yaml.SequenceEndEvent, yaml.MappingEndEvent)):
+                n, anchor = stack.pop()
+            elif isinstance(ev, yaml.ScalarEvent):
+                n, anchor = 1, ev.anchor
+            elif isinstance(ev, yaml.AliasEvent):
+                aliases += 1
+                n, anchor = size.get(ev.anchor, 1), None
+            else:
+                continue
+            if anchor is not None:
+                size[anchor] = n
+            stack[-1][0] += n
+            total = stack[0][0] + sum(c[0] for c in stack[1:])
+            if total > MAX_NODES:
+                why = (f"with its {aliases} alias(es) expanded" if aliases else "a config holds at most that many")
+                raise yaml.YAMLError(f"the document holds more than {MAX_NODES:,} values ({why}): refused")
+    except yaml.YAMLError as exc:
+        if "refused" in str(exc):
+            raise
+        return                      # a syntax error: the Python loader reports it with its line
+
+
 def _expanded_size(node, memo: dict, stack: set) -> int:
     key = id(node)
     if key in memo:
@@ -156,6 +193,7 @@ def load(text: str, numbers: list | None = None):
     document is read as YAML 1.1 reads it (the last of duplicate keys wins, an unknown tag's node
     is plain text, list or mapping; the caller lists them with its own problems and uses
     nothing)."""
+    _too_big(text)
     loader = _Loader(text)
     try:
         node = loader.get_single_node()
