@@ -59,7 +59,7 @@ class _Lines:
     """Progress for a non-terminal stderr (CI logs, ``| tee``): one line every ``every`` seconds."""
 
     def __init__(self, total: int, initial: int, every: float = 5.0):
-        self.total, self.n, self.every = total, initial, every
+        self.total, self.n, self.every, self.initial = total, initial, every, initial
         self.t0 = self.last = time.perf_counter()
         self.what = ""
         if initial:
@@ -73,11 +73,19 @@ class _Lines:
         now = time.perf_counter()
         if now - self.last >= self.every or self.n == self.total:
             self.last = now
-            print(f"shootout: {self.n}/{self.total} cases, {now - self.t0:.0f} s"
+            done, left = self.n - self.initial, self.total - self.n
+            eta = (f", about {_duration((now - self.t0) / done * left)} left at this session's pace"
+                   if done > 0 and left > 0 else "")
+            print(f"shootout: {self.n}/{self.total} cases, {now - self.t0:.0f} s{eta}"
                   + (f" (last: {self.what})" if self.what else ""), file=sys.stderr, flush=True)
 
     def close(self):
         pass
+
+
+def _duration(s: float) -> str:
+    """Seconds as a rounded duration: ``45 s``, ``12 min``, ``3.4 h``."""
+    return f"{s:.0f} s" if s < 90 else f"{s / 60:.0f} min" if s < 5400 else f"{s / 3600:.1f} h"
 
 
 def _progress(total: int, initial: int):
@@ -658,8 +666,11 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
             print(f"shootout: resuming {out_dir}: {len(done)} finished case(s) kept, {n_todo} to run"
                   + (" (and the tuned cases the choice makes)" if cfg.tune is not None else ""),
                   file=sys.stderr, flush=True)
+        budget = cfg.cases[0].time_budget if cfg.cases else 0.25
+        floor = n_todo * budget / max(int(meta["workers"] or 1), 1)     # every case samples its budget at least
         print(f"shootout: {meta['n_cases']} case(s), {n_todo} to run on {meta['workers']} worker(s)"
-              + (f" (a large run: {n_todo:,} cases; --timeout bounds each one)" if n_todo > 1000 else ""),
+              + (f" (a large run: {n_todo:,} cases, at least {_duration(floor)} of timing alone, "
+                 f"time_budget {budget:g} s each; --timeout bounds each one)" if n_todo > 1000 else ""),
               file=sys.stderr, flush=True)
         bar = _progress(len(cfg.cases), len(done & own_ids))
     counts: dict[str, int] = {}

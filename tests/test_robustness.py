@@ -212,3 +212,20 @@ def test_an_interrupt_while_compiled_code_loads_waits_and_a_second_one_stops_at_
                        capture_output=True, text=True, timeout=60)
     assert r.stdout.split() == ["went", "on", "raised", "after"], r.stdout + r.stderr
     assert r.returncode == 130 and "interrupted again" in r.stderr, (r.returncode, r.stderr)
+
+
+def test_progress_lines_say_how_long_is_left(capsys):
+    """Progress on long work: the lines a non-terminal stderr gets (CI logs, | tee) give an
+    estimate of the time left at this session's pace (the cases a resume kept do not count)."""
+    from harness.session import _duration, _Lines
+    p = _Lines(10, 2, every=0.0)
+    p.set_postfix_str("scratch.taubin on knight")
+    p.update()
+    p.update()
+    err = capsys.readouterr().err
+    assert "resuming, 2 of 10 case(s) already done" in err
+    assert "shootout: 4/10 cases" in err and "left at this session's pace (last: scratch.taubin on knight)" in err
+    for _ in range(6):
+        p.update()
+    assert "left" not in capsys.readouterr().err.splitlines()[-1]          # the last line: nothing left
+    assert (_duration(45), _duration(720), _duration(4 * 3600)) == ("45 s", "12 min", "4.0 h")
