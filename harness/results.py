@@ -24,6 +24,7 @@ import io
 import json
 import os
 import re
+import sys
 import tempfile
 from pathlib import Path
 
@@ -838,8 +839,12 @@ def _checked_csv_text(path: Path) -> str:
         raise ShootoutError(f"{path}: cannot read ({exc.strerror})") from None
     if "\x00" in text:
         raise ShootoutError(f"{path}: damaged CSV (contains NUL bytes)")
+    cut = text[text.rfind("\n") + 1:]
     text = text[:text.rfind("\n") + 1]         # a row cut short by a kill: not data (only "\n" ends a
-    if not text:                                 # line: a form feed in a message does not)
+    if cut and text:                             # line: a form feed in a message does not); said, not silent
+        print(f"shootout: warning: {path}: its last line was cut short (a run stopped while writing it): left out "
+              f"({cut[:40]!r}{'...' if len(cut) > 40 else ''})", file=sys.stderr)
+    if not text:
         raise ShootoutError(f"{path}: empty CSV (no header)")
     try:
         rows = list(csv.reader(io.StringIO(text), strict=True))

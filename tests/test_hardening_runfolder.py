@@ -293,7 +293,8 @@ def test_damaged_csvs_are_a_message_not_a_traceback_or_a_false_regression(tmp_pa
     r = cli(["compare", a, b])
     assert "Traceback" not in r.stderr
     if damage == "torn":
-        assert r.returncode == 0, r.stdout + r.stderr        # dropped, never compared as data
+        assert r.returncode == 0, r.stdout + r.stderr        # dropped, never compared as data,
+        assert "its last line was cut short" in r.stderr and "smoothing.csv" in r.stderr, r.stderr   # and said
     else:
         assert r.returncode == 2 and "smoothing.csv" in r.stderr, r.stderr
     r = cli(["report", b])
