@@ -307,6 +307,11 @@ def test_generic_section_plots_parameter_sweeps_and_level_lines(tmp_path):
     assert s["view3d"] == "ready" and s["painted"] == s["canvases"] > 0
     cdp_titles = s.get("groupTitles") or []
     assert any("vs t_factor" in t for t in cdp_titles), cdp_titles
+    # accuracy vs time with the Pareto front (the geodesics issue), as smoothing has it: its points
+    # ringed (one here: with one sample a case the times tie, and the most accurate dominates)
+    ringed = page_value(tmp_path / "report.html", """[...document.querySelectorAll('#plots-geodesics svg.chart')]
+        .map(s => [...s.querySelectorAll('circle.pt')].filter(c => c.getAttribute('stroke') === '#111').length)""")
+    assert ringed[0] >= 1, ringed
     # an outside review: a view's face count and a metric's unit, tampered in the run folder, reached
     # innerHTML unescaped; rebuilding the report must run none of it
     from harness.report.html import build_report

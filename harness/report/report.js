@@ -799,17 +799,18 @@
       addPanel(ioPanels, chart({w: 440, h: 340, xlabel: ioIn + unit, ylabel: ioKey + unit, xlog: true, ylog: true, diag: true, series: ioSeries}));
       histPlot(plots, {rows: ok, colors: d.colors}, hidden, 'Triangle quality of the results: min-angle histogram per method', mkLeg([]));
     }
-    function aggregate(rs, key) { // one point per variant: [median time, mean metric, tip, n, variant]
-      var out = [];
-      groupBy(rs, function (r) { return r._variant; }).forEach(function (g, v) {
-        var t = median(g.map(function (r) { return r.time_s; }).filter(isNum)), y = mean(g.map(function (r) { return r[key]; }));
-        out.push([t, y, tipOf(g[0], key + ' ' + fmt(y) + (g.length > 1 ? ' (mean of ' + g.length + ' seeds)' : '') + ', time ' +
-          fmtTime(t) + (g.length > 1 ? ' (median)' : ''), g), g.length, v]);
-      });
-      return out;
-    }
     render();
     RERENDER.push(render);
+  }
+
+  function aggregate(rs, key) { // one point per variant: [median time, mean metric, tip, n, variant]
+    var out = [];
+    groupBy(rs, function (r) { return r._variant; }).forEach(function (g, v) {
+      var t = median(g.map(function (r) { return r.time_s; }).filter(isNum)), y = mean(g.map(function (r) { return r[key]; }));
+      out.push([t, y, tipOf(g[0], key + ' ' + fmt(y) + (g.length > 1 ? ' (mean of ' + g.length + ' seeds)' : '') + ', time ' +
+        fmtTime(t) + (g.length > 1 ? ' (median)' : ''), g), g.length, v]);
+    });
+    return out;
   }
 
   function simplificationSection(d) {
@@ -1204,17 +1205,33 @@
         if (x[0].length) plots.appendChild(el('p', {'class': 'caption', text: x[0].length + x[1] +
           uniq(x[0].map(function (r) { return r._invalid; })).join('; ') + x[2]}));
       });
-      var panels = panelGroup(plots, key + ' vs time, per mesh' + (axes ? ' and setting' : ''), 'One point per case; ' + esc(m.better) +
-        ' is better' + (m.unit ? ' (' + esc(m.unit) + ')' : '') + '.', function () { return legend(d.variants, d.colors, hidden, render); });
-      groupBy(vis.filter(function (r) { return isNum(r.time_s); }), function (r) {
+      // a lower-is-better metric: one point per method (mean over seeds, median time) and the Pareto front
+      var tol = tolOf(spec, key);
+      var panels = panelGroup(plots, key + ' vs time, per mesh' + (axes ? ' and setting' : ''), (lower ?
+        'One point per method: x its median time (log), y its mean ' + esc(key) + ' over seeds. Black-ringed points and the ' +
+        'dashed staircase are the Pareto front: no other method in the panel is faster beyond the timing noise and not ' +
+        'less accurate, or not slower and more accurate beyond the metric\'s tolerance (as the winner tables tie them)'
+        : 'One point per case') + '; ' + esc(m.better) + ' is better' + (m.unit ? ' (' + esc(m.unit) + ')' : '') + '.',
+        function () { return legend(d.variants, d.colors, hidden, render); });
+      groupBy(vis.filter(function (r) { return isNum(r.time_s) && validOrShown(r); }), function (r) {
         return r.mesh + ' · ' + r._noise + (r._axis ? ' · ' + r._axis : '');        // one panel per setting (e.g. k)
       }).forEach(function (rs, title) {
-        var series = [];
-        groupBy(rs, function (r) { return r._variant; }).forEach(function (vr, v) {
-          series.push({name: v, color: d.colors[v], pts: vr.map(function (r) {
-            return [r.time_s, r[key], tipOf(r, key + ' ' + fmt(r[key]) + ', time ' + fmtTime(r.time_s))]; })});
-        });
-        addPanel(panels, chart({title: title, xlabel: 'time (s)', ylabel: key, xlog: true, ylog: false, series: series}));
+        var series = [], front = [];
+        if (lower) {
+          var pts = aggregate(rs, key);
+          front = pareto(pts, tol, rs, key);
+          var onFront = new Set(front);
+          groupBy(pts, function (p) { return p[4]; }).forEach(function (ps, v) {
+            series.push({name: v, color: d.colors[v], pts: ps.map(function (p) { return [p[0], p[1], p[2], onFront.has(p)]; })});
+          });
+        } else {
+          groupBy(rs, function (r) { return r._variant; }).forEach(function (vr, v) {
+            series.push({name: v, color: d.colors[v], pts: vr.map(function (r) {
+              return [r.time_s, r[key], tipOf(r, key + ' ' + fmt(r[key]) + ', time ' + fmtTime(r.time_s))]; })});
+          });
+        }
+        addPanel(panels, chart({title: title, xlabel: 'time (s)', ylabel: key, xlog: true, ylog: false, series: series,
+                                front: front}));
       });
       noisePanels(plots, d, vis, key);
       sweepPanels(plots, vis, key);
