@@ -301,3 +301,27 @@ def test_a_case_that_measures_nothing_says_so(tmp_path):
     assert "no scored metric of the curvature task applies to this input" in df.loc["woody", "error"]
     sphere = df.loc[df.index != "woody"].iloc[0]
     assert "no scored metric" not in str(sphere["error"]) and sphere["K_rel_l2"] >= 0
+
+
+def test_observed_order_under_refinement(tmp_path):
+    """The curvature issue's convergence study: error against the mean edge length on log-log
+    axes with fitted slopes, the observed order per estimator (harness.report.convergence, drawn
+    by the report). The cotan mean curvature converges at second order on the regular icosphere
+    and not at all on random points of the sphere (the literature's finding: order -0.04 here),
+    while the quadric fit converges on both."""
+    from harness.report.convergence import convergence, family, observed_order
+    assert family("torus(r=0.3,resolution=16)") == "torus(r=0.3)" and family("sphere(subdivisions=2)") == "sphere"
+    assert family("sphere_random(n_points=500,seed=1)") == "sphere_random(seed=1)" and family("knight") == "knight"
+    h = np.array([0.4, 0.2, 0.1, 0.05])
+    assert observed_order(h, 3 * h ** 2) == pytest.approx(2.0) and observed_order(h[:2], h[:2]) is None
+    meshes = [{"procedural": "sphere", "subdivisions": s} for s in (2, 3, 4)] + \
+             [{"procedural": "sphere_random", "n_points": n} for n in (500, 2000, 8000)]
+    run({"name": "conv", "repeats": 1, "time_budget": 0, "meshes": meshes, "noise": [{"model": "none"}],
+         "tasks": {"curvature": {"methods": ["scratch.cotan_mean", "scratch.quadric_fit"]}}}, out=tmp_path, quiet=True)
+    df = pd.read_csv(tmp_path / "curvature.csv")
+    assert (df["mean_edge_length"] > 0).all()
+    from harness import tasks
+    recs = convergence(tasks.get("curvature").spec(), df, df["method"], [""] * len(df))
+    order = {(c["family"], c["variant"]): c["order"] for c in recs if c["metric"] == "H_rel_l2"}
+    assert order[("sphere", "scratch.cotan_mean")] > 1.5 and abs(order[("sphere_random", "scratch.cotan_mean")]) < 0.5
+    assert order[("sphere", "scratch.quadric_fit")] > 1.5 and order[("sphere_random", "scratch.quadric_fit")] > 1.5

@@ -745,3 +745,21 @@ def test_a_shared_sample_error_is_shown_and_ties_nothing_in_the_report(tmp_path)
     assert len(got["best"]) == 1 and "t_factor=1.0" in got["best"][0] and "tied" not in got["best"][0], got
     assert "± " + f"{win.value_se:.2g}" in got["best"][0], (got, win.value_se)
     assert "over the sample every method of the cell shares" in got["notes"], got
+
+
+def test_curvature_convergence_panels_state_the_observed_order(tmp_path):
+    """The curvature issue: the convergence plot with fitted slopes, and the report states each
+    estimator's observed order (a table per metric: methods x mesh families)."""
+    import harness
+    meshes = [{"procedural": "sphere", "subdivisions": s} for s in (2, 3, 4)]
+    harness.run({"name": "conv", "repeats": 1, "time_budget": 0, "meshes": meshes, "noise": [{"model": "none"}],
+                 "tasks": {"curvature": {"methods": ["scratch.cotan_mean", "scratch.quadric_fit"]}}},
+                out=tmp_path, quiet=True)
+    s = check_report_in_browser(tmp_path / "report.html", interact=False)
+    assert s["console_errors"] == [] and s["exceptions"] == [] and s["jserrors"] == 0
+    rows = page_value(tmp_path / "report.html", """[...document.querySelectorAll('#plots-curvature table.convergence tr')]
+        .map(r => [...r.cells].map(c => c.textContent))""")
+    assert rows[0] == ["method", "sphere · no noise"], rows
+    orders = {r[0]: float(r[1]) for r in rows[1:]}
+    assert set(orders) == {"scratch.cotan_mean", "scratch.quadric_fit"} and all(o > 1.5 for o in orders.values()), orders
+    assert any("vs mean edge length, per mesh family (log-log)" in t for t in s["groupTitles"]), s["groupTitles"]

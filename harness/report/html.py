@@ -28,6 +28,7 @@ from ..schema import text
 from .common import esc as _esc
 from .common import fmt as _fmt
 from .common import natural_key, noise_label, params_of, variant_labels
+from .convergence import convergence
 from .laplacian import property_matrix_section
 
 HERE = Path(__file__).parent
@@ -61,7 +62,8 @@ def _frame_payload(spec, df) -> dict:
     for r, v, n, h, t, bad, ax, miss in zip(rows, variants, noise, hist, target, invalid, axis, missing):
         r += [v, n, h, _clean(t) if not isinstance(t, str) else t, bad or None, ax, bool(miss)]
     order = sorted(set(variants), key=natural_key)
-    return {"columns": cols, "rows": rows, "variants": order, "spec": spec}
+    return {"columns": cols, "rows": rows, "variants": order, "spec": spec,
+            "convergence": convergence(spec, df, variants, invalid)}
 
 
 # ----------------------------------------------------------------------------- header

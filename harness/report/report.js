@@ -1233,6 +1233,7 @@
         addPanel(panels, chart({title: title, xlabel: 'time (s)', ylabel: key, xlog: true, ylog: false, series: series,
                                 front: front}));
       });
+      convergencePanels(plots, d, key, hidden);
       noisePanels(plots, d, vis, key);
       sweepPanels(plots, vis, key);
     }
@@ -1272,6 +1273,43 @@
   }
   // the metric against every numeric parameter that some method sweeps over >= 3 values (e.g. the
   // heat method's time factor): one line per method and its other parameters, mean over seeds
+  // convergence under refinement (a task declaring mean_edge_length: curvature): the metric against
+  // the mean edge length h on log-log axes per mesh family, one line per variant, and the observed
+  // order, the fitted slope of log error against log h (computed in Python: harness.report.convergence)
+  function convergencePanels(plots, d, key, hidden) {
+    var recs = (d.T.convergence || []).filter(function (c) { return c.metric === key && !hidden.has(c.variant); });
+    if (!recs.length) return;
+    var fams = uniq(recs.map(function (c) { return c.family + ' · ' + c.noise; })).sort();
+    var vars = uniq(recs.map(function (c) { return c.variant; })).sort();
+    var t = el('table', {'class': 'best convergence'});
+    var order = function (v, f) {
+      var c = recs.filter(function (c) { return c.variant === v && c.family + ' · ' + c.noise === f; })[0];
+      return c ? (isNum(c.order) ? c.order.toFixed(2) : '— (' + c.points.length + ' resolutions)') : '';
+    };
+    t.innerHTML = '<tr><th>method</th>' + fams.map(function (f) { return '<th>' + esc(f) + '</th>'; }).join('') + '</tr>' +
+      vars.map(function (v) {
+        return '<tr><td>' + esc(v) + '</td>' + fams.map(function (f) { return '<td class="num">' + order(v, f) + '</td>'; }).join('') + '</tr>';
+      }).join('');
+    plots.appendChild(el('h4', {text: 'Observed order of ' + key + ' under refinement (slope of log ' + key + ' against log h)'}));
+    plots.appendChild(t);
+    plots.appendChild(el('p', {'class': 'caption', text: 'h: the mean edge length of the clean input; error ~ C h^p, p the ' +
+      'least-squares slope over three resolutions or more of one surface (a mesh family: the same procedural surface at ' +
+      'several subdivisions, resolutions or point counts), means over seeds of valid results. A positive p converges; ' +
+      'p near 0 does not (the cotan mean curvature on irregular triangulations, in the literature).'}));
+    var panels = panelGroup(plots, key + ' vs mean edge length, per mesh family (log-log)',
+      'One line per method; the legend gives each line\'s observed order p.', function () {
+        return staticLegend(vars, function (name) { return d.colors[name]; });
+      });
+    groupBy(recs, function (c) { return c.family + ' · ' + c.noise; }).forEach(function (cs, title) {
+      var series = cs.map(function (c) {
+        return {name: c.variant, color: d.colors[c.variant], line: true, r: 3, pts: c.points.map(function (p) {
+          return [p[0], p[1], c.variant + '\n' + title + '\nh ' + fmt(p[0]) + ', ' + key + ' ' + fmt(p[1]) +
+            (isNum(c.order) ? '\norder ' + c.order.toFixed(2) : '')];
+        })};
+      });
+      addPanel(panels, chart({title: title, xlabel: 'mean edge length h', ylabel: key, xlog: true, ylog: true, series: series}));
+    });
+  }
   function sweepPanels(plots, vis, key) {
     var P = vis.map(function (r) { try { return JSON.parse(r.params) || {}; } catch (e) { return {}; } });
     var names = uniq([].concat.apply([], P.map(function (p) { return Object.keys(p); }))).sort();

@@ -117,7 +117,8 @@ def _facts(inp) -> dict:
         V, F = inp.clean.V, inp.F
         A = np.bincount(F.ravel(), weights=np.repeat(double_areas(inp.V, F) / 6.0, 3), minlength=len(inp.V))
         topo = topology(V, F)
-        inp.cache["curvature"] = {"A": A, "boundary": boundary_vertices(F, len(V)),
+        from ..core.geometry import mean_edge_length
+        inp.cache["curvature"] = {"A": A, "boundary": boundary_vertices(F, len(V)), "h": mean_edge_length(V, F),
                                   "chi": topo["euler"], "closed": topo["boundary_edges"] == 0,
                                   "truth": analytic(inp.shape, V)}
     return inp.cache["curvature"]
@@ -126,7 +127,7 @@ def _facts(inp) -> dict:
 def measure(inp, result, params) -> dict:
     f = _facts(inp)
     A, bnd, truth = f["A"], f["boundary"], f["truth"]
-    row: dict = {}
+    row: dict = {"mean_edge_length": float(f["h"])}
     for q in QUANTITIES:
         row[f"provides_{q}"] = getattr(result, q) is not None
     if truth is not None:
@@ -201,6 +202,8 @@ _METRICS += [Metric("gauss_bonnet_error", "info", "|sum K A - 2 pi chi| / (2 pi 
              Metric("gauss_bonnet_error_barycentric", "info", "gauss_bonnet_error with the barycentric areas for every "
                     "method: the same K scores the same whether or not its method returns its areas", **_E)]
 _METRICS += [Metric(f"provides_{q}", "info", f"the method estimates {q}", kind="bool") for q in QUANTITIES]
+_METRICS += [Metric("mean_edge_length", "input", "mean edge length of the clean input (input units): the resolution "
+                    "the report's convergence panels fit each error's observed order against", **_E)]
 
 TASK = Task(
     name="curvature", title="Curvature", result_type=CurvatureResult,

@@ -1,0 +1,65 @@
+"""Convergence under refinement for the report: a task that declares a ``mean_edge_length``
+column (the input's resolution, e.g. curvature) gets, per lower-is-better metric, each variant's
+error against the mean edge length ``h`` over the meshes of one family (the same procedural
+surface at several resolutions: the mesh label without ``subdivisions``, ``resolution`` or
+``n_points``), and the observed order: the least-squares slope of ``log error`` against
+``log h`` (error ~ C h^p), from three resolutions or more with a positive error. Errors are
+means over seeds of the valid ok rows (`harness.leaderboard.validity`)."""
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pandas as pd
+
+H = "mean_edge_length"
+RESOLUTION = ("subdivisions", "resolution", "n_points")
+_PARAM = re.compile(r"(?:^|,)\s*(?:" + "|".join(RESOLUTION) + r")=[^,()]*")
+
+
+def family(mesh: str) -> str:
+    """The mesh label without its resolution parameters: ``torus(r=0.3,resolution=16)`` ->
+    ``torus(r=0.3)``, ``sphere(subdivisions=2)`` -> ``sphere``."""
+    m = re.fullmatch(r"([^()]*)\((.*)\)", str(mesh))
+    if not m:
+        return str(mesh)
+    rest = _PARAM.sub("", m.group(2)).strip(", ")
+    return m.group(1) + (f"({rest})" if rest else "")
+
+
+def observed_order(h, err) -> float | None:
+    """Slope of ``log err`` against ``log h`` (least squares); None for fewer than 3 points with
+    ``h > 0`` and ``err > 0``, or a single resolution."""
+    h, err = np.asarray(h, dtype=np.float64), np.asarray(err, dtype=np.float64)
+    ok = (h > 0) & (err > 0) & np.isfinite(h) & np.isfinite(err)
+    if ok.sum() < 3 or np.ptp(np.log(h[ok])) == 0:
+        return None
+    return float(np.polyfit(np.log(h[ok]), np.log(err[ok]), 1)[0])
+
+
+def convergence(spec: dict, df: pd.DataFrame, variants, invalid) -> list[dict]:
+    """Records ``{metric, family, noise, variant, points: [[h, err], ...], order}`` (points by
+    ascending ``h``) for every lower-is-better metric of ``spec`` with values; ``variants`` and
+    ``invalid`` the rows' variant labels and validity reasons (empty: valid)."""
+    if H not in df or not len(df):
+        return []
+    from .common import noise_label
+    d = df.assign(_variant=list(variants), _bad=[bool(x) for x in invalid],
+                  _family=[family(m) for m in df["mesh"]],
+                  _noise=[noise_label(m, lv) for m, lv in zip(df["noise_model"], df["noise_level"])],
+                  _h=pd.to_numeric(df[H], errors="coerce"))
+    d = d[(d["status"] == "ok") & ~d["_bad"] & d["_h"].notna()]
+    out = []
+    for m in spec.get("metrics", []):
+        name = m.get("name")
+        if m.get("better") != "lower" or name not in d:
+            continue
+        v = d.assign(_y=pd.to_numeric(d[name], errors="coerce")).dropna(subset=["_y"])
+        for (fam, noise, var), g in v.groupby(["_family", "_noise", "_variant"], sort=True):
+            pts = g.groupby("mesh").agg(h=("_h", "first"), y=("_y", "mean")).sort_values("h")
+            if len(pts) < 2:
+                continue
+            out.append({"metric": name, "family": fam, "noise": noise, "variant": var,
+                        "points": [[float(a), float(b)] for a, b in zip(pts["h"], pts["y"])],
+                        "order": observed_order(pts["h"], pts["y"])})
+    return out
