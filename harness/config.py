@@ -712,7 +712,8 @@ def _check_tasks(tasks, P: list, skip_unknown: bool = False, noise: dict | None 
                     P.append(f"{src}: empty list of values")
                 for val in values:
                     for prob in meth.param_problems({k: val}):
-                        P.append(f"{src}: {prob}")
+                        if f"{src}: {prob}" not in P:      # an unknown name is one problem, not one per value
+                            P.append(f"{src}: {prob}")
             size = math.prod(len(v) if isinstance(v, list) else 1 for v in params.values())
             if size > MAX_CASES:             # refused before the product is built in memory
                 P.append(f"{mat}: its parameter lists expand to {size:,} settings, more than {MAX_CASES:,} cases")

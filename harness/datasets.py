@@ -47,6 +47,7 @@ PROCEDURAL = {
     "torus": {"R": 1.0, "r": 0.4, "resolution": 48},
     "plane_delaunay": {"n_points": 300, "seed": 0},
     "plane_nondelaunay": {"n_points": 300, "seed": 0, "flip_fraction": 0.3},
+    "plane_skinny": {"n_points": 300, "seed": 0, "split_fraction": 0.5, "offset": 0.02},
     "cylinder": {"radius": 1.0, "height": 2.0, "resolution": 32},
     "ellipsoid": {"rx": 1.0, "ry": 0.75, "rz": 0.5, "subdivisions": 4},
     "saddle": {"a": 0.5, "n_points": 2000, "seed": 0},
@@ -56,7 +57,7 @@ PROCEDURAL_BOUNDS = {
     "subdivisions": (0, 9), "radius": (1e-9, 1e9), "R": (1e-9, 1e9), "r": (1e-9, 1e9),
     "resolution": (3, 4096), "n_points": (4, 2_000_000), "seed": (0, 2**32 - 1),
     "flip_fraction": (0.0, 1.0), "height": (1e-9, 1e9), "a": (-1e6, 1e6), "rx": (1e-9, 1e9), "ry": (1e-9, 1e9),
-    "rz": (1e-9, 1e9),
+    "rz": (1e-9, 1e9), "split_fraction": (0.0, 1.0), "offset": (1e-6, 1.0 / 3.0),
 }
 
 
@@ -421,6 +422,32 @@ def saddle(a: float = 0.5, n_points: int = 2000, seed: int = 0):
     return np.column_stack([x, y, a * (x * x - y * y)]), F
 
 
+def plane_skinny(n_points: int = 300, seed: int = 0, split_fraction: float = 0.5, offset: float = 0.02):
+    """`plane_delaunay` remeshed with slivers: a seeded ``split_fraction`` of its faces split in
+    three at a point next to their longest edge (barycentric ``offset`` toward the opposite corner),
+    each giving a sliver whose angle at the new vertex approaches 180 degrees.
+
+    The same unit square (z = 0, every point in it), so the plane's analytic references hold; no
+    edge of the plane is split, so no vertex hangs on a neighbour's edge.
+    """
+    V, F = plane_delaunay(n_points, seed)
+    rng = np.random.default_rng(int(seed) + 2)
+    pick = np.flatnonzero(rng.random(len(F)) < float(split_fraction))
+    T = F[pick]
+    L = np.stack([np.linalg.norm(V[T[:, (k + 1) % 3]] - V[T[:, (k + 2) % 3]], axis=1) for k in range(3)], 1)
+    k = L.argmax(axis=1)                              # the corner opposite the longest edge
+    c = T[np.arange(len(T)), k]
+    a, b = T[np.arange(len(T)), (k + 1) % 3], T[np.arange(len(T)), (k + 2) % 3]
+    w = float(offset)
+    P = (1 - w) * 0.5 * (V[a] + V[b]) + w * V[c]
+    n = len(V) + np.arange(len(T))
+    V = np.vstack([V, P])
+    keep = np.ones(len(F), bool)
+    keep[pick] = False
+    F = np.vstack([F[keep], np.stack([a, b, n], 1), np.stack([b, c, n], 1), np.stack([c, a, n], 1)])
+    return V, _orient_up(V, F)
+
+
 def sphere_random(n_points: int = 2000, seed: int = 0, radius: float = 1.0):
     """Irregular sphere: the convex hull of seeded uniform random points on the sphere.
 
@@ -438,7 +465,7 @@ def sphere_random(n_points: int = 2000, seed: int = 0, radius: float = 1.0):
 
 
 GENERATORS = {"sphere": icosphere, "torus": torus, "plane_delaunay": plane_delaunay,
-              "plane_nondelaunay": plane_nondelaunay, "cylinder": cylinder, "ellipsoid": ellipsoid,
+              "plane_nondelaunay": plane_nondelaunay, "plane_skinny": plane_skinny, "cylinder": cylinder, "ellipsoid": ellipsoid,
               "saddle": saddle, "sphere_random": sphere_random}
 
 

@@ -101,7 +101,7 @@ def analytic(shape: dict | None, P: np.ndarray) -> dict | None:
         W2 = 1 + 4 * a * a * (x * x + y * y)
         K = -4 * a * a / W2 ** 2
         H = 4 * a ** 3 * (x * x - y * y) / W2 ** 1.5
-    elif kind in ("plane_delaunay", "plane_nondelaunay"):
+    elif kind in ("plane_delaunay", "plane_nondelaunay", "plane_skinny"):
         K, H = np.zeros(len(P)), np.zeros(len(P))
     else:
         return None

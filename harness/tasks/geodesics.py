@@ -148,7 +148,7 @@ def analytic(shape: dict | None, P: np.ndarray, s: np.ndarray) -> np.ndarray | N
     if kind in ("sphere", "sphere_random"):
         r = float(shape.get("radius", 1.0))
         return r * np.arccos(np.clip(P @ s / (r * r), -1.0, 1.0))
-    if kind in ("plane_delaunay", "plane_nondelaunay"):
+    if kind in ("plane_delaunay", "plane_nondelaunay", "plane_skinny"):
         return np.linalg.norm(P - s, axis=1)
     if kind == "cylinder":
         r = float(shape["radius"])

@@ -92,7 +92,7 @@ def analytic(shape: dict | None, k: int) -> np.ndarray | None:
     and the unit square of the planes (``plane_delaunay``, ``plane_nondelaunay``) with the
     natural (Neumann) boundary condition a discrete Laplacian imposes, ``pi^2 (a^2 + b^2)`` for
     integers ``a, b >= 0``."""
-    if shape and shape.get("procedural") in ("plane_delaunay", "plane_nondelaunay"):
+    if shape and shape.get("procedural") in ("plane_delaunay", "plane_nondelaunay", "plane_skinny"):
         # a quarter disc of radius R holds at least pi R^2 / 4 lattice points, so the k smallest
         # have a^2 + b^2 <= 4k/pi; the grid reaches past that radius
         top = int(np.ceil(np.sqrt(4.0 * k / np.pi))) + 2
