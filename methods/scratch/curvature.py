@@ -49,10 +49,15 @@ def angle_defect(V, F, *, area="voronoi"):
     return CurvatureResult(K=(full - total) / A, area=A)
 
 
-@register("scratch.cotan_mean", task="curvature", library="scratch", params={"area": _AREA},
+@register("scratch.cotan_mean", task="curvature", library="scratch",
+          params={"area": _AREA,
+                  "signed": Param("signed", True, doc="H signed by the vertex normal; false: |H|, the length of "
+                                                      "the mean curvature normal (no normal needed)")},
           cite="Meyer, Desbrun, Schroeder, Barr 2003 (mean curvature normal from the cotan Laplacian)")
-def cotan_mean(V, F, *, area="voronoi"):
-    """Signed mean curvature ``H_i = -1/2 (M^-1 W x)_i . n_i`` (module docstring).
+def cotan_mean(V, F, *, area="voronoi", signed=True):
+    """Signed mean curvature ``H_i = -1/2 (M^-1 W x)_i . n_i`` (module docstring), or with
+    ``signed: false`` its magnitude ``|H_i| = 1/2 |(M^-1 W x)_i|``, which the task scores against
+    the signed truth as any H: equal where H >= 0 (a sphere), not where H changes sign (a saddle).
 
     Boundary vertices get the same formula; their one-sided neighbourhoods make it unreliable
     there (the task reports boundary errors separately).
@@ -61,7 +66,8 @@ def cotan_mean(V, F, *, area="voronoi"):
     A = _areas(V, F, area)
     A = np.where(A > 0, A, 1.0)
     Hn = -0.5 * (W @ V) / A[:, None]
-    return CurvatureResult(H=np.einsum("ij,ij->i", Hn, vertex_normals(V, F)), area=A)
+    H = np.einsum("ij,ij->i", Hn, vertex_normals(V, F)) if signed else np.linalg.norm(Hn, axis=1)
+    return CurvatureResult(H=H, area=A)
 
 
 def _adjacency(F: np.ndarray, n: int) -> sp.csr_matrix:
