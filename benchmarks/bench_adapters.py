@@ -218,6 +218,17 @@ def p_ml_heat_geodesic(V, F, p):
     return ms.current_mesh().vertex_scalar_array()
 
 
+def p_ml_apss(V, F, p):
+    import pymeshlab
+    out = []
+    for kind in (1, 0):                                 # Gauss, Mean (k1 + k2: halved)
+        ms = pymeshlab.MeshSet()
+        ms.add_mesh(pymeshlab.Mesh(V, F))
+        ms.compute_curvature_and_color_apss_per_vertex(filterscale=2.0, curvaturetype=kind)
+        out.append(ms.current_mesh().vertex_scalar_array() * (0.5 if kind == 0 else 1.0))
+    return out
+
+
 p_ml_discrete_curvature = _meshlab(_ml_discrete)
 p_ml_principal_curvature = _meshlab(_ml_principal)
 p_ml_geodesic = _meshlab(_ml_geodesic)
@@ -399,6 +410,7 @@ CASES = {
     "meshlab.scale_dependent": (p_ml_scale_dependent, c_smooth, EXACT, None, "lbar: igl.avg_edge_length in B"),
     "meshlab.discrete_curvature": (p_ml_discrete_curvature, c_KH, EXACT, None, ""),
     "meshlab.principal_curvature": (p_ml_principal_curvature, c_k12, EXACT, None, ""),
+    "meshlab.apss_curvature": (p_ml_apss, c_KH, EXACT, None, ""),
     "meshlab.geodesic": (p_ml_geodesic, c_geo, EXACT, None, ""),
     "meshlab.heat_geodesic": (p_ml_heat_geodesic, c_geo, EXACT, None, ""),
     "libigl.cotan": (p_cotan, c_laplacian, EXACT, None, ""),
