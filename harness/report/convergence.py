@@ -54,7 +54,8 @@ def convergence(spec: dict, df: pd.DataFrame, variants, invalid) -> list[dict]:
         name = m.get("name")
         if m.get("better") != "lower" or name not in d:
             continue
-        v = d.assign(_y=pd.to_numeric(d[name], errors="coerce")).dropna(subset=["_y"])
+        v = d.assign(_y=pd.to_numeric(d[name], errors="coerce"))
+        v = v[np.isfinite(v["_y"]) & np.isfinite(v["_h"])]     # an inf in a hand-edited CSV: no point
         for (fam, noise, var), g in v.groupby(["_family", "_noise", "_variant"], sort=True):
             pts = g.groupby("mesh").agg(h=("_h", "first"), y=("_y", "mean")).sort_values("h")
             if len(pts) < 2:

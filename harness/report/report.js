@@ -1212,8 +1212,9 @@
         'dashed staircase are the Pareto front: no other method in the panel is faster beyond the timing noise and not ' +
         'less accurate, or not slower and more accurate beyond the metric\'s tolerance (as the winner tables tie them)'
         : 'One point per case') + '; ' + esc(m.better) + ' is better' + (m.unit ? ' (' + esc(m.unit) + ')' : '') + '.',
-        function () { return legend(d.variants, d.colors, hidden, render); });
-      groupBy(vis.filter(function (r) { return isNum(r.time_s) && validOrShown(r); }), function (r) {
+        function () { return legend(d.variants, d.colors, hidden, render, lower ? ['Pareto front'] : undefined); });
+      // never a row that is no measurement (the reference scored against itself), checkbox or not
+      groupBy(vis.filter(function (r) { return isNum(r.time_s) && validOrShown(r) && !r._missing; }), function (r) {
         return r.mesh + ' · ' + r._noise + (r._axis ? ' · ' + r._axis : '');        // one panel per setting (e.g. k)
       }).forEach(function (rs, title) {
         var series = [], front = [];
@@ -1233,7 +1234,7 @@
         addPanel(panels, chart({title: title, xlabel: 'time (s)', ylabel: key, xlog: true, ylog: false, series: series,
                                 front: front}));
       });
-      convergencePanels(plots, d, key, hidden);
+      if (!state.mesh) convergencePanels(plots, d, key, hidden);    // over a family's meshes: not one mesh's
       noisePanels(plots, d, vis, key);
       sweepPanels(plots, vis, key);
     }
@@ -1297,7 +1298,7 @@
       'several subdivisions, resolutions or point counts), means over seeds of valid results. A positive p converges; ' +
       'p near 0 does not (the cotan mean curvature on irregular triangulations, in the literature).'}));
     var panels = panelGroup(plots, key + ' vs mean edge length, per mesh family (log-log)',
-      'One line per method; the legend gives each line\'s observed order p.', function () {
+      'One line per method; its observed order p is in the table above (and in each point\'s tooltip).', function () {
         return staticLegend(vars, function (name) { return d.colors[name]; });
       });
     groupBy(recs, function (c) { return c.family + ' · ' + c.noise; }).forEach(function (cs, title) {
