@@ -100,3 +100,20 @@ def test_heat_geodesic_twins(kind):
         b = methods.get("scratch.heat")(V, F, sources=src, t_factor=t, mass="barycentric", boundary="neumann").D
         err = float(np.abs(a - b).max() / np.abs(b).max())
         assert err <= (1e-6 if kind == "noisy" else 2e-3), (kind, t, err)
+
+
+def test_heat_geodesic_twins_on_a_mesh_of_two_components():
+    """A diff review: VCG's heat filter writes NaN at the vertices of another component than the
+    source, which failed every case on such a mesh; they are unreachable (inf), as scratch.heat's,
+    and the source's own component keeps its twin's distances. A source in no face is refused (the
+    filter would select nothing and return 0 everywhere)."""
+    s = datasets.load({"procedural": "sphere", "subdivisions": 2}).clean
+    V = np.vstack([s.V, s.V + 3.0])
+    F = np.vstack([s.F, s.F + len(s.V)])
+    a = methods.get("meshlab.heat_geodesic")(V, F, sources=[5]).D[0]
+    b = methods.get("scratch.heat")(V, F, sources=[5], mass="barycentric", boundary="neumann").D[0]
+    n = len(s.V)
+    assert np.isinf(a[n:]).all() and np.abs(a[:n] - b[:n]).max() <= 1e-6 * b[:n].max()
+    with pytest.raises(ValueError, match="source vertex 10 is in no face"):
+        methods.get("meshlab.heat_geodesic")(np.vstack([s.V[:10], [[9.0, 9.0, 9.0]], s.V[10:]]),
+                                             np.where(s.F >= 10, s.F + 1, s.F), sources=[10])

@@ -68,11 +68,15 @@ def heat_geodesic(V, F, *, sources, t_factor=1.0):
     keep, Fc = np.unique(F, return_inverse=True)      # the referenced vertices (a filter may refuse others)
     Fc = Fc.reshape(F.shape).astype(np.int32)
     D = np.full((len(sources), len(V)), np.inf)        # an unreferenced vertex: unreachable
+    missing = [int(s) for s in sources if not np.isin(int(s), keep)]
+    if missing:                                        # nothing would be selected: the filter returns 0 everywhere
+        raise ValueError(f"meshlab.heat_geodesic: source vertex {missing[0]} is in no face")
     for i, s in enumerate(sources):
         mark = (keep == int(s)).astype(np.float64)
         ms = pymeshlab.MeshSet()        # no custom attribute: the selection's expression parser crashes on one
         ms.add_mesh(pymeshlab.Mesh(vertex_matrix=V[keep], face_matrix=Fc, v_scalar_array=mark))
         ms.compute_selection_by_condition_per_vertex(condselect="q > 0.5")
         ms.compute_scalar_by_heat_geodesic_distance_from_selection_per_vertex(m=float(t_factor))
-        D[i, keep] = ms.current_mesh().vertex_scalar_array()     # the filter keeps the vertices and their order
+        d = ms.current_mesh().vertex_scalar_array()     # the filter keeps the vertices and their order
+        D[i, keep] = np.where(np.isfinite(d), d, np.inf)  # NaN in another component than the source: unreachable
     return GeodesicResult(D=D, per_source_s=(time.perf_counter() - t0) / max(len(sources), 1))
