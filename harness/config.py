@@ -114,6 +114,23 @@ def case_id(task, mesh_spec, model, level, seed, fraction, method, params) -> st
     return hashlib.sha1(blob.encode()).hexdigest()[:12]
 
 
+def id_params(method: str, params: dict) -> dict:
+    """``params`` as a case id records them: a parameter under its ``id_as`` name, one with
+    ``id_omit_default`` left out at its default (`harness.core.params.Param`)."""
+    from .plugins import import_methods
+    try:
+        declared = import_methods().get(method).params
+    except KeyError:
+        return params
+    out = {}
+    for k, v in params.items():
+        p = declared.get(k)
+        if p is not None and p.id_omit_default and v == p.default:
+            continue
+        out[p.id_as if p is not None and p.id_as else k] = v
+    return out
+
+
 def _resolved(meth, params: dict) -> dict:
     """Declared defaults filled in, floats as floats: equal settings give equal case ids."""
     return meth.with_defaults(params)
@@ -418,7 +435,7 @@ def expand_cases(meshes: list, noises, tasks: dict, seed: int, repeats: int, plu
                     continue
                 for mname, grid in entries:
                     for params in grid:
-                        cid = case_id(task, ident, model, level, s, frac, mname, params)
+                        cid = case_id(task, ident, model, level, s, frac, mname, id_params(mname, params))
                         cases.append(Case(cid, task, spec, key, model, level, s, frac, mname,
                                           params, repeats, plugins, hs, budget, hausdorff_eps=eps))
     seen = set()
@@ -702,17 +719,21 @@ def _check_tasks(tasks, P: list, skip_unknown: bool = False, noise: dict | None 
                 P.append(f"{mat}: {mname} is a {meth.task} method, not {task}")
                 continue
             own, both = meth.canonical(own)              # a library's own spelling under the shared name
-            params = {**shared, **own}
+            shared_m, both_s = meth.canonical(shared)
+            params = {**shared_m, **own}
             n_before = len(P)
             P.extend(f"{mat}.params: {b}" for b in both)
+            P.extend(f"{at}.params: {b}" for b in both_s if f"{at}.params: {b}" not in P)
             for k, v in params.items():
                 src = f"{mat}.params.{k}" if k in own else f"{at}.params.{k}"
                 values = v if isinstance(v, list) else [v]
                 if isinstance(v, list) and not v:
                     P.append(f"{src}: empty list of values")
+                said = set()                             # an unknown name is one problem, not one per value
                 for val in values:
                     for prob in meth.param_problems({k: val}):
-                        if f"{src}: {prob}" not in P:      # an unknown name is one problem, not one per value
+                        if prob not in said:
+                            said.add(prob)
                             P.append(f"{src}: {prob}")
             size = math.prod(len(v) if isinstance(v, list) else 1 for v in params.values())
             if size > MAX_CASES:             # refused before the product is built in memory

@@ -172,6 +172,8 @@ def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | 
         meth = methods.get(m)
         axis = _tasks.get(configured[m][0]).axis_params
         ok = {}
+        ranges, both = meth.canonical(ranges)     # a library's own spelling under the shared name
+        P.extend(f"{at}: {b}" for b in both)
         for k, vals in ranges.items():
             if k in axis:                   # it defines the cell (the target, k, the sources): not a setting
                 P.append(f"{at}.{k}: {k} is an axis of the {configured[m][0]} task (rows with other values are "
@@ -183,7 +185,7 @@ def check_tune(raw, base_dir, P: list, tasks: dict, check_meshes) -> TuneSpec | 
                          "one configured setting with the chosen one: list one value there, or tune another parameter")
                 continue
             vals = vals if isinstance(vals, list) else [vals]
-            bad = [p for v in vals for p in meth.param_problems({k: v})]
+            bad = list(dict.fromkeys(p for v in vals for p in meth.param_problems({k: v})))   # once each
             if not vals or bad:
                 P.extend(f"{at}.{k}: {b}" for b in (bad or ["empty list of values"]))
                 continue

@@ -137,8 +137,10 @@ class Method:
         """``params`` with each alias (`ALIASES`) of a declared parameter under the declared name,
         and the problems of an alias given beside the name it stands for."""
         alias = lambda k: ALIASES.get(k) in self.params and k not in self.params   # noqa: E731
-        both = [f"{k} and {ALIASES[k]}: the same parameter given twice" for k in params
-                if alias(k) and ALIASES[k] in params]
+        names: dict = {}
+        for k in params:
+            names.setdefault(ALIASES[k] if alias(k) else k, []).append(k)
+        both = [" and ".join(ks) + ": the same parameter given twice" for ks in names.values() if len(ks) > 1]
         return {ALIASES[k] if alias(k) else k: v for k, v in params.items()}, both
 
     def resolve_params(self, params: dict) -> dict:

@@ -15,10 +15,10 @@ from methods import Param, SimplificationResult, register
     task="simplification",
     library="fast-simplification",
     params={
-        "aggressiveness": Param("aggressiveness", 7.0, "float", low=0.0, high=20.0,
-                     doc="aggressiveness of FQMS's error threshold schedule "
-                         "(0 = most accurate/slowest, 10 = fast/coarse; library default 7)"),
-        "preserve_boundary": Param("preserve_boundary", False,
+        "aggressiveness": Param("aggressiveness", 7.0, "float", low=0.0, high=20.0, id_as="agg",
+                                doc="aggressiveness of FQMS's error threshold schedule "
+                                    "(0 = most accurate/slowest, 10 = fast/coarse; library default 7)"),
+        "preserve_boundary": Param("preserve_boundary", False, id_as="preserve_border",
                                    doc="forbid collapses of edges touching an open boundary"),
     },
     requires=("fast_simplification",),

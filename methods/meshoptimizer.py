@@ -19,7 +19,7 @@ from methods import Param, SimplificationResult, register
           cite="A. Kapoulkine, meshoptimizer (simplifier.cpp)",
           params={"target_error": Param("target_error", 1.0, "float", low=0.0, high=1.0,
                                         doc="relative error limit (fraction of the mesh extent)"),
-                  "preserve_boundary": Param("preserve_boundary", False, "bool",
+                  "preserve_boundary": Param("preserve_boundary", False, "bool", id_as="lock_border",
                                              doc="keep border vertices (the library's SIMPLIFY_LOCK_BORDER)")})
 def qem(V, F, *, target_faces, target_error=1.0, preserve_boundary=False):
     """``meshoptimizer.simplify`` to ``target_faces`` (module docstring)."""

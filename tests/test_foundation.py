@@ -691,3 +691,23 @@ def test_an_unknown_task_kind_is_refused_not_an_empty_list():
     with pytest.raises(KeyError, match="unknown task 'smoothin'; did you mean smoothing"):
         methods.available("smoothin")
     assert "scratch.taubin" in methods.available("smoothing")
+
+
+def test_case_ids_of_recorded_runs_survive_renamed_and_added_parameters():
+    """A diff review: renaming a parameter to the shared vocabulary (fast-simplification's agg,
+    meshoptimizer's lock_border, MeshLab's fit_iterations) and adding one (cotan_mean's signed)
+    changed every such case id, so compare against an older run reported each as missing. A case
+    id records a renamed parameter under its old name (Param.id_as) and leaves an added one out
+    at its default (Param.id_omit_default): these ids are the ones 9a2b2a5 computed."""
+    from harness.config import load_config
+    cfg = {"name": "ids", "meshes": ["knight"], "noise": [{"model": "none"}],
+           "tasks": {"simplification": {"methods": ["fast_simplification.qem", "meshoptimizer.qem"],
+                                        "params": {"target_ratio": 0.5}},
+                     "smoothing": {"noise": [{"model": "gaussian_normal", "levels": [0.3]}],
+                                   "methods": ["meshlab.two_steps"]},
+                     "curvature": {"methods": ["scratch.cotan_mean"]}}}
+    ids = {c.method: c.case_id for c in load_config(cfg).cases}
+    assert ids == {"fast_simplification.qem": "0dad1ef56f79", "meshoptimizer.qem": "93678298df1b",
+                   "scratch.cotan_mean": "a79a42884ab5", "meshlab.two_steps": "7e820199d4df"}
+    cfg["tasks"] = {"curvature": {"methods": [{"name": "scratch.cotan_mean", "params": {"signed": [True, False]}}]}}
+    assert len({c.case_id for c in load_config(cfg).cases}) == 2          # away from its default: in the id

@@ -20,7 +20,10 @@ class Param:
     bounds for numbers, ``choices`` the allowed values of a string. ``default=None`` with
     ``optional=True`` means "not given". ``alt``: another accepted form of a value that is not
     of ``kind`` (a mapping, never a list: a list of values is a sweep), as
-    ``alt(value) -> (normalised JSON-ready value, None)`` or ``(None, why not)``.
+    ``alt(value) -> (normalised JSON-ready value, None)`` or ``(None, why not)``. ``id_as``: the
+    name a case id records the parameter under (the one it had when earlier runs were recorded,
+    so their cases keep their ids); ``id_omit_default``: a parameter added after runs were
+    recorded is left out of the case id at its default, for the same reason.
     """
 
     name: str
@@ -32,6 +35,8 @@ class Param:
     doc: str = ""
     optional: bool = False
     alt: Callable[[Any], tuple] | None = None
+    id_as: str | None = None
+    id_omit_default: bool = False
 
     def __post_init__(self):
         if not self.kind:

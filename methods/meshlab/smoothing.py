@@ -176,7 +176,7 @@ def hc(V, F, *, iterations=1):
                                                 low=0.0, high=180.0, doc="normalthr"),
                   "normal_iterations": Param("normal_iterations", 20, "int", low=0,
                                              high=10000, doc="stepnormalnum"),
-                  "vertex_iterations": Param("vertex_iterations", 20, "int", low=0, high=10000,
+                  "vertex_iterations": Param("vertex_iterations", 20, "int", low=0, high=10000, id_as="fit_iterations",
                                           doc="stepfitnum")})
 def two_steps(V, F, *, iterations=3, normal_threshold_deg=60.0, normal_iterations=20,
               vertex_iterations=20):

@@ -51,7 +51,7 @@ def angle_defect(V, F, *, area="voronoi"):
 
 @register("scratch.cotan_mean", task="curvature", library="scratch",
           params={"area": _AREA,
-                  "signed": Param("signed", True, doc="H signed by the vertex normal; false: |H|, the length of "
+                  "signed": Param("signed", True, id_omit_default=True, doc="H signed by the vertex normal; false: |H|, the length of "
                                                       "the mean curvature normal (no normal needed)")},
           cite="Meyer, Desbrun, Schroeder, Barr 2003 (mean curvature normal from the cotan Laplacian)")
 def cotan_mean(V, F, *, area="voronoi", signed=True):
