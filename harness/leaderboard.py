@@ -924,19 +924,24 @@ def no_ranking_text(frames: dict, specs: dict) -> str:
 def settings_note(tune) -> str:
     """What the ranked variants are: the settings the config gave (defaults where it gave none),
     not each method at its best, and which ones ``tune:`` chose (``tune``: run.json's ``tune``)."""
-    chosen = []
+    chosen, kept = [], []
     if isinstance(tune, dict) and isinstance(tune.get("methods"), dict):
         for m, ch in tune["methods"].items():
             picked = ch.get("chosen") if isinstance(ch, dict) else None
             if isinstance(picked, dict) and picked:
                 chosen.append(f"{m} {label_text('', picked, sorted(picked)).strip()}")
+            else:
+                kept.append(str(m))
     said = ("Each method is ranked at the parameters the config gave it, its defaults where it gave none: a "
             "ranking of these settings, not of each method at its best.")
     if chosen:
-        said += (" Tuned on the training meshes (`tune:`), each a variant of its own beside the configured one: "
+        said += (" Tuned on the training meshes (tune:), each a variant of its own beside the configured one: "
                  + "; ".join(chosen) + ".")
-    else:
-        said += " Nothing was tuned (`tune:` chooses parameters on training meshes)."
+    if kept:
+        said += (" Tuned, no candidate beating the configured setting on the training meshes (kept): "
+                 + ", ".join(kept) + ".")
+    if not chosen and not kept:
+        said += " Nothing was tuned (tune: chooses parameters on training meshes)."
     return said
 
 

@@ -394,5 +394,8 @@ def test_the_rankings_say_what_settings_they_rank(tmp_path):
     from harness.leaderboard import settings_note
     tuned = settings_note({"methods": {"scratch.implicit": {"chosen": {"step": 0.1, "iterations": 2}},
                                        "scratch.taubin": {"chosen": {}}}})
-    assert "Tuned on the training meshes (`tune:`), each a variant of its own beside the configured one: " \
+    assert "Tuned on the training meshes (tune:), each a variant of its own beside the configured one: " \
            "scratch.implicit iterations=2 step=0.1." in tuned, tuned
+    # a review: a method whose tuning kept the configured setting was said to be untuned
+    assert "no candidate beating the configured setting on the training meshes (kept): scratch.taubin." in tuned
+    assert "Nothing was tuned" not in tuned
