@@ -828,6 +828,9 @@ def _check_numbers(path: Path, df: pd.DataFrame) -> None:
                                 "expected a number")
 
 
+_TORN_SAID: set = set()         # (path, cut text) of torn last lines already said in this process
+
+
 def _checked_csv_text(path: Path) -> str:
     """The CSV's text without a torn last line; `ShootoutError` naming what is damaged otherwise
     (not UTF-8 text, empty, or lines whose field count differs from the header's)."""
@@ -841,7 +844,8 @@ def _checked_csv_text(path: Path) -> str:
         raise ShootoutError(f"{path}: damaged CSV (contains NUL bytes)")
     cut = text[text.rfind("\n") + 1:]
     text = text[:text.rfind("\n") + 1]         # a row cut short by a kill: not data (only "\n" ends a
-    if cut and text:                             # line: a form feed in a message does not); said, not silent
+    if cut and text and (str(path), cut) not in _TORN_SAID:    # line: a form feed in a message does not);
+        _TORN_SAID.add((str(path), cut))                          # said once, not silent
         print(f"shootout: warning: {path}: its last line was cut short (a run stopped while writing it): left out "
               f"({cut[:40]!r}{'...' if len(cut) > 40 else ''})", file=sys.stderr)
     if not text:
