@@ -590,6 +590,20 @@ def _label(r: dict) -> str:
     return f"{r.get('mesh')} {noise} {r.get('method')}[{ps}]"
 
 
+def _params_identity(r: dict) -> str:
+    """A row's parameters as its case id records them (`harness.config.id_params`: a renamed
+    parameter under its old name, an added one left out at its default), so a run recorded
+    before a rename or an addition describes the same case as one after it."""
+    try:
+        p = json.loads(str(r.get("params")))
+    except (TypeError, ValueError):
+        return str(r.get("params"))
+    if not isinstance(p, dict):
+        return str(r.get("params"))
+    from .config import id_params
+    return json.dumps(id_params(str(r.get("method")), p), sort_keys=True, default=str)
+
+
 def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FACTOR, rules=None,
                  absolute_time: bool = False, load_rule: bool = True, cores: int | None = None,
                  threads: tuple | None = None, samples_differ: bool = False) -> dict:
@@ -615,7 +629,8 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
         ra, rb = rows_a[cid], rows_b[cid]
         base = {"case_id": cid, "task": ra["task"], "case": _label(ra)}
         keys = IDENTITY if ra.get("library") != "external" else [k for k in IDENTITY if k != "params"]   # eval: the path
-        differ = [k for k in keys if str(ra.get(k)) != str(rb.get(k))]
+        differ = [k for k in keys if (_params_identity(ra) != _params_identity(rb) if k == "params"
+                                      else str(ra.get(k)) != str(rb.get(k)))]
         if differ:                          # one id, two different cases (e.g. two evals' files in another order)
             changes.append({**base, "metric": "case", "a": _label(ra), "b": _label(rb), "verdict": "changed",
                             "note": f"not compared: the rows describe different cases ({', '.join(differ)} differ)"})

@@ -959,3 +959,20 @@ def test_a_run_json_that_cannot_be_read_is_named_not_taken_for_the_defaults(run_
         in out, out
     code, out = run_compare(b, run_a, time_factor=None)
     assert code == 0 and f"note: A's run.json is {state}" in out and "other settings" not in out, out
+
+
+def test_a_row_recorded_before_a_rename_is_the_same_case():
+    """A diff review of the shared parameter names: a run recorded with fast-simplification's agg /
+    preserve_border (or before cotan_mean's signed existed) has the same case ids as one recorded
+    after, and compare must compare those rows, not call them different cases because the params
+    text differs."""
+    from harness.compare import compare_rows
+    base = {"task": "simplification", "mesh": "knight", "method": "fast_simplification.qem", "noise_model": "none",
+            "noise_level": 0.0, "seed": 0, "status": "ok", "hausdorff": 0.01}
+    a = {**base, "params": '{"agg": 7.0, "preserve_border": false, "target_ratio": 0.5}'}
+    b = {**base, "params": '{"aggressiveness": 7.0, "preserve_boundary": false, "target_ratio": 0.5}', "hausdorff": 0.02}
+    out = compare_rows({"x": a}, {"x": b}, time_factor=None)
+    assert [c["metric"] for c in out["changes"]] == ["hausdorff"], out["changes"]
+    c = {**base, "params": '{"aggressiveness": 3.0, "preserve_boundary": false, "target_ratio": 0.5}'}
+    out = compare_rows({"x": a}, {"x": c}, time_factor=None)
+    assert out["changes"][0]["metric"] == "case" and "params differ" in out["changes"][0]["note"]
