@@ -50,8 +50,7 @@ def check_arrays(V, F) -> tuple[np.ndarray, np.ndarray]:
     return V, F
 
 
-# Python-friendly spellings of parameter names that are keywords or clash in Python
-# other names of a declared parameter, accepted from Python and in configs and recorded under the
+# Other names of a declared parameter, accepted from Python and in configs and recorded under the
 # declared one: a Python keyword (lambda), and a library's own spelling of a concept that has one
 # name across adapters (fast-simplification's agg and preserve_border, meshoptimizer's lock_border,
 # MeshLab's fit_iterations for Sun et al.'s vertex iterations)
@@ -135,7 +134,8 @@ class Method:
 
     def canonical(self, params: dict) -> tuple[dict, list[str]]:
         """``params`` with each alias (`ALIASES`) of a declared parameter under the declared name,
-        and the problems of an alias given beside the name it stands for."""
+        and the problems of two names of one parameter given together (an alias and the declared
+        name, or two aliases)."""
         alias = lambda k: ALIASES.get(k) in self.params and k not in self.params   # noqa: E731
         names: dict = {}
         for k in params:

@@ -19,8 +19,9 @@ class Param:
     ``kind`` is one of ``int``, ``float``, ``bool``, ``str``; ``low``/``high`` are inclusive
     bounds for numbers, ``choices`` the allowed values of a string. ``default=None`` with
     ``optional=True`` means "not given". ``alt``: another accepted form of a value that is not
-    of ``kind`` (a mapping, never a list: a list of values is a sweep), as
-    ``alt(value) -> (normalised JSON-ready value, None)`` or ``(None, why not)``. ``id_as``: the
+    of ``kind`` (a config gives it as a mapping, or as a list inside the sweep's list: a list of
+    values is a sweep), as ``alt(value) -> (normalised JSON-ready value, None)`` or
+    ``(None, why not)``. ``id_as``: the
     name a case id records the parameter under (the one it had when earlier runs were recorded,
     so their cases keep their ids); ``id_omit_default``: a parameter added after runs were
     recorded is left out of the case id at its default, for the same reason.
