@@ -96,6 +96,7 @@ import sys
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from .core.params import id_form
 from .errors import ShootoutError
 from .leaderboard import params_text, validity
 from .tasks.base import target_tolerance
@@ -590,23 +591,34 @@ def _label(r: dict) -> str:
     return f"{r.get('mesh')} {noise} {r.get('method')}[{ps}]"
 
 
-def _params_identity(r: dict) -> str:
-    """A row's parameters as its case id records them (`harness.config.id_params`: a renamed
-    parameter under its old name, an added one left out at its default), so a run recorded
-    before a rename or an addition describes the same case as one after it."""
+def _params_identity(r: dict, ids: dict | None = None) -> str:
+    """A row's parameters as its case id records them (`harness.core.params.id_form` under
+    ``ids``, ``{method: id_spec}`` from the runs' run.json: a renamed parameter under its old
+    name, an added one left out at its default), so a run recorded before a rename or an
+    addition describes the same case as one after it."""
     try:
         p = json.loads(str(r.get("params")))
     except (TypeError, ValueError):
         return str(r.get("params"))
     if not isinstance(p, dict):
         return str(r.get("params"))
-    from .config import id_params
-    return json.dumps(id_params(str(r.get("method")), p), sort_keys=True, default=str)
+    return json.dumps(id_form(p, (ids or {}).get(str(r.get("method")))), sort_keys=True, default=str)
+
+
+def param_ids(*metas) -> dict:
+    """``{method: id_spec}`` the runs' run.json record (`harness.session.task_specs`), merged."""
+    out: dict = {}
+    for meta in metas:
+        for spec in ((meta or {}).get("tasks") or {}).values():
+            ids = spec.get("param_ids") if isinstance(spec, dict) else None
+            if isinstance(ids, dict):
+                out.update({m: v for m, v in ids.items() if isinstance(v, dict)})
+    return out
 
 
 def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FACTOR, rules=None,
                  absolute_time: bool = False, load_rule: bool = True, cores: int | None = None,
-                 threads: tuple | None = None, samples_differ: bool = False) -> dict:
+                 threads: tuple | None = None, samples_differ: bool = False, ids: dict | None = None) -> dict:
     """Every change between two runs' rows: ``{"changes": [...], "only_a": [...], "only_b": [...], ...}``.
 
     ``rules``: ``{task: {metric: Rule}}`` from the runs' task declarations (default: the known tasks).
@@ -618,7 +630,9 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
     (`whole_run_change`) is itself a change of the whole run: every case slowed alike, which no case's verdict relative to the
     drift can see. ``samples_differ``: the runs drew another number of points (`_measurement`'s
     ``hausdorff_samples``; 0 measures no sampled metric), so a sampled metric's value (``Rule.se``)
-    one of them left blank was not measured there: changed, not a regression.
+    one of them left blank was not measured there: changed, not a regression. ``ids``: how case
+    ids record renamed and added parameters (`param_ids`), so rows recorded before and after one
+    compare as the same case.
     """
     changes, input_changes = [], []
     unmatched: set = set()
@@ -629,7 +643,7 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
         ra, rb = rows_a[cid], rows_b[cid]
         base = {"case_id": cid, "task": ra["task"], "case": _label(ra)}
         keys = IDENTITY if ra.get("library") != "external" else [k for k in IDENTITY if k != "params"]   # eval: the path
-        differ = [k for k in keys if (_params_identity(ra) != _params_identity(rb) if k == "params"
+        differ = [k for k in keys if (_params_identity(ra, ids) != _params_identity(rb, ids) if k == "params"
                                       else str(ra.get(k)) != str(rb.get(k)))]
         if differ:                          # one id, two different cases (e.g. two evals' files in another order)
             changes.append({**base, "metric": "case", "a": _label(ra), "b": _label(rb), "verdict": "changed",
@@ -804,7 +818,8 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
     ma_, mb_ = _measurement(meta_a), _measurement(meta_b)
     differ = [f"{k} A {ma_[k]}, B {mb_[k]}" for k in ma_ if k in mb_ and ma_[k] != mb_[k]]
     res = compare_rows(ra, rb, time_factor, rules, absolute_time, cores=ca if ca == cb else None, threads=threads,
-                       samples_differ=not ma_ or not mb_ or ma_.get("hausdorff_samples") != mb_.get("hausdorff_samples"))
+                       samples_differ=not ma_ or not mb_ or ma_.get("hausdorff_samples") != mb_.get("hausdorff_samples"),
+                       ids=param_ids(meta_a, meta_b))
     changes = _sorted(res["changes"])
     regress = [c for c in changes if c["verdict"] == "regression"]
     shown = [c for c in changes if c["verdict"] not in ("within tolerance", "info", "inconclusive")]

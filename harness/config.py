@@ -117,18 +117,13 @@ def case_id(task, mesh_spec, model, level, seed, fraction, method, params) -> st
 def id_params(method: str, params: dict) -> dict:
     """``params`` as a case id records them: a parameter under its ``id_as`` name, one with
     ``id_omit_default`` left out at its default (`harness.core.params.Param`)."""
+    from .core.params import id_form, id_spec
     from .plugins import import_methods
     try:
         declared = import_methods().get(method).params
     except KeyError:
         return params
-    out = {}
-    for k, v in params.items():
-        p = declared.get(k)
-        if p is not None and p.id_omit_default and v == p.default:
-            continue
-        out[p.id_as if p is not None and p.id_as else k] = v
-    return out
+    return id_form(params, id_spec(declared))
 
 
 def _resolved(meth, params: dict) -> dict:

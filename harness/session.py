@@ -139,14 +139,19 @@ def task_specs(cfg: Config) -> dict:
     methods = import_methods()
     used = sorted({c.task for c in cfg.cases})
     specs = {t: tasks.get(t).spec() for t in used}
+    from .core.params import id_spec
     for t in used:                  # labels name a parameter only where it is not the default
-        defaults = {}
+        defaults, ids = {}, {}
         for name in sorted({c.method for c in cfg.cases if c.task == t}):
             try:
-                defaults[name] = json.loads(json.dumps(methods.get(name).with_defaults({}), default=str))
+                m = methods.get(name)
             except KeyError:
                 continue
+            defaults[name] = json.loads(json.dumps(m.with_defaults({}), default=str))
+            if id_spec(m.params):   # how case ids record renamed or added parameters (compare reads it)
+                ids[name] = json.loads(json.dumps(id_spec(m.params), default=str))
         specs[t]["method_defaults"] = defaults
+        specs[t]["param_ids"] = ids
     return specs
 
 

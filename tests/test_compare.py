@@ -971,8 +971,16 @@ def test_a_row_recorded_before_a_rename_is_the_same_case():
             "noise_level": 0.0, "seed": 0, "status": "ok", "hausdorff": 0.01}
     a = {**base, "params": '{"agg": 7.0, "preserve_border": false, "target_ratio": 0.5}'}
     b = {**base, "params": '{"aggressiveness": 7.0, "preserve_boundary": false, "target_ratio": 0.5}', "hausdorff": 0.02}
-    out = compare_rows({"x": a}, {"x": b}, time_factor=None)
+    from harness.compare import param_ids
+    from harness.session import task_specs
+    from harness.config import load_config
+    cfg = load_config({"name": "i", "meshes": ["knight"], "noise": [{"model": "none"}],
+                       "tasks": {"simplification": {"methods": ["fast_simplification.qem"]}}})
+    ids = param_ids({"tasks": task_specs(cfg)})        # as the newer run's run.json records them
+    assert ids["fast_simplification.qem"]["aggressiveness"] == {"as": "agg"}
+    out = compare_rows({"x": a}, {"x": b}, time_factor=None, ids=ids)
     assert [c["metric"] for c in out["changes"]] == ["hausdorff"], out["changes"]
+    assert compare_rows({"x": a}, {"x": b}, time_factor=None)["changes"][0]["metric"] == "case"   # no record: differ
     c = {**base, "params": '{"aggressiveness": 3.0, "preserve_boundary": false, "target_ratio": 0.5}'}
-    out = compare_rows({"x": a}, {"x": c}, time_factor=None)
+    out = compare_rows({"x": a}, {"x": c}, time_factor=None, ids=ids)
     assert out["changes"][0]["metric"] == "case" and "params differ" in out["changes"][0]["note"]

@@ -94,3 +94,29 @@ class Param:
             hi = "inf" if self.high is None else self.high
             s += f" [{lo}, {hi}]"
         return s
+
+
+def id_spec(params: dict) -> dict:
+    """How case ids record a method's parameters (``{name: Param}``): ``{name: {"as": id name,
+    "omit_default": default}}`` for those with an ``id_as`` or ``id_omit_default``, JSON-ready (a
+    run records it in run.json, so reading a run folder needs no method)."""
+    out = {}
+    for name, p in params.items():
+        if p.id_as or p.id_omit_default:
+            out[name] = {**({"as": p.id_as} if p.id_as else {}),
+                         **({"omit_default": p.default} if p.id_omit_default else {})}
+    return out
+
+
+def id_form(values: dict, spec: dict | None) -> dict:
+    """``values`` (a case's parameters) as its case id records them under ``spec`` (`id_spec`):
+    a parameter under its ``as`` name, one with ``omit_default`` left out at that value."""
+    if not spec:
+        return values
+    out = {}
+    for k, v in values.items():
+        s = spec.get(k) or {}
+        if "omit_default" in s and v == s["omit_default"]:
+            continue
+        out[s.get("as") or k] = v
+    return out
