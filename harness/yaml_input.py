@@ -39,6 +39,10 @@ _Loader.add_implicit_resolver(
     list("-+0123456789."))
 
 
+class _TooBig(yaml.YAMLError):
+    """More values than a config may hold (`_too_big`)."""
+
+
 def _too_big(text: str) -> None:
     """`yaml.YAMLError` when the document holds, aliases expanded, more than ``MAX_NODES`` values,
     counted on libyaml's event stream (C speed) before any Python node is built: a long plain
@@ -48,31 +52,31 @@ def _too_big(text: str) -> None:
         return                      # no libyaml: the node walk (`_expanded_size`) bounds it
     size: dict = {}                 # anchor -> its expanded size
     stack = [[0, None]]             # open collections: [values so far, anchor]
-    total, aliases = 0, 0
+    total, aliases = 0, 0           # values so far, aliases expanded
     try:
         for ev in yaml.parse(text, Loader=loader):
             if isinstance(ev, (yaml.SequenceStartEvent, yaml.MappingStartEvent)):
                 stack.append([1, ev.anchor])
-                continue
-            if isinstance(ev, (yaml.SequenceEndEvent, yaml.MappingEndEvent)):
+                total += 1
+            elif isinstance(ev, (yaml.SequenceEndEvent, yaml.MappingEndEvent)):
                 n, anchor = stack.pop()
-            elif isinstance(ev, yaml.ScalarEvent):
-                n, anchor = 1, ev.anchor
-            elif isinstance(ev, yaml.AliasEvent):
-                aliases += 1
-                n, anchor = size.get(ev.anchor, 1), None
-            else:
-                continue
-            if anchor is not None:
-                size[anchor] = n
-            stack[-1][0] += n
-            total = stack[0][0] + sum(c[0] for c in stack[1:])
+                if anchor is not None:
+                    size[anchor] = n
+                stack[-1][0] += n
+            elif isinstance(ev, (yaml.ScalarEvent, yaml.AliasEvent)):
+                alias = isinstance(ev, yaml.AliasEvent)
+                aliases += alias
+                n = size.get(ev.anchor, 1) if alias else 1
+                if not alias and ev.anchor is not None:
+                    size[ev.anchor] = 1
+                stack[-1][0] += n
+                total += n
             if total > MAX_NODES:
                 why = (f"with its {aliases} alias(es) expanded" if aliases else "a config holds at most that many")
-                raise yaml.YAMLError(f"the document holds more than {MAX_NODES:,} values ({why}): refused")
-    except yaml.YAMLError as exc:
-        if "refused" in str(exc):
-            raise
+                raise _TooBig(f"the document holds more than {MAX_NODES:,} values ({why}): refused")
+    except _TooBig:
+        raise
+    except yaml.YAMLError:
         return                      # a syntax error: the Python loader reports it with its line
 
 
