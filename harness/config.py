@@ -114,16 +114,15 @@ def case_id(task, mesh_spec, model, level, seed, fraction, method, params) -> st
     return hashlib.sha1(blob.encode()).hexdigest()[:12]
 
 
-def id_params(method: str, params: dict) -> dict:
-    """``params`` as a case id records them: a parameter under its ``id_as`` name, one with
-    ``id_omit_default`` left out at its default (`harness.core.params.Param`)."""
-    from .core.params import id_form, id_spec
+def method_id_spec(method: str) -> dict:
+    """How a case id records ``method``'s parameters (`harness.core.params.id_spec`: a parameter
+    under its ``id_as`` name, one with ``id_omit_default`` left out at its default)."""
+    from .core.params import id_spec
     from .plugins import import_methods
     try:
-        declared = import_methods().get(method).params
+        return id_spec(import_methods().get(method).params)
     except KeyError:
-        return params
-    return id_form(params, id_spec(declared))
+        return {}
 
 
 def _resolved(meth, params: dict) -> dict:
@@ -410,7 +409,9 @@ def expand_cases(meshes: list, noises, tasks: dict, seed: int, repeats: int, plu
                  budget: float, eps: float = 1e-3) -> list:
     """Every (mesh, noise model, level, seed, task, method, params) case, duplicates removed;
     ``noises`` is one list for every task or a mapping task -> list."""
+    from .core.params import id_form
     cases = []
+    ids: dict = {}                  # method -> how its case ids record its parameters (`method_id_spec`)
     labels = _unique_labels(meshes)
     for spec, key in zip(meshes, labels):
         ident = _identity(spec)
@@ -429,8 +430,10 @@ def expand_cases(meshes: list, noises, tasks: dict, seed: int, repeats: int, plu
                 if (model, level, s, frac) not in lists[task]:
                     continue
                 for mname, grid in entries:
+                    if mname not in ids:
+                        ids[mname] = method_id_spec(mname)
                     for params in grid:
-                        cid = case_id(task, ident, model, level, s, frac, mname, id_params(mname, params))
+                        cid = case_id(task, ident, model, level, s, frac, mname, id_form(params, ids[mname]))
                         cases.append(Case(cid, task, spec, key, model, level, s, frac, mname,
                                           params, repeats, plugins, hs, budget, hausdorff_eps=eps))
     seen = set()

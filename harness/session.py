@@ -148,8 +148,9 @@ def task_specs(cfg: Config) -> dict:
             except KeyError:
                 continue
             defaults[name] = json.loads(json.dumps(m.with_defaults({}), default=str))
-            if id_spec(m.params):   # how case ids record renamed or added parameters (compare reads it)
-                ids[name] = json.loads(json.dumps(id_spec(m.params), default=str))
+            spec = id_spec(m.params)    # how case ids record renamed or added parameters (compare reads it)
+            if spec:
+                ids[name] = json.loads(json.dumps(spec, default=str))
         specs[t]["method_defaults"] = defaults
         specs[t]["param_ids"] = ids
     return specs
