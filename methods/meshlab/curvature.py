@@ -125,8 +125,8 @@ def principal_curvature(V, F, *, method="Quadric Fitting", scale=None):
 def apss_curvature(V, F, *, filter_scale=2.0):
     """Mean and Gaussian curvature of MeshLab's APSS fit (module docstring)."""
     out = {}
+    ms = _meshset(V, F)                                 # one mesh: the filter writes quality only
     for q, kind in (("H", 0), ("K", 1)):                # Mean, Gauss (2 and 3, K1 and K2, abort the process)
-        ms = _meshset(V, F)
         ms.compute_curvature_and_color_apss_per_vertex(filterscale=float(filter_scale), curvaturetype=kind)
         out[q] = _quality(V, ms)
     return CurvatureResult(K=out["K"], H=0.5 * out["H"])
