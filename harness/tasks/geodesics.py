@@ -76,7 +76,8 @@ def _given_sources(value) -> tuple:
     if min(ids) < 0:
         return None, f"vertices: a vertex index is >= 0, got {min(ids)}"
     if len(set(ids)) != len(ids):
-        return None, f"vertices: {sorted({v for v in ids if ids.count(v) > 1})[:5]} given more than once"
+        from collections import Counter
+        return None, f"vertices: {sorted(v for v, c in Counter(ids).items() if c > 1)[:5]} given more than once"
     if len(ids) > MAX_SOURCES:
         return None, f"vertices: at most {MAX_SOURCES} sources, got {len(ids)}"
     return {"vertices": ids}, None
