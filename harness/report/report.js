@@ -1280,11 +1280,12 @@
   function convergencePanels(plots, d, key, hidden) {
     var recs = (d.T.convergence || []).filter(function (c) { return c.metric === key && !hidden.has(c.variant); });
     if (!recs.length) return;
-    var fams = uniq(recs.map(function (c) { return c.family + ' · ' + c.noise; })).sort();
+    var famOf = function (c) { return c.family + ' · ' + c.noise; };    // a panel and a column each
+    var fams = uniq(recs.map(famOf)).sort();
     var vars = uniq(recs.map(function (c) { return c.variant; })).sort();
     var t = el('table', {'class': 'best convergence'});
     var order = function (v, f) {
-      var c = recs.filter(function (c) { return c.variant === v && c.family + ' · ' + c.noise === f; })[0];
+      var c = recs.filter(function (c) { return c.variant === v && famOf(c) === f; })[0];
       return c ? (isNum(c.order) ? c.order.toFixed(2) : '— (' + c.points.length + ' resolutions)') : '';
     };
     t.innerHTML = '<tr><th>method</th>' + fams.map(function (f) { return '<th>' + esc(f) + '</th>'; }).join('') + '</tr>' +
@@ -1301,7 +1302,7 @@
       'One line per method; its observed order p is in the table above (and in each point\'s tooltip).', function () {
         return staticLegend(vars, function (name) { return d.colors[name]; });
       });
-    groupBy(recs, function (c) { return c.family + ' · ' + c.noise; }).forEach(function (cs, title) {
+    groupBy(recs, famOf).forEach(function (cs, title) {
       var series = cs.map(function (c) {
         return {name: c.variant, color: d.colors[c.variant], line: true, r: 3, pts: c.points.map(function (p) {
           return [p[0], p[1], c.variant + '\n' + title + '\nh ' + fmt(p[0]) + ', ' + key + ' ' + fmt(p[1]) +
