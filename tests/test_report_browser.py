@@ -17,6 +17,7 @@ import os
 import re
 import select
 import shutil
+import struct
 import subprocess
 import tempfile
 import time
@@ -449,6 +450,52 @@ def test_every_legend_gives_its_lines_distinct_colours(tmp_path):
     for leg in legends:                   # the hashed hues of the pair above were 35 apart in RGB
         gaps = [np.linalg.norm(rgb(leg[a]) - rgb(leg[b])) for a, b in itertools.combinations(leg, 2)]
         assert min(gaps) >= 60, leg
+
+
+def _fnv1a(name: str) -> int:
+    h = 0x811C9DC5
+    for (unit,) in struct.iter_unpack("<H", name.encode("utf-16-le")):    # UTF-16 code units, as JavaScript
+        h = ((h ^ unit) * 0x01000193) & 0xFFFFFFFF
+    return h
+
+
+def test_a_method_keeps_its_colour_from_report_to_report(tmp_path):
+    """A name's colour is the palette's entry its FNV-1a hash picks (the later of two names of a
+    set that pick the same takes the next free one), so scratch.angle_defect is drawn in one colour
+    in two reports of different method sets (by the names' sorted order, it had the first colour
+    in one and the second in the other); libigl.gaussian_curvature and trimesh.curvature_measure
+    pick the same colour, so the second takes the next."""
+    import re
+
+    import harness
+    js = (Path(harness.__file__).parent / "report" / "report.js").read_text()
+    palette = re.findall(r"'(#[0-9a-f]{6})'", js[js.index("var PALETTE"):js.index("];", js.index("var PALETTE"))])
+    assert len(palette) == 20
+
+    def expected(names):
+        out, free = {}, [True] * len(palette)
+        for n in sorted(set(names)):
+            k = _fnv1a(n) % len(palette)
+            while not free[k]:
+                k = (k + 1) % len(palette)
+            free[k] = False
+            out[n] = "rgb({}, {}, {})".format(*(int(palette[k][i:i + 2], 16) for i in (1, 3, 5)))
+        return out
+    seen = {}
+    for label, methods in (("a", ["scratch.angle_defect", "libigl.principal_curvature", "scratch.cotan_mean"]),
+                           ("b", ["scratch.angle_defect", "libigl.gaussian_curvature", "trimesh.curvature_measure"])):
+        cfg = {"name": label, "repeats": 1, "time_budget": 0, "meshes": [{"procedural": "torus", "resolution": 16}],
+               "tasks": {"curvature": {"methods": methods}}}
+        harness.run(cfg, out=tmp_path / label, quiet=True, workers=1)
+        s = check_report_in_browser(tmp_path / label / "report.html", interact=False)
+        assert s["console_errors"] == [] and s["exceptions"] == [] and s["jserrors"] == 0
+        legends = [dict(leg) for leg in s["legends"] if leg and set(dict(leg)) <= set(methods)]
+        assert legends, s["legends"]
+        want = expected(methods)
+        for leg in legends:
+            assert leg == {n: want[n] for n in leg}, (leg, want)
+        seen[label] = want["scratch.angle_defect"]
+    assert seen["a"] == seen["b"]
 
 
 def test_the_noisy_input_line_spans_levels_where_every_result_is_invalid(tmp_path):

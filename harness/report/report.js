@@ -10,8 +10,6 @@
   });
   var D = JSON.parse(document.getElementById('report-data').textContent);
   var SVGNS = 'http://www.w3.org/2000/svg';
-  var PALETTE = ['#4e79a7', '#f28e2b', '#e15759', '#59a14f', '#b07aa1', '#76b7b2', '#edc948', '#9c755f',
-    '#ff9da7', '#1b9e77', '#7570b3', '#d95f02', '#66a61e', '#e7298a', '#a6761d', '#17becf', '#bcbd22', '#393b79'];
   var REF = '#777';
   var plotsRendered = 0;
 
@@ -95,10 +93,13 @@
   }
 
   // ------------------------------------------------------------------ task data
-  // colours of a set of names, by the names' sorted order: d3's category10 without its grey (the
-  // reference's), then eleven picked farthest-first from tab20 and Kelly's colours (every two of
-  // the twenty at least 64 apart in RGB); past twenty, each next colour is the one of a grid of
-  // hues and lightnesses farthest in RGB from those taken, the reference's grey and white
+  // colours of a set of names, derived from each name: twenty colours (d3's category10 without its
+  // grey, the reference's, then ten picked farthest-first from tab20 and Kelly's colours; every two
+  // at least 64 apart in RGB), a name's own the one its FNV-1a hash picks, so a method keeps its
+  // colour from report to report; where two names of one set pick the same, the later in sorted
+  // order takes the next free one (no two names of a set share a colour); past twenty, each next
+  // colour is the one of a grid of hues and lightnesses farthest in RGB from those taken, the
+  // reference's grey and white
   var PALETTE = ['#1f77b4', '#ff7f0e', '#2ca02c', '#d62728', '#9467bd', '#8c564b', '#e377c2', '#bcbd22',
     '#17becf', '#000080', '#dbdb8d', '#a1caf1', '#2b3d26', '#393b79', '#f99379', '#f7b6d2', '#98df8a',
     '#882d17', '#008856', '#f3c300'];
@@ -111,11 +112,24 @@
     });
   }
   function rgbDist(p, q) { return Math.hypot(p[0] - q[0], p[1] - q[1], p[2] - q[2]); }
+  function nameHash(s) {           // FNV-1a (32 bit) over the name's UTF-16 code units
+    var h = 0x811c9dc5;
+    for (var i = 0; i < s.length; i++) h = Math.imul(h ^ s.charCodeAt(i), 0x01000193) >>> 0;
+    return h;
+  }
   function paletteFor(names) {
     var out = {}, taken = PALETTE.map(hexRgb).concat([hexRgb('#777777'), [255, 255, 255]]), grid = [];
+    var free = PALETTE.map(function () { return true; }), nfree = PALETTE.length;
     for (var h = 0; h < 360; h += 10) [0.3, 0.45, 0.6].forEach(function (l) { grid.push(hslRgb(h, 0.65, l)); });
-    uniq(names).sort().forEach(function (n, i) {
-      if (i < PALETTE.length) { out[n] = PALETTE[i]; return; }
+    uniq(names).sort().forEach(function (n) {
+      if (nfree > 0) {
+        var k = nameHash(String(n)) % PALETTE.length;
+        while (!free[k]) k = (k + 1) % PALETTE.length;
+        free[k] = false;
+        nfree -= 1;
+        out[n] = PALETTE[k];
+        return;
+      }
       var best = null, bestD = -1;
       grid.forEach(function (c) {
         var d = Math.min.apply(null, taken.map(function (t) { return rgbDist(c, t); }));
