@@ -9,7 +9,7 @@ Run:  .venv/bin/python benchmarks/bench_fixed_floor.py [--config C] [--repeats 5
 2. In this process, for the same ok cases (each method called once on its case's input), times,
    median of ``--repeats``:
    - **required**: the work the metrics' definitions ask of any implementation, with the
-     harness's own distance queries (`harness.metrics._bvh_kernel`): for a simplified mesh,
+     harness's own distance queries (`harness.metrics._queries`, on the run's threads per case): for a simplified mesh,
      drawing its samples, a hierarchy over it and the ``2 x hausdorff_samples`` sampled
      distances ``surface_dist_mean`` averages; for a smoothed mesh, the distance of every
      vertex, which ``dist_mean`` integrates, and of every clean vertex to the result, which
@@ -56,9 +56,9 @@ def _median_time(fn, repeats: int) -> float:
 
 def _queries(P, S, order=None):
     from harness.core.geometry import morton_order
-    from harness.metrics._bvh_kernel import query_many
+    from harness.metrics._queries import query_blocks
     P = np.ascontiguousarray(P[morton_order(P) if order is None else order])
-    return query_many(P, np.full(len(P), -1, np.int64), *S.bvh())
+    return query_blocks(P, np.full(len(P), -1, np.int64), *S.bvh())
 
 
 def _simplification_work(inp, res, n_samples: int):
@@ -85,14 +85,14 @@ def _simplification_work(inp, res, n_samples: int):
 
 def _smoothing_work(inp, res):
     from harness.core.geometry import face_around_vertex, morton_order
-    from harness.metrics._bvh_kernel import query_many
+    from harness.metrics._queries import query_blocks
     from harness.metrics.surface_distance import cached_surface
     S = cached_surface(inp.cache, "clean_surface", inp.clean.V, inp.F)
     hints = face_around_vertex(np.asarray(inp.F, dtype=np.int64), len(res.V))
 
     def required():
         order = morton_order(res.V)
-        query_many(np.ascontiguousarray(res.V[order]), S.leaf_faces(hints[order]), *S.bvh())
+        query_blocks(res.V[order], S.leaf_faces(hints[order]), *S.bvh())
         S.displaced(res.V).corresponding_distances(S.V, S.walk())
     return required, None
 
@@ -135,7 +135,9 @@ def main(argv=None) -> int:
         out = Path(tmp) / "run"
         subprocess.run([sys.executable, "-m", "harness.cli", "run", args.config, "--workers", "1", "--out", str(out),
                         "--quiet"], cwd=ROOT, check=True, stdout=subprocess.DEVNULL)
-        fc = json.loads((out / "run.json").read_text())["fixed_cost_per_case_s"]
+        meta = json.loads((out / "run.json").read_text())
+        fc = meta["fixed_cost_per_case_s"]
+        threads = meta["timing"].get("threads_per_case") or 0
         ok = set()
         for t in tasks.names():
             if (out / task_file(t)).is_file():
@@ -148,6 +150,8 @@ def main(argv=None) -> int:
     print(f"run ({args.config}, --workers 1): {n} ok cases, method time {method:.3f} s, fixed cost {fixed:.3f} s "
           f"(measuring {measuring:.3f} s, the rest {outside:.3f} s), share {fc['share_of_method_time']:.3f}")
 
+    if threads:                                          # the run's cases measured on these threads
+        os.environ["OMP_NUM_THREADS"] = str(threads)
     from harness import runner
     from harness.config import load_config
     from harness.plugins import import_methods

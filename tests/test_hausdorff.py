@@ -1,6 +1,8 @@
 """The certified Hausdorff distance: closed forms, an independent C++ implementation (Sacht &
 Jacobson 2024, cascading upper bounds, PyPI ``cascading-upper-bounds``), dense sampling, exact
 reconstructions and budgets."""
+import os
+
 import numpy as np
 import pytest
 
@@ -201,6 +203,38 @@ def test_compiled_hierarchy_equals_libigl_distances():
         assert np.abs(d - ref).max() <= 1e-15 * diag
         hinted = query_many(P, np.roll(f, 1), *tree)[0]     # hints from other points: same answer
         assert np.abs(hinted - ref).max() <= 1e-15 * diag
+
+
+def test_blocked_queries_give_the_same_answer_on_any_number_of_threads(monkeypatch):
+    """`harness.metrics._queries.query_blocks` cuts the points into fixed blocks, so its distances
+    and closest faces are identical (bit for bit) on one, two and three threads and with
+    ``OMP_NUM_THREADS`` choosing; the distances equal libigl's to 1e-15 of the diagonal, with and
+    without hints, and one unblocked call's (the blocks only restart the hint chain)."""
+    from harness.metrics import _queries
+    from harness.metrics._bvh_kernel import query_many
+    m = datasets.load("armadillo").clean
+    S = _Surface(m.V, m.F)
+    rng = np.random.default_rng(3)
+    diag = m.diagonal()
+    P = sample_surface(m.V, m.F, 3 * _queries.BLOCK + 17, 4) + rng.normal(scale=0.01 * diag, size=(3 * _queries.BLOCK + 17, 3))
+    tree = S.bvh()
+    none = np.full(len(P), -1, np.int64)
+    d1, f1 = _queries.query_blocks(P, none, *tree, threads=1)
+    for n in (2, 3):
+        d, f = _queries.query_blocks(P, none, *tree, threads=n)
+        assert np.array_equal(d, d1) and np.array_equal(f, f1)
+    monkeypatch.setenv("OMP_NUM_THREADS", "2")
+    assert _queries.case_threads() == min(2, os.cpu_count() or 1)
+    d, f = _queries.query_blocks(P, none, *tree)
+    assert np.array_equal(d, d1) and np.array_equal(f, f1)
+    monkeypatch.setenv("OMP_NUM_THREADS", "x")
+    assert _queries.case_threads() == 1
+    ref = S.query(P)[0]
+    assert np.abs(d1 - ref).max() <= 1e-15 * diag
+    assert np.abs(d1 - query_many(P, none, *tree)[0]).max() <= 1e-15 * diag
+    hinted = _queries.query_blocks(P, np.roll(f1, 1), *tree, threads=2)[0]
+    assert np.abs(hinted - ref).max() <= 1e-15 * diag
+    assert len(_queries.query_blocks(P[:0], none[:0], *tree)[0]) == 0
 
 
 @pytest.mark.parametrize("level", [0.3, 3.0, 30.0])

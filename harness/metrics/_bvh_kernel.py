@@ -450,10 +450,11 @@ def closest(px, py, pz, V, F, B, hint, stack, dstack):
     return best, bf
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def query_many(P, hints, V, F, B):
     """Distances (k,) and closest faces (k,) of points P (k, 3); a point without a hint (-1)
-    starts from the previous point's closest face (consecutive points are often near)."""
+    starts from the previous point's closest face (consecutive points are often near). It
+    releases the GIL: `harness.metrics._queries` runs blocks of points on several threads."""
     k = P.shape[0]
     d = np.empty(k)
     f = np.empty(k, np.int64)

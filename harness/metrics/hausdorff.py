@@ -71,6 +71,7 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, ato
     ``all_vertices`` also the vertices in no face, else 0 there).
     """
     from . import _bvh_kernel as K
+    from ._queries import query_blocks
     VX = np.ascontiguousarray(VX, dtype=np.float64)
     FX = np.ascontiguousarray(FX, dtype=np.int64)
     tree = Y.bvh()
@@ -83,7 +84,7 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, ato
     if len(used):
         used = used[morton_order(VX[used])]         # neighbouring queries read neighbouring nodes
         h = np.full(len(used), -1, np.int64) if hints is None else Y.leaf_faces(np.asarray(hints)[used])
-        dV[used], iV[used] = K.query_many(np.ascontiguousarray(VX[used]), np.ascontiguousarray(h), *tree)
+        dV[used], iV[used] = query_blocks(VX[used], h, *tree)
     # state: [lower, queries, settled, open, initialised, heap size, free slots, done, floor]
     state = np.zeros(9)
     state[0] = max(lower, float(dV[inface].max()) if inface.any() else 0.0)
@@ -119,10 +120,10 @@ def _in_spatial_order(P: np.ndarray, Y: Surface, order: np.ndarray | None = None
     """Distances (k,) of the points P (k, 3) to Y, queried along a Morton curve (``order``, when
     known; neighbouring queries read neighbouring nodes, each starting from the previous
     point's closest face), returned in the order of P."""
-    from ._bvh_kernel import query_many
+    from ._queries import query_blocks
     order = morton_order(P) if order is None else order
     d = np.empty(len(P))
-    d[order] = query_many(np.ascontiguousarray(P[order]), np.full(len(P), -1, np.int64), *Y.bvh())[0]
+    d[order] = query_blocks(P[order], np.full(len(P), -1, np.int64), *Y.bvh())[0]
     Y.count += len(P)
     return d
 

@@ -97,7 +97,7 @@ class Surface:
         same faces on corresponding vertices (a displaced copy, e.g. a noisy or smoothed one):
         each query starts from a face around its vertex, so it usually prunes at once.
         ``walk``: ``P``'s `walk` when known (e.g. the clean surface's, for its own vertices)."""
-        from ._bvh_kernel import query_many
+        from ._queries import query_blocks
         P = np.ascontiguousarray(P, dtype=np.float64)
         if len(P) != len(self.V):
             raise ValueError(f"corresponding_distances needs one point per vertex ({len(self.V)}), got {len(P)}")
@@ -106,7 +106,7 @@ class Surface:
         order, hints = walk if walk is not None else _walk(P, self.F)
         self.count += len(P)
         d = np.empty(len(P))
-        d[order] = query_many(np.ascontiguousarray(P[order]), self.leaf_faces(hints), *self.bvh())[0]
+        d[order] = query_blocks(P[order], self.leaf_faces(hints), *self.bvh())[0]
         return d
 
     def walk(self) -> tuple[np.ndarray, np.ndarray]:
