@@ -317,27 +317,31 @@ def test_a_zero_area_side_has_no_samples_but_a_certified_bracket():
     assert h["hausdorff"] == pytest.approx(1.0, abs=1e-12) and h["hausdorff_upper"] == pytest.approx(1.0, abs=1e-12)
 
 
-def test_the_hierarchys_numba_cache_is_dropped_when_cover_bound_changes(tmp_path):
-    """numba keys _bvh_kernel's cache by that file alone, but its functions compile cover_bound in:
-    an edited _cover_bound.py must not leave the old machine code running."""
-    from harness.metrics._bvh_kernel import drop_stale_cache
-    here, dep, cache = tmp_path / "_bvh_kernel.py", tmp_path / "_cover_bound.py", tmp_path / "__pycache__"
+def test_the_brackets_numba_cache_is_dropped_when_a_kernel_it_compiles_in_changes(tmp_path):
+    """numba keys _bracket_kernel's cache by that file alone, but its functions compile
+    _bvh_kernel's and cover_bound's in: an edited dependency must not leave the old machine code
+    running."""
+    from harness.metrics._kernel_cache import drop_stale_cache
+    here, cache = tmp_path / "_bracket_kernel.py", tmp_path / "__pycache__"
+    deps = {name: tmp_path / name for name in ("_bvh_kernel.py", "_cover_bound.py")}
     here.write_text("# kernel\n")
-    dep.write_text("# bound v1\n")
+    for name, dep in deps.items():
+        dep.write_text(f"# {name} v1\n")
     cache.mkdir()
 
     def fake_cache():
-        for name in ("_bvh_kernel._upper-324.py311.nbi", "_bvh_kernel._upper-324.py311.1.nbc",
-                     "_cover_bound.cover_bound-38.py311.nbi", "_bvh_kernel.cpython-311.pyc"):
+        for name in ("_bracket_kernel._upper-324.py311.nbi", "_bracket_kernel._upper-324.py311.1.nbc",
+                     "_cover_bound.cover_bound-38.py311.nbi", "_bracket_kernel.cpython-311.pyc"):
             (cache / name).write_text("x")
     fake_cache()
-    assert drop_stale_cache(here)                          # no record yet: cannot vouch for the files
-    assert sorted(p.name for p in cache.iterdir()) == ["_bvh_kernel.cpython-311.pyc", "_bvh_kernel.deps",
+    assert drop_stale_cache(here, tuple(deps))             # no record yet: cannot vouch for the files
+    assert sorted(p.name for p in cache.iterdir()) == ["_bracket_kernel.cpython-311.pyc", "_bracket_kernel.deps",
                                                         "_cover_bound.cover_bound-38.py311.nbi"]
-    fake_cache()
-    assert not drop_stale_cache(here) and (cache / "_bvh_kernel._upper-324.py311.nbi").exists()
-    dep.write_text("# bound v2\n")
-    assert drop_stale_cache(here) and not (cache / "_bvh_kernel._upper-324.py311.nbi").exists()
+    for name, dep in deps.items():
+        fake_cache()
+        assert not drop_stale_cache(here, tuple(deps)) and (cache / "_bracket_kernel._upper-324.py311.nbi").exists()
+        dep.write_text(f"# {name} v2\n")
+        assert drop_stale_cache(here, tuple(deps)) and not (cache / "_bracket_kernel._upper-324.py311.nbi").exists()
 
 
 def test_surface_b_keeps_its_samples_through_a_pickle_with_the_same_result(simplified):

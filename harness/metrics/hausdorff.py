@@ -70,7 +70,7 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, ato
     (batches of splits) and ``vertex_distances`` (k,) (each vertex of X to Y; with
     ``all_vertices`` also the vertices in no face, else 0 there).
     """
-    from . import _bvh_kernel as K
+    from . import _bracket_kernel as B
     from ._queries import query_blocks
     VX = np.ascontiguousarray(VX, dtype=np.float64)
     FX = np.ascontiguousarray(FX, dtype=np.int64)
@@ -91,7 +91,7 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, ato
     state[1] = float(len(used))
     state[8] = floor
     cap = np.full(len(FX), np.inf) if cap is None else np.ascontiguousarray(cap, dtype=np.float64)
-    ub = K.roots(VX, FX, dV, iV, *tree, NY, W, eps, atol, state, cap)
+    ub = B.roots(VX, FX, dV, iV, *tree, NY, W, eps, atol, state, cap)
     thr = (1.0 + eps) * max(state[0], floor) + atol
     closed = ub <= thr
     if closed.any():
@@ -105,7 +105,7 @@ def one_sided(VX: np.ndarray, FX: np.ndarray, Y: Surface, eps: float = 1e-3, ato
     rounds = 0
     while True:
         rounds += 1
-        store = K.best_first(tris, np.ascontiguousarray(ub[tris]), VX, FX, dV, iV, *tree, NY, W, eps, atol,
+        store = B.best_first(tris, np.ascontiguousarray(ub[tris]), VX, FX, dV, iV, *tree, NY, W, eps, atol,
                              float(max_points), 20000, store, state)
         if state[7] or state[1] + 7 > max_points or time.perf_counter() > deadline:
             break
