@@ -496,7 +496,7 @@ def test_the_vectorised_obj_reader_equals_the_general_one(bad_dir, tmp_path):
     """A plain OBJ (three numbers a vertex, three indices a face) is read by numpy in one pass;
     it must give exactly the general reader's arrays, and leave every other file (slashes,
     polygons, negative or out-of-range indices, other line breaks, short lines) to it."""
-    import harness.mesh as M
+    import harness.mesh_formats as M
     rng = np.random.default_rng(3)
     V = rng.standard_normal((500, 3)) * 10.0 ** rng.integers(-8, 8, (500, 1))
     F = rng.integers(0, 500, (900, 3))
