@@ -92,7 +92,12 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 
-from ..core.geometry import edge_face_counts, referenced
+from ..core.geometry import referenced
+from ._edge_pattern import _boundary_vertices, _edge_keys, _isin_sorted
+from ._eig_solvers import DENSE_N, _largest_magnitude, _ldlt, _most_negative, _v0  # noqa: F401
+
+__all__ = ["COLUMNS", "DENSE_N", "EIG_MAX_N", "LIN_TOL", "PLANAR_TOL", "PSD_TOL", "SYM_TOL", "ZERO_TOL",
+           "laplacian_properties"]
 
 SYM_TOL = 1e-10
 ZERO_TOL = 1e-12
@@ -100,7 +105,6 @@ LIN_TOL = 1e-9
 PSD_TOL = 1e-10
 PLANAR_TOL = 1e-9
 EIG_MAX_N = 200_000
-DENSE_N = 2000           # lam_max falls back to a dense eigensolver up to this size
 
 COLUMNS = ("sym_error", "loc_violations", "lin_error", "neg_weights", "min_eig", "psd", "nnz",
            "SYM", "LOC", "LIN", "POS", "operator_symmetric")
@@ -271,39 +275,6 @@ def _symmetrizer(W, n):
     return d
 
 
-def _edge_keys(F: np.ndarray, n: int) -> np.ndarray:
-    """Sorted unique directed keys ``i*n + j`` of both orientations of every mesh edge (a
-    degenerate face's self-loop ``i*n + i`` once)."""
-    E = edge_face_counts(F)[0] if len(F) else np.zeros((0, 2), np.int64)
-    i, j = E[:, 0], E[:, 1]
-    loop = i == j
-    keys = np.concatenate([i * np.int64(n) + j, j[~loop] * np.int64(n) + i[~loop]])
-    keys.sort()
-    return keys
-
-
-def _isin_sorted(keys: np.ndarray, sorted_keys: np.ndarray) -> np.ndarray:
-    if sorted_keys.size == 0:
-        return np.zeros(keys.shape, bool)
-    pos = np.searchsorted(sorted_keys, keys)
-    pos = np.minimum(pos, sorted_keys.size - 1)
-    return sorted_keys[pos] == keys
-
-
-def _boundary_vertices(F: np.ndarray, n: int) -> np.ndarray:
-    """Vertices on an edge with one incident face, or with more than two (non-manifold)."""
-    E = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
-    keys = E[:, 0] * np.int64(n) + E[:, 1]
-    keys.sort()
-    start = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]])
-    counts = np.diff(np.r_[start, keys.size])
-    bad = keys[start[counts != 2]]
-    out = np.zeros(n, bool)
-    out[bad // n] = True
-    out[bad % n] = True
-    return out
-
-
 def _operator_symmetric(W, M, rows, cols, vals, WT):
     if M is None:
         m = np.ones(W.shape[0])
@@ -355,34 +326,6 @@ def _certificate(S, V, F):
     return (True if float(sigma.max()) <= PSD_TOL * np.ldexp(dmax, -k) else None), zero_rows
 
 
-def _v0(n):
-    return np.random.default_rng(0).standard_normal(n)
-
-
-def _ldlt(A):
-    """``(solve, pivots)`` of ``P A P^T = L D L^T`` without pivoting (QDLDL with an AMD ordering;
-    SuperLU in symmetric mode with diagonal pivots where QDLDL is missing), or None when a pivot
-    is exactly zero or SuperLU left the diagonal."""
-    try:
-        import qdldl
-    except ImportError:
-        qdldl = None
-    if qdldl is not None:
-        try:
-            f = qdldl.Solver(sp.csc_matrix(A))
-        except (ValueError, RuntimeError):
-            return None
-        D = f.factors()[1]
-        return (None if (D == 0).any() else (f.solve, D))
-    try:
-        lu = sla.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
-    except RuntimeError:
-        return None
-    if not np.array_equal(lu.perm_r, lu.perm_c):
-        return None
-    return lu.solve, lu.U.diagonal()
-
-
 def _min_eig(W, V, F, WT=None):
     """(min_eig relative, psd) of S = -(W + W^T)/2 (``WT``: W^T in CSR, when known); None where
     not measurable."""
@@ -432,40 +375,3 @@ def _min_eig(W, V, F, WT=None):
     if not psd and lam_min >= sigma:  # iteration disagrees with the exact inertia count
         return None, psd
     return (lam_min / lam_max if lam_max is not None else None), psd
-
-
-def _largest_magnitude(S, n):
-    """``max |eig(S)|`` of symmetric S (CSC): Lanczos with 8 vectors, then with 32 (nearly tied
-    extreme eigenvalues of opposite sign can stall the small space), then a dense solver up to
-    `DENSE_N`; None when none of them gives it."""
-    for ncv in dict.fromkeys((min(n - 1, 8), min(n - 1, 32))):
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                return float(np.abs(sla.eigsh(S, k=1, which="LM", ncv=ncv, v0=_v0(n), return_eigenvectors=False,
-                                              tol=1e-6, maxiter=max(1000, 10 * n))).max())
-        except (sla.ArpackNoConvergence, RuntimeError, ValueError):
-            pass
-    if n <= DENSE_N:
-        return float(np.abs(np.linalg.eigvalsh(S.toarray())).max())
-    return None
-
-
-def _most_negative(S, n, lam_max):
-    """Smallest (most negative) eigenvalue of symmetric S by Lanczos, then LOBPCG.
-
-    The LOBPCG value is accepted only if its residual ``|S x - lam x|`` is below
-    ``1e-6 * lam_max`` (an unconverged Rayleigh quotient is only an upper bound); else None.
-    """
-    try:
-        return sla.eigsh(S, k=1, which="SA", ncv=min(n - 1, 8), v0=_v0(n), return_eigenvectors=False,
-                         tol=1e-8, maxiter=max(2000, 20 * n))
-    except sla.ArpackNoConvergence:
-        pass
-    rng = np.random.default_rng(0)
-    X = rng.standard_normal((n, 1))
-    vals, vecs = sla.lobpcg(S, X, largest=False, tol=1e-8, maxiter=2000)
-    x = vecs[:, 0] / np.linalg.norm(vecs[:, 0])
-    if np.linalg.norm(S @ x - vals[0] * x) > 1e-6 * lam_max:
-        return None
-    return vals
