@@ -44,7 +44,9 @@ from .. import input_store
 from ..config import Case
 from ..results import close_inherited_locks
 from ..runner import base_row, run_case
-from .procs import die_with_parent, end_by, signal_name
+from .guard import _GUARD_WAITS, _die_with_guard, _guard
+from .procs import signal_name
+from .subreaper import _children, become_subreaper, reap_strays
 
 
 STDERR_MAX = 16 << 20          # a case's stderr file is cut back to its tail past this size
@@ -97,82 +99,6 @@ def signals_blocked():
         yield
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, old)
-
-
-PR_SET_CHILD_SUBREAPER = 36
-
-
-def become_subreaper(on: bool = True) -> bool:
-    """Make this process a child subreaper (Linux; ``on=False`` undoes it): orphaned descendants
-    are re-parented to it instead of init, even after they left its session. False where
-    unsupported."""
-    try:
-        import ctypes
-        libc = ctypes.CDLL(None, use_errno=True)
-        return libc.prctl(PR_SET_CHILD_SUBREAPER, int(on), 0, 0, 0) == 0
-    except (OSError, AttributeError):
-        return False
-
-
-def _children(pid: int) -> list[int]:
-    """Pids whose parent is ``pid`` (from /proc: each thread's ``children`` list where the kernel
-    has it, else every process's parent; [] without /proc)."""
-    try:
-        tids = os.listdir(f"/proc/{pid}/task")
-        kids: set[int] = set()
-        for t in tids:
-            with open(f"/proc/{pid}/task/{t}/children") as fh:
-                kids.update(int(x) for x in fh.read().split())
-        return sorted(kids)
-    except (OSError, ValueError):
-        pass
-    out = []
-    try:
-        names = os.listdir("/proc")
-    except OSError:
-        return out
-    for name in names:
-        if not name.isdigit():
-            continue
-        try:
-            with open(f"/proc/{name}/stat", "rb") as fh:
-                stat = fh.read()
-        except OSError:
-            continue
-        fields = stat[stat.rfind(b")") + 2:].split()     # after the command name, which may hold spaces
-        if len(fields) > 1 and int(fields[1]) == pid:
-            out.append(int(name))
-    return out
-
-
-def reap_strays(keep=(), rounds: int = 20, wait_s: float = 2.0) -> int:
-    """Kill and reap every child of this process that is not in ``keep`` (running cases, and
-    children this process had before its cases): the orphaned descendants of cases that
-    escaped their process group, re-parented here because this process is a subreaper. Their
-    own children come here in turn as they die, so this repeats until none is left (at most
-    ``rounds`` times); each round waits at most ``wait_s`` for the killed to be reaped (one
-    stuck in uninterruptible sleep is left to init). Returns how many were killed."""
-    me, keep, n = os.getpid(), set(keep), 0
-    for _ in range(rounds):
-        strays = [c for c in _children(me) if c not in keep]
-        if not strays:
-            break
-        for c in strays:
-            with contextlib.suppress(OSError):
-                os.kill(c, signal.SIGKILL)
-        left, t_end = set(strays), time.monotonic() + wait_s
-        while left and time.monotonic() < t_end:
-            for c in list(left):
-                try:
-                    if os.waitpid(c, os.WNOHANG)[0]:
-                        left.discard(c)
-                except ChildProcessError:
-                    left.discard(c)
-            if left:
-                time.sleep(0.01)
-        n += len(strays)
-        keep |= left                                 # not reaped in time: not ours to wait for
-    return n
 
 
 def _isolate(stderr_path: str | None) -> None:
@@ -237,73 +163,6 @@ def _child(conn, case, want_meshes, own_reader_fd=None, want_view=False, stderr_
             os._exit(0)
         reap_strays()
         conn.close()
-
-
-# every signal whose default ends a process (a method may send any to its parent, os.getppid()):
-# the guard takes them only from the driver, so a method's cost the case nothing and never reach it
-_NOT_ENDING = {getattr(signal, n) for n in ("SIGKILL", "SIGSTOP", "SIGCHLD", "SIGCONT", "SIGTSTP", "SIGTTIN",
-                                            "SIGTTOU", "SIGWINCH", "SIGURG") if hasattr(signal, n)}
-_GUARDED = tuple(sorted(set(signal.valid_signals()) - _NOT_ENDING)) if hasattr(signal, "valid_signals") else ()
-_GUARD_WAITS = set(_GUARDED) | ({signal.SIGCHLD} if hasattr(signal, "SIGCHLD") else set())
-
-
-def _die_with_guard(guard: int) -> None:
-    """In the case process: killed (SIGKILL) the moment its guard ends, whatever ends it, so the
-    case never becomes a child of the driver (a subreaper) and cannot outlive a guard the
-    driver killed, even from a session of its own."""
-    if not die_with_parent(guard):        # it ended before that
-        os._exit(70)
-
-
-def _guard(pid: int) -> None:
-    """The case process as the driver sees it: the parent of the process that runs the case
-    (``pid``), which dies with it (`_die_with_guard`). It takes the signals of `_GUARDED` from
-    the driver alone (stopped by it, it kills the case and ends by that signal); from anyone
-    else, the case's own processes included (a method signalling its parent), they are
-    dropped. It dies with the driver (``PR_SET_PDEATHSIG``), and the case with it. It is a child
-    subreaper (what the case leaves, even outside its group, comes back here and is killed),
-    waits for the case, then ends as the case did: the same exit code, or killed by the same
-    signal (without a core file of its own). Where ``sigwaitinfo`` is missing (macOS) the sender
-    cannot be told: the guarded signals are ignored. Never returns."""
-    driver = os.getppid()
-    try:
-        import resource
-        resource.setrlimit(resource.RLIMIT_CORE, (0, 0))     # a core file is the case's, never this one's
-    except (ImportError, OSError, ValueError):
-        pass
-    if not die_with_parent(driver):                          # with the driver, even a SIGKILLed one
-        os.kill(pid, signal.SIGKILL)
-        os._exit(70)
-    become_subreaper()
-    if not hasattr(signal, "sigwaitinfo"):   # (macOS) no sender to check: the guarded signals are ignored
-        for sig in _GUARDED:
-            with contextlib.suppress(OSError, ValueError):
-                signal.signal(sig, signal.SIG_IGN)
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, _GUARD_WAITS)
-    status = None
-    while status is None and not hasattr(signal, "sigwaitinfo"):
-        try:
-            status = os.waitpid(pid, 0)[1]
-        except ChildProcessError:
-            status = 0
-    while status is None:
-        try:
-            done, st = os.waitpid(pid, os.WNOHANG)
-        except ChildProcessError:
-            done, st = pid, 0
-        if done:
-            status = st
-            break
-        info = signal.sigwaitinfo(_GUARD_WAITS)
-        if info.si_signo in _GUARDED and info.si_pid == driver:
-            with contextlib.suppress(OSError):
-                os.kill(pid, signal.SIGKILL)
-            reap_strays()
-            end_by(info.si_signo)
-    reap_strays()
-    if os.WIFSIGNALED(status):
-        end_by(os.WTERMSIG(status))
-    os._exit(os.waitstatus_to_exitcode(status) if os.WIFEXITED(status) else 1)
 
 
 def _tail(path: str | None, n: int = 3) -> str:
