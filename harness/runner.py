@@ -46,7 +46,6 @@ import contextlib
 import json
 import math
 import os
-import resource
 import socket
 import statistics
 import threading
@@ -58,90 +57,18 @@ from pathlib import Path
 import numpy as np
 
 from . import input_store, tasks
+from .case_inputs import QUALITY, input_mesh_name, prepare_input, saved_meshes
 from .config import Case
 from .errors import ShootoutError
-from .tasks.base import CaseInput
+from .probes import _machine_busy_s, _reset_peak, _status_kib, _thread_ticks, _trim_heap, peak_rss_mb, threads_busy
+
+__all__ = ["MAX_SAMPLES", "QUALITY", "SAMPLE_WALL", "THREAD_ENV", "base_row", "forget_inputs", "input_mesh_name",
+           "limit_threads", "peak_rss_mb", "prepare_input", "release_thread_pools", "run_case", "saved_meshes",
+           "scan_thread_pools", "thread_env", "threads_busy", "timing_columns"]
 
 
 MAX_SAMPLES = 1000
 SAMPLE_WALL = 10.0   # beyond `repeats`, samples stop once their loop has taken this times the time budget
-
-
-def peak_rss_mb() -> float:
-    """Peak resident set size of this process so far, from the OS (getrusage), in MiB."""
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
-
-
-def _status_kib(field: str) -> int | None:
-    try:
-        with open("/proc/self/status") as fh:
-            for line in fh:
-                if line.startswith(field + ":"):
-                    return int(line.split()[1])
-    except (OSError, ValueError, IndexError):
-        return None
-    return None
-
-
-def _trim_heap() -> None:
-    """Return freed heap memory to the OS (glibc ``malloc_trim``; nothing elsewhere): pages the
-    allocator kept from earlier calls neither hide a call's allocations from the memory
-    measurement nor spare it the cost of touching fresh memory."""
-    try:
-        import ctypes
-        ctypes.CDLL("libc.so.6").malloc_trim(0)
-    except (OSError, AttributeError):
-        pass
-
-
-def _reset_peak() -> bool:
-    """Reset the kernel's resident high-water mark (VmHWM) of this process (Linux); after
-    `_trim_heap`, so that the peak counts the call's own allocations."""
-    try:
-        with open("/proc/self/clear_refs", "w") as fh:
-            fh.write("5")
-        return True
-    except OSError:
-        return False
-
-
-def _machine_busy_s() -> float | None:
-    """CPU seconds all processes of the machine have used (``/proc/stat``: user, nice, system,
-    irq, softirq and, on a virtual machine, steal), None where unknown."""
-    try:
-        with open("/proc/stat") as fh:
-            f = fh.readline().split()
-        ticks = os.sysconf("SC_CLK_TCK")
-        return sum(int(x) for x in f[1:4] + f[6:9]) / ticks
-    except (OSError, ValueError, IndexError, AttributeError):
-        return None
-
-
-def _thread_ticks() -> dict[int, int] | None:
-    """CPU clock ticks (user + system) of each thread of this process (``/proc/self/task``), None
-    where unknown."""
-    out = {}
-    try:
-        for d in os.scandir("/proc/self/task"):
-            try:
-                with open(f"/proc/self/task/{d.name}/stat") as fh:
-                    f = fh.read().rsplit(")", 1)[1].split()
-                out[int(d.name)] = int(f[11]) + int(f[12])      # utime, stime: fields 14 and 15
-            except (OSError, ValueError, IndexError):
-                continue                                        # a thread that ended meanwhile
-    except OSError:
-        return None
-    return out
-
-
-def threads_busy(before: dict | None, after: dict | None, wall_s: float) -> int | None:
-    """How many threads ran for at least 5% of a window of ``wall_s`` seconds and 2 clock ticks
-    (10 ms each), from `_thread_ticks` before and after it (a thread that ended within the
-    window is not seen: pools persist, so theirs are); None without both or under 0.05 s."""
-    if before is None or after is None or wall_s < 0.05:
-        return None
-    floor = max(2, 0.05 * wall_s * os.sysconf("SC_CLK_TCK"))
-    return sum(1 for tid, t in after.items() if t - before.get(tid, 0) >= floor)
 
 
 _POOLS: tuple | None = None   # (threadpoolctl controller, loaded objects at its scan), see scan_thread_pools
@@ -288,49 +215,6 @@ def timing_columns(times: list[float], cold: float | None, cpu: list[float] | No
         cpu = [float(f"{t:.9g}") for t in cpu]
         out.update(time_cpu_s=statistics.median(cpu), cpu_times=json.dumps(cpu))
     return out
-
-
-def prepare_input(case: Case) -> tuple[CaseInput, float | None]:
-    """The case's input (clean mesh, input positions) and the noise level of a given pair."""
-    from . import datasets
-    from .noise import apply_noise
-    src = datasets.cached(case.mesh)
-    clean = src.clean
-    settings = {"hausdorff_samples": case.hausdorff_samples, "hausdorff_eps": case.hausdorff_eps}
-    if src.noisy_V is not None:
-        return CaseInput(clean, src.noisy_V, clean.F, clean.diagonal(), settings), src.pair_level
-    frame = clean.noise_frame if case.adds_noise else None
-    V_in = apply_noise(clean.V, clean.F, case.noise_model, case.noise_level, case.seed,
-                       mesh_key=case.mesh_key, fraction=case.fraction, frame=frame)
-    return CaseInput(clean, V_in, clean.F, clean.diagonal(), settings, shape=src.shape), None
-
-
-def input_mesh_name(case: Case) -> str:
-    """The saved input's file name: one per (mesh, noise, level, seed), the level as ``%g`` where
-    that reads back as the level, else whole (``repr``: two levels that differ past 6 digits are
-    two files)."""
-    x = float(case.noise_level)
-    lvl = "pair" if math.isnan(x) else f"{x:g}" if float(f"{x:g}") == x else repr(x)
-    model = case.noise_model if case.noise_name == case.noise_model else f"{case.noise_model}-fraction{float(case.fraction)!r}"
-    return f"{case.mesh_key}-{model}-{lvl}-{case.seed}-input.ply"
-
-
-QUALITY = "quality = unsigned distance of each vertex to the clean surface (mesh units)"
-
-
-def saved_meshes(case: Case, task, inp: CaseInput, result) -> dict:
-    """The meshes ``save_meshes`` writes: ``{file name: (V, F, quality, comment)}``.
-
-    The input and the task's output mesh, each with a per-vertex quality: by default the
-    distance of each vertex to the clean surface (`QUALITY`); a task's ``output_mesh`` may
-    return ``(V, F, quality, comment)`` to store its own per-vertex value instead.
-    """
-    from .metrics.surface_distance import point_surface_distance
-    out = task.output_mesh(inp, result)
-    if len(out) == 2:
-        out = (*out, point_surface_distance(out[0], inp.clean.V, inp.clean.F), QUALITY)
-    return {input_mesh_name(case): (inp.V, inp.F, point_surface_distance(inp.V, inp.clean.V, inp.clean.F), QUALITY),
-            f"{case.case_id}.ply": out}
 
 
 def _has_value(v) -> bool:
