@@ -62,9 +62,9 @@ from .config import Case
 from .errors import ShootoutError
 from .probes import _machine_busy_s, _reset_peak, _status_kib, _thread_ticks, _trim_heap, peak_rss_mb, threads_busy
 
-__all__ = ["MAX_SAMPLES", "QUALITY", "SAMPLE_WALL", "THREAD_ENV", "base_row", "forget_inputs", "input_mesh_name",
-           "limit_threads", "peak_rss_mb", "prepare_input", "release_thread_pools", "run_case", "saved_meshes",
-           "scan_thread_pools", "thread_env", "threads_busy", "timing_columns"]
+__all__ = ["MAX_SAMPLES", "QUALITY", "SAMPLE_WALL", "THREAD_ENV", "_thread_ticks", "_trim_heap", "base_row",
+           "forget_inputs", "input_mesh_name", "limit_threads", "peak_rss_mb", "prepare_input", "release_thread_pools",
+           "run_case", "saved_meshes", "scan_thread_pools", "thread_env", "threads_busy", "timing_columns"]
 
 
 MAX_SAMPLES = 1000
