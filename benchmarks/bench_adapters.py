@@ -554,8 +554,8 @@ def main(argv=None) -> int:
         print(f"{m.name:28s} {r['n']:5d} {r['ta'] * 1e3:9.1f} {r['tb'] * 1e3:9.1f}  {ratio:22s} {out:27s} {r['what']}"
               f"{'; ' + r['note'] if r['note'] else ''}", flush=True)
     if "libigl.implicit" in rows:
-        from harness.core.solvers import solver_info
-        print(f"libigl.implicit solved with {solver_info()['last_used'].get('solver')} (harness auto choice)")
+        from harness.core.solvers import used
+        print(f"the harness's solver layer factored with: {', '.join(used()) or 'none'} in this process (libigl.implicit: the automatic choice)")
     over = [k for k, r in rows.items() if r["r"] > 1.05]
     bad = [k for k, r in rows.items() if not (r["diff"] <= r["tol"])]
     print(f"\nA/B median > 1.05: {', '.join(over) or 'none'}")

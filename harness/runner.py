@@ -229,7 +229,9 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
     for the driver to write (`saved_meshes`, when ``want_meshes`` and the task has an output mesh);
     ``extras["view"]`` holds the task's view meshes (``want_view``); ``extras["case_wall_s"]`` the
     wall time of this call (loading, noise, cold call, samples, measuring) and, for an ok case,
-    ``extras["measure_s"]`` that of the task's measuring of the result.
+    ``extras["measure_s"]`` that of the task's measuring of the result and ``extras["solver"]``
+    the backends the method's calls factored with through `harness.core.solvers` (``{backend:
+    largest system}``, empty for a method that did not use it).
     """
     row = base_row(case)
     extras: dict = {}
@@ -268,6 +270,8 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
         limiters.append(limit_threads(case.threads))
         env.enter_context(thread_env(case.threads))    # libraries that load or start their threads from here on
         loaded = _loaded_objects()
+        from .core import solvers
+        solvers.forget_used()
         with warnings.catch_warnings(record=True) as said:
             warnings.simplefilter("always")
             run, finish = method.bind(inp.V.copy(), inp.F.copy(), **case.params)   # checks: untimed
@@ -309,6 +313,7 @@ def run_case(case: Case, want_meshes: bool = False, want_view: bool = False) -> 
             others = max(0.0, (busy1 - busy0) - (own1 - own0)) / (wall1 - wall0)
             row["others_cpu"] = round(min(others, float(os.cpu_count() or 1)), 3)
         row["threads_busy"] = threads_busy(ticks0, _thread_ticks(), wall1 - wall0)
+        extras["solver"] = solvers.used()               # the method's own calls (measuring may factor too)
         t_measure = time.perf_counter()
         row.update(task.measured(inp, result, full))
         extras["measure_s"] = time.perf_counter() - t_measure

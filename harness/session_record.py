@@ -96,6 +96,20 @@ def _fixed_cost(row: dict, extras: dict) -> tuple[float, float, float] | None:
     return max(0.0, wall - method), method, float(extras.get("measure_s") or 0.0)
 
 
+def _count_solvers(used: dict, case, solvers) -> None:
+    """Add a case's sparse solver backends (`harness.runner.run_case`'s ``extras["solver"]``,
+    ``{backend: largest system}``) to ``used``: ``{backend: {"cases", "unknowns_max",
+    "methods"}}`` for run.json's ``solver.used``."""
+    if not isinstance(solvers, dict):
+        return
+    for name, n in solvers.items():
+        u = used.setdefault(str(name), {"cases": 0, "unknowns_max": 0, "methods": []})
+        u["cases"] += 1
+        u["unknowns_max"] = max(u["unknowns_max"], int(n))
+        if case.method not in u["methods"]:
+            u["methods"] = sorted(u["methods"] + [case.method])
+
+
 PROVENANCE = ("git_commit", "git_dirty", "code_sha256", "versions")
 
 

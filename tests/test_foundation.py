@@ -711,3 +711,33 @@ def test_case_ids_of_recorded_runs_survive_renamed_and_added_parameters():
                    "scratch.cotan_mean": "a79a42884ab5", "meshlab.two_steps": "7e820199d4df"}
     cfg["tasks"] = {"curvature": {"methods": [{"name": "scratch.cotan_mean", "params": {"signed": [True, False]}}]}}
     assert len({c.case_id for c in load_config(cfg).cases}) == 2          # away from its default: in the id
+
+
+def test_run_json_records_the_solver_backends_the_cases_used(tmp_path):
+    """run.json's ``solver.used`` names each backend the cases factored with through the
+    harness's solver layer (the automatic choice resolved), with its cases, methods and largest
+    system, from the forked case processes (the driver's own record saw none of them); a
+    method that factors nothing adds nothing."""
+    import json
+
+    import harness
+    from harness.core.solvers import auto_solver
+    cfg = {"name": "solvers", "repeats": 1, "time_budget": 0, "meshes": ["knight", "bunny"],
+           "noise": [{"model": "gaussian_normal", "levels": [0.3]}],
+           "tasks": {"smoothing": {"methods": ["scratch.implicit", "scratch.taubin"]}}}
+    frames = harness.run(cfg, out=tmp_path, quiet=True, workers=2)
+    df = frames["smoothing"]
+    assert (df.status == "ok").all()
+    n = df.loc[df.method == "scratch.implicit", "n_vertices"].astype(int)
+    want = {}
+    for k in n:
+        name = auto_solver(k)
+        w = want.setdefault(name, {"cases": 0, "unknowns_max": 0, "methods": ["scratch.implicit"]})
+        w["cases"] += 1
+        w["unknowns_max"] = max(w["unknowns_max"], k)
+    meta = json.loads((tmp_path / "run.json").read_text())
+    assert meta["solver"]["used"] == want and meta["sessions"][-1]["solver_used"] == want
+    from harness.report.overview import _solver_text
+    text = _solver_text(meta["solver"])
+    assert all(f"{b} in {w['cases']} case(s) of scratch.implicit (up to {w['unknowns_max']} unknowns)" in text
+               for b, w in want.items()), text

@@ -69,7 +69,7 @@ _DIST = {"cholmod": "scikit-sparse", "pypardiso": "pypardiso", "scipy": "scipy",
          "qdldl": "qdldl", "cholespy": "cholespy"}
 SOLVER_CHOICES = ("auto",) + SOLVERS
 
-_LAST_USED: dict = {}
+_USED: dict = {}             # backend -> largest system `factorize` gave it since `forget_used`
 
 
 _IMPORTABLE: dict = {}
@@ -125,8 +125,18 @@ def solver_info() -> dict:
             "auto_small_max_n": AUTO_SMALL_MAX_N,
             "auto_order_small": list(AUTO_SMALL), "auto_order_large": list(AUTO_LARGE),
             "env_override": os.environ.get("MESH_SHOOTOUT_SOLVER") or None,
-            "installed": installed_solvers(), "versions": versions,
-            "last_used": dict(_LAST_USED)}
+            "installed": installed_solvers(), "versions": versions}
+
+
+def forget_used() -> None:
+    """Start a new record of the backends `factorize` uses (`used`)."""
+    _USED.clear()
+
+
+def used() -> dict:
+    """``{backend: unknowns}``: each backend `factorize` used since `forget_used`, with the
+    largest system it factored (the automatic choice included, resolved to its backend)."""
+    return dict(_USED)
 
 
 def _canonical(A) -> sp.csr_matrix:
@@ -192,8 +202,7 @@ def factorize(A, solver: str = "auto", reuse_symbolic: bool = True) -> Factor:
     A = _canonical(A)
     key = _pattern_key(name, A) if reuse_symbolic else None
     fac = _BACKENDS[name](A, key)
-    _LAST_USED["solver"] = name
-    _LAST_USED["n"] = int(A.shape[0])
+    _USED[name] = max(_USED.get(name, 0), int(A.shape[0]))
     return fac
 
 

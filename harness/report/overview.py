@@ -171,9 +171,14 @@ def _solver_text(solver: dict) -> str:
         parts.append(f"overridden by the environment: {solver['env_override']}")
     if inst:
         parts.append(f"installed: {inst}")
-    used = solver.get("last_used")
+    used = solver.get("used")
     if isinstance(used, dict) and used:
-        parts.append("used: " + ", ".join(f"{k}: {v}" for k, v in sorted(used.items())))
+        said = []
+        for k, v in sorted(used.items(), key=lambda kv: str(kv[0])):
+            v = v if isinstance(v, dict) else {}
+            said.append(f"{k} in {v.get('cases', '?')} case(s) of {', '.join(map(str, v.get('methods') or [])) or '?'} "
+                        f"(up to {v.get('unknowns_max', '?')} unknowns)")
+        parts.append("used by this session's cases: " + "; ".join(said))
     return "; ".join(parts)
 
 
