@@ -1,0 +1,101 @@
+"""A reference spectrum for a mesh without an analytic one: the same surface, refined.
+
+The piecewise-linear surface of a mesh is a surface of its own (flat triangles, cone points at
+the vertices). Midpoint subdivision (every triangle into four, new vertices at the edge
+midpoints) leaves that surface unchanged and nests the spaces of continuous piecewise-linear
+functions. The eigenvalues of the conforming linear finite elements, ``K x = lambda M x`` with
+``K`` the cotangent stiffness (``-W``) and ``M`` the full (consistent) FEM mass matrix
+(``M_ij = A_f / 12`` per shared face off the diagonal, ``A_f / 6`` on it), are Rayleigh-Ritz
+values of the surface's Laplace-Beltrami operator: by the min-max principle each is an upper
+bound of the surface's exact eigenvalue of the same index, and it does not grow under a
+refinement. With second-order convergence in the edge length (smooth eigenfunctions; lower
+near reentrant cone points), ``lambda_L - lambda ~ (lambda_{L-1} - lambda_L) / 3``.
+
+`refined_reference` computes the ``k`` smallest eigenvalues on the mesh refined ``L`` and
+``L - 1`` times, ``L`` the most levels (at least 1) whose mesh has at most `MAX_FACES` faces, and
+returns the level-``L`` values as the reference and ``max_i (lambda_{L-1,i} - lambda_{L,i}) /
+(3 lambda_{L,i})`` over ``i >= 1`` as the estimate of its own relative error (``lambda_0 = 0``:
+constants). Eigenvalues in 1/length^2 (input units); matched to a method's by index, as the
+analytic spectra are. Solver: ARPACK shift-invert below the spectrum (``sigma = -s``, ``s`` a
+small multiple of the smallest positive ``K_ii / M_ii``), with the SPD factorization of ``K +
+s M`` (`harness.core.solvers.factorize`), tolerance 1e-10.
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+MAX_FACES = 50_000    # the finest refinement computed
+MAX_K = 200           # references for at most this many eigenpairs (ARPACK keeps 2k + 1 vectors)
+
+
+def midpoint_subdivide(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(V', F')``: every triangle split into four at its edge midpoints (one new vertex per
+    edge, shared by its faces); the first ``len(V)`` vertices are ``V``; the surface is the same."""
+    from ..core.geometry import edge_keys
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    m, n = len(F), len(V)
+    keys, _ = edge_keys(F, n)                          # half-edges (0,1), (1,2), (2,0) of every face
+    uniq, inv = np.unique(keys, return_inverse=True)
+    mid = n + inv.reshape(3, m).T                      # (m, 3): the midpoint of edge (0,1), (1,2), (2,0)
+    a, b = uniq // n, uniq % n
+    Vn = np.concatenate([V, 0.5 * (V[a] + V[b])])
+    e01, e12, e20 = mid[:, 0], mid[:, 1], mid[:, 2]
+    Fn = np.concatenate([np.stack([F[:, 0], e01, e20], 1), np.stack([e01, F[:, 1], e12], 1),
+                         np.stack([e20, e12, F[:, 2]], 1), np.stack([e01, e12, e20], 1)])
+    return Vn, Fn
+
+
+def fem_matrices(V: np.ndarray, F: np.ndarray) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+    """``(K, M)``: the cotangent stiffness (positive semi-definite, ``K = -W``) and the consistent
+    FEM mass matrix of the linear elements on ``(V, F)``."""
+    from ..core.geometry import corner_cotangents
+    n = len(V)
+    C, dbl = corner_cotangents(V, F)
+    i = np.concatenate([F[:, 1], F[:, 2], F[:, 0]])   # edge opposite corner 0, 1, 2
+    j = np.concatenate([F[:, 2], F[:, 0], F[:, 1]])
+    w = 0.5 * np.concatenate([C[:, 0], C[:, 1], C[:, 2]])
+    W = sp.coo_matrix((np.concatenate([w, w]), (np.concatenate([i, j]), np.concatenate([j, i]))), shape=(n, n)).tocsr()
+    K = (sp.diags(np.asarray(W.sum(axis=1)).ravel()) - W).tocsr()
+    area = dbl / 2.0
+    off = np.concatenate([area, area, area]) / 12.0
+    M = sp.coo_matrix((np.concatenate([off, off]), (np.concatenate([i, j]), np.concatenate([j, i]))), shape=(n, n)).tocsr()
+    diag = np.bincount(F.ravel(), weights=np.repeat(area / 6.0, 3), minlength=n)
+    return K, (M + sp.diags(diag)).tocsr()
+
+
+def fem_eigenvalues(V: np.ndarray, F: np.ndarray, k: int) -> np.ndarray:
+    """The ``k`` smallest eigenvalues of ``K x = lambda M x`` (`fem_matrices`), ascending."""
+    from scipy.sparse.linalg import LinearOperator, eigsh
+
+    from ..core.solvers import factorize
+    K, M = fem_matrices(V, F)
+    n = K.shape[0]
+    d = K.diagonal() / np.maximum(M.diagonal(), 1e-300)
+    s = 1e-3 * float(d[d > 0].min()) if (d > 0).any() else 1.0
+    fac = factorize((K + s * M).tocsc())
+    op = LinearOperator((n, n), matvec=lambda x: fac.solve(np.asarray(x, dtype=np.float64)).ravel(), dtype=np.float64)
+    v0 = np.random.default_rng(0).standard_normal(n)
+    lam = eigsh(K, k=k, M=M, sigma=-s, which="LM", OPinv=op, tol=1e-10, v0=v0, return_eigenvectors=False)
+    return np.sort(lam)
+
+
+def refined_reference(V: np.ndarray, F: np.ndarray, k: int) -> dict | None:
+    """``{"values", "levels", "faces", "error_est"}`` (module docstring), or None when ``k``
+    exceeds `MAX_K` or the mesh cannot be refined once within `MAX_FACES` faces, or ``k`` is not
+    below the coarser refinement's vertex count."""
+    F = np.asarray(F, dtype=np.int64)
+    if k < 2 or k > MAX_K or 4 * len(F) > MAX_FACES:
+        return None
+    levels, meshes = 0, [(np.asarray(V, dtype=np.float64), F)]
+    while 4 * len(meshes[-1][1]) <= MAX_FACES:
+        meshes.append(midpoint_subdivide(*meshes[-1]))
+        levels += 1
+    (Vc, Fc), (Vf, Ff) = meshes[-2], meshes[-1]
+    if k >= len(Vc) - 1:
+        return None
+    coarse, fine = fem_eigenvalues(Vc, Fc, k), fem_eigenvalues(Vf, Ff, k)
+    ref = fine[1:]
+    est = float(np.max((coarse[1:] - ref) / (3.0 * ref))) if k > 1 else 0.0
+    return {"values": fine, "levels": levels, "faces": int(len(Ff)), "error_est": est}
