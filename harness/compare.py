@@ -101,7 +101,7 @@ from .compare_time import (ALPHA, BOOTSTRAP, BUSY_CORES, CONTENDED_CPU, OVERSUBS
 from .results import RunFolder, recorded_specs
 from .schema import number as _num
 
-__all__ = ["ALPHA", "BOOTSTRAP", "BUSY_CORES", "COMMON_RULES", "CONTENDED_CPU", "IDENTITY", "KNOWN", "ORDER",
+__all__ = ["ALPHA", "BOOTSTRAP", "BUSY_CORES", "COMMON_RULES", "CONTENDED_CPU", "IDENTITY", "KNOWN", "ORDER", "_label",
            "OVERSUBSCRIBED", "RULES", "Rule", "SKIP", "TIME_FACTOR", "TIME_FLOOR_S", "busier", "compare_rows",
            "compare_runs", "cpu_ratio", "judge", "judge_time", "load_stretch", "param_ids", "rule_for",
            "rules_from_specs", "run_drift", "threads_used", "time_effect", "time_samples", "timing_notes",

@@ -33,7 +33,7 @@ from .errors import InvalidMeshError
 from .mesh_formats import _fan, _read_obj, _read_off, _read_ply, _read_stl
 from .mesh_formats import write_obj, write_ply  # noqa: F401
 
-__all__ = ["COORD_LIMIT", "SUPPORTED", "Mesh", "file_sha1", "missing_file_problem", "nonmanifold_vertices", "read_mesh",
+__all__ = ["COORD_LIMIT", "SUPPORTED", "Mesh", "file_sha1", "mean_edge_length", "missing_file_problem", "nonmanifold_vertices", "read_mesh",
            "topology", "validate", "write_obj", "write_ply"]
 
 SUPPORTED = (".obj", ".off", ".ply", ".stl")

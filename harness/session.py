@@ -23,7 +23,7 @@ from .session_checks import (_accepted, _config_problem, _mesh_ok, _results_conf
 from .session_disk import NO_ROOM, DiskFull, _inside, _no_room, _write_status_in_place
 from .session_finish import finish, recompute_views
 from .session_progress import _duration, _Lines, _progress
-from .session_record import (PROVENANCE, _count_solvers, _fixed_cost, _keep_first_provenance, _load, _solver_info, method_sources,
+from .session_record import (PROVENANCE, _count_solvers, _fixed_cost, _merged_solvers, _keep_first_provenance, _load, _solver_info, method_sources,
                              task_specs)
 from .session_tune import _earlier_tuned_ids, _training_left, _tune
 
@@ -322,9 +322,9 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
                    "executor": meta.get("executor"), "scheduler": meta.get("scheduler"), "workers": meta.get("workers"),
                    "threads_per_case": threads, "timeout_s": timeout, "status_counts": counts,
                    "load_average": [load0, meta["load_average"][-1]], **own}
+        session["solver_used"] = {k: solver_used[k] for k in sorted(solver_used)}
         if isinstance(meta.get("solver"), dict):
-            meta["solver"]["used"] = {k: solver_used[k] for k in sorted(solver_used)}
-            session["solver_used"] = meta["solver"]["used"]
+            meta["solver"]["used"] = _merged_solvers(solver_used, prev_meta)
         if overhead:
             fixed = [f for f, _, _ in overhead]
             spent = sum(m for _, m, _ in overhead)

@@ -737,6 +737,8 @@ def test_run_json_records_the_solver_backends_the_cases_used(tmp_path):
         w["unknowns_max"] = max(w["unknowns_max"], k)
     meta = json.loads((tmp_path / "run.json").read_text())
     assert meta["solver"]["used"] == want and meta["sessions"][-1]["solver_used"] == want
+    harness.run(cfg, out=tmp_path, quiet=True, workers=2, resume=True)      # nothing left to run: kept
+    assert json.loads((tmp_path / "run.json").read_text())["solver"]["used"] == want
     from harness.report.overview import _solver_text
     text = _solver_text(meta["solver"])
     assert all(f"{b} in {w['cases']} case(s) of scratch.implicit (up to {w['unknowns_max']} unknowns)" in text

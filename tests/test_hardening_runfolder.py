@@ -571,6 +571,8 @@ def test_a_hand_edited_run_json_of_wrong_types_is_read_without_a_traceback(tmp_p
         in _timing_text(resumed)
     edits = [(("machine",), "x"), (("tasks",), []), (("versions",), "x"), (("workers",), "x"),
              (("load_average",), 5), (("timing",), ["x"]), (("solver", "versions"), 5), (("solver", "used"), "x"), (("solver", "used", "pypardiso"), 5),
+             (("solver", "used", "pypardiso"), {"methods": 5, "cases": "x"}),
+             (("solver", "used", "pypardiso"), {"methods": "ab", "unknowns_max": None}),
              (("sessions", 0), 5), (("sessions", 0, "wall_s"), "12.5"), (("load_average", 0), "x"),
              (("tasks", "smoothing", "metrics"), 5), (("tasks", "smoothing"), "x")]   # a review: `shootout report`
     d = tmp_path / "d"

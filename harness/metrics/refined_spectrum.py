@@ -11,14 +11,23 @@ bound of the surface's exact eigenvalue of the same index, and it does not grow 
 refinement. With second-order convergence in the edge length (smooth eigenfunctions; lower
 near reentrant cone points), ``lambda_L - lambda ~ (lambda_{L-1} - lambda_L) / 3``.
 
-`refined_reference` computes the ``k`` smallest eigenvalues on the mesh refined ``L`` and
-``L - 1`` times, ``L`` the most levels (at least 1) whose mesh has at most `MAX_FACES` faces, and
-returns the level-``L`` values as the reference and ``max_i (lambda_{L-1,i} - lambda_{L,i}) /
-(3 lambda_{L,i})`` over ``i >= 1`` as the estimate of its own relative error (``lambda_0 = 0``:
-constants). Eigenvalues in 1/length^2 (input units); matched to a method's by index, as the
-analytic spectra are. Solver: ARPACK shift-invert below the spectrum (``sigma = -s``, ``s`` a
-small multiple of the smallest positive ``K_ii / M_ii``), with the SPD factorization of ``K +
-s M`` (`harness.core.solvers.factorize`), tolerance 1e-10.
+`refined_reference` computes the ``k`` smallest eigenvalues on the mesh refined ``L``, ``L - 1``
+and (when ``L >= 2``) ``L - 2`` times, ``L`` the most levels (at least 1) whose mesh has at most
+`MAX_FACES` faces, and returns the level-``L`` values as the reference with an estimate of their
+own relative error, ``max_i d_i / ((q - 1) lambda_{L,i})`` over ``i >= 1`` (``lambda_0 = 0``:
+constants), ``d_i = lambda_{L-1,i} - lambda_{L,i}``: with a convergence ratio ``q`` the error left
+after level ``L`` is ``d_i (1/q + 1/q^2 + ...) = d_i / (q - 1)``. ``q`` is the median over ``i``
+of the observed ratios ``(lambda_{L-2,i} - lambda_{L-1,i}) / d_i``, kept within [2, 4] (4 is the
+h^2 rate; cone points of a mesh lower it, to about 2.9 measured on knight); with two levels only
+it is 2, the cautious end. Eigenvalues in 1/length^2 (input units); matched to a method's by
+index, as the analytic spectra are. Solver: ARPACK shift-invert below the spectrum (``sigma =
+-s``, ``s`` a small multiple of the smallest positive ``K_ii / M_ii``), with a single-threaded
+SPD factorization of ``K + s M`` (`harness.core.solvers.factorize` with qdldl, else scipy's:
+the same digits on any thread count, and no OpenMP runtime started in a forked case process,
+which hangs when its parent used one), tolerance 1e-10. Not for a mesh of several connected
+pieces (each adds a zero eigenvalue, and the matching by index would divide by rounding noise)
+nor when the level-``L`` values fail a sanity check (``lambda_0`` not zero to 1e-8 of
+``lambda_1``, or not finite): both give None.
 """
 from __future__ import annotations
 
@@ -69,12 +78,13 @@ def fem_eigenvalues(V: np.ndarray, F: np.ndarray, k: int) -> np.ndarray:
     """The ``k`` smallest eigenvalues of ``K x = lambda M x`` (`fem_matrices`), ascending."""
     from scipy.sparse.linalg import LinearOperator, eigsh
 
-    from ..core.solvers import factorize
+    from ..core.solvers import factorize, installed_solvers
     K, M = fem_matrices(V, F)
     n = K.shape[0]
     d = K.diagonal() / np.maximum(M.diagonal(), 1e-300)
     s = 1e-3 * float(d[d > 0].min()) if (d > 0).any() else 1.0
-    fac = factorize((K + s * M).tocsc())
+    fac = factorize((K + s * M).tocsc(), "qdldl" if "qdldl" in installed_solvers() else "scipy",
+                    reuse_symbolic=False)
     op = LinearOperator((n, n), matvec=lambda x: fac.solve(np.asarray(x, dtype=np.float64)).ravel(), dtype=np.float64)
     v0 = np.random.default_rng(0).standard_normal(n)
     lam = eigsh(K, k=k, M=M, sigma=-s, which="LM", OPinv=op, tol=1e-10, v0=v0, return_eigenvectors=False)
@@ -82,20 +92,32 @@ def fem_eigenvalues(V: np.ndarray, F: np.ndarray, k: int) -> np.ndarray:
 
 
 def refined_reference(V: np.ndarray, F: np.ndarray, k: int) -> dict | None:
-    """``{"values", "levels", "faces", "error_est"}`` (module docstring), or None when ``k``
-    exceeds `MAX_K` or the mesh cannot be refined once within `MAX_FACES` faces, or ``k`` is not
-    below the coarser refinement's vertex count."""
+    """``{"values", "levels", "faces", "error_est", "ratio"}`` (module docstring), or None when
+    ``k`` is below 2 or exceeds `MAX_K`, the mesh cannot be refined once within `MAX_FACES`
+    faces, ``k`` is not below the coarser refinement's vertex count, the mesh has several
+    connected pieces, or the values fail the sanity check."""
+    from ..core.geometry import vertex_components
+    V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
-    if k < 2 or k > MAX_K or 4 * len(F) > MAX_FACES:
+    if k < 2 or k > MAX_K or 4 * len(F) > MAX_FACES or len(np.unique(vertex_components(F, len(V)))) != 1:
         return None
-    levels, meshes = 0, [(np.asarray(V, dtype=np.float64), F)]
+    levels, meshes = 0, [(V, F)]
     while 4 * len(meshes[-1][1]) <= MAX_FACES:
         meshes.append(midpoint_subdivide(*meshes[-1]))
         levels += 1
-    (Vc, Fc), (Vf, Ff) = meshes[-2], meshes[-1]
-    if k >= len(Vc) - 1:
+    if k >= len(meshes[-2][0]) - 1:
         return None
-    coarse, fine = fem_eigenvalues(Vc, Fc, k), fem_eigenvalues(Vf, Ff, k)
-    ref = fine[1:]
-    est = float(np.max((coarse[1:] - ref) / (3.0 * ref))) if k > 1 else 0.0
-    return {"values": fine, "levels": levels, "faces": int(len(Ff)), "error_est": est}
+    used = meshes[-3:] if levels >= 2 and k < len(meshes[-3][0]) - 1 else meshes[-2:]
+    lams = [fem_eigenvalues(Vi, Fi, k) for Vi, Fi in used]
+    fine = lams[-1]
+    if not np.isfinite(fine).all() or not (fine[1] > 0 and abs(fine[0]) <= 1e-8 * fine[1]):
+        return None
+    d = np.maximum(lams[-2][1:] - fine[1:], 0.0)
+    q = 2.0
+    if len(lams) == 3:
+        prev = lams[0][1:] - lams[1][1:]
+        ok = d > 1e-12 * fine[1:]
+        if ok.any():
+            q = float(np.clip(np.median(prev[ok] / d[ok]), 2.0, 4.0))
+    est = float(np.max(d / ((q - 1.0) * fine[1:])))
+    return {"values": fine, "levels": levels, "faces": int(len(meshes[-1][1])), "error_est": est, "ratio": q}

@@ -176,7 +176,8 @@ def _solver_text(solver: dict) -> str:
         said = []
         for k, v in sorted(used.items(), key=lambda kv: str(kv[0])):
             v = v if isinstance(v, dict) else {}
-            said.append(f"{k} in {v.get('cases', '?')} case(s) of {', '.join(map(str, v.get('methods') or [])) or '?'} "
+            who = v.get("methods") if isinstance(v.get("methods"), list) else []
+            said.append(f"{k} in {v.get('cases', '?')} case(s) of {', '.join(map(str, who)) or '?'} "
                         f"(up to {v.get('unknowns_max', '?')} unknowns)")
         parts.append("used by this session's cases: " + "; ".join(said))
     return "; ".join(parts)
