@@ -737,21 +737,21 @@ def test_the_leaderboard_card_names_and_explains_the_methods_left_out(tmp_path):
 
 
 def test_a_cell_where_the_metric_does_not_apply_says_no_valid_result_neither_on_the_page(tmp_path):
-    """A review: winners.md left out a spectrum cell on a mesh without an analytic spectrum where
-    one method failed, but the page still said "no valid result" there; a cell where every result
+    """A review: winners.md left out a spectrum cell on a mesh without a reference spectrum
+    (fandisk: neither analytic nor refined within 50,000 faces) where one method failed, but the page still said "no valid result" there; a cell where every result
     diverged or failed still says so."""
     import csv
 
     import harness
     from harness.cli import main
     cfg = {"name": "noref", "repeats": 1, "time_budget": 0, "noise": [{"model": "none"}],
-           "meshes": ["knight", {"procedural": "sphere", "subdivisions": 2}],
+           "meshes": ["fandisk", {"procedural": "sphere", "subdivisions": 2}],
            "tasks": {"spectrum": {"params": {"k": 10}, "methods": ["scratch.spectrum", "libigl.eigsh"]}}}
     harness.run(cfg, out=tmp_path, quiet=True, workers=1)
     path = tmp_path / "spectrum.csv"
     rows = list(csv.DictReader(path.open()))
     for r in rows:
-        if r["mesh"] == "knight" and r["method"] == "libigl.eigsh":
+        if r["mesh"] == "fandisk" and r["method"] == "libigl.eigsh":
             r.update(status="error", error="RuntimeError: boom")
     _write_rows(path, rows)
     assert main(["report", str(tmp_path)]) == 0
@@ -760,10 +760,10 @@ def test_a_cell_where_the_metric_does_not_apply_says_no_valid_result_neither_on_
         return page_value(tmp_path / "report.html", """[...document.querySelectorAll('#plots-spectrum table.best tr')]
             .slice(1).map(r => r.textContent)""")
     got = best()
-    assert not [r for r in got if r.startswith("knight")] and any(r.startswith("sphere") for r in got), got
-    assert "knight" not in (tmp_path / "winners.md").read_text()
+    assert not [r for r in got if r.startswith("fandisk")] and any(r.startswith("sphere") for r in got), got
+    assert "fandisk" not in (tmp_path / "winners.md").read_text()
     for r in rows:                                     # every result on the sphere failed: said on the page
-        if r["mesh"] != "knight":
+        if r["mesh"] != "fandisk":
             r.update(status="error", error="RuntimeError: boom")
     _write_rows(path, rows)
     assert main(["report", str(tmp_path)]) == 0
