@@ -66,6 +66,10 @@ class LocalExecutor:
         _warm_mesh_cache(todo, self.timeout)
         from ..runner import scan_thread_pools
         scan_thread_pools(next((c.threads for c in todo), None))    # last: after every library loaded
+        gomp = gnu_openmp_started()
+        if gomp:
+            import warnings
+            warnings.warn(GOMP_SAID, RuntimeWarning, stacklevel=2)
         todo.reverse()
         running: list[_Job] = []
         before = set(_children(os.getpid())) if REAP else set()     # the driver's own children stay
@@ -101,6 +105,8 @@ class LocalExecutor:
                     for job in [j for j in running if now - j.t0 >= self.timeout]:
                         running.remove(job)
                         row, extras = job.kill_timeout(self.timeout)
+                        if gomp:
+                            row["error"] += "; " + GOMP_SAID
                         reap()
                         yield job.case, row, extras
         finally:
@@ -116,6 +122,29 @@ class LocalExecutor:
 
     def describe(self) -> dict:
         return {"executor": self.name, "workers": getattr(self, "workers", 1)}
+
+
+GOMP_SAID = ("this process had GNU OpenMP (libgomp) loaded and threads that Python did not start when it "
+             "forked the case processes; if they are OpenMP's (PyMeshLab, or PARDISO through MKL, called in this "
+             "process before the run), a case that enters an OpenMP parallel region hangs until its timeout, as "
+             "GNU OpenMP is not fork-safe: run the config from a fresh process (shootout run, or harness.run "
+             "before such calls)")
+
+
+def gnu_openmp_started() -> bool:
+    """Whether this process has GNU OpenMP (libgomp) loaded and threads that Python did not start.
+    libgomp keeps its pool once started, and a process forked from it then waits forever for
+    that pool at its first OpenMP parallel region; the threads may also be another library's
+    (importing PyMeshLab starts one), so this says "possibly". Linux; False where ``/proc`` says
+    nothing."""
+    import threading
+    try:
+        with open("/proc/self/maps") as fh:
+            if "libgomp" not in fh.read():
+                return False
+        return len(os.listdir("/proc/self/task")) > threading.active_count()
+    except OSError:
+        return False
 
 
 def _preload_tasks(cases) -> None:
