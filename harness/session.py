@@ -324,7 +324,7 @@ def _locked_run(cfg, folder, out_dir, cases, workers, timeout, chash, threads, e
                    "load_average": [load0, meta["load_average"][-1]], **own}
         session["solver_used"] = {k: solver_used[k] for k in sorted(solver_used)}
         if isinstance(meta.get("solver"), dict):
-            meta["solver"]["used"] = _merged_solvers(solver_used, prev_meta)
+            meta["solver"]["used"] = _merged_solvers(solver_used, prev_sessions)
         if overhead:
             fixed = [f for f, _, _ in overhead]
             spent = sum(m for _, m, _ in overhead)

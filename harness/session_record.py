@@ -110,22 +110,22 @@ def _count_solvers(used: dict, case, solvers) -> None:
             u["methods"] = sorted(u["methods"] + [case.method])
 
 
-def _merged_solvers(this: dict, prev_meta: dict | None) -> dict:
+def _merged_solvers(this: dict, earlier_sessions: list) -> dict:
     """run.json's ``solver.used`` over the run's sessions: this session's (`_count_solvers`)
-    added to what the folder's run.json recorded before (a resume), whose entries of a wrong
-    type (a hand edit) are left out."""
-    out = {k: {"cases": v["cases"], "unknowns_max": v["unknowns_max"], "methods": list(v["methods"])}
-           for k, v in this.items()}
-    prev = (prev_meta or {}).get("solver")
-    prev = prev.get("used") if isinstance(prev, dict) else None
-    for name, v in (prev.items() if isinstance(prev, dict) else ()):
-        if not (isinstance(v, dict) and isinstance(v.get("cases"), int) and isinstance(v.get("unknowns_max"), int)
-                and isinstance(v.get("methods"), list)):
-            continue
-        u = out.setdefault(str(name), {"cases": 0, "unknowns_max": 0, "methods": []})
-        u["cases"] += v["cases"]
-        u["unknowns_max"] = max(u["unknowns_max"], v["unknowns_max"])
-        u["methods"] = sorted(set(u["methods"]) | {str(m) for m in v["methods"]})
+    added to each earlier session's own record (``sessions[i].solver_used``; entries of a wrong
+    type, a hand edit, are left out). ``cases`` counts case runs: a case a resume ran again counts
+    again; a session whose driver was killed recorded none."""
+    out: dict = {}
+    records = [x.get("solver_used") for x in earlier_sessions if isinstance(x, dict)] + [this]
+    for rec in records:
+        for name, v in (rec.items() if isinstance(rec, dict) else ()):
+            if not (isinstance(v, dict) and isinstance(v.get("cases"), int) and isinstance(v.get("unknowns_max"), int)
+                    and isinstance(v.get("methods"), list)):
+                continue
+            u = out.setdefault(str(name), {"cases": 0, "unknowns_max": 0, "methods": []})
+            u["cases"] += v["cases"]
+            u["unknowns_max"] = max(u["unknowns_max"], v["unknowns_max"])
+            u["methods"] = sorted(set(u["methods"]) | {str(m) for m in v["methods"]})
     return {k: out[k] for k in sorted(out)}
 
 

@@ -14,20 +14,25 @@ near reentrant cone points), ``lambda_L - lambda ~ (lambda_{L-1} - lambda_L) / 3
 `refined_reference` computes the ``k`` smallest eigenvalues on the mesh refined ``L``, ``L - 1``
 and (when ``L >= 2``) ``L - 2`` times, ``L`` the most levels (at least 1) whose mesh has at most
 `MAX_FACES` faces, and returns the level-``L`` values as the reference with an estimate of their
-own relative error, ``max_i d_i / ((q - 1) lambda_{L,i})`` over ``i >= 1`` (``lambda_0 = 0``:
-constants), ``d_i = lambda_{L-1,i} - lambda_{L,i}``: with a convergence ratio ``q`` the error left
-after level ``L`` is ``d_i (1/q + 1/q^2 + ...) = d_i / (q - 1)``. ``q`` is the median over ``i``
-of the observed ratios ``(lambda_{L-2,i} - lambda_{L-1,i}) / d_i``, kept within [2, 4] (4 is the
-h^2 rate; cone points of a mesh lower it, to about 2.9 measured on knight); with two levels only
-it is 2, the cautious end. Eigenvalues in 1/length^2 (input units); matched to a method's by
-index, as the analytic spectra are. Solver: ARPACK shift-invert below the spectrum (``sigma =
--s``, ``s`` a small multiple of the smallest positive ``K_ii / M_ii``), with a single-threaded
-SPD factorization of ``K + s M`` (`harness.core.solvers.factorize` with qdldl, else scipy's:
-the same digits on any thread count, and no OpenMP runtime started in a forked case process,
-which hangs when its parent used one), tolerance 1e-10. Not for a mesh of several connected
-pieces (each adds a zero eigenvalue, and the matching by index would divide by rounding noise)
-nor when the level-``L`` values fail a sanity check (``lambda_0`` not zero to 1e-8 of
-``lambda_1``, or not finite): both give None.
+own relative error, ``max_i d_i / ((q_i - 1) lambda_{L,i})`` over ``i >= 1`` (``lambda_0 = 0``:
+constants), ``d_i = lambda_{L-1,i} - lambda_{L,i}``: with a convergence ratio ``q_i`` the error
+left after level ``L`` is ``d_i (1/q_i + 1/q_i^2 + ...) = d_i / (q_i - 1)``. ``q_i`` is the ratio
+observed for that eigenvalue, ``(lambda_{L-2,i} - lambda_{L-1,i}) / d_i``, kept within [1.25, 4]
+(4 is the h^2 rate; cone points and reentrant corners lower it: about 2.9 on knight, 2.2 on an
+L-shaped plane); with two levels only it is taken as 1.5 for every ``i`` (``2 d_i``), and an
+eigenvalue already converged to rounding (``d_i <= 1e-12 lambda_i``) adds nothing. Eigenvalues in
+1/length^2 (input units); matched to a method's by index, as the analytic spectra are. Solver:
+ARPACK shift-invert below the spectrum (``sigma = -s``, ``s`` a small multiple of the smallest
+positive ``K_ii / M_ii``) for ``k`` plus a margin of pairs (ARPACK may return fewer copies of an
+eigenvalue of exact multiplicity than it has, e.g. on a symmetric mesh), with a single-threaded
+SPD factorization of ``K + s M`` (`harness.core.solvers.factorize` with qdldl, else scipy's: the
+same digits on any thread count, and no OpenMP runtime started in a forked case process, which
+hangs when its parent used one), tolerance 1e-10; then Sylvester's inertia of ``K - t M`` (``t``
+just below the ``k``-th value) must count exactly the values returned below ``t``, at every
+level, else there is no reference. Not for a mesh of several connected pieces (each adds a zero
+eigenvalue, and the matching by index would divide by rounding noise) nor when the level-``L``
+values fail a sanity check (``lambda_0`` not zero to 1e-8 of ``lambda_1``, or not finite): both
+give None.
 """
 from __future__ import annotations
 
@@ -74,11 +79,13 @@ def fem_matrices(V: np.ndarray, F: np.ndarray) -> tuple[sp.csr_matrix, sp.csr_ma
     return K, (M + sp.diags(diag)).tocsr()
 
 
-def fem_eigenvalues(V: np.ndarray, F: np.ndarray, k: int) -> np.ndarray:
-    """The ``k`` smallest eigenvalues of ``K x = lambda M x`` (`fem_matrices`), ascending."""
+def fem_eigenvalues(V: np.ndarray, F: np.ndarray, k: int) -> np.ndarray | None:
+    """The ``k`` smallest eigenvalues of ``K x = lambda M x`` (`fem_matrices`), ascending, or None
+    when the inertia count says one below the ``k``-th was skipped (module docstring)."""
     from scipy.sparse.linalg import LinearOperator, eigsh
 
     from ..core.solvers import factorize, installed_solvers
+    from ._eig_solvers import _ldlt
     K, M = fem_matrices(V, F)
     n = K.shape[0]
     d = K.diagonal() / np.maximum(M.diagonal(), 1e-300)
@@ -87,15 +94,23 @@ def fem_eigenvalues(V: np.ndarray, F: np.ndarray, k: int) -> np.ndarray:
                     reuse_symbolic=False)
     op = LinearOperator((n, n), matvec=lambda x: fac.solve(np.asarray(x, dtype=np.float64)).ravel(), dtype=np.float64)
     v0 = np.random.default_rng(0).standard_normal(n)
-    lam = eigsh(K, k=k, M=M, sigma=-s, which="LM", OPinv=op, tol=1e-10, v0=v0, return_eigenvectors=False)
-    return np.sort(lam)
+    want = min(k + max(5, k // 5), n - 2)
+    lam = np.sort(eigsh(K, k=want, M=M, sigma=-s, which="LM", OPinv=op, tol=1e-10, v0=v0,
+                        return_eigenvectors=False))[:k]
+    t = float(lam[-1]) * (1.0 - 1e-6)
+    f = _ldlt(sp.csc_matrix(K - t * M))
+    if len(lam) < k or f is None or int(np.count_nonzero(f[1] < 0)) != int(np.count_nonzero(lam < t)):
+        return None
+    return lam
 
 
 def refined_reference(V: np.ndarray, F: np.ndarray, k: int) -> dict | None:
-    """``{"values", "levels", "faces", "error_est", "ratio"}`` (module docstring), or None when
-    ``k`` is below 2 or exceeds `MAX_K`, the mesh cannot be refined once within `MAX_FACES`
-    faces, ``k`` is not below the coarser refinement's vertex count, the mesh has several
-    connected pieces, or the values fail the sanity check."""
+    """``{"values", "levels", "faces", "error_est", "ratio", "observed"}`` (module docstring;
+    ``ratio``: the median ``q_i``, ``observed``: whether the ratios were observed over three
+    levels or taken as 1.5), or None when ``k`` is below 2 or exceeds `MAX_K`, the mesh cannot be
+    refined once within `MAX_FACES` faces, ``k`` is not below the coarser refinement's vertex
+    count less 2, the mesh has several connected pieces, an inertia count finds a skipped
+    eigenvalue, or the values fail the sanity check."""
     from ..core.geometry import vertex_components
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
@@ -105,19 +120,22 @@ def refined_reference(V: np.ndarray, F: np.ndarray, k: int) -> dict | None:
     while 4 * len(meshes[-1][1]) <= MAX_FACES:
         meshes.append(midpoint_subdivide(*meshes[-1]))
         levels += 1
-    if k >= len(meshes[-2][0]) - 1:
+    if k >= len(meshes[-2][0]) - 2:
         return None
-    used = meshes[-3:] if levels >= 2 and k < len(meshes[-3][0]) - 1 else meshes[-2:]
+    used = meshes[-3:] if levels >= 2 and k < len(meshes[-3][0]) - 2 else meshes[-2:]
     lams = [fem_eigenvalues(Vi, Fi, k) for Vi, Fi in used]
+    if any(lam is None for lam in lams):
+        return None
     fine = lams[-1]
     if not np.isfinite(fine).all() or not (fine[1] > 0 and abs(fine[0]) <= 1e-8 * fine[1]):
         return None
     d = np.maximum(lams[-2][1:] - fine[1:], 0.0)
-    q = 2.0
+    q = np.full(len(d), 1.5)
     if len(lams) == 3:
         prev = lams[0][1:] - lams[1][1:]
-        ok = d > 1e-12 * fine[1:]
-        if ok.any():
-            q = float(np.clip(np.median(prev[ok] / d[ok]), 2.0, 4.0))
-    est = float(np.max(d / ((q - 1.0) * fine[1:])))
-    return {"values": fine, "levels": levels, "faces": int(len(meshes[-1][1])), "error_est": est, "ratio": q}
+        q = np.clip(np.divide(prev, d, out=np.full(len(d), 4.0), where=d > 0), 1.25, 4.0)
+    moving = d > 1e-12 * fine[1:]
+    est = float(np.max(np.where(moving, d / ((q - 1.0) * fine[1:]), 0.0)))
+    ratio = float(np.median(q[moving])) if moving.any() else 4.0
+    return {"values": fine, "levels": levels, "faces": int(len(meshes[-1][1])), "error_est": est, "ratio": ratio,
+            "observed": len(lams) == 3}

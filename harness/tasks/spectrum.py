@@ -152,9 +152,13 @@ def measure(inp, result, params) -> dict:
         row["reference"] = "analytic"
     else:
         got = _refined(inp, len(lam))
-        ref = None if got is None else got["values"]
-        if got is not None:
-            row.update(reference=f"refined: {got['levels']} midpoint subdivision(s), {got['faces']} faces",
+        ref = got.get("values") if got is not None else None
+        if got is not None and "failed" in got:
+            row["reference"] = f"none: the refined reference's own solve failed ({got['failed']})"
+        elif got is not None:
+            rate = (f"convergence ratio {got['ratio']:.2f} observed (median)" if got["observed"]
+                    else "convergence ratio 1.5 assumed (two levels)")
+            row.update(reference=f"refined: {got['levels']} midpoint subdivision(s), {got['faces']} faces; {rate}",
                        reference_error_est=got["error_est"])
     if ref is not None and len(lam) > 1:
         rel = np.abs(lam[1:] - ref[1:]) / ref[1:]
@@ -185,14 +189,14 @@ def measure(inp, result, params) -> dict:
 
 def _refined(inp, k: int) -> dict | None:
     """`harness.metrics.refined_spectrum.refined_reference` of the input mesh for ``k`` pairs,
-    once per input and ``k`` (an input fact)."""
+    once per input and ``k`` (an input fact); ``{"failed": why}`` when its solve raised."""
     from ..metrics.refined_spectrum import refined_reference
     key = ("refined_spectrum", int(k))
     if key not in inp.cache:
         try:
             inp.cache[key] = refined_reference(inp.V, inp.F, int(k))
-        except Exception:  # noqa: BLE001 - the judge's own solve failed, not the method: no reference, blank errors
-            inp.cache[key] = None
+        except Exception as exc:  # noqa: BLE001 - the judge's own solve failed, not the method: blank errors, said
+            inp.cache[key] = {"failed": f"{type(exc).__name__}: {exc}"[:200]}
     return inp.cache[key]
 
 
@@ -269,9 +273,9 @@ TASK = Task(
                "planes, clean), or the FEM eigenvalues of the input mesh itself refined by midpoint subdivision (the "
                "same surface; up to 50,000 faces, k <= 200)", kind="str"),
         Metric("reference_error_est", "info", "estimated relative error of a refined reference itself: max_i "
-               "(lambda_(L-1),i - lambda_L,i) / ((q - 1) lambda_L,i), q the convergence ratio observed over the last "
-               "three refinements within [2, 4] (2 with two; its eigenvalues are upper bounds that fall under "
-               "refinement)"),
+               "(lambda_(L-1),i - lambda_L,i) / ((q_i - 1) lambda_L,i), q_i the convergence ratio of eigenvalue i "
+               "observed over the last three refinements within [1.25, 4] (1.5 with two; its eigenvalues are upper "
+               "bounds that fall under refinement)"),
         Metric("eig0", "info", "smallest eigenvalue, 1/length^2 (0 up to rounding on a connected mesh, open ones "
                "too: the constants are in the kernel under the natural Neumann condition; one 0 per component)"),
         Metric("eig_max", "info", "largest of the k eigenvalues, 1/length^2 (input units: it scales as 1/s^2 with the mesh)"),
