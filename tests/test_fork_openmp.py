@@ -9,6 +9,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 
 SCRIPT = r"""
@@ -34,8 +36,12 @@ print(json.dumps({"fresh": fresh, "after": gnu_openmp_started(), "status": df["s
 """
 
 
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="one core: libgomp starts no thread pool to inherit")
 def test_a_driver_that_started_gnu_openmp_warns_and_its_timeout_rows_say_why(tmp_path):
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    # two OpenMP threads, so libgomp starts a pool (a test before this one in the same pytest
+    # worker may have left OMP_NUM_THREADS=1 in the environment: then it starts none)
+    env = {k: v for k, v in os.environ.items() if k not in ("OMP_NUM_THREADS", "MKL_NUM_THREADS")}
+    env.update(PYTHONPATH=str(ROOT), OMP_NUM_THREADS="2")
     out = subprocess.run([sys.executable, "-c", SCRIPT, str(tmp_path / "run")], cwd=tmp_path, env=env,
                          capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr[-3000:]
