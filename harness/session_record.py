@@ -103,11 +103,15 @@ def _count_solvers(used: dict, case, solvers) -> None:
     if not isinstance(solvers, dict):
         return
     for name, n in solvers.items():
-        u = used.setdefault(str(name), {"cases": 0, "unknowns_max": 0, "methods": []})
-        u["cases"] += 1
-        u["unknowns_max"] = max(u["unknowns_max"], int(n))
-        if case.method not in u["methods"]:
-            u["methods"] = sorted(u["methods"] + [case.method])
+        _add_solver(used, name, 1, int(n), [case.method])
+
+
+def _add_solver(used: dict, name, cases: int, unknowns: int, methods: list) -> None:
+    """Count ``cases`` case runs of backend ``name`` in ``used`` (`_count_solvers`' form)."""
+    u = used.setdefault(str(name), {"cases": 0, "unknowns_max": 0, "methods": []})
+    u["cases"] += cases
+    u["unknowns_max"] = max(u["unknowns_max"], unknowns)
+    u["methods"] = sorted(set(u["methods"]) | {str(m) for m in methods})
 
 
 def _merged_solvers(this: dict, earlier_sessions: list) -> dict:
@@ -122,10 +126,7 @@ def _merged_solvers(this: dict, earlier_sessions: list) -> dict:
             if not (isinstance(v, dict) and isinstance(v.get("cases"), int) and isinstance(v.get("unknowns_max"), int)
                     and isinstance(v.get("methods"), list)):
                 continue
-            u = out.setdefault(str(name), {"cases": 0, "unknowns_max": 0, "methods": []})
-            u["cases"] += v["cases"]
-            u["unknowns_max"] = max(u["unknowns_max"], v["unknowns_max"])
-            u["methods"] = sorted(set(u["methods"]) | {str(m) for m in v["methods"]})
+            _add_solver(out, name, v["cases"], v["unknowns_max"], v["methods"])
     return {k: out[k] for k in sorted(out)}
 
 
