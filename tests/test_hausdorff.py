@@ -1,7 +1,6 @@
 """The certified Hausdorff distance: closed forms, an independent C++ implementation (Sacht &
 Jacobson 2024, cascading upper bounds, PyPI ``cascading-upper-bounds``), dense sampling, exact
 reconstructions and budgets."""
-import os
 
 import numpy as np
 import pytest
@@ -10,6 +9,7 @@ import methods
 from harness import datasets
 from harness.core.geometry import sample_surface
 from harness.metrics.hausdorff import _Surface, hausdorff, one_sided
+from harness.provenance import usable_cpus
 
 
 def test_plane_and_displaced_copy_bracket_the_offset():
@@ -224,7 +224,10 @@ def test_blocked_queries_give_the_same_answer_on_any_number_of_threads(monkeypat
         d, f = _queries.query_blocks(P, none, *tree, threads=n)
         assert np.array_equal(d, d1) and np.array_equal(f, f1)
     monkeypatch.setenv("OMP_NUM_THREADS", "2")
-    assert _queries.case_threads() == min(2, os.cpu_count() or 1)
+    assert _queries.case_threads() == min(2, usable_cpus())
+    monkeypatch.setenv("OMP_NUM_THREADS", "64")          # never more than the CPUs it may run on
+    assert _queries.case_threads() == usable_cpus()
+    monkeypatch.setenv("OMP_NUM_THREADS", "2")
     d, f = _queries.query_blocks(P, none, *tree)
     assert np.array_equal(d, d1) and np.array_equal(f, f1)
     monkeypatch.setenv("OMP_NUM_THREADS", "x")

@@ -20,12 +20,14 @@ BLOCK = 4096
 
 
 def case_threads() -> int:
-    """Threads the case may use: ``OMP_NUM_THREADS`` (at least 1, at most the cores)."""
+    """Threads the case may use: ``OMP_NUM_THREADS`` (at least 1, at most the CPUs this process
+    may run on, `harness.provenance.usable_cpus`: its affinity set and cgroup quota)."""
+    from ..provenance import usable_cpus
     try:
         n = int(os.environ.get("OMP_NUM_THREADS", "1"))
     except ValueError:
         n = 1
-    return max(1, min(n, os.cpu_count() or 1))
+    return max(1, min(n, usable_cpus()))
 
 
 def query_blocks(P: np.ndarray, hints: np.ndarray, V, F, B, threads: int | None = None):
