@@ -123,6 +123,27 @@ def release_thread_pools() -> None:
             _PARENT_LIMIT = None
 
 
+def preload_tasks(cases) -> None:
+    """Run each task's ``preload`` (compiled measuring code) once in the driver, so forked case
+    processes inherit it instead of loading it again (best effort: harness code, never a method's).
+    An interrupt meanwhile is deferred to the end (`harness.errors.interrupts_deferred`; a second
+    one ends the process at once)."""
+    from .core import geometry
+    from .errors import interrupts_deferred
+    with interrupts_deferred():          # a KeyboardInterrupt inside llvmlite crashed the driver
+        try:
+            geometry.warm()
+        except Exception:  # noqa: BLE001 - the numpy path below the threshold still works
+            pass
+        for name in sorted({c.task for c in cases}):
+            try:
+                fn = tasks.get(name).preload
+                if fn is not None:
+                    fn()
+            except Exception:  # noqa: BLE001 - a failure here shows again, as the cases' rows
+                pass
+
+
 # Read once, when the library loads or first goes parallel: libigl's own std::threads (which
 # threadpoolctl does not see), and MKL, OpenMP and OpenBLAS loaded by a method after the case's
 # pools were limited (pypardiso's MKL is loaded at its first solve, inside the cold call).

@@ -56,8 +56,9 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
     naming the signal; past ``timeout`` -> stopped (SIGTERM to the guard, SIGKILL 10 s later),
     ``timeout`` row; ``stop()`` true (polled twice a second) -> stopped. The timeout counts from
     the moment the child can fork its case (its interpreter started, the harness, the registry,
-    the case's plugins and a bundled or procedural mesh loaded (`_warm`): what a forking worker's
-    case inherits), which it writes on a pipe; its start-up may take `STARTUP_S` beyond ``timeout``.
+    the case's plugins and a bundled or procedural mesh loaded (`_warm`), the task's compiled
+    measuring code loaded and the thread pools limited to the case's threads: what a forking
+    worker's case inherits), which it writes on a pipe; its start-up may take `STARTUP_S` beyond ``timeout``.
     """
     fd, out_path = tempfile.mkstemp(prefix="shootout-case-", suffix=".pkl")
     os.close(fd)
@@ -175,6 +176,9 @@ def _subprocess_main(out_path: str, ready_fd: int | None = None) -> int:
     from .. import tasks
     _warm(case)                  # registry, plugins and bundled mesh, as a forking worker's case inherits them
     tasks.get(case.task)
+    from ..runner import preload_tasks, scan_thread_pools
+    preload_tasks([case])       # the measuring's compiled code, as a local case inherits it
+    scan_thread_pools(case.threads)   # pools limited before the fork, as a local case's: none spin in its samples
     become_subreaper()
     if ready_fd is not None:                          # the case's timeout starts here
         os.write(ready_fd, repr(time.monotonic()).encode())
