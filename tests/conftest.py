@@ -1,7 +1,21 @@
-"""Shared fixtures: one small run of all three tasks, reused by the report tests."""
-import pytest
+"""Shared fixtures: one small run of all three tasks, reused by the report tests.
 
-import harness
+The pytest workers run methods in-process too (PARDISO, MeshLab filters) before they run
+configs. With GNU OpenMP on several threads, that starts libgomp's pool, which a forked case
+cannot use, and the local executor then runs every case in a fresh interpreter
+(`harness.executors.gomp`), several times slower for these small runs. The workers' own OpenMP
+is one thread (``OMP_NUM_THREADS``, read when libgomp and MKL load; OpenBLAS keeps its own count):
+their case processes still get their threads from the runner, and `tests/test_fork_openmp.py`
+tests the fresh path in interpreters of its own.
+"""
+import os
+
+os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ.setdefault("OPENBLAS_NUM_THREADS", str(len(os.sched_getaffinity(0))))
+
+import pytest  # noqa: E402
+
+import harness  # noqa: E402
 
 # every task, two meshes (one planar so LIN is measured), two noise levels plus none
 TINY = {

@@ -4,7 +4,8 @@ isolation (debugging only).
 
 The local executor is a single-threaded scheduler waiting on the children's pipes: no threads in
 the forking process, and no re-import of the user's ``__main__`` (scripts need no
-``if __name__ == "__main__"`` guard).
+``if __name__ == "__main__"`` guard). A driver that has started GNU OpenMP's threads, which a
+fork does not survive, runs the cases in fresh interpreters instead (`harness.executors.fresh`).
 """
 from __future__ import annotations
 
@@ -14,7 +15,8 @@ from multiprocessing.connection import wait as mp_wait
 
 from .. import input_store
 from ..errors import check_interrupt
-from ..runner import release_thread_pools, run_case
+from ..runner import preload_tasks, release_thread_pools, run_case
+from .gomp import forked_openmp_hangs
 from .isolation import _children, _Job, reap_strays, signals_blocked
 
 REAP = False      # the driver is a child subreaper (the ``shootout`` command): kill orphans cases leave
@@ -61,15 +63,20 @@ class LocalExecutor:
         self.timeout = timeout
 
     def run(self, cases, want_meshes=False):
+        import warnings
         todo = list(cases)
-        _preload_tasks(todo)                   # compiled code first: the mesh loaders inherit it
+        gomp = bool(todo) and forked_openmp_hangs()
+        if gomp:
+            from .fresh import fresh_resolvable, run_fresh
+            if fresh_resolvable(todo):
+                warnings.warn(GOMP_FRESH, RuntimeWarning, stacklevel=2)
+                yield from run_fresh(todo, self.workers, self.timeout, want_meshes)
+                return
+            warnings.warn(GOMP_SAID, RuntimeWarning, stacklevel=2)
+        preload_tasks(todo)                    # compiled code first: the mesh loaders inherit it
         _warm_mesh_cache(todo, self.timeout)
         from ..runner import scan_thread_pools
         scan_thread_pools(next((c.threads for c in todo), None))    # last: after every library loaded
-        gomp = gnu_openmp_started()
-        if gomp:
-            import warnings
-            warnings.warn(GOMP_SAID, RuntimeWarning, stacklevel=2)
         todo.reverse()
         running: list[_Job] = []
         before = set(_children(os.getpid())) if REAP else set()     # the driver's own children stay
@@ -124,49 +131,16 @@ class LocalExecutor:
         return {"executor": self.name, "workers": getattr(self, "workers", 1)}
 
 
-GOMP_SAID = ("this process had GNU OpenMP (libgomp) loaded and threads that Python did not start when it "
-             "forked the case processes; if they are OpenMP's (PyMeshLab, or PARDISO through MKL, called in this "
-             "process before the run), a case that enters an OpenMP parallel region hangs until its timeout, as "
-             "GNU OpenMP is not fork-safe: run the config from a fresh process (shootout run, or harness.run "
-             "before such calls)")
+GOMP_FRESH = ("a process forked from this one hangs in GNU OpenMP (libgomp), which is not fork-safe: this "
+              "process has started its thread pool (PyMeshLab, or PARDISO through MKL, called before the run); "
+              "each case runs in a fresh Python process instead (an interpreter's start-up more per case; the "
+              "same rows)")
 
-
-def gnu_openmp_started() -> bool:
-    """Whether this process has GNU OpenMP (libgomp) loaded and threads that Python did not start.
-    libgomp keeps its pool once started, and a process forked from it then waits forever for
-    that pool at its first OpenMP parallel region; the threads may also be another library's
-    (importing PyMeshLab starts one), so this says "possibly". Linux; False where ``/proc`` says
-    nothing."""
-    import threading
-    try:
-        with open("/proc/self/maps") as fh:
-            if "libgomp" not in fh.read():
-                return False
-        return len(os.listdir("/proc/self/task")) > threading.active_count()
-    except OSError:
-        return False
-
-
-def _preload_tasks(cases) -> None:
-    """Run each task's ``preload`` (compiled measuring code) once in the driver, so forked case
-    processes inherit it instead of loading it again (best effort: harness code, never a method's).
-    An interrupt meanwhile is deferred to the end (`harness.errors.interrupts_deferred`; a second
-    one ends the process at once)."""
-    from .. import tasks
-    from ..core import geometry
-    from ..errors import interrupts_deferred
-    with interrupts_deferred():          # a KeyboardInterrupt inside llvmlite crashed the driver
-        try:
-            geometry.warm()
-        except Exception:  # noqa: BLE001 - the numpy path below the threshold still works
-            pass
-        for name in sorted({c.task for c in cases}):
-            try:
-                fn = tasks.get(name).preload
-                if fn is not None:
-                    fn()
-            except Exception:  # noqa: BLE001 - a failure here shows again, as the cases' rows
-                pass
+GOMP_SAID = ("a process forked from this one hangs in GNU OpenMP (libgomp), which is not fork-safe: this "
+             "process has started its thread pool (PyMeshLab, or PARDISO through MKL, called before the run); "
+             "a method registered here, in __main__, exists in no fresh process, so the cases are forked "
+             "anyway, and one that enters an OpenMP parallel region hangs until its timeout: run the config "
+             "from a fresh process (shootout run, or harness.run before such calls)")
 
 
 def _load_in_child(spec: dict, frame: bool, timeout: float | None):
