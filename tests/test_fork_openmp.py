@@ -39,7 +39,7 @@ cfg = {"name": "gomp", "repeats": 1, "time_budget": 0, "timeout": 60, "meshes": 
        "tasks": {"smoothing": {"methods": methods}}}
 with warnings.catch_warnings(record=True) as said:
     warnings.simplefilter("always")
-    df = harness.run(cfg, out=sys.argv[1], quiet=True, workers=2)["smoothing"]
+    df = harness.run(cfg, out=sys.argv[1], quiet=True, workers=int(sys.argv[3]))["smoothing"]
 print(json.dumps({"fresh": fresh, "after": gnu_openmp_started(), "hangs": forked_openmp_hangs(), "status": df["status"].tolist(),
                   "method": df["method"].tolist(), "error": df["error"].fillna("").tolist(),
                   "dist": df["dist_mean"].tolist(),
@@ -47,12 +47,13 @@ print(json.dumps({"fresh": fresh, "after": gnu_openmp_started(), "hangs": forked
 """
 
 
-def _run(tmp_path, methods):
+def _run(tmp_path, methods, workers=1):
     # two OpenMP threads, so libgomp starts a pool (a test before this one in the same pytest
     # worker may have left OMP_NUM_THREADS=1 in the environment: then it starts none)
     env = {k: v for k, v in os.environ.items() if k not in ("OMP_NUM_THREADS", "MKL_NUM_THREADS")}
     env.update(PYTHONPATH=str(ROOT), OMP_NUM_THREADS="2")
-    out = subprocess.run([sys.executable, "-c", SCRIPT, str(tmp_path / "run"), ",".join(methods)], cwd=tmp_path,
+    out = subprocess.run([sys.executable, "-c", SCRIPT, str(tmp_path / "run"), ",".join(methods), str(workers)],
+                         cwd=tmp_path,
                          env=env, capture_output=True, text=True, timeout=600)
     assert out.returncode == 0, out.stderr[-3000:]
     got = json.loads(out.stdout.strip().splitlines()[-1])
@@ -63,7 +64,8 @@ def _run(tmp_path, methods):
 @pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="one core: libgomp starts no thread pool to inherit")
 def test_a_driver_that_started_gnu_openmp_runs_its_cases_in_fresh_interpreters(tmp_path):
     got = _run(tmp_path, ["scratch.implicit", "meshlab.taubin"])
-    assert got["status"] == ["ok", "ok"], got                 # forked, scratch.implicit was a timeout row
+    # forked with two threads a case (one worker on two cores), scratch.implicit was a timeout row
+    assert got["status"] == ["ok", "ok"], got
     assert any("fresh Python process" in w for w in got["warned"]), got["warned"]
     assert not any("__main__" in w for w in got["warned"]), got["warned"]
     assert all(d > 0 for d in got["dist"]), got
@@ -100,3 +102,45 @@ def test_the_probe_tells_a_loaded_libgomp_from_a_started_pool():
     # PyMeshLab imported (libgomp loaded, and a thread of its own, which may not show yet): a
     # forked child runs OpenMP fine; after PARDISO's two threads it hangs
     assert said[1:] == [False, True, True], said
+
+
+EDITED = r"""
+import json, sys, warnings
+from pathlib import Path
+import harness
+from harness import datasets
+from harness.executors.gomp import forked_openmp_hangs
+from harness.plugins import import_methods
+a = datasets.load("fandisk").clean
+m = import_methods()
+m.get("meshlab.taubin")(a.V, a.F)              # PyMeshLab's libgomp, which MKL then uses
+m.get("scratch.implicit")(a.V, a.F)
+cfg = {"name": "edited", "repeats": 1, "time_budget": 0, "timeout": 60, "meshes": ["fandisk"],
+       "plugins": ["tmpplug"], "tasks": {"smoothing": {"methods": ["tmplab.same"]}}}
+said = [forked_openmp_hangs()]
+with warnings.catch_warnings():
+    warnings.simplefilter("ignore")
+    for i in range(2):
+        df = harness.run(cfg, out=f"{sys.argv[1]}{i}", quiet=True, workers=1)["smoothing"]
+        said.append([df["status"].tolist(), df["error"].fillna("").tolist()])
+        with open(Path(sys.argv[2]) / "tmpplug.py", "a") as fh:    # edited between the runs
+            fh.write("# edited\n")
+print(json.dumps(said))
+"""
+
+
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="one core: libgomp starts no thread pool to inherit")
+def test_a_plugin_edited_between_two_fresh_runs_keeps_the_second_runs_rows(tmp_path):
+    """A review: the driver's code hash was kept from the first run, so every row of a second
+    run after an edit was refused as "changed during the run"."""
+    (tmp_path / "tmpplug.py").write_text(
+        "from methods import register, SmoothingResult\n"
+        "@register('tmplab.same', task='smoothing', library='tmplab')\n"
+        "def same(V, F):\n    return SmoothingResult(V=V.copy())\n")
+    env = {k: v for k, v in os.environ.items() if k not in ("OMP_NUM_THREADS", "MKL_NUM_THREADS")}
+    env.update(PYTHONPATH=os.pathsep.join([str(ROOT), str(tmp_path)]), OMP_NUM_THREADS="2")
+    out = subprocess.run([sys.executable, "-c", EDITED, str(tmp_path / "run"), str(tmp_path)], cwd=tmp_path, env=env,
+                         capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr[-3000:]
+    said = json.loads(out.stdout.strip().splitlines()[-1])
+    assert said == [True, [["ok"], [""]], [["ok"], [""]]], said

@@ -7,11 +7,13 @@ the harness, the registry and the case's plugins, and forks the case behind a gu
 with the run's timeout from the moment it could fork. A case costs an interpreter's start-up
 more (not counted in its times or fixed cost) and reads its input's facts again (the session's
 input store is the forking driver's alone); its rows are the same. A case whose interpreter
-read other sources than the driver loaded (files edited during the run) is an error row.
+read other sources than there were when the run started (files edited during the run) is an
+error row; so is a case whose interpreter could not be started.
 
-Only for cases whose method and task a fresh interpreter finds by name: built-in, an entry
-point, or in the case's ``plugins``; a method registered in the driver's ``__main__`` (a
-notebook) exists nowhere else, and its run forks as before (`fresh_resolvable`).
+Only for cases whose method and task a fresh interpreter finds by name: built-in, or defined
+in (a submodule of) a module under the case's ``plugins`` or an entry point. A method defined
+elsewhere (the driver's ``__main__``, a notebook, a module imported outside ``plugins:``)
+exists in no fresh interpreter, and its run forks as before (`fresh_resolvable`).
 """
 from __future__ import annotations
 
@@ -23,8 +25,16 @@ from ..errors import check_interrupt
 POLL_S = 0.5
 
 
+def _found_by_name(mod: str, case, eps: set) -> bool:
+    """Whether a fresh interpreter imports module ``mod``: built-in, or (in) a module named under
+    the case's ``plugins`` or an entry point."""
+    roots = ("methods", "harness", *case.plugins, *eps)
+    return any(mod == r or mod.startswith(r + ".") for r in roots)
+
+
 def fresh_resolvable(cases) -> bool:
-    """Whether a fresh interpreter finds every case's method and task by name (see the module)."""
+    """Whether a fresh interpreter finds every case's method and task by name (see the module):
+    the modules defining the method's function and the task's ``measure``."""
     from importlib.metadata import entry_points
 
     from methods import registry
@@ -33,12 +43,11 @@ def fresh_resolvable(cases) -> bool:
     eps = {ep.module for ep in entry_points(group=registry.ENTRY_POINT_GROUP)}
     for c in cases:
         try:
-            mods = (registry.get(c.method).func.__module__, type(tasks.get(c.task)).__module__)
+            mods = (registry.get(c.method).func.__module__, tasks.get(c.task).measure.__module__)
         except Exception:  # noqa: BLE001 - an unknown name is the case's error row either way
             continue
-        for mod in mods:
-            if not (mod.startswith(("methods.", "harness.tasks.")) or mod in c.plugins or mod in eps):
-                return False
+        if not all(_found_by_name(str(m), c, eps) for m in mods):
+            return False
     return True
 
 
@@ -46,9 +55,11 @@ def run_fresh(cases, workers: int, timeout: float | None, want_meshes: bool):
     """Yield ``(case, row, extras)`` for ``cases``, ``workers`` at a time, each in a fresh
     interpreter (the module's). An interrupt (or closing the generator) stops the running ones:
     their processes and what they left are killed, and they yield nothing."""
+    from ..provenance import code_hash
     from ..runner import base_row
-    from .dask_code import CODE_KEY, _code_of
+    from .dask_code import CODE_KEY
     from .dask_subprocess import run_in_subprocess
+    ours = {p: code_hash(p) for p in {tuple(c.plugins) for c in cases}}    # the sources as the run starts
     stop = threading.Event()
     todo = list(cases)
     todo.reverse()
@@ -63,14 +74,18 @@ def run_fresh(cases, workers: int, timeout: float | None, want_meshes: bool):
             check_interrupt()
             for fut in done:
                 case = running.pop(fut)
-                row, extras = fut.result()
-                theirs = row.pop(CODE_KEY, None)
-                if isinstance(theirs, (tuple, list)) and theirs and theirs[0] != _code_of(case.plugins):
-                    why = (f"its fresh interpreter read other sources (code_sha256 {theirs[0]}) than this run "
-                           f"loaded ({_code_of(case.plugins)}): the harness, methods or plugins changed on disk "
-                           "during the run; its row is not kept")
+                try:
+                    row, extras = fut.result()
+                except Exception as exc:  # noqa: BLE001 - no process, or no result read: this case's row
                     row, extras = base_row(case), {}
-                    row["error"] = why
+                    row["error"] = f"could not run the case in a fresh interpreter: {type(exc).__name__}: {exc}"[:2000]
+                theirs = row.pop(CODE_KEY, None)
+                mine = ours[tuple(case.plugins)]
+                if isinstance(theirs, (tuple, list)) and theirs and theirs[0] != mine:
+                    row, extras = base_row(case), {}
+                    row["error"] = (f"its fresh interpreter read other sources (code_sha256 {theirs[0]}) than there "
+                                    f"were when the run started ({mine}): the harness, methods or plugins changed "
+                                    "on disk during the run; its row is not kept")
                 yield case, row, extras
     finally:
         stop.set()                       # the running cases' processes are killed within POLL_S

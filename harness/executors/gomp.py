@@ -10,7 +10,8 @@ before ``harness.run`` is such a process (as a notebook often is).
 may be another library's: importing PyMeshLab starts one). `forked_openmp_hangs` settles it: it
 forks a child that runs an empty parallel region of two threads in every libgomp this process
 has loaded (``GOMP_parallel(free, NULL, 2, 0)``: each thread calls ``free(NULL)``, which does
-nothing) and exits; a child still running after ``timeout`` seconds hangs, and is killed (one
+nothing) and exits at once (``os._exit``: exit code 0 only when every region returned); it
+dies with the driver (``PR_SET_PDEATHSIG``); a child still running after ``timeout`` seconds hangs, and is killed (one
 that crashes counts as hanging too). Linux;
 False where ``/proc`` says nothing.
 """
@@ -21,21 +22,24 @@ import time
 
 
 def _loaded_gomp() -> list[str]:
-    """Paths of the libgomp shared objects mapped in this process (several wheels bundle their own)."""
+    """Paths of the libgomp shared objects mapped in this process (several wheels bundle their own;
+    a path may hold spaces, and a file replaced since it was loaded ends in `` (deleted)``)."""
     try:
         with open("/proc/self/maps") as fh:
-            return sorted({ln.split()[-1] for ln in fh if "libgomp" in ln and ln.split()[-1].startswith("/")})
+            lines = [ln.rstrip("\n").split(maxsplit=5) for ln in fh if "libgomp" in ln]
     except OSError:
         return []
+    return sorted({p[5] for p in lines if len(p) == 6 and "libgomp" in p[5]})
 
 
 def gnu_openmp_started() -> bool:
     """Whether this process has GNU OpenMP (libgomp) loaded and threads that Python did not start
     (possibly libgomp's pool; see the module)."""
     import threading
-    if not _loaded_gomp():
-        return False
     try:
+        with open("/proc/self/maps") as fh:
+            if "libgomp" not in fh.read():
+                return False
         return len(os.listdir("/proc/self/task")) > threading.active_count()
     except OSError:
         return False
@@ -44,13 +48,21 @@ def gnu_openmp_started() -> bool:
 def forked_openmp_hangs(timeout: float = 2.0) -> bool:
     """Whether a child forked from this process hangs in its first OpenMP parallel region (the
     module's probe); False at once unless `gnu_openmp_started`. A probe that cannot run (no
-    ``fork``, a libgomp without ``GOMP_parallel``) says True: the caller then avoids forking."""
+    ``fork``, a libgomp without ``GOMP_parallel`` or whose file is gone) says True: the caller then
+    avoids forking. It asks for two threads whatever the cases' own count: a forked case limited
+    to one thread runs its regions alone, but a method may ask OpenMP for threads of its own."""
     if not gnu_openmp_started():
         return False
     import ctypes
     import signal
+
+    from .isolation import signals_blocked
+    from .procs import die_with_parent
+    paths = _loaded_gomp()
+    if not paths:                                 # named in the maps, but no file to load
+        return True
     try:
-        libs = [ctypes.CDLL(p) for p in _loaded_gomp()]     # the copies already loaded, not new ones
+        libs = [ctypes.CDLL(p) for p in paths]    # the copies already loaded (a deleted one: OSError)
         free = ctypes.cast(ctypes.CDLL(None).free, ctypes.c_void_p)
         calls = [lib.GOMP_parallel for lib in libs]
     except (OSError, AttributeError):
@@ -58,15 +70,19 @@ def forked_openmp_hangs(timeout: float = 2.0) -> bool:
     for call in calls:
         call.argtypes = (ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint, ctypes.c_uint)
         call.restype = None
-    pid = os.fork()
-    if pid == 0:                                  # C calls only, then out without Python's exit
-        try:
-            for call in calls:
-                call(free, None, 2, 0)
-        finally:
-            os._exit(0)
-    status = None
+    parent, pid, status = os.getpid(), -1, None
     try:
+        with signals_blocked():                   # no interrupt between the fork and the try
+            pid = os.fork()
+            if pid == 0:                          # the regions, then out without Python's exit
+                code = 1
+                try:
+                    if die_with_parent(parent):   # a driver killed meanwhile takes it along
+                        for call in calls:
+                            call(free, None, 2, 0)
+                        code = 0
+                finally:
+                    os._exit(code)
         end = time.monotonic() + timeout
         while status is None and time.monotonic() < end:
             done, st = os.waitpid(pid, os.WNOHANG)
@@ -75,7 +91,7 @@ def forked_openmp_hangs(timeout: float = 2.0) -> bool:
             else:
                 time.sleep(0.005)
     finally:                                      # hung, or interrupted meanwhile: it ends here
-        if status is None:
+        if pid > 0 and status is None:
             try:
                 os.kill(pid, signal.SIGKILL)
             except OSError:

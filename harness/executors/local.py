@@ -138,8 +138,8 @@ GOMP_FRESH = ("a process forked from this one hangs in GNU OpenMP (libgomp), whi
 
 GOMP_SAID = ("a process forked from this one hangs in GNU OpenMP (libgomp), which is not fork-safe: this "
              "process has started its thread pool (PyMeshLab, or PARDISO through MKL, called before the run); "
-             "a method registered here, in __main__, exists in no fresh process, so the cases are forked "
-             "anyway, and one that enters an OpenMP parallel region hangs until its timeout: run the config "
+             "a method or task defined outside the built-ins, the config's plugins and the entry points (in "
+             "__main__, say) exists in no fresh process, so the cases are forked anyway, and one that enters an OpenMP parallel region hangs until its timeout: run the config "
              "from a fresh process (shootout run, or harness.run before such calls)")
 
 
