@@ -5,7 +5,7 @@ the report only reads files.
 Which cases: ``report.views`` in the config (case ids), else the best valid and the worst ok
 case of each task that declares a ``view_metric`` (by that metric's direction). Each chosen case runs
 once more in an isolated child process (`harness.executors.isolation.run_isolated`, with a time
-budget) and its task's ``view`` gives the meshes and per-vertex values. Lengths are fractions of
+budget; a fresh interpreter where a fork would hang in GNU OpenMP, `harness.executors.fresh`) and its task's ``view`` gives the meshes and per-vertex values. Lengths are fractions of
 the clean mesh's bounding-box diagonal.
 """
 from __future__ import annotations
@@ -150,7 +150,8 @@ def compute_views(cases_by_id: dict, frames, report_cfg: dict, budget_s: float =
                   timeout: float | None = None, threads: int | None = None) -> list[dict]:
     """View payloads of the chosen cases, each run again with the run's ``threads`` per case (so
     its result is the measured one); each failure is a view with an ``error`` text."""
-    from .executors.isolation import run_isolated
+    from .executors.fresh import isolated_runner
+    run_isolated = isolated_runner(list(cases_by_id.values()))
     rows = {str(r["case_id"]): r for df in frames.values() for r in df.to_dict("records")}
     views, t0 = [], time.perf_counter()
     for cid, why in choose_views(report_cfg, frames):
@@ -185,7 +186,7 @@ def compute_views(cases_by_id: dict, frames, report_cfg: dict, budget_s: float =
             continue
         left = min(left, timeout) if timeout else left
         try:
-            new_row, extras = run_isolated(dataclasses.replace(case, repeats=1, threads=threads or case.threads), timeout=max(left, 5.0),
+            new_row, extras = run_isolated(dataclasses.replace(case, repeats=1, threads=threads or case.threads), max(left, 5.0),
                                            want_view=True)
             if new_row.get("status") != "ok" or "view" not in extras:
                 v["error"] = f"computing the view failed ({new_row.get('status')}): {new_row.get('error')}"

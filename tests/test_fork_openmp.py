@@ -40,7 +40,10 @@ cfg = {"name": "gomp", "repeats": 1, "time_budget": 0, "timeout": 60, "meshes": 
 with warnings.catch_warnings(record=True) as said:
     warnings.simplefilter("always")
     df = harness.run(cfg, out=sys.argv[1], quiet=True, workers=int(sys.argv[3]))["smoothing"]
-print(json.dumps({"fresh": fresh, "after": gnu_openmp_started(), "hangs": forked_openmp_hangs(), "status": df["status"].tolist(),
+import glob, os
+views = [json.load(open(f)) for f in sorted(glob.glob(os.path.join(sys.argv[1], "views", "0*.json")))]
+print(json.dumps({"fresh": fresh, "after": gnu_openmp_started(), "hangs": forked_openmp_hangs(),
+                  "views": [[v.get("error"), "meshes" in v] for v in views], "status": df["status"].tolist(),
                   "method": df["method"].tolist(), "error": df["error"].fillna("").tolist(),
                   "dist": df["dist_mean"].tolist(),
                   "warned": [str(w.message) for w in said if issubclass(w.category, RuntimeWarning)]}))
@@ -69,6 +72,8 @@ def test_a_driver_that_started_gnu_openmp_runs_its_cases_in_fresh_interpreters(t
     assert any("fresh Python process" in w for w in got["warned"]), got["warned"]
     assert not any("__main__" in w for w in got["warned"]), got["warned"]
     assert all(d > 0 for d in got["dist"]), got
+    # the 3D views run their cases again after the run: fresh too (forked, each waited for its timeout)
+    assert got["views"] and all(v == [None, True] for v in got["views"]), got["views"]
 
 
 @pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="one core: libgomp starts no thread pool to inherit")

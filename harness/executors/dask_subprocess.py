@@ -45,10 +45,14 @@ def _warm(case: Case) -> None:
         pass
 
 
-def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: bool = False, stop=None):
-    """Run one case in a fresh ``python -m harness.executors.dask`` process; ``(row, meshes)``.
+def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: bool = False, stop=None,
+                      want_view: bool = False):
+    """Run one case in a fresh ``python -m harness.executors.dask`` process; ``(row, meshes)``
+    (`harness.runner.run_case`'s extras: the meshes with ``want_meshes``, the view's with
+    ``want_view``).
 
-    For processes that may not fork multiprocessing children (daemonic Dask workers). The
+    For processes that may not fork multiprocessing children (daemonic Dask workers, a driver
+    that started GNU OpenMP: `harness.executors.fresh`). The
     case goes in on stdin (pickled) and the result comes back through a temporary file (the
     method may print to stdout). The child holds stdin open and exits when it reaches EOF,
     so it dies with this process. It runs the case behind a guard (`_subprocess_main`) that
@@ -83,7 +87,7 @@ def run_in_subprocess(case: Case, timeout: float | None = None, want_meshes: boo
         reader = threading.Thread(target=keep_tail, daemon=True)
         reader.start()
         try:
-            proc.stdin.write(pickle.dumps((case, want_meshes), protocol=pickle.HIGHEST_PROTOCOL))
+            proc.stdin.write(pickle.dumps((case, want_meshes, want_view), protocol=pickle.HIGHEST_PROTOCOL))
             proc.stdin.flush()
         except BrokenPipeError:
             pass
@@ -169,7 +173,8 @@ def _subprocess_main(out_path: str, ready_fd: int | None = None) -> int:
     from the worker), the guard kills every process it left, in its process group or out of it
     (``setsid`` and a double fork re-parents them here), then ends as the case did: the same
     exit code, or killed by the same signal."""
-    case, want_meshes = pickle.load(sys.stdin.buffer)
+    case, want_meshes, *rest = pickle.load(sys.stdin.buffer)
+    want_view = bool(rest and rest[0])
     from ..provenance import code_hash, package_versions
     from ..runner import run_case
     from .isolation import become_subreaper, reap_strays
@@ -189,7 +194,7 @@ def _subprocess_main(out_path: str, ready_fd: int | None = None) -> int:
             null = os.open(os.devnull, os.O_RDONLY)   # the case reads no input, as a local case's (its
             os.dup2(null, 0)                           # stdin is the pipe its case came on, open till it ends)
             os.close(null)
-            result = run_case(case, want_meshes=want_meshes)
+            result = run_case(case, want_meshes=want_meshes, want_view=want_view)
             result[0][CODE_KEY] = (code_hash(case.plugins), package_versions())   # what this process loaded and ran
             tmp = out_path + ".part"
             with open(tmp, "wb") as fh:

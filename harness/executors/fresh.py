@@ -90,3 +90,22 @@ def run_fresh(cases, workers: int, timeout: float | None, want_meshes: bool):
     finally:
         stop.set()                       # the running cases' processes are killed within POLL_S
         pool.shutdown(wait=True, cancel_futures=True)
+
+
+def isolated_runner(cases):
+    """``run(case, timeout, want_view=False) -> (row, extras)`` for cases run one at a time after
+    the run (the 3D views): `harness.executors.isolation.run_isolated` (a fork), or
+    `run_in_subprocess` when a fork would hang in GNU OpenMP and ``cases`` can run fresh. The
+    probe runs at the first call."""
+    chosen: list = []
+
+    def run(case, timeout, want_view=False):
+        if not chosen:
+            from .gomp import forked_openmp_hangs
+            chosen.append(forked_openmp_hangs() and fresh_resolvable(cases))
+        if chosen[0]:
+            from .dask_subprocess import run_in_subprocess
+            return run_in_subprocess(case, timeout, want_view=want_view)
+        from .isolation import run_isolated
+        return run_isolated(case, timeout=timeout, want_view=want_view)
+    return run
