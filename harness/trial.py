@@ -30,7 +30,7 @@ def import_problems(modules, prepare=None) -> dict:
     or ended that process (``os._exit``, a signal, a crash in compiled code): such a module is not
     imported here, so it cannot end the caller with a misleading exit status. The trial process
     is a fork of this one when no other Python thread runs here (a fork copies no import lock
-    another thread holds), else a fresh interpreter with this ``sys.path``
+    another thread holds) and a fork would not hang in GNU OpenMP (`_openmp_hazard`), else a fresh interpreter with this ``sys.path``
     (`harness.executors.procs.python_child`); it writes to /dev/null, runs in a process group of
     its own that is killed once it is done (with whatever the imports started) and dies with this
     process. Modules already imported here are not tried; each trial is new (a module fixed since
@@ -40,7 +40,7 @@ def import_problems(modules, prepare=None) -> dict:
     todo = [m for m in dict.fromkeys(modules) if m not in sys.modules]
     if not todo:
         return {}
-    forking = hasattr(os, "fork") and threading.active_count() == 1
+    forking = hasattr(os, "fork") and threading.active_count() == 1 and not _openmp_hazard()
     if forking and prepare is not None:
         prepare()                                 # e.g. the registry the imports add to, inherited
     found: dict = {}
@@ -55,6 +55,13 @@ def import_problems(modules, prepare=None) -> dict:
                 ENDED.pop(mod, None)
         todo = todo[len(tried):]
     return found
+
+
+def _openmp_hazard() -> bool:
+    """Whether a fork of this process would hang in GNU OpenMP (`harness.executors.gomp`): an
+    import that enters an OpenMP region then hangs the forked trial, so a fresh interpreter tries it."""
+    from .executors.gomp import forked_openmp_hangs
+    return forked_openmp_hangs()
 
 
 def _trial(todo: list, forking: bool) -> dict:

@@ -149,3 +149,31 @@ def test_a_plugin_edited_between_two_fresh_runs_keeps_the_second_runs_rows(tmp_p
     assert out.returncode == 0, out.stderr[-3000:]
     said = json.loads(out.stdout.strip().splitlines()[-1])
     assert said == [True, [["ok"], [""]], [["ok"], [""]]], said
+
+
+OMP_PLUGIN = """
+import ctypes
+import pymeshlab  # noqa: F401 - its libgomp
+path = next(ln.split(maxsplit=5)[5].strip() for ln in open("/proc/self/maps") if "libgomp" in ln)
+ctypes.CDLL(path).GOMP_parallel(ctypes.cast(ctypes.CDLL(None).free, ctypes.c_void_p), None, 2, 0)   # at import
+from methods import register, SmoothingResult
+@register("omplab.same", task="smoothing", library="omplab")
+def same(V, F):
+    return SmoothingResult(V=V.copy())
+"""
+
+
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="one core: libgomp starts no thread pool to inherit")
+def test_a_plugin_that_runs_openmp_at_import_is_tried_in_a_fresh_interpreter(tmp_path):
+    """The config's plugins are first imported in a trial process, a fork of the driver: in a
+    driver whose fork hangs in GNU OpenMP, a plugin entering an OpenMP region at import hung the
+    trial, and the run with it."""
+    (tmp_path / "ompplug.py").write_text(OMP_PLUGIN)
+    script = EDITED.replace('"plugins": ["tmpplug"]', '"plugins": ["ompplug"]').replace("tmplab.same", "omplab.same")
+    script = script.replace("    for i in range(2):", "    for i in range(1):").replace('/ "tmpplug.py"', '/ "ompplug.py"')
+    env = {k: v for k, v in os.environ.items() if k not in ("OMP_NUM_THREADS", "MKL_NUM_THREADS")}
+    env.update(PYTHONPATH=os.pathsep.join([str(ROOT), str(tmp_path)]), OMP_NUM_THREADS="2")
+    out = subprocess.run([sys.executable, "-c", script, str(tmp_path / "run"), str(tmp_path)], cwd=tmp_path, env=env,
+                         capture_output=True, text=True, timeout=180)
+    assert out.returncode == 0, out.stderr[-3000:]
+    assert json.loads(out.stdout.strip().splitlines()[-1]) == [True, [["ok"], [""]]]

@@ -55,8 +55,9 @@ def forked_openmp_hangs(timeout: float = 2.0) -> bool:
         return False
     import ctypes
     import signal
+    if not hasattr(os, "fork") or not hasattr(signal, "pthread_sigmask"):
+        return True
 
-    from .isolation import signals_blocked
     from .procs import die_with_parent
     paths = _loaded_gomp()
     if not paths:                                 # named in the maps, but no file to load
@@ -71,8 +72,10 @@ def forked_openmp_hangs(timeout: float = 2.0) -> bool:
         call.argtypes = (ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint, ctypes.c_uint)
         call.restype = None
     parent, pid, status = os.getpid(), -1, None
+    held = {signal.SIGINT, signal.SIGTERM}
     try:
-        with signals_blocked():                   # no interrupt between the fork and the try
+        old = signal.pthread_sigmask(signal.SIG_BLOCK, held)      # no interrupt between the fork and the try
+        try:
             pid = os.fork()
             if pid == 0:                          # the regions, then out without Python's exit
                 code = 1
@@ -83,6 +86,8 @@ def forked_openmp_hangs(timeout: float = 2.0) -> bool:
                         code = 0
                 finally:
                     os._exit(code)
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
         end = time.monotonic() + timeout
         while status is None and time.monotonic() < end:
             done, st = os.waitpid(pid, os.WNOHANG)
