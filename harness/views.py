@@ -151,7 +151,7 @@ def compute_views(cases_by_id: dict, frames, report_cfg: dict, budget_s: float =
     """View payloads of the chosen cases, each run again with the run's ``threads`` per case (so
     its result is the measured one); each failure is a view with an ``error`` text."""
     from .executors.fresh import isolated_runner
-    run_isolated = isolated_runner(list(cases_by_id.values()))
+    run_isolated = isolated_runner()
     rows = {str(r["case_id"]): r for df in frames.values() for r in df.to_dict("records")}
     views, t0 = [], time.perf_counter()
     for cid, why in choose_views(report_cfg, frames):

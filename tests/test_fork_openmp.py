@@ -155,10 +155,13 @@ OMP_PLUGIN = """
 import ctypes
 import pymeshlab  # noqa: F401 - its libgomp
 path = next(ln.split(maxsplit=5)[5].strip() for ln in open("/proc/self/maps") if "libgomp" in ln)
-ctypes.CDLL(path).GOMP_parallel(ctypes.cast(ctypes.CDLL(None).free, ctypes.c_void_p), None, 2, 0)   # at import
+def region():
+    ctypes.CDLL(path).GOMP_parallel(ctypes.cast(ctypes.CDLL(None).free, ctypes.c_void_p), None, 2, 0)
+region()                                        # at import: libgomp's pool of two threads
 from methods import register, SmoothingResult
 @register("omplab.same", task="smoothing", library="omplab")
 def same(V, F):
+    region()                                    # and in the method: a fork of the importer hangs here
     return SmoothingResult(V=V.copy())
 """
 
@@ -167,7 +170,8 @@ def same(V, F):
 def test_a_plugin_that_runs_openmp_at_import_is_tried_in_a_fresh_interpreter(tmp_path):
     """The config's plugins are first imported in a trial process, a fork of the driver: in a
     driver whose fork hangs in GNU OpenMP, a plugin entering an OpenMP region at import hung the
-    trial, and the run with it."""
+    trial, and the run with it. The case's fresh interpreter imports it too (its pool started
+    there): the case then runs in that interpreter, not in a fork of it, where its region hung."""
     (tmp_path / "ompplug.py").write_text(OMP_PLUGIN)
     script = EDITED.replace('"plugins": ["tmpplug"]', '"plugins": ["ompplug"]').replace("tmplab.same", "omplab.same")
     script = script.replace("    for i in range(2):", "    for i in range(1):").replace('/ "tmpplug.py"', '/ "ompplug.py"')

@@ -172,7 +172,9 @@ def _subprocess_main(out_path: str, ready_fd: int | None = None) -> int:
     subreaper and forks the case; when the case ends (returns, crashes or is stopped by SIGTERM
     from the worker), the guard kills every process it left, in its process group or out of it
     (``setsid`` and a double fork re-parents them here), then ends as the case did: the same
-    exit code, or killed by the same signal."""
+    exit code, or killed by the same signal. Where a plugin started GNU OpenMP's pool at import,
+    so that a fork would hang (`harness.executors.gomp`), the case runs in this process itself,
+    and what it left is killed when it ends (and with the session, by the worker)."""
     case, want_meshes, *rest = pickle.load(sys.stdin.buffer)
     want_view = bool(rest and rest[0])
     from ..provenance import code_hash, package_versions
@@ -188,7 +190,9 @@ def _subprocess_main(out_path: str, ready_fd: int | None = None) -> int:
     if ready_fd is not None:                          # the case's timeout starts here
         os.write(ready_fd, repr(time.monotonic()).encode())
         os.close(ready_fd)
-    pid = os.fork()
+    from .gomp import forked_openmp_hangs
+    in_place = forked_openmp_hangs()  # a plugin started GNU OpenMP's pool at import: a fork would hang
+    pid = 0 if in_place else os.fork()
     if pid == 0:
         try:
             null = os.open(os.devnull, os.O_RDONLY)   # the case reads no input, as a local case's (its
@@ -205,7 +209,11 @@ def _subprocess_main(out_path: str, ready_fd: int | None = None) -> int:
         except BaseException:  # noqa: BLE001 - the worker reads no result: an error row with this tail
             import traceback
             traceback.print_exc()
+            if in_place:
+                reap_strays()
             os._exit(1)
+        if in_place:                  # what the case left dies here (the worker kills the session too)
+            reap_strays()
         os._exit(0)                   # no interpreter teardown racing the guard's threads
 
     def end(sig: int):

@@ -8,7 +8,9 @@ with the run's timeout from the moment it could fork. A case costs an interprete
 more (not counted in its times or fixed cost) and reads its input's facts again (the session's
 input store is the forking driver's alone); its rows are the same. A case whose interpreter
 read other sources than there were when the run started (files edited during the run) is an
-error row; so is a case whose interpreter could not be started.
+error row; so is a case whose interpreter could not be started. A plugin that starts GNU
+OpenMP's pool at import would hang a case forked in that interpreter too: there the case runs
+in the interpreter itself (`harness.executors.dask_subprocess._subprocess_main`).
 
 Only for cases whose method and task a fresh interpreter finds by name: built-in, or defined
 in (a submodule of) a module under the case's ``plugins`` or an entry point. A method defined
@@ -92,20 +94,20 @@ def run_fresh(cases, workers: int, timeout: float | None, want_meshes: bool):
         pool.shutdown(wait=True, cancel_futures=True)
 
 
-def isolated_runner(cases):
+def isolated_runner():
     """``run(case, timeout, want_view=False) -> (row, extras)`` for cases run one at a time after
     the run (the 3D views): `harness.executors.isolation.run_isolated` (a fork), or
-    `run_in_subprocess` when a fork would hang in GNU OpenMP and ``cases`` can run fresh. The
-    probe runs at the first call."""
-    chosen: list = []
-
+    `run_in_subprocess` when a fork would hang in GNU OpenMP and the case can run fresh (its row
+    is not checked against the run's sources: a view compares its metric with the row instead;
+    the fresh interpreter's start-up may take `STARTUP_S` beyond ``timeout``)."""
     def run(case, timeout, want_view=False):
-        if not chosen:
-            from .gomp import forked_openmp_hangs
-            chosen.append(forked_openmp_hangs() and fresh_resolvable(cases))
-        if chosen[0]:
+        from .gomp import forked_openmp_hangs
+        if forked_openmp_hangs() and fresh_resolvable([case]):
+            from .dask_code import CODE_KEY
             from .dask_subprocess import run_in_subprocess
-            return run_in_subprocess(case, timeout, want_view=want_view)
+            row, extras = run_in_subprocess(case, timeout, want_view=want_view)
+            row.pop(CODE_KEY, None)
+            return row, extras
         from .isolation import run_isolated
         return run_isolated(case, timeout=timeout, want_view=want_view)
     return run

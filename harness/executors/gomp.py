@@ -11,7 +11,7 @@ may be another library's: importing PyMeshLab starts one). `forked_openmp_hangs`
 forks a child that runs an empty parallel region of two threads in every libgomp this process
 has loaded (``GOMP_parallel(free, NULL, 2, 0)``: each thread calls ``free(NULL)``, which does
 nothing) and exits at once (``os._exit``: exit code 0 only when every region returned); it
-dies with the driver (``PR_SET_PDEATHSIG``); a child still running after ``timeout`` seconds hangs, and is killed (one
+dies with the thread that forked it (``PR_SET_PDEATHSIG``) or after its own alarm; a child still running after ``timeout`` seconds hangs, and is killed (one
 that crashes counts as hanging too). Linux;
 False where ``/proc`` says nothing.
 """
@@ -45,61 +45,77 @@ def gnu_openmp_started() -> bool:
         return False
 
 
+_SEEN_HANG: list = []     # a probe that hung: the pool stays for the life of the process (and its forks)
+
+
 def forked_openmp_hangs(timeout: float = 2.0) -> bool:
     """Whether a child forked from this process hangs in its first OpenMP parallel region (the
-    module's probe); False at once unless `gnu_openmp_started`. A probe that cannot run (no
-    ``fork``, a libgomp without ``GOMP_parallel`` or whose file is gone) says True: the caller then
-    avoids forking. It asks for two threads whatever the cases' own count: a forked case limited
-    to one thread runs its regions alone, but a method may ask OpenMP for threads of its own."""
+    module's probe); False at once unless `gnu_openmp_started`, True at once once a probe hung
+    here. A probe that cannot run (no ``fork``, a libgomp without ``GOMP_parallel`` or whose file
+    is gone) says True: the caller then avoids forking. It asks for two threads whatever the cases'
+    own count: a forked case limited to one thread runs its regions alone, but a method may ask
+    OpenMP for threads of its own. The probe child ends itself after ``timeout`` + 2 s (``alarm``)
+    should this process lose track of it, and an interrupt during the probe is raised after it
+    (`harness.errors.interrupts_deferred`, where the run's handler is installed). With SIGCHLD
+    ignored (children reaped by the kernel) a child that is gone before ``timeout`` did not hang."""
+    if _SEEN_HANG:
+        return True
     if not gnu_openmp_started():
         return False
     import ctypes
     import signal
-    if not hasattr(os, "fork") or not hasattr(signal, "pthread_sigmask"):
-        return True
 
+    from ..errors import interrupts_deferred
     from .procs import die_with_parent
     paths = _loaded_gomp()
-    if not paths:                                 # named in the maps, but no file to load
+    if not paths or not hasattr(os, "fork"):      # named in the maps but no file to load; no fork
         return True
     try:
         libs = [ctypes.CDLL(p) for p in paths]    # the copies already loaded (a deleted one: OSError)
-        free = ctypes.cast(ctypes.CDLL(None).free, ctypes.c_void_p)
+        libc = ctypes.CDLL(None)
+        free = ctypes.cast(libc.free, ctypes.c_void_p)
         calls = [lib.GOMP_parallel for lib in libs]
+        alarm, set_handler = libc.alarm, libc.signal
     except (OSError, AttributeError):
         return True
     for call in calls:
         call.argtypes = (ctypes.c_void_p, ctypes.c_void_p, ctypes.c_uint, ctypes.c_uint)
         call.restype = None
-    parent, pid, status = os.getpid(), -1, None
-    held = {signal.SIGINT, signal.SIGTERM}
-    try:
-        old = signal.pthread_sigmask(signal.SIG_BLOCK, held)      # no interrupt between the fork and the try
-        try:
-            pid = os.fork()
-            if pid == 0:                          # the regions, then out without Python's exit
-                code = 1
-                try:
-                    if die_with_parent(parent):   # a driver killed meanwhile takes it along
-                        for call in calls:
-                            call(free, None, 2, 0)
-                        code = 0
-                finally:
-                    os._exit(code)
-        finally:
-            signal.pthread_sigmask(signal.SIG_SETMASK, old)
-        end = time.monotonic() + timeout
-        while status is None and time.monotonic() < end:
-            done, st = os.waitpid(pid, os.WNOHANG)
-            if done:
-                status = st
-            else:
-                time.sleep(0.005)
-    finally:                                      # hung, or interrupted meanwhile: it ends here
-        if pid > 0 and status is None:
+    set_handler.argtypes, set_handler.restype = (ctypes.c_int, ctypes.c_void_p), ctypes.c_void_p
+    parent, status, gone = os.getpid(), None, False
+    with interrupts_deferred():
+        pid = os.fork()
+        if pid == 0:                              # C calls, then out without Python's exit
+            code = 1
             try:
-                os.kill(pid, signal.SIGKILL)
-            except OSError:
-                pass
-            os.waitpid(pid, 0)
-    return status is None or os.waitstatus_to_exitcode(status) != 0
+                set_handler(signal.SIGALRM, None)          # SIG_DFL: the alarm ends this process
+                alarm(int(timeout) + 2)
+                if die_with_parent(parent):       # with the thread that forked it
+                    for call in calls:
+                        call(free, None, 2, 0)
+                    code = 0
+            finally:
+                os._exit(code)
+        try:
+            end = time.monotonic() + timeout
+            while status is None and not gone and time.monotonic() < end:
+                try:
+                    done, st = os.waitpid(pid, os.WNOHANG)
+                except ChildProcessError:         # SIGCHLD ignored: the kernel reaped it, it ended
+                    gone = True
+                    break
+                if done:
+                    status = st
+                else:
+                    time.sleep(0.005)
+        finally:                                  # hung, or interrupted meanwhile: it ends here
+            if status is None and not gone:
+                try:
+                    os.kill(pid, signal.SIGKILL)
+                    os.waitpid(pid, 0)
+                except (ProcessLookupError, ChildProcessError):
+                    pass
+    hangs = not gone and (status is None or os.waitstatus_to_exitcode(status) != 0)
+    if hangs:
+        _SEEN_HANG.append(True)
+    return hangs
