@@ -30,10 +30,10 @@ def import_problems(modules, prepare=None) -> dict:
     or ended that process (``os._exit``, a signal, a crash in compiled code): such a module is not
     imported here, so it cannot end the caller with a misleading exit status. The trial process
     is a fork of this one when no other Python thread runs here (a fork copies no import lock
-    another thread holds) and a fork would not hang in GNU OpenMP (`_openmp_hazard`), else a fresh interpreter with this ``sys.path``
-    (`harness.executors.procs.python_child`); it writes to /dev/null, runs in a process group of
-    its own that is killed once it is done (with whatever the imports started) and dies with this
-    process. Modules already imported here are not tried; each trial is new (a module fixed since
+    another thread holds) and a fork would not hang in GNU OpenMP (`_openmp_hazard`), else a
+    fresh interpreter with this ``sys.path`` (`harness.executors.procs.python_child`); it writes
+    to /dev/null, runs in a process group of its own that is killed once it is done (with
+    whatever the imports started) and dies with this process. Modules already imported here are not tried; each trial is new (a module fixed since
     is tried again). `ENDED` keeps the modules whose import ended the trial process, for a case
     forked from here. ``prepare``: called before a forked trial (what the fork should inherit)."""
     import threading

@@ -5,8 +5,9 @@ the report only reads files.
 Which cases: ``report.views`` in the config (case ids), else the best valid and the worst ok
 case of each task that declares a ``view_metric`` (by that metric's direction). Each chosen case runs
 once more in an isolated child process (`harness.executors.isolation.run_isolated`, with a time
-budget; a fresh interpreter where a fork would hang in GNU OpenMP, `harness.executors.fresh`) and its task's ``view`` gives the meshes and per-vertex values. Lengths are fractions of
-the clean mesh's bounding-box diagonal.
+budget; a fresh interpreter where a fork would hang in GNU OpenMP, `harness.executors.fresh`)
+and its task's ``view`` gives the meshes and per-vertex values. Lengths are fractions of the
+clean mesh's bounding-box diagonal.
 """
 from __future__ import annotations
 

@@ -186,12 +186,12 @@ def _subprocess_main(out_path: str, ready_fd: int | None = None) -> int:
     from ..runner import preload_tasks, scan_thread_pools
     preload_tasks([case])       # the measuring's compiled code, as a local case inherits it
     scan_thread_pools(case.threads)   # pools limited before the fork, as a local case's: none spin in its samples
+    from .gomp import forked_openmp_hangs
+    in_place = forked_openmp_hangs()  # a plugin started GNU OpenMP's pool at import: a fork would hang
     become_subreaper()
     if ready_fd is not None:                          # the case's timeout starts here
         os.write(ready_fd, repr(time.monotonic()).encode())
         os.close(ready_fd)
-    from .gomp import forked_openmp_hangs
-    in_place = forked_openmp_hangs()  # a plugin started GNU OpenMP's pool at import: a fork would hang
     pid = 0 if in_place else os.fork()
     if pid == 0:
         try:

@@ -6,7 +6,7 @@ first OpenMP parallel region. Each case then runs as a Dask worker's does when i
 the harness, the registry and the case's plugins, and forks the case behind a guard of its own,
 with the run's timeout from the moment it could fork. A case costs an interpreter's start-up
 more (not counted in its times or fixed cost) and reads its input's facts again (the session's
-input store is the forking driver's alone); its rows are the same. A case whose interpreter
+input store is the forking driver's alone); its metrics are the same. A case whose interpreter
 read other sources than there were when the run started (files edited during the run) is an
 error row; so is a case whose interpreter could not be started. A plugin that starts GNU
 OpenMP's pool at import would hang a case forked in that interpreter too: there the case runs

@@ -134,13 +134,14 @@ class LocalExecutor:
 GOMP_FRESH = ("a process forked from this one hangs in GNU OpenMP (libgomp), which is not fork-safe: this "
               "process has started its thread pool (PyMeshLab, or PARDISO through MKL, called before the run); "
               "each case runs in a fresh Python process instead (an interpreter's start-up more per case; the "
-              "same rows)")
+              "same metrics)")
 
 GOMP_SAID = ("a process forked from this one hangs in GNU OpenMP (libgomp), which is not fork-safe: this "
              "process has started its thread pool (PyMeshLab, or PARDISO through MKL, called before the run); "
              "a method or task defined outside the built-ins, the config's plugins and the entry points (in "
-             "__main__, say) exists in no fresh process, so the cases are forked anyway, and one that enters an OpenMP parallel region hangs until its timeout: run the config "
-             "from a fresh process (shootout run, or harness.run before such calls)")
+             "__main__, say) exists in no fresh process, so the cases are forked anyway, and one that enters "
+             "an OpenMP parallel region hangs until its timeout: run the config from a fresh process (shootout "
+             "run, or harness.run before such calls)")
 
 
 def _load_in_child(spec: dict, frame: bool, timeout: float | None):
