@@ -79,7 +79,8 @@ def config(tmp_path):
                        {"file": str(tmp_path / "shipped" / "grid.obj")}],
             "noise": [{"model": "gaussian_normal", "levels": [0.2]}],
             "tasks": {"laplacian": {"methods": ["libigl.cotan", "crashy.abort"]},
-                      "smoothing": {"methods": [{"name": "scratch.explicit", "params": {"iterations": 5}}]},
+                      "smoothing": {"methods": [{"name": "scratch.explicit", "params": {"iterations": 5}},
+                                                "scratch.implicit"]},
                       "simplification": {"methods": ["fast_simplification.qem"], "params": {"target_ratio": 0.5}}}}
 
 
@@ -109,6 +110,10 @@ def test_dask_run_equals_local_run(cluster, tmp_path):
     assert set(others["mesh"]) == {"knight", "sphere(subdivisions=2)", "grid"}
     meta = harness.results.RunFolder(tmp_path / "dask").read_run_json()
     assert meta["executor"] == "dask" and meta["workers"] == 2
+    # the solver backends the workers' cases factored with come back with their rows, as a local run's
+    used = meta["solver"]["used"]
+    assert used and used == harness.results.RunFolder(tmp_path / "local").read_run_json()["solver"]["used"]
+    assert all(v["methods"] == ["scratch.implicit"] and v["cases"] == 3 for v in used.values()), used
 
 
 def test_a_scheduler_that_went_is_told_from_a_task_cancelled_for_itself():
