@@ -129,6 +129,8 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
     if P:                                        # every problem at once, nothing written
         raise problems_error(list(dict.fromkeys(P)))
     auto = default_labels([e["file"] for e in entries])
+    cleans_given = list(dict.fromkeys(str(Path(e["clean"])) for e in entries))
+    mesh_names = dict(zip(cleans_given, default_labels(cleans_given)))   # two clean files named alike: their folders
     entries = [e if e.get("label") else {**e, "label": auto[i]} for i, e in enumerate(entries)]
     rows: list[tuple[dict, bool]] = []          # each file's row, and whether its task is known (given or read)
     cleans: dict = {}
@@ -154,14 +156,14 @@ def eval_entries(entries: list[dict], out, hausdorff_samples: int = 20000, confi
                 "method": e.get("label") or rp.stem, "library": "external", "params": json.dumps({"file": str(rp)})}
         if isinstance(got, Exception):
             what = "the clean mesh" if not noisy else "the clean and noisy pair"
-            rows.append(({**base, "mesh": clean.stem, "status": "error",
+            rows.append(({**base, "mesh": mesh_names[str(clean)], "status": "error",
                           "error": f"{what} ({clean}{f', {noisy}' if noisy else ''}): {got}"[:2000]},
                          known))
             continue
         cmesh, V_in, raw = got
         n_raw, m_raw = len(raw.V), len(raw.F)
         notes = [f"input repaired: {'; '.join(cmesh.repairs)}"] if cmesh.repairs else []
-        row = {**base, "mesh": raw.name, "n_vertices": cmesh.n_vertices, "n_faces": cmesh.n_faces,
+        row = {**base, "mesh": mesh_names[str(clean)], "n_vertices": cmesh.n_vertices, "n_faces": cmesh.n_faces,
                "status": "ok", "error": ""}
         try:                                     # a bad result file costs its row, as a crashing method does
             r = read_mesh(rp, repair=False, finite=False)     # NaN: scored as the task scores it (diverged)

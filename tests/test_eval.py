@@ -423,3 +423,18 @@ def test_a_results_config_from_python_lists_its_out_problem_too(tmp_path):
     with pytest.raises(harness.errors.ShootoutError) as err:
         harness.run(cfg.read_text(), out=str(cfg))
     assert "duplicate key 'name'" in str(err.value) and "not a folder" in str(err.value), str(err.value)
+
+
+def test_two_clean_meshes_with_one_file_name_are_two_meshes(tmp_path):
+    """Both published pairs name their clean mesh ``Original.obj``: an eval of results on both
+    put all rows under one mesh ``Original``, which the report groups as one mesh. Their mesh
+    names are now their files' shortest distinct trailing folders, as result labels are."""
+    from harness.scoring import eval_entries
+    root = PAIR.parent
+    entries = [{"file": str(root / p / "Noisy.obj"), "clean": str(root / p / "Original.obj"), "label": "as-is"}
+               for p in ("Fandisk0.3", "SharpSphere0.3")]
+    df = eval_entries(entries, tmp_path / "o", hausdorff_samples=2000)["smoothing"].set_index("case_id")
+    assert sorted(df["mesh"]) == ["Fandisk0.3/Original", "SharpSphere0.3/Original"]
+    assert (df["status"] == "ok").all() and df["n_vertices"].nunique() == 2
+    one = eval_entries(entries[:1], tmp_path / "one", hausdorff_samples=2000)["smoothing"]
+    assert list(one["mesh"]) == ["Original"]                 # alone, its file's name as before
