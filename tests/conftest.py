@@ -4,7 +4,8 @@ The pytest workers run methods in-process too (PARDISO, MeshLab filters) before 
 configs. With GNU OpenMP on several threads, that starts libgomp's pool, which a forked case
 cannot use, and the local executor then runs every case in a fresh interpreter
 (`harness.executors.gomp`), several times slower for these small runs. The workers' own OpenMP
-is one thread (``OMP_NUM_THREADS``, read when libgomp and MKL load; OpenBLAS keeps its own count):
+is one thread (``OMP_NUM_THREADS`` and ``MKL_NUM_THREADS``, read when libgomp and MKL load;
+OpenBLAS keeps its own count):
 their case processes still get their threads from the runner, and `tests/test_fork_openmp.py`
 tests the fresh path in interpreters of its own. A test that runs a case in-process with
 several threads (the serial executor) could still start a pool; none does now, and the suite's
@@ -12,7 +13,8 @@ runs then warn (the warning is ignored in pyproject; `-W default:"a process fork
 """
 import os
 
-os.environ.setdefault("OMP_NUM_THREADS", "1")
+os.environ["OMP_NUM_THREADS"] = "1"       # whatever the CI's environment says: MKL reads its own first
+os.environ["MKL_NUM_THREADS"] = "1"
 os.environ.setdefault("OPENBLAS_NUM_THREADS", str(len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
                                                   else os.cpu_count() or 1))
 
