@@ -128,7 +128,9 @@ def compare_rows(rows_a: dict, rows_b: dict, time_factor: float | None = TIME_FA
     for cid in common:
         ra, rb = rows_a[cid], rows_b[cid]
         base = {"case_id": cid, "task": ra["task"], "case": _label(ra)}
-        keys = IDENTITY if ra.get("library") != "external" else [k for k in IDENTITY if k != "params"]   # eval: the path
+        # eval: not the result's path (params), nor the clean mesh's name, which depends on the other
+        # clean files of that eval; its case id hashes the clean mesh's bytes
+        keys = IDENTITY if ra.get("library") != "external" else [k for k in IDENTITY if k not in ("params", "mesh")]
         differ = [k for k in keys if (_params_identity(ra, ids) != _params_identity(rb, ids) if k == "params"
                                       else str(ra.get(k)) != str(rb.get(k)))]
         if differ:                          # one id, two different cases (e.g. two evals' files in another order)

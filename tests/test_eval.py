@@ -425,7 +425,7 @@ def test_a_results_config_from_python_lists_its_out_problem_too(tmp_path):
     assert "duplicate key 'name'" in str(err.value) and "not a folder" in str(err.value), str(err.value)
 
 
-def test_two_clean_meshes_with_one_file_name_are_two_meshes(tmp_path):
+def test_two_clean_meshes_with_one_file_name_are_two_meshes(tmp_path, capsys):
     """Both published pairs name their clean mesh ``Original.obj``: an eval of results on both
     put all rows under one mesh ``Original``, which the report groups as one mesh. Their mesh
     names are now their files' shortest distinct trailing folders, as result labels are."""
@@ -438,3 +438,8 @@ def test_two_clean_meshes_with_one_file_name_are_two_meshes(tmp_path):
     assert (df["status"] == "ok").all() and df["n_vertices"].nunique() == 2
     one = eval_entries(entries[:1], tmp_path / "one", hausdorff_samples=2000)["smoothing"]
     assert list(one["mesh"]) == ["Original"]                 # alone, its file's name as before
+    # a review: compare took the two names of one case (one id) for two cases
+    assert one["case_id"].iloc[0] in df.index
+    assert cli(["compare", str(tmp_path / "one"), str(tmp_path / "o"), "--no-time"]) == 0
+    out = capsys.readouterr().out
+    assert "describe different cases" not in out and "1 cases in both" in out and "0 regression(s)" in out, out
