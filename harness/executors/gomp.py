@@ -11,9 +11,9 @@ may be another library's: importing PyMeshLab starts one). `forked_openmp_hangs`
 forks a child that runs an empty parallel region of two threads in every libgomp this process
 has loaded (``GOMP_parallel(free, NULL, 2, 0)``: each thread calls ``free(NULL)``, which does
 nothing) and exits at once (``os._exit``: exit code 0 only when every region returned); it
-dies with the thread that forked it (``PR_SET_PDEATHSIG``) or after its own alarm; a child still running after ``timeout`` seconds hangs, and is killed (one
-that crashes counts as hanging too). Linux;
-False where ``/proc`` says nothing.
+dies with the thread that forked it (``PR_SET_PDEATHSIG``) or after its own alarm; a child
+still running after ``timeout`` seconds hangs, and is killed (one that crashes counts as
+hanging too). Linux; False where ``/proc`` says nothing.
 """
 from __future__ import annotations
 
