@@ -23,8 +23,8 @@ from .session_checks import (_accepted, _config_problem, _mesh_ok, _results_conf
 from .session_disk import NO_ROOM, DiskFull, _inside, _no_room, _write_status_in_place
 from .session_finish import finish, recompute_views
 from .session_progress import _duration, _Lines, _progress
-from .session_record import (PROVENANCE, _count_solvers, _fixed_cost, _merged_solvers, _keep_first_provenance, _load, _solver_info, method_sources,
-                             task_specs)
+from .session_record import (PROVENANCE, _count_solvers, _fixed_cost, _keep_first_provenance, _load, _merged_solvers,
+                             _solver_info, method_sources, task_specs)
 from .session_tune import _earlier_tuned_ids, _training_left, _tune
 
 __all__ = ["NO_ROOM", "PROVENANCE", "DiskFull", "_Lines", "_duration", "_no_room", "_results_config",

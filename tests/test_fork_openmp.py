@@ -15,6 +15,19 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+TWO_CORES = pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="one core: libgomp starts no thread pool to inherit")
+
+
+def _python(script: str, *args, paths=(), cwd=None, timeout: float = 600):
+    """The JSON on the last stdout line of ``script`` run in a fresh interpreter with ``paths``
+    on its path and two OpenMP threads, so that libgomp starts a pool (the test workers' own
+    OpenMP is one thread: tests/conftest.py)."""
+    env = {k: v for k, v in os.environ.items() if k not in ("OMP_NUM_THREADS", "MKL_NUM_THREADS")}
+    env.update(PYTHONPATH=os.pathsep.join([str(ROOT), *map(str, paths)]), OMP_NUM_THREADS="2")
+    out = subprocess.run([sys.executable, "-c", script, *map(str, args)], cwd=cwd, env=env, capture_output=True,
+                         text=True, timeout=timeout)
+    assert out.returncode == 0, out.stderr[-3000:]
+    return json.loads(out.stdout.strip().splitlines()[-1])
 
 SCRIPT = r"""
 import json, sys, warnings
@@ -51,20 +64,12 @@ print(json.dumps({"fresh": fresh, "after": gnu_openmp_started(), "hangs": forked
 
 
 def _run(tmp_path, methods, workers=1):
-    # two OpenMP threads, so libgomp starts a pool (a test before this one in the same pytest
-    # worker may have left OMP_NUM_THREADS=1 in the environment: then it starts none)
-    env = {k: v for k, v in os.environ.items() if k not in ("OMP_NUM_THREADS", "MKL_NUM_THREADS")}
-    env.update(PYTHONPATH=str(ROOT), OMP_NUM_THREADS="2")
-    out = subprocess.run([sys.executable, "-c", SCRIPT, str(tmp_path / "run"), ",".join(methods), str(workers)],
-                         cwd=tmp_path,
-                         env=env, capture_output=True, text=True, timeout=600)
-    assert out.returncode == 0, out.stderr[-3000:]
-    got = json.loads(out.stdout.strip().splitlines()[-1])
+    got = _python(SCRIPT, tmp_path / "run", ",".join(methods), workers, cwd=tmp_path)
     assert got["fresh"] is False and got["after"] is True and got["hangs"] is True
     return got
 
 
-@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="one core: libgomp starts no thread pool to inherit")
+@TWO_CORES
 def test_a_driver_that_started_gnu_openmp_runs_its_cases_in_fresh_interpreters(tmp_path):
     got = _run(tmp_path, ["scratch.implicit", "meshlab.taubin"])
     # forked with two threads a case (one worker on two cores), scratch.implicit was a timeout row
@@ -76,7 +81,7 @@ def test_a_driver_that_started_gnu_openmp_runs_its_cases_in_fresh_interpreters(t
     assert got["views"] and all(v == [None, True] for v in got["views"]), got["views"]
 
 
-@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="one core: libgomp starts no thread pool to inherit")
+@TWO_CORES
 def test_a_method_registered_in_main_forks_as_before_and_the_warning_says_why(tmp_path):
     got = _run(tmp_path, ["mainlab.same"])
     assert got["status"] == ["ok"], got
@@ -97,13 +102,9 @@ print(json.dumps(said))
 """
 
 
-@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="one core: libgomp starts no thread pool to inherit")
+@TWO_CORES
 def test_the_probe_tells_a_loaded_libgomp_from_a_started_pool():
-    env = {k: v for k, v in os.environ.items() if k not in ("OMP_NUM_THREADS", "MKL_NUM_THREADS")}
-    env.update(PYTHONPATH=str(ROOT), OMP_NUM_THREADS="2")
-    out = subprocess.run([sys.executable, "-c", PROBE, "1.0"], env=env, capture_output=True, text=True, timeout=300)
-    assert out.returncode == 0, out.stderr[-3000:]
-    said = json.loads(out.stdout.strip().splitlines()[-1])
+    said = _python(PROBE, "1.0", timeout=300)
     # PyMeshLab imported (libgomp loaded, and a thread of its own, which may not show yet): a
     # forked child runs OpenMP fine; after PARDISO's two threads it hangs
     assert said[1:] == [False, True, True], said
@@ -120,21 +121,22 @@ a = datasets.load("fandisk").clean
 m = import_methods()
 m.get("meshlab.taubin")(a.V, a.F)              # PyMeshLab's libgomp, which MKL then uses
 m.get("scratch.implicit")(a.V, a.F)
+out, where, plugin, method, runs = sys.argv[1:6]          # a plugin module in folder `where`
 cfg = {"name": "edited", "repeats": 1, "time_budget": 0, "timeout": 60, "meshes": ["fandisk"],
-       "plugins": ["tmpplug"], "tasks": {"smoothing": {"methods": ["tmplab.same"]}}}
+       "plugins": [plugin], "tasks": {"smoothing": {"methods": [method]}}}
 said = [forked_openmp_hangs()]
 with warnings.catch_warnings():
     warnings.simplefilter("ignore")
-    for i in range(2):
-        df = harness.run(cfg, out=f"{sys.argv[1]}{i}", quiet=True, workers=1)["smoothing"]
+    for i in range(int(runs)):
+        df = harness.run(cfg, out=f"{out}{i}", quiet=True, workers=1)["smoothing"]
         said.append([df["status"].tolist(), df["error"].fillna("").tolist()])
-        with open(Path(sys.argv[2]) / "tmpplug.py", "a") as fh:    # edited between the runs
+        with open(Path(where) / f"{plugin}.py", "a") as fh:    # edited between the runs
             fh.write("# edited\n")
 print(json.dumps(said))
 """
 
 
-@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="one core: libgomp starts no thread pool to inherit")
+@TWO_CORES
 def test_a_plugin_edited_between_two_fresh_runs_keeps_the_second_runs_rows(tmp_path):
     """A review: the driver's code hash was kept from the first run, so every row of a second
     run after an edit was refused as "changed during the run"."""
@@ -142,12 +144,7 @@ def test_a_plugin_edited_between_two_fresh_runs_keeps_the_second_runs_rows(tmp_p
         "from methods import register, SmoothingResult\n"
         "@register('tmplab.same', task='smoothing', library='tmplab')\n"
         "def same(V, F):\n    return SmoothingResult(V=V.copy())\n")
-    env = {k: v for k, v in os.environ.items() if k not in ("OMP_NUM_THREADS", "MKL_NUM_THREADS")}
-    env.update(PYTHONPATH=os.pathsep.join([str(ROOT), str(tmp_path)]), OMP_NUM_THREADS="2")
-    out = subprocess.run([sys.executable, "-c", EDITED, str(tmp_path / "run"), str(tmp_path)], cwd=tmp_path, env=env,
-                         capture_output=True, text=True, timeout=600)
-    assert out.returncode == 0, out.stderr[-3000:]
-    said = json.loads(out.stdout.strip().splitlines()[-1])
+    said = _python(EDITED, tmp_path / "run", tmp_path, "tmpplug", "tmplab.same", 2, paths=[tmp_path], cwd=tmp_path)
     assert said == [True, [["ok"], [""]], [["ok"], [""]]], said
 
 
@@ -166,18 +163,13 @@ def same(V, F):
 """
 
 
-@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="one core: libgomp starts no thread pool to inherit")
+@TWO_CORES
 def test_a_plugin_that_runs_openmp_at_import_is_tried_in_a_fresh_interpreter(tmp_path):
     """The config's plugins are first imported in a trial process, a fork of the driver: in a
     driver whose fork hangs in GNU OpenMP, a plugin entering an OpenMP region at import hung the
     trial, and the run with it. The case's fresh interpreter imports it too (its pool started
     there): the case then runs in that interpreter, not in a fork of it, where its region hung."""
     (tmp_path / "ompplug.py").write_text(OMP_PLUGIN)
-    script = EDITED.replace('"plugins": ["tmpplug"]', '"plugins": ["ompplug"]').replace("tmplab.same", "omplab.same")
-    script = script.replace("    for i in range(2):", "    for i in range(1):").replace('/ "tmpplug.py"', '/ "ompplug.py"')
-    env = {k: v for k, v in os.environ.items() if k not in ("OMP_NUM_THREADS", "MKL_NUM_THREADS")}
-    env.update(PYTHONPATH=os.pathsep.join([str(ROOT), str(tmp_path)]), OMP_NUM_THREADS="2")
-    out = subprocess.run([sys.executable, "-c", script, str(tmp_path / "run"), str(tmp_path)], cwd=tmp_path, env=env,
-                         capture_output=True, text=True, timeout=180)
-    assert out.returncode == 0, out.stderr[-3000:]
-    assert json.loads(out.stdout.strip().splitlines()[-1]) == [True, [["ok"], [""]]]
+    said = _python(EDITED, tmp_path / "run", tmp_path, "ompplug", "omplab.same", 1, paths=[tmp_path], cwd=tmp_path,
+                   timeout=180)
+    assert said == [True, [["ok"], [""]]]
