@@ -66,8 +66,26 @@ def variant_labels(df, axis_params=frozenset(), defaults=None) -> list[str]:
     rows and those set away from its default (axis params excluded); `label_text` writes them.
     The report, the leaderboard and the winners label rows with this one function."""
     ps = [params_of(s) for s in df["params"]] if "params" in df else [{} for _ in range(len(df))]
+    ps = _external_files_left_out(df, ps)
     keys = label_keys(df["method"], ps, set(axis_params), defaults)
     return [label_text(m, p, keys.get(m, ())) for m, p in zip(df["method"], ps)]
+
+
+def _external_files_left_out(df, ps: list[dict]) -> list[dict]:
+    """``ps`` with the ``file`` of each scored result (`shootout eval`: library ``external``,
+    params ``{"file": path}``) left out where its label names one file per mesh: the file is
+    where a result came from, not a setting, so one label over several meshes is one variant
+    (ranked across them). A label with two files on one mesh keeps them in its labels."""
+    if "library" not in df or "mesh" not in df:
+        return ps
+    ext = [lib == "external" for lib in df["library"]]
+    files: dict = {}
+    for e, m, mesh, p in zip(ext, df["method"], df["mesh"], ps):
+        if e:
+            files.setdefault(m, {}).setdefault(str(mesh), set()).add(json.dumps(p.get("file")))
+    one = {m for m, by_mesh in files.items() if all(len(f) == 1 for f in by_mesh.values())}
+    return [{k: v for k, v in p.items() if k != "file"} if e and m in one else p
+            for e, m, p in zip(ext, df["method"], ps)]
 
 
 def noise_label(model, level) -> str:

@@ -443,3 +443,29 @@ def test_two_clean_meshes_with_one_file_name_are_two_meshes(tmp_path, capsys):
     assert cli(["compare", str(tmp_path / "one"), str(tmp_path / "o"), "--no-time"]) == 0
     out = capsys.readouterr().out
     assert "describe different cases" not in out and "1 cases in both" in out and "0 regression(s)" in out, out
+
+
+def test_one_label_over_several_meshes_is_ranked_across_them(tmp_path):
+    """Each scored file's path is its row's ``params``, so a label given on two meshes was two
+    variants, one per file, and the leaderboard of an eval of both published pairs was empty
+    ("no cell compares two or more methods"). A label with one file per mesh is now one
+    variant; a label with two files on one mesh still names its files."""
+    from harness import leaderboard as L
+    from harness.leaderboard_labels import variant_labels
+    from harness.scoring import eval_entries
+    root = PAIR.parent
+    entries = [{"file": str(root / p / f), "clean": str(root / p / "Original.obj"),
+                "noisy": str(root / p / "Noisy.obj"), "label": lab}
+               for p in ("Fandisk0.3", "SharpSphere0.3") for f, lab in (("Noisy.obj", "as-is"), ("Original.obj", "exact"))]
+    frames = eval_entries(entries, tmp_path / "o", hausdorff_samples=2000)
+    df = frames["smoothing"]
+    assert sorted(variant_labels(df)) == ["as-is", "as-is", "exact", "exact"]
+    meta = json.loads((tmp_path / "o" / "run.json").read_text())
+    lb = L.leaderboard(dict(frames), meta["tasks"])
+    dm = lb[lb["metric"] == "dist_mean"].set_index("method")
+    assert list(dm.index) == ["exact", "as-is"] and (dm["cells"] == 2).all(), dm
+    # two files of one label on one mesh: two variants, told apart by their files
+    twice = entries[:2] + [{**entries[0], "file": str(root / "Fandisk0.3" / "Original.obj")}]
+    df2 = eval_entries(twice, tmp_path / "t", hausdorff_samples=2000)["smoothing"]
+    labels = variant_labels(df2)
+    assert labels[1] == "exact" and labels[0] != labels[2] and labels[0].startswith("as-is file="), labels
