@@ -327,6 +327,27 @@ def test_observed_order_under_refinement(tmp_path):
     assert order[("sphere", "scratch.quadric_fit")] > 1.5 and order[("sphere_random", "scratch.quadric_fit")] > 1.5
 
 
+def test_an_exact_estimators_rounding_is_no_observed_order(tmp_path):
+    """An outside audit: the angle defect is exact on a cylinder (K = 0), its K_rel_l2 rounding
+    (4e-14 to 3e-12) grows as 1/h^2, and the report printed an observed order of -2.1 ("does not
+    converge") for an exact method. Errors at or below the metric's compare tolerance are left
+    out of the fit; a variant exact at every resolution says so."""
+    from harness import tasks
+    from harness.report.convergence import convergence, observed_order
+    h = np.array([0.4, 0.2, 0.1, 0.05])
+    assert observed_order(h, 1e-14 / h ** 2, floor=1e-9) is None
+    assert observed_order(h, 1e-14 / h ** 2) == pytest.approx(-2.0)
+    assert observed_order(h, np.r_[1e-12, 3 * h[1:] ** 2], floor=1e-9) == pytest.approx(2.0)
+    meshes = [{"procedural": "cylinder", "resolution": r} for r in (16, 32, 64)]
+    run({"name": "cyl", "repeats": 1, "time_budget": 0, "meshes": meshes, "noise": [{"model": "none"}],
+         "tasks": {"curvature": {"methods": ["scratch.angle_defect"]}}}, out=tmp_path, quiet=True)
+    df = pd.read_csv(tmp_path / "curvature.csv")
+    assert (df["K_rel_l2"] < 1e-9).all() and df["K_rel_l2"].max() > df["K_rel_l2"].min() * 4   # rounding, growing
+    recs = [c for c in convergence(tasks.get("curvature").spec(), df, df["method"], [""] * len(df))
+            if c["metric"] == "K_rel_l2"]
+    assert len(recs) == 1 and recs[0]["order"] is None and recs[0]["at_floor"] == 3 and recs[0]["floor"] == 1e-9
+
+
 def test_cotan_mean_gives_the_magnitude_too():
     """The curvature issue asks scratch.cotan_mean for |H| and signed H: ``signed: false`` is the
     length of the mean curvature normal, never below the signed value's magnitude (its component

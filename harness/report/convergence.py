@@ -3,8 +3,10 @@ column (the input's resolution, e.g. curvature) gets, per lower-is-better metric
 error against the mean edge length ``h`` over the meshes of one family (the same procedural
 surface at several resolutions: the mesh label without ``subdivisions``, ``resolution`` or
 ``n_points``), and the observed order: the least-squares slope of ``log error`` against
-``log h`` (error ~ C h^p), from three resolutions or more with a positive error. Errors are
-means over seeds of the valid ok rows (`harness.leaderboard.validity`)."""
+``log h`` (error ~ C h^p), from three resolutions or more with an error above the metric's
+compare tolerance ``abs`` (an error at or below it is rounding: an exact method's angle defects
+on a cylinder, 4e-14 to 3e-12, grow as 1/h^2 and would fit as divergence). Errors are means over
+seeds of the valid ok rows (`harness.leaderboard.validity`)."""
 from __future__ import annotations
 
 import re
@@ -27,20 +29,23 @@ def family(mesh: str) -> str:
     return m.group(1) + (f"({rest})" if rest else "")
 
 
-def observed_order(h, err) -> float | None:
-    """Slope of ``log err`` against ``log h`` (least squares); None for fewer than 3 points with
-    ``h > 0`` and ``err > 0``, or a single resolution."""
+def observed_order(h, err, floor: float = 0.0) -> float | None:
+    """Slope of ``log err`` against ``log h`` (least squares) over the points with ``h > 0`` and
+    ``err > floor`` (``floor`` >= 0: the level below which an error is rounding); None for fewer
+    than 3 such points, or a single resolution."""
     h, err = np.asarray(h, dtype=np.float64), np.asarray(err, dtype=np.float64)
-    ok = (h > 0) & (err > 0) & np.isfinite(h) & np.isfinite(err)
+    ok = (h > 0) & (err > max(float(floor), 0.0)) & np.isfinite(h) & np.isfinite(err)
     if ok.sum() < 3 or np.ptp(np.log(h[ok])) == 0:
         return None
     return float(np.polyfit(np.log(h[ok]), np.log(err[ok]), 1)[0])
 
 
 def convergence(spec: dict, df: pd.DataFrame, variants, invalid) -> list[dict]:
-    """Records ``{metric, family, noise, variant, points: [[h, err], ...], order}`` (points by
-    ascending ``h``) for every lower-is-better metric of ``spec`` with values; ``variants`` and
-    ``invalid`` the rows' variant labels and validity reasons (empty: valid)."""
+    """Records ``{metric, family, noise, variant, points: [[h, err], ...], order, floor,
+    at_floor}`` (points by ascending ``h``; ``floor`` the metric's ``abs`` tolerance, ``at_floor``
+    how many points are at or below it, left out of the order) for every lower-is-better metric
+    of ``spec`` with values; ``variants`` and ``invalid`` the rows' variant labels and validity
+    reasons (empty: valid)."""
     if H not in df or not len(df):
         return []
     from .common import noise_label
@@ -54,6 +59,10 @@ def convergence(spec: dict, df: pd.DataFrame, variants, invalid) -> list[dict]:
         name = m.get("name")
         if m.get("better") != "lower" or name not in d:
             continue
+        try:
+            floor = max(float(m.get("abs") or 0.0), 0.0)
+        except (TypeError, ValueError):
+            floor = 0.0
         v = d.assign(_y=pd.to_numeric(d[name], errors="coerce"))
         v = v[np.isfinite(v["_y"]) & np.isfinite(v["_h"])]     # an inf in a hand-edited CSV: no point
         for (fam, noise, var), g in v.groupby(["_family", "_noise", "_variant"], sort=True):
@@ -62,5 +71,6 @@ def convergence(spec: dict, df: pd.DataFrame, variants, invalid) -> list[dict]:
                 continue
             out.append({"metric": name, "family": fam, "noise": noise, "variant": var,
                         "points": [[float(a), float(b)] for a, b in zip(pts["h"], pts["y"])],
-                        "order": observed_order(pts["h"], pts["y"])})
+                        "order": observed_order(pts["h"], pts["y"], floor), "floor": floor,
+                        "at_floor": int((pts["y"] <= floor).sum())})
     return out

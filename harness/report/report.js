@@ -1300,7 +1300,10 @@
     var t = el('table', {'class': 'best convergence'});
     var order = function (v, f) {
       var c = recs.filter(function (c) { return c.variant === v && famOf(c) === f; })[0];
-      return c ? (isNum(c.order) ? c.order.toFixed(2) : '— (' + c.points.length + ' resolutions)') : '';
+      if (!c) return '';
+      if (isNum(c.order)) return c.order.toFixed(2);
+      if (c.at_floor && c.at_floor === c.points.length) return 'exact (every error ≤ ' + fmt(c.floor) + ')';
+      return '— (' + (c.points.length - (c.at_floor || 0)) + ' resolutions above ' + fmt(c.floor || 0) + ')';
     };
     t.innerHTML = '<tr><th>method</th>' + fams.map(function (f) { return '<th>' + esc(f) + '</th>'; }).join('') + '</tr>' +
       vars.map(function (v) {
@@ -1310,7 +1313,8 @@
     plots.appendChild(t);
     plots.appendChild(el('p', {'class': 'caption', text: 'h: the mean edge length of the clean input; error ~ C h^p, p the ' +
       'least-squares slope over three resolutions or more of one surface (a mesh family: the same procedural surface at ' +
-      'several subdivisions, resolutions or point counts), means over seeds of valid results. A positive p converges; ' +
+      'several subdivisions, resolutions or point counts), means over seeds of valid results; errors at or below the ' +
+      'metric\'s compare tolerance are rounding, left out of the fit. A positive p converges; ' +
       'p near 0 does not (the cotan mean curvature on irregular triangulations, in the literature).'}));
     var panels = panelGroup(plots, key + ' vs mean edge length, per mesh family (log-log)',
       'One line per method; its observed order p is in the table above (and in each point\'s tooltip).', function () {
