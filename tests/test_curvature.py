@@ -60,6 +60,35 @@ def test_gauss_bonnet_error_ranks_nothing():
     assert compare.rule_for("gauss_bonnet_error", "curvature").kind == "info"
 
 
+def test_quadric_fit_is_the_curvature_of_the_fitted_graph():
+    """An outside audit: the fit's shape operator was ``-[[2a, b], [b, 2c]]``, the fitted slope
+    (d, e) dropped, which is the graph's curvature only where the vertex normal is the fitted
+    surface's. Points on a graph h = a u^2 + b uv + c v^2 + d u + e v over a tilted frame are fitted
+    exactly, and the principal curvatures must be the graph's at the origin, from the Monge-patch
+    formulas (K = (h_uu h_vv - h_uv^2) / w^4, H = ((1 + h_v^2) h_uu - 2 h_u h_v h_uv + (1 + h_u^2)
+    h_vv) / (2 w^3), w^2 = 1 + h_u^2 + h_v^2; the task's H is its negative, > 0 on a sphere with
+    outward normals), to 1e-10. Dropping the slope misses by 30% here."""
+    from methods.scratch.curvature import _fit
+    rng = np.random.default_rng(3)
+    N = np.array([0.3, -0.5, 0.81])
+    N /= np.linalg.norm(N)
+    t1 = np.cross(N, [0.0, 0.0, 1.0])
+    t1 /= np.linalg.norm(t1)
+    t2 = np.cross(N, t1)
+    a, b, c, d, e = 0.7, -0.4, 1.3, 0.6, -0.45
+    u, v = rng.uniform(-0.2, 0.2, (2, 14))
+    h = a * u * u + b * u * v + c * v * v + d * u + e * v
+    D = u[:, None] * t1 + v[:, None] * t2 + h[:, None] * N
+    k1, k2 = _fit(N[None], D[None], np.ones((1, 14), bool))
+    huu, huv, hvv = 2 * a, b, 2 * c
+    w2 = 1 + d * d + e * e
+    K = (huu * hvv - huv ** 2) / w2 ** 2
+    H = -((1 + e * e) * huu - 2 * d * e * huv + (1 + d * d) * hvv) / (2 * w2 ** 1.5)
+    assert k1[0] >= k2[0]
+    assert abs(k1[0] * k2[0] - K) <= 1e-10 * abs(K) and abs((k1[0] + k2[0]) / 2 - H) <= 1e-10 * abs(H)
+    assert abs(-(a + c) - H) > 0.3 * abs(H)                  # the slope matters at this tilt
+
+
 def test_quadric_fit_widens_the_ring_until_the_fit_is_determined():
     """A vertex short of 5 neighbours gets a ring widened step by step (it stopped after one step
     and gave such vertices K = H = 0 in an ok row); a component of fewer than 6 vertices, where no

@@ -38,9 +38,13 @@ def gaussian_curvature(V, F):
 def principal_curvature(V, F, *, radius=5):
     """``igl.principal_curvature(V, F, radius)`` values (module docstring).
 
-    A quadric fitted over the ``radius``-ring, as `scratch.quadric_fit` with ``rings = radius``
-    (same median H on an icosphere to 4 digits; its docstring); the default neighbourhoods
-    differ (5 here, 2 rings there)."""
+    A quadric ``a u^2 + b uv + c v^2 + d u + e v`` fitted over the ``radius``-ring (neighbours whose
+    normal faces away left out where 6 remain with the vertex), its principal curvatures the
+    eigenvalues of ``I^-1 II`` with the (0,1) entry replaced by the (1,0) one (libigl's
+    ``finalEigenStuff``): H, the trace, is exact; K, k1, k2 are off where the slope ``(d, e)`` is
+    large. `scratch.quadric_fit` with ``rings = radius`` is the same fit with the exact operator:
+    the same H to 5e-10 (its docstring). The default neighbourhoods differ (5 here, 2 rings
+    there)."""
     import igl
     _, _, pv1, pv2, bad = igl.principal_curvature(V, F, int(radius))
     pv1, pv2 = np.asarray(pv1, dtype=np.float64), np.asarray(pv2, dtype=np.float64)
