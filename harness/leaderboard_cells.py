@@ -40,8 +40,12 @@ def cell_values(spec: dict, df: pd.DataFrame, metric: str, axis_params=(), cells
 
 
 def _seed_text(d: pd.DataFrame) -> pd.Series:
-    """Each row's noise seed as text ("0" where the frame has no seed column)."""
-    return (d["seed"] if "seed" in d else pd.Series(0, index=d.index)).astype(str)
+    """Each row's noise seed as text ("0" where the frame has no seed column, "" where the row has
+    none: a scored file's, `shootout eval`; pandas keeps a blank as NaN through ``astype(str)``,
+    and ``nunique`` counted such a cell's seeds as 0, its standard errors as infinite)."""
+    if "seed" not in d:
+        return pd.Series("0", index=d.index)
+    return pd.Series(["" if pd.isna(v) else str(v) for v in d["seed"]], index=d.index, dtype=object)
 
 
 def _cell_seeds(d: pd.DataFrame) -> pd.Series:

@@ -101,18 +101,21 @@ def _not_measured_note(g: pd.DataFrame) -> str:
 
 
 def _seeds_note(g: pd.DataFrame) -> str:
-    """What the cells' winners rest on: how many noise draws (seeds), said plainly when one."""
-    noisy = g[g["noise_model"].astype(str) != "none"]
+    """What the cells' winners rest on: how many noise draws (seeds), said plainly when one; a
+    given noisy input (no seed to vary) said to be one fixed draw."""
+    model = g["noise_model"].astype(str)
+    given = " Given noisy inputs (a published pair) are one fixed draw each." if (model == "given").any() else ""
+    noisy = g[(model != "none") & (model != "given")]
     if not len(noisy) or "seeds" not in noisy:
-        return ""
+        return given and "\n" + given.strip()
     n = pd.to_numeric(noisy["seeds"], errors="coerce").dropna()
     if not len(n):
-        return ""
+        return given and "\n" + given.strip()
     lo, hi = int(n.min()), int(n.max())
     said = f"{lo}" if lo == hi else f"{lo}-{hi}"
     one = (" A winner from one seed is one noise draw's: another draw may name another method (run more seeds, "
            "`noise: [{..., seeds: N}]`).") if lo == 1 else ""
-    return f"\nNoisy cells rest on {said} noise seed(s) each.{one}"
+    return f"\nNoisy cells rest on {said} noise seed(s) each.{one}{given}"
 
 
 def _carries(g: pd.DataFrame, kind: str) -> bool:
