@@ -177,7 +177,7 @@ def test_heat_kernel_signature_on_the_sphere_and_between_solvers():
         src = datasets.load({"procedural": "sphere", "subdivisions": s})
         r = methods.get("scratch.spectrum")(src.clean.V, src.clean.F, k=36)
         inp = Inp()
-        inp.shape, inp.V, inp.clean = src.shape, src.clean.V, src.clean
+        inp.shape, inp.V, inp.F, inp.clean = src.shape, src.clean.V, src.clean.F, src.clean
         row = measure(inp, r, {})
         assert row["hks_rel_error"] < row["eig_rel_error_max"]
         errs.append(row["hks_rel_error"])
@@ -205,7 +205,7 @@ def test_hks_error_does_not_depend_on_the_basis_of_a_cut_multiplet():
 
     src = datasets.load({"procedural": "sphere", "subdivisions": 3})
     inp = Inp()
-    inp.shape, inp.V, inp.clean = src.shape, src.clean.V, src.clean
+    inp.shape, inp.V, inp.F, inp.clean = src.shape, src.clean.V, src.clean.F, src.clean
     rng = np.random.default_rng(0)
     for k in (17, 20, 24):
         a = methods.get("scratch.spectrum")(src.clean.V, src.clean.F, k=k)
@@ -264,7 +264,7 @@ def test_residual_is_scale_free():
     for s in (0.1, 1.0, 10.0, 100.0):
         M, lam = r.M * s ** 2, r.values / s ** 2
         norms = np.sqrt(np.einsum("ij,ij->j", X, M @ X))
-        got.append(_residual(r.W @ X + (M @ X) * lam, r.W, M, norms, lam))
+        got.append(_residual(r.W @ X + (M @ X) * lam, r.W, M, norms, lam, 1))
     assert got[1] > 0 and np.allclose(got, got[1], rtol=1e-9, atol=0), got
 
 
@@ -275,14 +275,63 @@ def test_residual_without_a_nonzero_eigenvalue_is_small_and_scale_free():
     from harness.tasks.spectrum import _residual
     V, F, _ = sphere(3)
     V2, F2 = np.vstack([V, V + 3.0]), np.vstack([F, F + len(V)])
-    for VV, FF, k in ((V, F, 1), (V2, F2, 2)):
+    for VV, FF, k, c in ((V, F, 1, 1), (V2, F2, 2, 2)):
         got = []
         for s in (1.0, 10.0):
             r = methods.get("scratch.spectrum")(VV * s, FF, k=k)
             X, lam = r.vectors, r.values
             norms = np.sqrt(np.einsum("ij,ij->j", X, r.M @ X))
-            got.append(_residual(r.W @ X + (r.M @ X) * lam, r.W, r.M, norms, lam))
+            got.append(_residual(r.W @ X + (r.M @ X) * lam, r.W, r.M, norms, lam, c))
         assert max(got) < 1e-8 and np.isclose(got[0], got[1], rtol=1e-3, atol=1e-14), got
+
+
+def test_sliver_meshes_measure_residuals_against_the_first_nonzero_eigenvalue():
+    """An outside audit: eigenvalues at or below ``1e-8 max |W_ii / M_ii|`` counted as zero, and on
+    slivers that scale is 3.7e9 (plane_skinny: the cut 37 against lambda_1 = 9.87), 7e12 with
+    ``offset: 1e-6`` (no returned eigenvalue above the cut): two pairs rotated into each other
+    (still M-orthonormal, no longer eigenpairs) passed the 1e-6 validity rule. The zeros are now
+    the components' count, so such pairs are measured against lambda_1."""
+    from harness import datasets
+    from harness.tasks.spectrum import _components, _residual
+    for spec, k, i, j, th in (({"procedural": "plane_skinny", "n_points": 3000}, 50, 1, 30, 1e-7),
+                              ({"procedural": "plane_skinny", "offset": 1e-6}, 10, 1, 9, 1e-3)):
+        src = datasets.load(spec)
+        V, F = src.clean.V, src.clean.F
+        r = methods.get("scratch.spectrum")(V, F, k=k)
+        s = np.abs(r.W.diagonal() / r.M.diagonal()).max()
+        assert 1e-8 * s > r.values[1]                     # the old cut: lambda_1 among the "zeros"
+        c, sn = np.cos(th), np.sin(th)
+        X = r.vectors.copy()
+        X[:, i], X[:, j] = c * r.vectors[:, i] + sn * r.vectors[:, j], -sn * r.vectors[:, i] + c * r.vectors[:, j]
+        M = r.M
+        norms = np.sqrt(np.einsum("ij,ij->j", X, M @ X))
+        got = _residual(r.W @ X + (M @ X) * r.values, r.W, M, norms, r.values, _components(F, len(V)))
+        Md = M.diagonal()
+        R = r.W @ X + (M @ X) * r.values
+        rn = np.sqrt(np.einsum("ij,ij->j", R, R / Md[:, None]))
+        want = (rn / norms / np.maximum(np.abs(r.values), r.values[1])).max()
+        assert got == pytest.approx(want, rel=1e-12) and got > 1e-6, (spec, got, want)
+
+
+def test_the_bands_final_inertia_check_runs_on_slivers(monkeypatch):
+    """An outside audit: the bands' last factorization (certifying the pairs above the last
+    band's shift) was skipped when the k-th eigenvalue lay below ``1e-8 max |A_ii / M_ii|``, taken
+    for k zero modes; on plane_skinny with ``offset: 1e-6`` that cut is 7e4, above lambda_9 = 87,
+    so one band of 10 pairs was returned uncertified. The zero modes are the components now."""
+    from harness import datasets
+    from methods.scratch import bands
+    calls = []
+    real = bands._factor
+    monkeypatch.setattr(bands, "_factor", lambda S: calls.append(1) or real(S))
+    src = datasets.load({"procedural": "plane_skinny", "offset": 1e-6})
+    r = methods.get("scratch.spectrum")(src.clean.V, src.clean.F, k=10, solver="bands")
+    assert r.values[-1] < 1e-8 * np.abs(r.W.diagonal() / r.M.diagonal()).max()
+    assert len(calls) == 2, calls                       # the band's shift, and the final check
+    calls.clear()
+    V, F = src.clean.V, src.clean.F
+    V2, F2 = np.vstack([V, V + 3.0]), np.vstack([F, F + len(V)])
+    methods.get("scratch.spectrum")(V2, F2, k=2, solver="bands")       # two zero modes: no final check
+    assert len(calls) == 1, calls
 
 
 def test_a_numerically_flat_face_is_a_clear_error():

@@ -7,7 +7,7 @@ together with ``W`` and ``M`` so that the residual and the M-orthogonality can b
 
 Reference (``reference`` column): on a sphere of radius ``r`` (``sphere``, ``sphere_random``) the spectrum of the smooth
 Laplace-Beltrami operator is ``l (l + 1) / r^2`` with multiplicity ``2 l + 1``; on the unit-square
-planes (``plane_delaunay``, ``plane_nondelaunay``, open: the discrete operators impose the natural
+planes (``plane_delaunay``, ``plane_nondelaunay``, ``plane_skinny``, open: the discrete operators impose the natural
 Neumann condition) it is ``pi^2 (a^2 + b^2)``, ``a, b >= 0`` integers; both lists sorted
 ascending, they are matched index by index (a multiplet cut at ``k`` matches its first members).
 ``eig_rel_error_max`` / ``eig_rel_error_mean``: ``|lambda_i - lambda*_i| / lambda*_i`` over
@@ -17,9 +17,11 @@ subdivision, its linear-FEM eigenvalues with the consistent mass matrix
 (`harness.metrics.refined_spectrum`: upper bounds of the surface's exact ones, with the estimate of
 their own relative error in ``reference_error_est``), for meshes whose refinement fits in 50,000
 faces and ``k <= 200``; else those columns are blank. ``residual_max``: ``max_i ||W x_i + lambda_i M x_i||_{M^-1}
-/ (max(|lambda_i|, lambda_f) ||x_i||_M)``, ``lambda_f`` the smallest returned ``|lambda|`` above
-``1e-8 s`` (the first non-zero eigenvalue: the constant mode is measured relative to it; ``s =
-max |W_ii / M_ii|``, an eigenvalue scale of the operator, when no returned one is above): the
+/ (max(|lambda_i|, lambda_f) ||x_i||_M)``, ``lambda_f`` the ``(c + 1)``-th smallest returned
+``|lambda|``, ``c`` the input's connected components (the first non-zero eigenvalue: the constant
+modes are measured relative to it; ``s = max |W_ii / M_ii|``, an eigenvalue scale of the
+operator, when no more than ``c`` are returned; a cut at ``1e-8 s`` put slivers' first
+eigenvalues among the zeros, their scale 1e9 and more): the
 relative residual of ``M^-1 W x = -lambda x`` in the M-norm, dimensionless, so the same
 eigenpairs give the same value at any mesh scale; ``orthogonality_error``:
 ``max |X^T M X - I|`` after M-normalising each column. ``hks_rel_error`` (spheres, when
@@ -31,7 +33,7 @@ solver returned, by more than the metric's tolerance) at 4 times log-spaced in
 over vertices and times of ``|HKS - HKS*| / HKS*`` against the sphere's exact HKS (all terms:
 the truncation is part of the error, below ``1e-4`` at the smallest time for ``k <= 2000``).
 On a mesh whose eigenvalues cross between degrees ``L`` and ``L + 1`` (far too coarse a
-sphere) the first ``(L + 1)^2`` pairs do not span a whole multiplet either. The 3D view shows the HKS at the smallest and largest of those times (from
+sphere) the first ``(L + 1)^2`` pairs do not span a whole multiplet either. The 3D view shows the HKS at the two smallest of those times (from
 the method's own eigenvalues) on any mesh.
 """
 from __future__ import annotations
@@ -93,7 +95,7 @@ def _check(result: SpectrumResult, V, F):
 
 def analytic(shape: dict | None, k: int) -> np.ndarray | None:
     """The ``k`` smallest Laplace-Beltrami eigenvalues of the exact surface, or None: spheres,
-    and the unit square of the planes (``plane_delaunay``, ``plane_nondelaunay``) with the
+    and the unit square of the planes (``plane_delaunay``, ``plane_nondelaunay``, ``plane_skinny``) with the
     natural (Neumann) boundary condition a discrete Laplacian imposes, ``pi^2 (a^2 + b^2)`` for
     integers ``a, b >= 0``."""
     if shape and shape.get("procedural") in ("plane_delaunay", "plane_nondelaunay", "plane_skinny"):
@@ -180,7 +182,7 @@ def measure(inp, result, params) -> dict:
         MX = M @ X
         norms = np.sqrt(np.maximum(np.einsum("ij,ij->j", X, MX), 1e-300))
         R = W @ X + MX * lam[None, :]
-        row["residual_max"] = _residual(R, W, M, norms, lam)
+        row["residual_max"] = _residual(R, W, M, norms, lam, _components(inp.F, len(inp.V)))
         Xn = X / norms
         G = Xn.T @ (M @ Xn)
         row["orthogonality_error"] = float(np.abs(G - np.eye(len(lam))).max())
@@ -200,11 +202,18 @@ def _refined(inp, k: int) -> dict | None:
     return inp.cache[key]
 
 
-def _residual(R: np.ndarray, W, M, norms: np.ndarray, lam: np.ndarray) -> float | None:
+def _components(F, n: int) -> int:
+    """The connected components of the faces' vertices: the zero eigenvalues of a Laplacian."""
+    from ..core.geometry import referenced, vertex_components
+    used = referenced(np.asarray(F), n)
+    return int(len(np.unique(vertex_components(F, n)[used]))) if used.any() else 0
+
+
+def _residual(R: np.ndarray, W, M, norms: np.ndarray, lam: np.ndarray, zeros: int) -> float | None:
     """``max_i ||R_i||_{M^-1} / (max(|lambda_i|, lambda_f) ||x_i||_M)`` (module docstring); None
-    where M is singular. ``s = max |W_ii / M_ii|`` (an eigenvalue scale, 1/length^2) decides what
-    counts as zero (``|lambda| <= 1e-8 s``) and stands for ``lambda_f`` when no returned eigenvalue
-    is non-zero."""
+    where M is singular. ``zeros``: how many eigenvalues are zero (the connected components);
+    ``lambda_f`` is the next smallest ``|lambda|``, or ``s = max |W_ii / M_ii|`` (an eigenvalue
+    scale, 1/length^2) where no more are returned."""
     import scipy.sparse.linalg as sla
     Mc = sp.csr_matrix(M)
     md = Mc.diagonal()
@@ -221,8 +230,7 @@ def _residual(R: np.ndarray, W, M, norms: np.ndarray, lam: np.ndarray) -> float 
     rn = np.sqrt(np.maximum(np.einsum("ij,ij->j", R, MinvR), 0.0))
     a = np.abs(lam)
     scale = float(np.abs(W_diag_over_m).max()) if W_diag_over_m.size else 0.0
-    nz = a[a > 1e-8 * scale]
-    floor = nz.min() if nz.size else scale
+    floor = float(np.sort(a)[zeros]) if len(a) > zeros else scale
     if not floor > 0:
         return None
     return float((rn / norms / np.maximum(a, floor)).max())
@@ -235,7 +243,9 @@ def view(inp, result) -> list:
     if result.vectors is None or result.vectors.shape[1] < 2:
         return []
     X = result.vectors
-    out = [("eigenvector 1", inp.V, inp.F, X[:, 1], "first non-constant eigenvector", {"signed": True})]
+    out = [("eigenvector 1", inp.V, inp.F, X[:, 1], "eigenvector 1 (the first non-constant one on a connected mesh; "
+                                                       "with several components, a zero mode constant on each)",
+            {"signed": True})]
     if result.M is not None:
         X = X / np.sqrt(np.maximum(np.einsum("ij,ij->j", X, result.M @ X), 1e-300))
         times = hks_times(result.values)

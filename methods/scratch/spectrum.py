@@ -87,8 +87,11 @@ def inversion_shift(W, M) -> float:
     return -1e-8 * float(np.median(d[d > 0])) if (d > 0).any() else -1e-8
 
 
-def smallest_eigenpairs(W, M, k: int, solver: str = "auto", linear_solver: str = "auto", seed: int = 0):
-    """(values ascending (k,), M-orthonormal vectors (n, k)) of ``-W x = lambda M x``."""
+def smallest_eigenpairs(W, M, k: int, solver: str = "auto", linear_solver: str = "auto", seed: int = 0,
+                        zeros: int | None = None):
+    """(values ascending (k,), M-orthonormal vectors (n, k)) of ``-W x = lambda M x``; ``zeros``:
+    the dimension of W's kernel where known (the mesh's connected components), for the bands'
+    final inertia check (`methods.scratch.bands.band_eigenpairs`)."""
     from scipy.sparse.linalg import LinearOperator, eigsh
     n = W.shape[0]
     k = int(min(k, n - 1 if solver != "dense" else n))
@@ -102,9 +105,9 @@ def smallest_eigenpairs(W, M, k: int, solver: str = "auto", linear_solver: str =
     elif solver == "bands" or (solver == "auto" and k > BANDS_FROM):
         from methods.scratch.bands import BandFailure, band_eigenpairs
         try:
-            lam, X = band_eigenpairs(A, M, k, sigma, band=BAND, seed=seed)
+            lam, X = band_eigenpairs(A, M, k, sigma, band=BAND, seed=seed, zeros=zeros)
         except (BandFailure, ImportError):
-            return smallest_eigenpairs(W, M, k, "shift_invert", linear_solver, seed)
+            return smallest_eigenpairs(W, M, k, "shift_invert", linear_solver, seed, zeros)
     elif solver in ("shift_invert", "auto"):
         fac = factorize((A - sigma * M).tocsr(), many_solves_solver() if linear_solver == "auto" else linear_solver)
         OPinv = LinearOperator((n, n), matvec=fac.solve, dtype=np.float64)
@@ -148,5 +151,7 @@ def spectrum(V, F, *, k=20, operator="cotan", mass="voronoi", solver="auto", lin
         raise ValueError(f"{unused.size} vertices no face uses (first: {unused[:5].tolist()}): they have no mass; "
                          "drop them first (harness.core.geometry.compact)")
     W, M = operator_and_mass(V, F, operator, mass)
-    lam, X = smallest_eigenpairs(W, M, k, solver, linear_solver)
+    from harness.core.geometry import vertex_components
+    zeros = int(len(np.unique(vertex_components(F, len(V)))))      # every vertex is in a face (above)
+    lam, X = smallest_eigenpairs(W, M, k, solver, linear_solver, zeros=zeros)
     return SpectrumResult(values=lam, vectors=X, W=W, M=M)
