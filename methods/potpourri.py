@@ -11,9 +11,10 @@ default. Its Poisson step solves with ``L + 1e-6 I`` (geometry-central's
 whose effect grows as L's smallest non-zero eigenvalue shrinks with the vertex count: 2.5e-3 of
 the largest distance from ``scratch.heat`` on a 327k-face icosphere (1.3e-3 mean), 4e-4 at 20k
 faces. So with ``use_robust`` off it is ``scratch.heat`` with ``boundary: neumann, mass:
-barycentric`` up to that shift (to 1e-4 of the largest distance on a cylinder and on Delaunay and
-non-Delaunay planes, `tests/test_geodesics.py`; 2e-4 on bunny, 9e-4 on camelhead, 8e-4 on
-camelhead with noise); with it on, the nearest setting is
+barycentric`` up to that shift (to 2e-5 of the largest distance on 300-point Delaunay and
+non-Delaunay planes and 1e-4 on a cylinder, `tests/test_geodesics.py`; 2.2e-4 on the 3000-point
+planes of ``configs/geodesics.yaml``, 2.8e-4 on bunny, 9e-4 on camelhead, 8e-4 on camelhead with
+noise); with it on, the nearest setting is
 ``scratch.heat`` with ``laplacian: tufted, boundary: neumann, mass: barycentric`` (2e-5 to 6e-3
 of the largest distance apart on those meshes, woody and noisy ones): the same operator, but
 geometry-central takes h from the intrinsic Delaunay mesh (t 0.948 of ours on bunny) besides the

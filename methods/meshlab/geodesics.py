@@ -19,7 +19,8 @@ alone selected (its vertex quality set to 1 and selected by ``q > 0.5``; the fil
 parser crashes the process when the mesh carries a custom vertex attribute, as the other
 adapters' meshes do), so every call factors again. It equals
 ``scratch.heat`` with ``mass: barycentric`` on closed meshes (max difference over the largest
-distance: 6e-10 on knight, 6e-8 on bunny and noisy bunny, 2e-7 on noisy fandisk, at
+distance: 6e-10 on knight, 5e-8 to 1.3e-7 on bunny and noisy bunny (over source seeds 0-3),
+1.4e-7 on fandisk, 2e-7 on noisy fandisk, at
 ``t_factor`` 1 and 4); on an open mesh it is nearest ``boundary: neumann`` and differs near the
 boundary (two interior sources: camelhead 1.9e-4, the obtuse plane 8e-4, against 1e-2 and 4e-2
 to ``average``; a source on the plane's boundary 1.3e-2).

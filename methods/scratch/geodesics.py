@@ -2,7 +2,11 @@
 heat", ACM TOG 32(5)), on our own operators, prefactored.
 
 With ``W`` the cotangent Laplacian (libigl's sign: negative semi-definite), ``M`` the vertex
-mass and ``t = t_factor * h^2`` (``h`` the mean edge length):
+mass and ``t = t_factor * h^2`` (``h`` the mean edge length). The default mass is the mixed
+Voronoi one of libigl's ``heat_geodesics`` (which the default settings reproduce to 1e-13);
+geometry-central, the authors' implementation, lumps barycentric areas (``mass: barycentric``;
+mean relative error barycentric 0.0227 and Voronoi 0.0247 on bunny, 0.110 and 0.116 on the
+non-Delaunay plane, within 0.3% of each other on the sphere, camelhead and woody):
 
 1. heat: ``(M - t W) u = delta_s`` (1 at the source). With a boundary, ``boundary: average``
    averages the Neumann solution and the Dirichlet one (``u = 0`` on the boundary), as the paper
@@ -151,7 +155,9 @@ class HeatSolver:
                                      doc="operators on the mesh, on its intrinsic Delaunay triangulation, or on "
                                          "the intrinsic Delaunay triangulation of its tufted cover"),
                   "mass": Param("mass", "voronoi", choices=("voronoi", "barycentric"),
-                                doc="vertex mass of the heat step (libigl uses voronoi)"),
+                                doc="vertex mass of the heat step: voronoi (libigl's heat_geodesics, the default "
+                                    "here) or barycentric (one third of the incident triangles' areas: the "
+                                    "paper's reference implementation, geometry-central)"),
                   "boundary": Param("boundary", "average", choices=("average", "neumann", "dirichlet"),
                                     doc="heat-step boundary condition on open meshes (the paper: average)"),
                   "solver": solver_param()})
