@@ -13,7 +13,8 @@ adapter calls it on the mesh centred and scaled to unit mean edge length and ret
 Near a boundary K is far too large, as trimesh computes it: trimesh takes every vertex's angle
 defect against ``2 pi``, also at boundary vertices (whose defect is against ``pi``), so each
 boundary vertex inside a ball adds about ``pi`` to that ball's K (on a flat square, exact K = 0,
-interior vertices within ``r`` of the boundary read a median K of 174 at the default radius).
+interior vertices within ``r`` of the boundary read a median K h^2 of about 0.22 at the default
+radius, ``h`` the mean edge length: K = 174 on ``plane_delaunay`` with 1000 points, 52 with 300).
 The adapter keeps trimesh's values; the task's interior errors (``K_rel_l2``, ``K_max``) include
 those vertices. The division by ``pi r^2`` also assumes a full disc, which a boundary cuts.
 """

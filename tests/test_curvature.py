@@ -23,7 +23,7 @@ def load(shape):
 
 
 def test_unit_icosphere_5():
-    """Subdivision-5 unit icosphere (20,480 faces, mean edge ~0.019): the angle-defect K is 1 to
+    """Subdivision-5 unit icosphere (20,480 faces, mean edge ~0.038): the angle-defect K is 1 to
     3.6e-4 at every vertex and the cotan H is 1 to 2e-6 (measured 3.55e-4 and 1.8e-6; on the
     icosphere the error is set by the spread of vertex areas, not by round-off)."""
     V, F, _ = load({"procedural": "sphere", "subdivisions": 5, "radius": 1.0})
