@@ -870,3 +870,32 @@ def test_the_generic_pareto_front_is_the_dominance_front(tmp_path):
         vals = sorted(float(x.split("rel_error_mean ")[1].split(",")[0]) for x in ringed)   # 4 digits shown
         assert len(vals) == len(want) and np.allclose(vals, sorted(want), rtol=1e-3), (ringed, want)
     assert len(want) >= 2
+
+
+def test_an_eval_report_claims_no_fastest_method_and_points_at_no_command_it_refuses(tmp_path):
+    """An outside audit of an eval of two decimations: the simplification table named a "fastest"
+    method although nothing was timed (the first row, time blank), and the page said its
+    leaderboard files are written by `shootout report` and its views by `shootout views`, both of
+    which refuse an eval folder."""
+    from harness.mesh import read_mesh
+    from harness.mesh_formats import write_obj
+    from harness.scoring import eval_entries
+    import methods
+    clean = Path(__file__).resolve().parents[1] / "harness" / "data" / "meshes" / "fandisk.obj"
+    m = read_mesh(clean)
+    files = []
+    for r in (0.5, 0.2):
+        out = methods.get("fast_simplification.qem")(m.V, m.F, target_ratio=r)
+        files.append(tmp_path / f"fs{int(r * 100)}.obj")
+        write_obj(files[-1], out.V, out.F)
+    eval_entries([{"file": str(f), "clean": str(clean), "task": "simplification"} for f in files], tmp_path / "o",
+                 hausdorff_samples=2000)
+    report = tmp_path / "o" / "report.html"
+    s = check_report_in_browser(report, interact=False)
+    assert s["console_errors"] == [] and s["exceptions"] == [] and s["jserrors"] == 0
+    rows, lb, views = page_value(report, """[[...document.querySelectorAll('#plots-simplification table.best tr')]
+        .map(r => [...r.cells].map(c => c.textContent)), document.querySelector('#leaderboard p').textContent,
+        document.querySelector('#views').textContent]""")
+    assert rows[0][7] == "fastest" and rows[1][7] == "— (nothing timed)" and rows[1][3].endswith("fs50"), rows
+    assert "shootout report" not in lb and "only one" in lb, lb
+    assert "shootout views" not in views and "runs no method" in views, views

@@ -100,10 +100,13 @@ def _leaderboard_payload(frames, specs) -> list[dict]:
     return out
 
 
-def _leaderboard_files_text(run_dir) -> str:
+def _leaderboard_files_text(run_dir, scored: bool = False) -> str:
     """Where else the leaderboard is: the files of it this run folder holds (a run writes them
-    when it finishes, and `shootout report` rebuilds them; an interrupted run and `eval` do not)."""
+    when it finishes, and `shootout report` rebuilds them; an interrupted run and `eval` do not;
+    ``scored``: an eval folder, which `shootout report` does not rewrite either)."""
     have = [n for n in REPORT_FILES if n.startswith("leaderboard.") and (Path(run_dir) / n).is_file()]
+    if not have and scored:
+        return "An eval folder has no leaderboard files: this page's leaderboard is the only one."
     if not have:
         return ("This run folder has no leaderboard files (they are written when a run finishes, and by "
                 "`shootout report`).")
@@ -131,7 +134,9 @@ def render(run_dir) -> str:
         return (o, t)
     order = sorted(specs, key=position)
     views, views_note = data["views"], None
-    if not views and not (Path(run_dir) / "views").is_dir() and frames:
+    if meta.get("kind") == "eval" and not views:
+        views_note = "No 3D views: an eval scores result files, it runs no method to draw."
+    elif not views and not (Path(run_dir) / "views").is_dir() and frames:
         why = ({"interrupted": "the run was interrupted before its views were computed",
                 "running": "the run had not finished (or its driver was killed) when this page was built"}
                .get(meta.get("status"), "this run folder has no views/ (made by an older version, or the views "
@@ -159,7 +164,7 @@ def render(run_dir) -> str:
             "Invalid results (diverged, worse than the noisy input, over the face target, made non-manifold or topology-changing) rank last in "
             "their cell; cells with a missing result are left out; values closer than the metric's compare tolerance tie. "
             f"{'' if meta.get('kind') == 'eval' else _esc(settings_note(meta.get('tune')))} "
-            f"{_leaderboard_files_text(run_dir)}</p>"
+            f"{_leaderboard_files_text(run_dir, meta.get('kind') == 'eval')}</p>"
             "<div id='leaderboard-body'></div></section>",
             *[_task_section(t, specs[t], frames) for t in order],
             "<section id='views'><h2>3D views</h2><p>Meshes side by side, coloured by the per-vertex quantity "

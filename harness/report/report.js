@@ -866,14 +866,16 @@
         var best = pickBest(rs, function (r) { return r[key]; }, function (r) { return r._variant; }, true);
         var tied = tiedWith(rs, best, function (r) { return r[key]; }, function (r) { return r._variant; }, rows, key, tol, true);
         var timed = rs.filter(function (r) { return isNum(r.time_s); });
-        var fast = timed.length ? pickBest(timed, function (r) { return r.time_s; }, function (r) { return r._variant; }, true) : rs[0];
-        var fastTied = timed.filter(function (r) { return r !== fast && timeTiedWith(rows, fast._variant, r._variant); })
-          .map(function (r) { return r._variant; });
+        var fast = timed.length ? pickBest(timed, function (r) { return r.time_s; }, function (r) { return r._variant; }, true) : null;
+        var fastTied = fast ? timed.filter(function (r) { return r !== fast && timeTiedWith(rows, fast._variant, r._variant); })
+          .map(function (r) { return r._variant; }) : [];
+        var fastCells = fast ? '<td>' + esc(fast._variant) + timeTiedNote(fastTied) + '</td><td class="num">' +
+          valueText(rows, fast._variant, key, tol, 4) + '</td><td class="num">' + timeCell(fast.time_s, rows, fast._variant) + '</td>' :
+          '<td class="muted">— (nothing timed)</td><td></td><td></td>';
         bt.appendChild(el('tr', {html: '<td>' + esc(best.mesh) + '</td><td>' + esc(best._noise) + '</td><td>' + esc(fmt(best._target)) +
           '</td><td><i style="color:' + d.colors[best._variant] + '">●</i> ' + esc(best._variant) + tiedNote(tied) + '</td><td class="num">' + valueText(rows, best._variant, key, tol, 4) +
-          '</td><td class="num">' + best.out_faces + '</td><td class="num">' + timeCell(best.time_s, rows, best._variant) + '</td><td>' +
-          esc(fast._variant) + timeTiedNote(fastTied) +
-          '</td><td class="num">' + valueText(rows, fast._variant, key, tol, 4) + '</td><td class="num">' + timeCell(fast.time_s, rows, fast._variant) + '</td>'}));
+          '</td><td class="num">' + best.out_faces + '</td><td class="num">' + timeCell(best.time_s, rows, best._variant) + '</td>' +
+          fastCells}));
       });
       plots.appendChild(el('h4', {text: 'Most accurate and fastest method per mesh, noise level and target (mean over seeds)'}));
       plots.appendChild(bt);
