@@ -1,6 +1,8 @@
 """Task ``spectrum``: eigensolvers against dense LAPACK, the sphere's analytic spectrum and its
 convergence, residuals and M-orthogonality, the plain libigl + scipy pipeline, and the task
 through the pipeline."""
+import json
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -251,6 +253,29 @@ def test_unit_square_reference_holds_every_requested_eigenvalue():
     brute = np.sort((np.pi ** 2 * (a[:, None] ** 2 + a[None, :] ** 2)).ravel())
     for k in (1, 2, 36, 939, 940, 1000, 2000):
         assert np.array_equal(analytic({"procedural": "plane_delaunay"}, k), brute[:k]), k
+
+
+def test_errors_below_the_refined_references_own_are_no_measurement(tmp_path):
+    """An outside audit: bunny's reference is refined once (27,864 faces) and estimates its own
+    error at 0.019, while the methods' errors against it are 0.004-0.009; against the FEM of a
+    111k-face refinement the order of cotan and intrinsic Delaunay reverses. Such errors are
+    blank now, their values said in ``reference``, and the cell ranks nothing; knight's (errors
+    3 times its reference's) stay."""
+    from harness import leaderboard as L
+    run({"name": "spec", "repeats": 1, "time_budget": 0, "meshes": ["bunny", "knight"], "noise": [{"model": "none"}],
+         "tasks": {"spectrum": {"methods": [{"name": "scratch.spectrum",
+                                             "params": {"operator": ["cotan", "intrinsic_delaunay"]}}],
+                                "params": {"k": 20}}}}, out=tmp_path, quiet=True)
+    df = pd.read_csv(tmp_path / "spectrum.csv")
+    bunny, kn = df[df["mesh"] == "bunny"], df[df["mesh"] == "knight"]
+    assert (bunny["status"] == "ok").all() and bunny["eig_rel_error_mean"].isna().all()
+    assert (bunny["reference_error_est"] > 0.015).all()
+    assert bunny["reference"].str.contains(r"its estimated error 0\.019 exceeds this result's 0\.00\d+ \(mean; max "
+                                           r"0\.00\d+\): no measurement$").all(), bunny["reference"].tolist()
+    assert (kn["eig_rel_error_mean"] > kn["reference_error_est"]).all()
+    specs = json.loads((tmp_path / "run.json").read_text())["tasks"]
+    lb = L.leaderboard({"spectrum": df}, specs)
+    assert (lb["cells"] == 1).all() and len(lb), lb                 # knight alone
 
 
 def test_residual_is_scale_free():
