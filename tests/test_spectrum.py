@@ -62,6 +62,11 @@ def test_the_task_runs_through_the_pipeline(tmp_path):
     sph = df[df["mesh"].str.startswith("sphere")]
     assert (sph["eig_rel_error_max"] < 0.05).all()
     assert (sph["reference"] == "analytic").all() and sph["reference_error_est"].isna().all()
+    src = datasets.load({"procedural": "sphere", "subdivisions": 3})        # the signed mean, recomputed
+    lam = methods.get("scratch.spectrum")(src.clean.V, src.clean.F, k=16).values
+    ref = analytic(src.shape, 16)
+    row = sph[(sph["method"] == "scratch.spectrum") & sph["params"].str.contains('"mass": "voronoi"')].iloc[0]
+    assert row["eig_rel_bias"] == pytest.approx(((lam[1:] - ref[1:]) / ref[1:]).mean(), rel=1e-6)
     kn = df[df["mesh"] == "knight"]
     assert kn["reference"].str.startswith("refined: 2 midpoint subdivision(s), 16000 faces; convergence ratio ").all(), \
         kn["reference"]
