@@ -138,13 +138,14 @@ def _check_meshes(meshes, base_dir: Path, P: list, key: str = "meshes") -> list[
 
 
 def _same_mesh_key(spec: dict) -> dict:
-    """What makes two mesh entries one mesh: `_identity`, where a bundled mesh (not a pair) is the
-    file it reads, so that the same bytes given as a ``file:`` are the same mesh too."""
+    """What makes two mesh entries one mesh: `_identity`, where a bundled mesh is the file it reads
+    and a bundled pair its noisy and clean files, so that the same bytes given as ``file:`` (and
+    ``clean:``) are the same mesh too."""
     if set(spec) <= {"bundled", "name"}:
         files = datasets._spec_files(spec)
-        if len(files) == 1:
+        if len(files) in (1, 2):
             try:
-                return {"file_sha1": file_sha1(files[0])}
+                return dict(zip(("file_sha1", "clean_sha1"), map(file_sha1, files)))
             except OSError:
                 pass
     return _identity(spec)

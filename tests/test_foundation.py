@@ -294,6 +294,10 @@ def test_config_grid_expansion():
      "meshes[0].name: 'sphere' is also the label of meshes[1], another mesh"),
     # a review: a bundled mesh given again as its file (or a copy of it) ran twice
     ({"meshes": ["knight", {"file": str(KNIGHT)}]}, "meshes[1]: the same mesh as meshes[0] (the same file bytes)"),
+    # an outside audit: a bundled pair given again as its two files ran twice, doubling its cells
+    ({"meshes": ["fandisk-noisy-0.3", {"file": str(MESH_DIR / "denoise" / "Fandisk0.3" / "Noisy.obj"),
+                                       "clean": str(MESH_DIR / "denoise" / "Fandisk0.3" / "Original.obj")}]},
+     "meshes[1]: the same mesh as meshes[0] (the same file bytes)"),
 ])
 def test_config_errors_name_key_path(patch, needle):
     probs = _problems({**GOOD, **patch})
