@@ -236,6 +236,11 @@ def compare_runs(run_a, run_b, html_out=None, time_factor: float | None = TIME_F
         if meta.get("status") in ("running", "interrupted"):
             print(f"note: {which}'s run.json says {meta['status']}: the run is still going, was killed or was "
                   "interrupted, so a case missing from it may not have run yet (--resume finishes it)", file=out)
+    code = [(m.get("code_sha256"), m.get("git_commit"), m.get("git_dirty")) for m in (meta_a, meta_b)]
+    if code[0][0] and code[1][0] and code[0][0] != code[1][0]:
+        said = [f"{w} {(c or '?')[:10]}{' with uncommitted changes' if d else ''}" for w, (_, c, d) in zip("AB", code)]
+        print(f"note: the runs ran different code ({', '.join(said)}; their code_sha256 differ): a change may be "
+              "the code's", file=out)
     if res["common"] == 0 and res["only_a"] and res["only_b"]:
         print("note: the runs share no case: they ran other configs (or meshes whose files changed), so every case "
               "of A counts as missing in B", file=out)

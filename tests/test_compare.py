@@ -71,6 +71,19 @@ def test_identical_runs_exit_0(run_a, tmp_path, capsys):
     assert "0 regression(s)" in out and "5 cases in both" in out
 
 
+def test_runs_of_different_code_are_said_to_be(run_a, tmp_path):
+    """An outside audit: two runs whose code differed (another commit landed during the second)
+    compared with no word of it; run.json records each run's code hash and commit."""
+    b = copy(run_a, tmp_path)
+    code, out = run_compare(run_a, b, time_factor=None)
+    assert "different code" not in out
+    meta = json.loads((b / "run.json").read_text())
+    meta.update(code_sha256="0" * 64, git_commit="abcdef0123456789", git_dirty=True)
+    (b / "run.json").write_text(json.dumps(meta))
+    code, out = run_compare(run_a, b, time_factor=None)
+    assert code == 0 and "note: the runs ran different code (A " in out and "B abcdef0123 with uncommitted changes" in out, out
+
+
 def test_injected_metric_regression_exits_1_and_html(run_a, tmp_path):
     b = copy(run_a, tmp_path)
     edit(b / "smoothing.csv", lambda rows: rows[0].update(dist_mean=str(float(rows[0]["dist_mean"]) * 1.05)))
