@@ -11,7 +11,7 @@ surface the mesh samples (sphere: great-circle ``r arccos(x . s / r^2)``; planes
 square, convex): Euclidean; open cylinder: ``sqrt((r dtheta)^2 + dz^2)`` unrolled), ``False``.
 It includes the mesh's own distance from that surface: the exact polyhedral distance scores
 ``rel_error_mean`` 0.0023 on the default sphere (3 subdivisions; 0.0006 at 4, 0.00015 at 5),
-0.0012 on the default cylinder (resolution 32), 2.8e-9 on the planes: a floor no method on the
+0.0012 on the default cylinder (resolution 32), 4e-12 or less on the planes: a floor no method on the
 mesh goes below, and part of each method's value (about a sixth of the heat method's on that
 sphere);
 otherwise the exact polyhedral distance on the mesh (libigl ``exact_geodesic``, the
