@@ -1,5 +1,5 @@
 """scratch.bilateral against an independent implementation of Zheng et al. 2011's local scheme,
-written here from the paper and the authors' reference code (GuidedDenoising's
+written here from the paper and Zhang et al. 2015's reimplementation (GuidedDenoising's
 ``BilateralNormalFilteringForMeshDenoising``): neighbourhood = faces sharing a vertex with the
 centre face, the centre face excluded; ``sigma_c`` = mean centroid distance over (face,
 edge-adjacent face) pairs; weights ``A_j W_s W_r``; 20 Jacobi normal passes on fixed areas and

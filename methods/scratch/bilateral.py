@@ -72,7 +72,7 @@ def sun_vertex_update(X: np.ndarray, F: np.ndarray, N: np.ndarray, iterations: i
 FACE_NEIGHBOURHOOD = Param("neighbourhood", "vertex", choices=("vertex", "edge"),
                            doc="faces sharing a vertex (default) or an edge with the face")
 FIXED_BOUNDARY = Param("boundary", "fixed", choices=("fixed", "free"),
-                       doc="boundary vertices kept in place (the reference code) or moved")
+                       doc="boundary vertices kept in place (Zhang et al.'s reimplementation) or moved")
 
 
 @register("scratch.bilateral", task="smoothing", library="scratch",
@@ -95,9 +95,11 @@ FIXED_BOUNDARY = Param("boundary", "fixed", choices=("fixed", "free"),
 def bilateral(V, F, *, normal_sigma=0.35, spatial_multiple=1.0, normal_iterations=20, vertex_iterations=10,
               iterations=1, neighbourhood="vertex", boundary="fixed"):
     """Bilateral normal filtering (Zheng, Fu, Au, Tai, "Bilateral normal filtering for mesh
-    denoising", IEEE TVCG 2011), local iterative scheme, as in the authors' reference code
-    (the ``BilateralNormalFilteringForMeshDenoising`` local scheme distributed with Zhang et
-    al. 2015's GuidedDenoising), vectorized.
+    denoising", IEEE TVCG 2011), local iterative scheme, as Zhang et al. 2015's reimplementation
+    runs it (``BilateralNormalFilteringForMeshDenoising`` in their GuidedDenoising, which
+    reimplements others' methods for comparison; not Zheng et al.'s own code, and not Fleishman
+    et al. 2003's bilateral mesh denoising, which GuidedDenoising ships as
+    ``BilateralMeshDenoising``), vectorized.
 
     Parameters
     ----------
