@@ -41,8 +41,11 @@ def tangential(V, F, *, step=0.5, iterations=10):
     0). It is not the neighbours' mean weighted by vertex areas (on knight, 10 iterations
     at step 0.5, the two targets end 1.5e-2 of the diagonal apart, with equal angle gains),
     nor the point minimising the incident faces' squared areas, which newer pmp releases
-    move to first. The normal ``n_i`` is the area-weighted face normal; pmp applies the
-    whole move (``step 1``). Removing the normal component makes it a redistribution of
+    move to first. The normal ``n_i`` is the area-weighted face normal, where pmp's
+    (``Normals::compute_vertex_normal``) is angle-weighted (10 iterations at step 0.5: 1.5e-3 of
+    the diagonal apart on camelhead, 1.5e-2 to 2.7e-2 on noisy bunny, knight and a noisy obtuse
+    plane); pmp applies the whole move (``step 1``) and, in remeshing, projects each vertex back
+    onto the input surface, which this does not. Removing the normal component makes it a redistribution of
     vertices within the surface: it improves angles while the distance to the input stays
     second order. Boundary vertices are fixed.
     """
