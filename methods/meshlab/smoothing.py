@@ -51,7 +51,8 @@ uniform sums count each neighbour twice and cotangent sums give ``cot a + cot b`
     lower or equal index (about half its ring; some faces only with themselves): the result
     depends on the order of the faces (Fandisk0.3 at the defaults: ``dist_mean`` 4.13e-3 in
     the file's order, 2.33e-3 with the faces shuffled, against the noisy input's 3.33e-3;
-    `scratch.sun` at its defaults gives 1.08e-3 in both orders), and it is not the paper's
+    `scratch.sun` gives 1.31e-3 in both orders at its defaults, the authors' code's, and 1.08e-3
+    with Zhang et al.'s settings), and it is not the paper's
     method (tests/test_smoothing_sun.py).
 ``meshlab.surface_preserving`` (``apply_coord_laplacian_smoothing_surface_preserving``)
     uniform Laplacian step cancelled for vertices whose move would rotate an incident face

@@ -15,9 +15,11 @@ convention (off-diagonal weights positive, rows summing to zero) and a diagonal 
     the one-ring area).
 ``cotan_area``
     the Laplace-Beltrami operator: ``W`` = cotangent matrix, ``M`` = mixed Voronoi mass
-    (Meyer et al. 2003; ``igl.massmatrix(..., VORONOI)``), as libigl's implicit smoothing; Desbrun
-    et al. 1999's curvature flow divides by the one-ring area instead (a barycentric mass: at
-    step 1, 8e-4 of the diagonal apart on noisy bunny and camelhead, 4e-3 on an obtuse plane).
+    (Meyer et al. 2003; ``igl.massmatrix(..., VORONOI)``), as `libigl.implicit` (libigl's own
+    tutorial uses the barycentric mass); Desbrun et al. 1999's curvature flow divides by the
+    one-ring area instead, a multiple of the barycentric mass (Voronoi and barycentric masses at
+    step 1: about 1e-3 of the diagonal apart on noisy bunny and camelhead, 4e-3 on an obtuse
+    plane).
 
 Time step (the shared, dimensionless ``step`` parameter): ``uniform`` and ``cotan`` are
 row-normalized (``L`` has eigenvalues in ``[-2, 0]`` for non-negative weights), so the time

@@ -35,7 +35,8 @@ def sun_vertex_update_in_place(X: np.ndarray, F: np.ndarray, N: np.ndarray, iter
     vertex from the positions as they are when its turn comes (Gauss-Seidel: the centroids
     ``c_f`` see the vertices already moved in this pass), ``iterations`` passes; the faces of a
     vertex summed in increasing index. Xianfang Sun's ``mdenoise`` (``VertexUpdate``) runs the
-    pass this way. ``N`` (m, 3) fixed filtered normals; ``fixed`` (n,) vertices that do not move.
+    pass this way. ``N`` (m, 3) fixed filtered normals; ``fixed``: the vertices that do not move,
+    a mask (n,) or their indices.
     Returns ``X`` (n, 3) float64, updated in place."""
     X = np.ascontiguousarray(X, dtype=np.float64)
     F = np.ascontiguousarray(F, dtype=np.int64)
@@ -45,5 +46,13 @@ def sun_vertex_update_in_place(X: np.ndarray, F: np.ndarray, N: np.ndarray, iter
     faces = np.ascontiguousarray(np.repeat(np.arange(m, dtype=np.int64), 3)[order])
     ptr = np.zeros(n + 1, np.int64)
     np.cumsum(np.bincount(vid, minlength=n), out=ptr[1:])
-    keep = np.zeros(n, np.bool_) if fixed is None else np.ascontiguousarray(fixed, dtype=np.bool_)
+    keep = np.zeros(n, np.bool_)
+    if fixed is not None:
+        fixed = np.asarray(fixed)
+        if fixed.dtype == np.bool_:
+            if fixed.shape != (n,):
+                raise ValueError(f"fixed: a mask of {fixed.shape} for {n} vertices")
+            keep[:] = fixed
+        else:
+            keep[fixed.astype(np.int64)] = True                # vertex indices
     return _passes(X, F, np.ascontiguousarray(N, dtype=np.float64), ptr, faces, int(iterations), keep)
