@@ -209,3 +209,19 @@ def test_meshlab_two_steps_is_vcgs_one_sided_pass(meshes, mesh):
     full = vcg_two_steps(V, F, 1, 60.0, 20, 50, one_sided=False)
     sun = methods.get("scratch.sun")(V, F, threshold=0.5, boundary="free", update="jacobi").V
     assert np.abs(full - sun).max() <= 1e-12 * d
+
+
+def test_the_in_place_pass_takes_a_mask_or_indices(meshes):
+    """A review: a ``fixed`` given as indices (the Jacobi pass takes either) was cast to a mask of
+    the wrong length and read past its end in the compiled pass."""
+    from harness.core.geometry import boundary_vertices
+    from methods.scratch.bilateral import face_geometry
+    from methods.scratch.sun_kernel import sun_vertex_update_in_place
+    V, F = meshes["woody"]
+    N = face_geometry(V, F)[0]
+    mask = boundary_vertices(F, len(V))
+    a = sun_vertex_update_in_place(V.copy(), F, N, 5, mask)
+    b = sun_vertex_update_in_place(V.copy(), F, N, 5, np.flatnonzero(mask))
+    assert np.array_equal(a, b) and np.array_equal(a[mask], V[mask]) and not np.array_equal(a, V)
+    with pytest.raises(ValueError, match="a mask of"):
+        sun_vertex_update_in_place(V.copy(), F, N, 5, mask[:-1])
