@@ -43,8 +43,8 @@ def qem(V, F, *, target_faces, preserve_boundary=False, boundary_weight=1.0,
     VCGLib keeps a heap of edge collapses ordered by quadric error, penalised by triangle
     quality. Its face-plane quadrics are built on the unnormalised normal ``(p1 - p0) x (p2 -
     p0)`` (``UseArea``, VCGLib's default, which the filter does not change), so each face's
-    quadric is weighted by its doubled area squared, ``(2 A)^2``, where Garland & Heckbert
-    weight by area; the optional boundary and planar quadrics are built on that normal too.
+    quadric is weighted by its doubled area squared, ``(2 A)^2``, where QSlim weights by area
+    (the 1997 paper does not weight); the optional boundary and planar quadrics are built on that normal too.
 
     Parameters
     ----------

@@ -31,9 +31,10 @@ def face_quadrics(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray,
     ``a11 a12 a13 a22 a23 a33 b1 b2 b3 c`` of ``x^T A x + 2 b^T x + c``). The error
     ``x^T K_f x`` is the area times the squared distance of ``x`` to the plane (units
     length^4), so a large face pulls harder than a sliver, and the sum over a vertex's faces
-    approximates the integral of squared distance over its neighbourhood (the area weighting
-    of Garland & Heckbert 1997, Sec. 5; it also makes the result independent of how finely a
-    flat region happens to be triangulated). Zero-area faces contribute nothing.
+    approximates the integral of squared distance over its neighbourhood (QSlim 2.x's default
+    weighting, ``MX_WEIGHT_AREA``, and Garland's thesis, 1999; the 1997 paper sums unweighted
+    plane quadrics; it also makes the result independent of how finely a flat region happens to
+    be triangulated). Zero-area faces contribute nothing.
     """
     P0 = V[F[:, 0]]
     N = _cross(V[F[:, 1]] - P0, V[F[:, 2]] - P0)
@@ -130,7 +131,7 @@ def spatial_order(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray,
         "boundary_weight": Param(
             "boundary_weight", 100.0, "float", low=0.0, high=1e9,
             doc="weight of the perpendicular-plane penalty quadrics on boundary edges "
-                "(times the squared edge length)"),
+                "(times the squared edge length; QSlim's is 1000)"),
         "max_normal_angle": Param(
             "max_normal_angle", 60.0, "float", low=1.0, high=180.0,
             doc="reject a collapse that turns a surviving face's normal by more than this "
@@ -148,7 +149,20 @@ def spatial_order(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray,
 )
 def qem(V, F, *, target_faces, preserve_boundary=False, boundary_weight=100.0,
         max_normal_angle=60.0, min_quality=0.1, relax=True):
-    """Quadric-error edge collapse (Garland & Heckbert 1997) from scratch.
+    """Quadric-error edge collapse (Garland & Heckbert 1997) from scratch, with guards of its own.
+
+    Departures from the reference (QSlim 2.1, Garland's code, whose defaults libigl's ``qslim``
+    follows: area-weighted quadrics, boundary penalty weight 1000, the optimal placement wherever
+    ``|det A| > 1e-12``, edges only, no check of folded faces or of the link): it adds the link
+    condition, a normal-flip limit of 60 degrees (the paper suggests rejecting flips, QSlim's
+    default does not), a triangle-quality floor of 0.1 (both relaxed in stages, step 5), a
+    conditioning and distance test on the optimal placement, and a boundary weight of 100. With
+    the geometric guards off (``max_normal_angle: 180, min_quality: 0, relax: false``) its
+    certified Hausdorff distances at 10% equal ``libigl.qslim``'s to 5 digits on bunny, knight
+    and a noisy bunny. The guards are where its accuracy lead comes from: on armadillo
+    Loop-subdivided once (346k faces) 7.03e-4 of the diagonal with them, 1.23e-3 without, 7.42e-4
+    with the paper's flip test alone (90 degrees), QSlim 9.24e-4; on bunny, knight, camelhead and
+    a noisy bunny they move it by -9% to +8% against that flip test alone.
 
     Algorithm
     ---------
