@@ -41,7 +41,11 @@ def tufted(V, F, *, mollify_factor=1e-5):
     -----
     Sharp & Crane 2020, "A Laplacian for nonmanifold triangle meshes": intrinsic Delaunay
     triangulation of the tufted cover (each face doubled), which handles non-manifold and
-    degenerate input; weights are non-negative (POS) and PSD holds, LOC does not.
+    degenerate input; PSD holds, LOC does not. Weights are non-negative (POS) up to
+    geometry-central's flip tolerance: ``flipToDelaunay`` flips an edge only when its cotangent
+    weight is below -1e-6, so a slightly non-Delaunay edge stays and its weight can be slightly
+    negative (stanford-bunny: 9.4e-6, fandisk: 5.0e-5 of the scale; POS false), where
+    `scratch.tufted`, flipping at a relative 1e-12, gives the Delaunay triangulation.
     """
     import robust_laplacian
     L, M = robust_laplacian.mesh_laplacian(V, F, mollify_factor=float(mollify_factor))

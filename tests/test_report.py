@@ -142,7 +142,7 @@ def test_property_matrix_and_uniform_note(run_dir):
     assert uni["POS"]["fails"] == 0 and cot["POS"]["fails"] >= 1          # non-Delaunay plane: negative cotans
     assert "plane_nondelaunay(n_points=120)" in cot["POS"]["fail_meshes"]
     text = (run_dir / "report.html").read_text()
-    assert "weighted Delaunay" in text and "D = diag(1/N" in text
+    assert "Delaunay triangulations without obtuse boundary angles" in text and "D = diag(1/N" in text
     lin = df[(df.method == "scratch.uniform") & df.lin_error.notna()].lin_error.iloc[0]
     assert f"lin_error = {rh._fmt(lin)}" in text                          # the numbers come from the row
     worst_loc = int(max(p["LOC"]["worst"] for p in mat.values() if p["LOC"]["worst"] is not None))

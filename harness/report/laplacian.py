@@ -130,7 +130,8 @@ def property_matrix_section(df, spec=None) -> str:
     return ("<h3>Property matrix (Wardetzky et al. 2007)</h3>"
             "<p class='theorem'><b>Theorem</b> (Wardetzky, Mathur, Kälberer &amp; Grinspun, <i>Discrete Laplace "
             "operators: no free lunch</i>, SGP 2007): no discrete Laplacian satisfies symmetry (SYM), locality (LOC), "
-            "linear precision (LIN) and positive weights (POS) on all triangle meshes. On the plane, all four hold "
-            "at once exactly on regular / weighted Delaunay triangulations, where the cotangent weights are "
-            "non-negative; PSD follows from SYM and POS.</p>"
+            "linear precision (LIN) and positive weights (POS) on all triangle meshes. On the plane, the cotangent "
+            "weights have all four on Delaunay triangulations without obtuse boundary angles (where they are "
+            "non-negative), and the weighted cotangent operator on regular triangulations; PSD follows from SYM "
+            "and POS.</p>"
             + _matrix_html(df, defaults) + _all_four_html(df, defaults) + _uniform_note(df))

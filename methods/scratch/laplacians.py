@@ -124,7 +124,9 @@ def cotan(V, F, *, mass="voronoi"):
     -----
     a_ij, b_ij are the angles opposite edge ij in its two faces (Pinkall & Polthier 1993).
     Weights are dimensionless; ``M^-1 W`` has units 1/length^2. SYM, LOC, LIN hold; POS holds
-    exactly on (intrinsic) Delaunay meshes. Zero-area faces contribute nothing (module docstring).
+    exactly on Delaunay meshes without obtuse boundary angles (a boundary edge's weight is one
+    cotangent: negative opposite an obtuse angle, e.g. woody, Delaunay but with 178 obtuse
+    corners on its boundary). Zero-area faces contribute nothing (module docstring).
 
     Implementation: below ``FAST_MIN_FACES`` faces, vectorized numpy (`operators.cotan_weights`,
     `operators.mass_matrix`); from there on, one compiled assembly that writes the CSR rows and
@@ -286,10 +288,11 @@ def tufted(V, F, *, mass="barycentric", mollify_factor=1e-5):
     LaplacianResult
         ``W`` with non-negative off-diagonal weights on any input (manifold or not), rows
         summing to zero; with ``mass: barycentric`` ``(-W, M)`` equals
-        ``robust_laplacian.mesh_laplacian(V, F, mollify_factor)`` (to ~1e-12 relative on the
-        bundled meshes; on meshes with cocircular quads, e.g. fandisk, the Delaunay
-        triangulation is not unique: ``W`` then differs by up to 1e-8 relative and the masses
-        may differ where the flip order does).
+        ``robust_laplacian.mesh_laplacian(V, F, mollify_factor)`` (to ~1e-12 relative on bunny,
+        camelhead, woody, knight and noisy and obtuse meshes; where an edge is non-Delaunay by
+        less than geometry-central's flip tolerance, a cotangent weight of -1e-6, that library
+        keeps it and this flips it: stanford-bunny ``W`` 4.5e-8 apart and 3% in the masses of 4
+        vertices, fandisk 1e-8 and 4%, where the library's ``W`` has negative weights).
 
     Notes
     -----
