@@ -60,9 +60,10 @@ def convergence(spec: dict, df: pd.DataFrame, variants, invalid) -> list[dict]:
         if m.get("better") != "lower" or name not in d:
             continue
         try:
-            floor = max(float(m.get("abs") or 0.0), 0.0)
+            floor = float(m.get("abs") or 0.0)
         except (TypeError, ValueError):
             floor = 0.0
+        floor = floor if np.isfinite(floor) and floor > 0 else 0.0      # a hand-edited run.json: no floor
         v = d.assign(_y=pd.to_numeric(d[name], errors="coerce"))
         v = v[np.isfinite(v["_y"]) & np.isfinite(v["_h"])]     # an inf in a hand-edited CSV: no point
         for (fam, noise, var), g in v.groupby(["_family", "_noise", "_variant"], sort=True):
