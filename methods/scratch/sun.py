@@ -61,8 +61,8 @@ def sun(V, F, *, threshold=0.4, normal_iterations=20, vertex_iterations=50, neig
 
     ``meshlab.two_steps`` runs these formulas per outer iteration, but VCG's normal pass sees
     only part of each face's ring (its docstring); with ``iterations 1`` and a full ring it
-    would be this method with ``threshold: 0.5, update: jacobi`` (the boundary free, as here). A zero-area face has a zero normal: it
-    weighs nothing and is left with a zero normal.
+    would be this method with ``threshold: 0.5, update: jacobi`` (the boundary free, as here).
+    A zero-area face has a zero normal: it weighs nothing and is left with a zero normal.
     """
     from harness.core.geometry import boundary_vertices
     n, m = V.shape[0], F.shape[0]
