@@ -1305,7 +1305,7 @@
       if (!c) return '';
       if (isNum(c.order)) return c.order.toFixed(2);
       if (c.at_floor && c.at_floor === c.points.length) return 'exact (every error ≤ ' + fmt(c.floor) + ')';
-      return '— (' + (c.points.length - (c.at_floor || 0)) + ' resolutions above ' + fmt(c.floor || 0) + ')';
+      return '— (' + (c.points.length - (c.at_floor || 0)) + ' resolutions' + (c.floor ? ' above ' + fmt(c.floor) : '') + ')';
     };
     t.innerHTML = '<tr><th>method</th>' + fams.map(function (f) { return '<th>' + esc(f) + '</th>'; }).join('') + '</tr>' +
       vars.map(function (v) {
