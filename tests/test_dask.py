@@ -474,6 +474,30 @@ def test_a_case_queued_behind_a_worker_killer_is_not_blamed_for_its_death(tmp_pa
     assert killer["status"] == "error" and "worker running this case died" in killer["error"], killer
 
 
+def test_a_result_that_never_reaches_the_driver_costs_its_row_not_the_run(tmp_path, monkeypatch):
+    """A fresh-clone suite under heavy load hung in ``fut.result()`` after the killer test's cases
+    were done: a finished case whose result must come from a worker waits without end where that
+    worker died and its task is not computed again. The fetch now waits at most
+    ``$MESH_SHOOTOUT_DASK_WAIT`` s; the case is sent again up to three times, then it is an error
+    row. (A wait of 0 s times out every fetch: each result is on a worker of its own process.)"""
+    monkeypatch.setenv("MESH_SHOOTOUT_DASK_WAIT", "0")
+    with dask.config.set({"distributed.worker.daemon": False}):
+        cl = distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True, dashboard_address=":0",
+                                      silence_logs=logging.CRITICAL)
+    cfg = load_config({"time_budget": 0, "meshes": ["knight"], "noise": [{"model": "none"}],
+                       "tasks": {"smoothing": {"methods": ["scratch.taubin"]}}})
+    try:
+        ex = DaskExecutor(timeout=60, scheduler=cl.scheduler_address)
+        try:
+            rows = [row for _, row, _ in ex.run(cfg.cases)]
+        finally:
+            ex.close()
+    finally:
+        cl.close()
+    assert len(rows) == 1 and rows[0]["status"] == "error", rows
+    assert "its result did not reach the driver within 0 s, 4 times" in rows[0]["error"], rows[0]["error"]
+
+
 def _log_as(*events):
     from harness.executors.dask import _log
     for e in events:

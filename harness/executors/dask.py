@@ -191,10 +191,13 @@ class DaskExecutor:
             futures[submit(case, sent)] = case
         self._futures = futures
         ac = as_completed(list(futures))
+        fetch_s = float(os.environ.get("MESH_SHOOTOUT_DASK_WAIT", "120"))
         for fut in self._completed(ac):
             case = futures.pop(fut)
             try:
-                row, extras = fut.result()
+                # done: its result comes from the worker holding it; where that worker died, Dask
+                # computes it again, and a wait that does not end must cost this case, not the run
+                row, extras = fut.result(timeout=fetch_s)
             except Exception as exc:  # KilledWorker, CancelledError: one error row; a lost scheduler: stop
                 name = type(exc).__name__
                 if name != "KilledWorker" and (scheduler_went(exc) or not self._scheduler_alive()):
@@ -204,6 +207,18 @@ class DaskExecutor:
                                          "finished so far are saved: continue with --resume") from None
                 sent, cid = sent_of[case.case_id], case.case_id
                 what = None
+                if isinstance(exc, TimeoutError):
+                    tries[cid] = tries.get(cid, 0) + 1
+                    fut.cancel()
+                    if tries[cid] <= 3:
+                        fut.release()
+                        again = submit(case, sent)
+                        futures[again] = case
+                        ac.add(again)
+                        continue
+                    what = (f"its result did not reach the driver within {fetch_s:.0f} s, {tries[cid]} times "
+                            "(the worker holding it died and the cluster did not compute it again; "
+                            "$MESH_SHOOTOUT_DASK_WAIT sets the wait); --resume runs it again")
                 if name == "KilledWorker" and self._ran_when_lost(fut.key, unknown=True) is False:
                     # Dask counts a worker's death against every task assigned to it, also those
                     # queued behind the case that killed it: one that never started is run again
