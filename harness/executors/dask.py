@@ -191,6 +191,13 @@ class DaskExecutor:
             futures[submit(case, sent)] = case
         self._futures = futures
         ac = as_completed(list(futures))
+
+        def resend(fut, case):
+            """Release ``fut`` and submit its case again, awaited with the others."""
+            fut.release()
+            again = submit(case, sent_of[case.case_id])
+            futures[again] = case
+            ac.add(again)
         fetch_s = float(os.environ.get("MESH_SHOOTOUT_DASK_WAIT", "120"))
         for fut in self._completed(ac):
             case = futures.pop(fut)
@@ -211,10 +218,7 @@ class DaskExecutor:
                     tries[cid] = tries.get(cid, 0) + 1
                     fut.cancel()
                     if tries[cid] <= 3:
-                        fut.release()
-                        again = submit(case, sent)
-                        futures[again] = case
-                        ac.add(again)
+                        resend(fut, case)
                         continue
                     what = (f"its result did not reach the driver within {fetch_s:.0f} s, {tries[cid]} times "
                             "(the worker holding it died and the cluster did not compute it again; "
@@ -224,10 +228,7 @@ class DaskExecutor:
                     # queued behind the case that killed it: one that never started is run again
                     waited[cid] = waited.get(cid, 0) + 1
                     if waited[cid] <= 3:
-                        fut.release()
-                        again = submit(case, sent)
-                        futures[again] = case
-                        ac.add(again)
+                        resend(fut, case)
                         continue
                     what = (f"Dask gave up on this case {waited[cid]} times (KilledWorker) while it waited on "
                             "workers that died before it started (another case may kill them); --resume runs it again")
@@ -247,10 +248,7 @@ class DaskExecutor:
                                     "each time the worker holding its mesh file's bytes (or its result) left (died or "
                                     "restarted); --resume runs it again")
                     if what is None:
-                        fut.release()
-                        again = submit(case, sent)
-                        futures[again] = case
-                        ac.add(again)
+                        resend(fut, case)
                         continue
                 row, extras = base_row(case), {}
                 what = what or (("the Dask worker running this case died (this case, or another one running "
